@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Install what stickslip needs on a Debian machine, if missing: gfortran, LAPACK/BLAS, FFTW3,
+# MINPACK (Debian packages) and fpm (PyPI). Idempotent; prints nothing when all is there.
+# Usage: ./setup.sh            install only
+#        ./setup.sh --run      install, build and run the seed example (examples/seed.nml)
+set -euo pipefail
+cd "$(dirname "$0")"
+
+pkgs=(gfortran liblapack-dev libfftw3-dev minpack-dev)
+missing=()
+for p in "${pkgs[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "setup: installing ${missing[*]}" >&2
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq >/dev/null
+    $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+if ! command -v fpm >/dev/null 2>&1; then
+    echo "setup: installing fpm from PyPI" >&2
+    python3 -m pip install --quiet --disable-pip-version-check fpm >/dev/null
+    hash -r
+    command -v fpm >/dev/null 2>&1 || { echo "setup: fpm installed but not on PATH (add ~/.local/bin)" >&2; exit 1; }
+fi
+
+if [ "${1:-}" = "--run" ]; then
+    fpm run --profile release -- examples/seed.nml
+fi

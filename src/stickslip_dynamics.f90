@@ -1,0 +1,216 @@
+!> Linear dynamics per harmonic and the exact condensation onto the contact coordinates.
+!>
+!> For each harmonic h > 0 of the basis, with complex amplitudes X = a - i b
+!> (x(t) = Re(X exp(i h omega t)) = a cos + b sin) and Z_h = K - (h omega)^2 M + i h omega C:
+!>     X_h = Z_h^{-1} (F_h + W R_h) = X0_h + Y_h R_h,
+!>     V_h (contacts) = i h omega W^T X_h = V0_h + G_h R_h.
+!> For h = 0: X_0 = K^{-1} (F_0 + W R_0) and the contact velocity is zero.
+!> The factorizations are done once (LAPACK zgetrf); afterwards only O(n_c^2) work per
+!> harmonic is left for the nonlinear solve. Only the data: no FFT, no friction law.
+module stickslip_dynamics
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_basis, only: basis_t
+    use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
+    implicit none
+    private
+    public :: dynamics_t, new_dynamics
+
+    !> Condensed linear dynamics on a basis.
+    type :: dynamics_t
+        !> Degrees of freedom N.
+        integer :: ndof = 0
+        !> Contacts n_c.
+        integer :: ncontact = 0
+        !> Fundamental angular frequency [rad/s].
+        real(dp) :: omega = 0.0_dp
+        !> X0_h = Z_h^{-1} F_h, N x nharm (complex amplitudes) [m].
+        complex(dp), allocatable :: x0(:, :)
+        !> Y_h = Z_h^{-1} W, N x n_c x nharm [m/N].
+        complex(dp), allocatable :: y(:, :, :)
+        !> V0_h = i h omega W^T X0_h, n_c x nharm [m/s].
+        complex(dp), allocatable :: v0(:, :)
+        !> G_h = i h omega W^T Y_h, n_c x n_c x nharm [m/(N s)].
+        complex(dp), allocatable :: g(:, :, :)
+        !> Static response K^{-1} F_0 (when the basis has the constant) [m].
+        real(dp), allocatable :: x0_static(:)
+        !> Static flexibility K^{-1} W, N x n_c (when the basis has the constant) [m/N].
+        real(dp), allocatable :: y_static(:, :)
+    contains
+        procedure :: contact_velocity
+        procedure :: displacement
+    end type dynamics_t
+
+    !> Dynamic stiffness whose reciprocal condition number is below this is called singular.
+    real(dp), parameter :: rcond_min = 1.0e-13_dp
+
+contains
+
+    !> Factorize the dynamic stiffness at every harmonic of `basis` and condense onto the
+    !> contacts. Errors: stat input if a forcing term's harmonic is not in the basis;
+    !> stat numerical if Z_h is singular (a natural frequency of the undamped structure at
+    !> h omega) or K is singular while the basis holds the constant.
+    subroutine new_dynamics(self, model, basis, error)
+        !> The condensed dynamics.
+        type(dynamics_t), intent(out) :: self
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        !> The harmonic basis.
+        type(basis_t), intent(in) :: basis
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: n, nc, ih, h, j, i, info
+        complex(dp), allocatable :: z(:, :), rhs(:, :), work(:)
+        real(dp), allocatable :: rwork(:)
+        integer, allocatable :: ipiv(:)
+        real(dp) :: anorm, rcond, w(model%ndof)
+        complex(dp) :: ihw
+        character(len=300) :: buf
+        logical :: placed
+
+        n = model%ndof
+        nc = model%ncontact()
+        self%ndof = n
+        self%ncontact = nc
+        self%omega = model%omega
+
+        do i = 1, model%nforce()
+            h = model%force_harmonic(i)
+            if (h == 0) then
+                placed = basis%has_zero
+            else
+                placed = any(basis%harm == h)
+            end if
+            if (.not. placed) then
+                write (buf, '(a,i0,a,i0,a)') "&forcing force_harmonic(", i, ") = ", h, &
+                    ": not in the harmonic basis (check &hbm harmonics and odd_only)"
+                call fatal_error(error, trim(buf), stickslip_stat%input)
+                return
+            end if
+        end do
+
+        allocate (self%x0(n, basis%nharm), self%y(n, nc, basis%nharm))
+        allocate (self%v0(nc, basis%nharm), self%g(nc, nc, basis%nharm))
+        allocate (z(n, n), rhs(n, nc + 1), ipiv(n), work(2*n), rwork(2*n))
+
+        do ih = 0, basis%nharm
+            if (ih == 0) then
+                if (.not. basis%has_zero) cycle
+                h = 0
+            else
+                h = basis%harm(ih)
+            end if
+            z = cmplx(model%stiffness - (h*model%omega)**2*model%mass, &
+                      h*model%omega*model%damping, dp)
+            anorm = zlange('1', n, n, z, n, rwork)
+            call zgetrf(n, n, z, n, ipiv, info)
+            if (info < 0) then
+                call fatal_error(error, "zgetrf: illegal argument", stickslip_stat%lapack)
+                return
+            end if
+            rcond = 0.0_dp
+            if (info == 0) then
+                call zgecon('1', n, z, n, anorm, rcond, work, rwork, info)
+            end if
+            if (.not. (rcond >= rcond_min)) then
+                if (h == 0) then
+                    write (buf, '(a,es9.2,a)') "the stiffness matrix K is singular (rcond = ", &
+                        rcond, "): the static (zeroth-harmonic) response is undetermined; "// &
+                        "restrain the rigid-body motion or set &hbm odd_only = .true."
+                else
+                    write (buf, '(a,i0,a,g0.6,a,es9.2,a)') "the dynamic stiffness "// &
+                        "K - (h omega)^2 M + i h omega C is singular at harmonic h = ", h, &
+                        " (h omega = ", h*model%omega, " rad/s, rcond = ", rcond, &
+                        "): a natural frequency of the undamped structure; "// &
+                        "the response is unbounded. Add damping or move omega"
+                end if
+                call fatal_error(error, trim(buf), stickslip_stat%numerical)
+                return
+            end if
+            rhs = (0.0_dp, 0.0_dp)
+            do i = 1, model%nforce()
+                if (model%force_harmonic(i) == h) then
+                    rhs(model%force_dof(i), 1) = rhs(model%force_dof(i), 1) + &
+                        model%force_amplitude(i)*exp(cmplx(0.0_dp, model%force_phase(i), dp))
+                end if
+            end do
+            do j = 1, nc
+                rhs(:, j + 1) = contact_velocity_direction(model, j)
+            end do
+            call zgetrs('N', n, nc + 1, z, n, ipiv, rhs, n, info)
+            if (h == 0) then
+                self%x0_static = real(rhs(:, 1), dp)
+                self%y_static = real(rhs(:, 2:), dp)
+                cycle
+            end if
+            self%x0(:, ih) = rhs(:, 1)
+            self%y(:, :, ih) = rhs(:, 2:)
+            ihw = cmplx(0.0_dp, h*model%omega, dp)
+            do j = 1, nc
+                w = contact_velocity_direction(model, j)
+                self%v0(j, ih) = ihw*sum(w*rhs(:, 1))
+                do i = 1, nc
+                    self%g(j, i, ih) = ihw*sum(w*rhs(:, i + 1))
+                end do
+            end do
+        end do
+    end subroutine new_dynamics
+
+    !> Contact slip-velocity coefficients V = V0 + G R (nb x n_c) for friction-force
+    !> coefficients R (nb x n_c), in the real coefficient layout of `basis`.
+    pure subroutine contact_velocity(self, basis, rcoef, vcoef)
+        !> The condensed dynamics.
+        class(dynamics_t), intent(in) :: self
+        !> The basis.
+        type(basis_t), intent(in) :: basis
+        !> Friction force coefficients, nb x n_c [N].
+        real(dp), intent(in) :: rcoef(:, :)
+        !> Contact velocity coefficients, nb x n_c [m/s].
+        real(dp), intent(out) :: vcoef(:, :)
+        integer :: ih, k, j
+        complex(dp) :: v(self%ncontact), r(self%ncontact)
+        if (basis%has_zero) vcoef(basis%i0, :) = 0.0_dp
+        do ih = 1, basis%nharm
+            k = basis%icos(ih)
+            r = cmplx(rcoef(k, :), -rcoef(k + 1, :), dp)
+            v = self%v0(:, ih)
+            do j = 1, self%ncontact
+                v = v + self%g(:, j, ih)*r(j)
+            end do
+            vcoef(k, :) = real(v, dp)
+            vcoef(k + 1, :) = -aimag(v)
+        end do
+    end subroutine contact_velocity
+
+    !> Displacement coefficients of every DOF, X = X0 + Y R (nb x N), for friction-force
+    !> coefficients R (nb x n_c).
+    pure subroutine displacement(self, basis, rcoef, xcoef)
+        !> The condensed dynamics.
+        class(dynamics_t), intent(in) :: self
+        !> The basis.
+        type(basis_t), intent(in) :: basis
+        !> Friction force coefficients, nb x n_c [N].
+        real(dp), intent(in) :: rcoef(:, :)
+        !> Displacement coefficients, nb x N [m].
+        real(dp), intent(out) :: xcoef(:, :)
+        integer :: ih, k, j
+        complex(dp) :: x(self%ndof), r(self%ncontact)
+        if (basis%has_zero) then
+            xcoef(basis%i0, :) = self%x0_static
+            do j = 1, self%ncontact
+                xcoef(basis%i0, :) = xcoef(basis%i0, :) + self%y_static(:, j)*rcoef(basis%i0, j)
+            end do
+        end if
+        do ih = 1, basis%nharm
+            k = basis%icos(ih)
+            r = cmplx(rcoef(k, :), -rcoef(k + 1, :), dp)
+            x = self%x0(:, ih)
+            do j = 1, self%ncontact
+                x = x + self%y(:, j, ih)*r(j)
+            end do
+            xcoef(k, :) = real(x, dp)
+            xcoef(k + 1, :) = -aimag(x)
+        end do
+    end subroutine displacement
+end module stickslip_dynamics

@@ -1,0 +1,66 @@
+!> Error handling: an allocatable `error_type` returned as the last argument of anything that
+!> can fail. Library code never stops and never prints; only the app turns errors into exit codes.
+module stickslip_error
+    implicit none
+    private
+    public :: error_type, fatal_error, stickslip_stat, exit_code_of
+
+    !> Error categories (`error_type%stat`).
+    type :: stat_enum_t
+        !> Bad input: case file, model data, options.
+        integer :: input = 1
+        !> Numerical failure: singular dynamic stiffness, non-converged solve, NaN.
+        integer :: numerical = 2
+        !> File input/output failure.
+        integer :: io = 3
+        !> A LAPACK routine reported an argument error.
+        integer :: lapack = 4
+        !> A user callback asked to stop.
+        integer :: callback = 5
+        !> Impossible state (a bug).
+        integer :: internal = 6
+    end type stat_enum_t
+
+    !> The one instance of the error categories.
+    type(stat_enum_t), parameter :: stickslip_stat = stat_enum_t()
+
+    !> An error: a category and a message meant for a person.
+    type :: error_type
+        !> Category, one of `stickslip_stat`.
+        integer :: stat = 1
+        !> Message naming what went wrong and where.
+        character(len=:), allocatable :: message
+    end type error_type
+
+contains
+
+    !> Create an error with `message` and category `stat` (default: input).
+    pure subroutine fatal_error(error, message, stat)
+        !> The error to create.
+        type(error_type), allocatable, intent(out) :: error
+        !> What went wrong, where.
+        character(len=*), intent(in) :: message
+        !> Category (`stickslip_stat%...`).
+        integer, intent(in), optional :: stat
+        allocate (error)
+        error%message = message
+        if (present(stat)) error%stat = stat
+    end subroutine fatal_error
+
+    !> Process exit code for an error category: 1 input/usage, 2 numerical failure, 3 I/O,
+    !> 4 internal or library failure.
+    pure integer function exit_code_of(stat) result(code)
+        !> Error category.
+        integer, intent(in) :: stat
+        select case (stat)
+        case (stickslip_stat%input)
+            code = 1
+        case (stickslip_stat%numerical)
+            code = 2
+        case (stickslip_stat%io)
+            code = 3
+        case default
+            code = 4
+        end select
+    end function exit_code_of
+end module stickslip_error

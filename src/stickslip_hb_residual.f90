@@ -1,0 +1,189 @@
+!> The projected friction equations of the weighted-residual method and their exact
+!> generalized Jacobian.
+!>
+!> Unknowns: the friction-force coefficients R (nb x n_c, stored contact after contact).
+!> Equations: for each contact j, the Galerkin projection of Psi(r_j(t), v_j(t)) on the basis,
+!> by uniform quadrature (FFT), with the contact velocities V = V0 + G R from the exact
+!> condensation (stickslip_dynamics). Jacobian, with s_j(t) the stick indicator and
+!> A_j = P diag(s_j) Q built from one FFT of s_j (stickslip_basis%stick_product):
+!>     dF_j / dR_l = A_j G_jl + delta_jl rho (I - A_j).
+module stickslip_hb_residual
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_model, only: model_t
+    use stickslip_basis, only: basis_t, new_basis
+    use stickslip_dynamics, only: dynamics_t, new_dynamics
+    use stickslip_friction, only: psi, psi_stick
+    use stickslip_nonlinear, only: nonlinear_system_t
+    implicit none
+    private
+    public :: hb_problem_t, new_hb_problem
+
+    !> The projected friction equations of one model on one basis. Owns its work arrays:
+    !> use one instance per thread.
+    type, extends(nonlinear_system_t) :: hb_problem_t
+        !> The basis (owns FFT plans: call destroy when done).
+        type(basis_t) :: basis
+        !> Condensed linear dynamics.
+        type(dynamics_t) :: dyn
+        !> Number of contacts.
+        integer :: nc = 0
+        !> Number of unknowns nb * n_c.
+        integer :: n = 0
+        !> Weight rho of Psi.
+        real(dp) :: rho = 0.0_dp
+        !> Friction limits mu_j N_j [N].
+        real(dp), allocatable :: limit(:)
+        real(dp), allocatable, private :: rs(:), vs(:), ps(:), rc(:, :), vc(:, :), a(:, :)
+        complex(dp), allocatable, private :: cw(:)
+    contains
+        procedure :: residual => hb_residual
+        procedure :: jacobian => hb_jacobian
+        procedure :: contact_samples
+        procedure :: destroy => hb_destroy
+    end type hb_problem_t
+
+contains
+
+    !> Build the problem for `model` on the basis of highest harmonic `harmonics` (all or odd
+    !> only) with `samples` quadrature points and weight `rho` > 0. Errors: stat input for
+    !> bad sizes or rho, a forcing harmonic outside the basis; stat numerical for a singular
+    !> dynamic stiffness (see new_dynamics).
+    subroutine new_hb_problem(self, model, harmonics, odd_only, samples, rho, error)
+        !> The problem.
+        type(hb_problem_t), intent(out) :: self
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        !> Highest harmonic H.
+        integer, intent(in) :: harmonics
+        !> Odd harmonics only.
+        logical, intent(in) :: odd_only
+        !> Quadrature samples per period.
+        integer, intent(in) :: samples
+        !> Weight rho > 0 [m/(N s)].
+        real(dp), intent(in) :: rho
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: nb, nc, nt
+        character(len=100) :: buf
+
+        if (.not. (rho > 0.0_dp) .or. rho > huge(rho)) then
+            write (buf, '(a,g0.6,a)') "&hbm rho = ", rho, ": must be finite and > 0"
+            call fatal_error(error, trim(buf), stickslip_stat%input)
+            return
+        end if
+        call new_basis(self%basis, harmonics, odd_only, samples, error)
+        if (allocated(error)) return
+        call new_dynamics(self%dyn, model, self%basis, error)
+        if (allocated(error)) then
+            call self%basis%destroy()
+            return
+        end if
+        nb = self%basis%nb
+        nc = model%ncontact()
+        nt = samples
+        self%nc = nc
+        self%n = nb*nc
+        self%rho = rho
+        self%limit = model%mu*model%normal_load
+        allocate (self%rs(nt), self%vs(nt), self%ps(nt), self%cw(nt/2 + 1))
+        allocate (self%rc(nb, nc), self%vc(nb, nc), self%a(nb, nb))
+    end subroutine new_hb_problem
+
+    !> F(R): projections of Psi(r_j, v_j) for every contact [m/s]. stat is left unchanged
+    !> unless a NaN appears (stat = 1).
+    subroutine hb_residual(self, x, f, stat)
+        !> The problem.
+        class(hb_problem_t), intent(inout) :: self
+        !> Friction force coefficients, contact after contact (length nb * n_c) [N].
+        real(dp), intent(in) :: x(:)
+        !> Projected residuals (length nb * n_c).
+        real(dp), intent(out) :: f(:)
+        !> Callback status.
+        integer, intent(inout) :: stat
+        integer :: j, nb
+        nb = self%basis%nb
+        self%rc = reshape(x, [nb, self%nc])
+        call self%dyn%contact_velocity(self%basis, self%rc, self%vc)
+        do j = 1, self%nc
+            call self%basis%synthesize(self%rc(:, j), self%rs, self%cw)
+            call self%basis%synthesize(self%vc(:, j), self%vs, self%cw)
+            self%ps = psi(self%rs, self%vs, self%limit(j), self%rho)
+            call self%basis%analyse(self%ps, f((j - 1)*nb + 1:j*nb), self%cw)
+        end do
+        if (any(f /= f)) stat = 1
+    end subroutine hb_residual
+
+    !> dF/dR, an element of the generalized (Clarke) Jacobian; exact, no finite differences.
+    subroutine hb_jacobian(self, x, jac, stat)
+        !> The problem.
+        class(hb_problem_t), intent(inout) :: self
+        !> Friction force coefficients (length nb * n_c) [N].
+        real(dp), intent(in) :: x(:)
+        !> Jacobian, (nb n_c) x (nb n_c).
+        real(dp), intent(out) :: jac(:, :)
+        !> Callback status.
+        integer, intent(inout) :: stat
+        integer :: j, l, nb, ih, k, rj, cl, i
+        real(dp) :: gr, gi
+        nb = self%basis%nb
+        self%rc = reshape(x, [nb, self%nc])
+        call self%dyn%contact_velocity(self%basis, self%rc, self%vc)
+        jac = 0.0_dp
+        do j = 1, self%nc
+            call self%basis%synthesize(self%rc(:, j), self%rs, self%cw)
+            call self%basis%synthesize(self%vc(:, j), self%vs, self%cw)
+            self%ps = psi_stick(self%rs, self%vs, self%limit(j), self%rho)
+            call self%basis%fft%forward(self%ps, self%cw)
+            self%cw = self%cw/real(self%basis%nt, dp)
+            call self%basis%stick_product(self%cw, self%a)
+            rj = (j - 1)*nb
+            do l = 1, self%nc
+                cl = (l - 1)*nb
+                do ih = 1, self%basis%nharm
+                    k = self%basis%icos(ih)
+                    gr = real(self%dyn%g(j, l, ih), dp)
+                    gi = aimag(self%dyn%g(j, l, ih))
+                    jac(rj + 1:rj + nb, cl + k) = gr*self%a(:, k) - gi*self%a(:, k + 1)
+                    jac(rj + 1:rj + nb, cl + k + 1) = gi*self%a(:, k) + gr*self%a(:, k + 1)
+                end do
+            end do
+            do i = 1, nb
+                jac(rj + 1:rj + nb, rj + i) = jac(rj + 1:rj + nb, rj + i) - self%rho*self%a(:, i)
+                jac(rj + i, rj + i) = jac(rj + i, rj + i) + self%rho
+            end do
+        end do
+        if (any(jac /= jac)) stat = 1
+    end subroutine hb_jacobian
+
+    !> Samples of the friction force r_j, slip velocity v_j and stick indicator s_j of every
+    !> contact at the nt quadrature instants, for unknowns x.
+    subroutine contact_samples(self, x, r, v, s)
+        !> The problem.
+        class(hb_problem_t), intent(inout) :: self
+        !> Friction force coefficients (length nb * n_c) [N].
+        real(dp), intent(in) :: x(:)
+        !> Friction forces, nt x n_c [N].
+        real(dp), intent(out) :: r(:, :)
+        !> Slip velocities, nt x n_c [m/s].
+        real(dp), intent(out) :: v(:, :)
+        !> Stick indicators, nt x n_c.
+        real(dp), intent(out) :: s(:, :)
+        integer :: j, nb
+        nb = self%basis%nb
+        self%rc = reshape(x, [nb, self%nc])
+        call self%dyn%contact_velocity(self%basis, self%rc, self%vc)
+        do j = 1, self%nc
+            call self%basis%synthesize(self%rc(:, j), r(:, j), self%cw)
+            call self%basis%synthesize(self%vc(:, j), v(:, j), self%cw)
+            s(:, j) = psi_stick(r(:, j), v(:, j), self%limit(j), self%rho)
+        end do
+    end subroutine contact_samples
+
+    !> Release the FFT plans of the problem's basis.
+    subroutine hb_destroy(self)
+        !> The problem.
+        class(hb_problem_t), intent(inout) :: self
+        call self%basis%destroy()
+    end subroutine hb_destroy
+end module stickslip_hb_residual

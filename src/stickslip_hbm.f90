@@ -1,0 +1,408 @@
+!> The weighted-residual (harmonic balance) solve of the periodic response: the entry point
+!> a structural code calls with a model built in memory.
+!>
+!> Flow: validate -> condense the linear dynamics on the contacts -> solve the projected
+!> friction equations for the friction-force coefficients with hybrj (exact generalized
+!> Jacobian; a ladder of warm starts from fewer harmonics when a cold start stalls) ->
+!> settle an undetermined mean force -> recover every DOF -> energy balance and samples.
+module stickslip_hbm
+    use, intrinsic :: iso_fortran_env, only: int64
+    use stickslip_kinds, only: dp, two_pi
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
+    use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
+    implicit none
+    private
+    public :: solve_periodic, validate_options
+
+    !> hybrj calls per stage: the first plus restarts from the last iterate.
+    integer, parameter :: max_calls_per_stage = 4
+    !> Lowest harmonic of the warm-start ladder.
+    integer, parameter :: ladder_first = 3
+
+contains
+
+    !> Check solver options. Errors (stat input) name the &hbm variable.
+    subroutine validate_options(opts, error)
+        !> Options to check.
+        type(hbm_options_t), intent(in) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=200) :: buf
+        if (opts%harmonics < 0 .or. (opts%odd_only .and. opts%harmonics < 1)) then
+            write (buf, '(a,i0,a)') "&hbm harmonics = ", opts%harmonics, &
+                ": must be >= 0 (>= 1 with odd_only)"
+        else if (opts%samples < 2*opts%harmonics + 1) then
+            write (buf, '(a,i0,a,i0,a,i0,a)') "&hbm samples = ", opts%samples, &
+                ": too few samples for the harmonics: need samples >= 2*harmonics+1 = ", &
+                2*opts%harmonics + 1, " (harmonics = ", opts%harmonics, ")"
+        else if (.not. (opts%rho > 0.0_dp) .or. opts%rho > huge(1.0_dp)) then
+            write (buf, '(a,g0.6,a)') "&hbm rho = ", opts%rho, ": must be finite and > 0"
+        else if (.not. (opts%tol > 0.0_dp) .or. opts%tol >= 1.0_dp) then
+            write (buf, '(a,g0.6,a)') "&hbm tol = ", opts%tol, ": must be in (0, 1)"
+        else if (.not. (opts%xtol >= 0.0_dp) .or. opts%xtol >= 1.0_dp) then
+            write (buf, '(a,g0.6,a)') "&hbm xtol = ", opts%xtol, ": must be in [0, 1)"
+        else if (opts%maxfev < 0) then
+            write (buf, '(a,i0,a)') "&hbm maxfev = ", opts%maxfev, ": must be >= 0 (0: automatic)"
+        else if (opts%start /= 'auto' .and. opts%start /= 'direct' .and. opts%start /= 'ladder') then
+            write (buf, '(a)') "&hbm start = '"//trim(opts%start)// &
+                "': must be 'auto', 'direct' or 'ladder'"
+        else
+            return
+        end if
+        call fatal_error(error, trim(buf), stickslip_stat%input)
+    end subroutine validate_options
+
+    !> Periodic response of `model` by the weighted-residual method with options `opts`.
+    !> Optionally start from friction-force coefficients `r_start` (nb x n_c, the layout of
+    !> hbm_solution_t%rcoef for the same basis; a start from fewer harmonics is embedded).
+    !> A non-converged solve is an outcome: sol%converged = .false. and sol%diagnosis says
+    !> why. Errors: stat input (invalid model or options), stat numerical (singular dynamic
+    !> stiffness, NaN in the residual).
+    subroutine solve_periodic(model, opts, sol, error, r_start)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> Solver options.
+        type(hbm_options_t), intent(in) :: opts
+        !> The solution and its convergence report.
+        type(hbm_solution_t), intent(out) :: sol
+        !> Set on invalid input or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        !> Optional start for the friction-force coefficients [N].
+        real(dp), intent(in), optional :: r_start(:, :)
+        type(hb_problem_t) :: prob
+        real(dp), allocatable :: y(:), vzero(:, :)
+        integer(int64) :: c0, c1, rate
+        integer :: nb, nc, ncopy
+        real(dp) :: target_norm
+
+        call system_clock(c0, rate)
+        call validate_model(model, error)
+        if (allocated(error)) return
+        call validate_options(opts, error)
+        if (allocated(error)) return
+        call new_hb_problem(prob, model, opts%harmonics, opts%odd_only, opts%samples, opts%rho, &
+                            error)
+        if (allocated(error)) return
+
+        nb = prob%basis%nb
+        nc = prob%nc
+        sol%harmonics = opts%harmonics
+        sol%odd_only = opts%odd_only
+        sol%samples = opts%samples
+        sol%nb = nb
+        sol%omega = model%omega
+        sol%harmonic = prob%basis%harmonic_of([(ncopy, ncopy=1, nb)])
+
+        allocate (y(prob%n), vzero(nb, nc))
+        y = 0.0_dp
+        if (present(r_start)) then
+            if (size(r_start, 2) /= nc .or. size(r_start, 1) > nb) then
+                call fatal_error(error, "solve_periodic: r_start must be nb x n_c "// &
+                                 "(nb at most that of the requested basis)", stickslip_stat%input)
+                call prob%destroy()
+                return
+            end if
+            ncopy = size(r_start, 1)
+            vzero = 0.0_dp
+            vzero(1:ncopy, :) = r_start
+            y = reshape(vzero, [prob%n])
+        end if
+        block
+            real(dp) :: rzero(nb, nc), vfree(nb, nc)
+            rzero = 0.0_dp
+            call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
+            sol%fscale = norm2(vfree)
+        end block
+        if (nc > 0) sol%fscale = max(sol%fscale, opts%rho*maxval(prob%limit))
+        target_norm = opts%tol*sol%fscale
+
+        if (nc == 0) then
+            sol%converged = .true.
+            sol%fnorm = 0.0_dp
+        else
+            select case (opts%start)
+            case ('ladder')
+                call solve_ladder(model, opts, prob, y, target_norm, sol, error)
+            case default
+                call solve_stage(prob, y, opts, target_norm, sol, error)
+                if (.not. allocated(error) .and. .not. sol%converged .and. opts%start == 'auto' &
+                    .and. opts%harmonics > ladder_first) then
+                    y = 0.0_dp
+                    if (present(r_start)) y = reshape(vzero, [prob%n])
+                    call solve_ladder(model, opts, prob, y, target_norm, sol, error)
+                end if
+            end select
+            if (allocated(error)) then
+                call prob%destroy()
+                return
+            end if
+        end if
+
+        if (.not. sol%converged) then
+            block
+                character(len=400) :: buf
+                write (buf, '(a,es10.3,a,es10.3,a,i0,a,i0,a,i0,a)') &
+                    "not converged: residual ||F|| = ", sol%fnorm, " > tol * fscale = ", &
+                    target_norm, " (hybrj info ", sol%info, ", ", sol%nfev, &
+                    " evaluations, ", sol%hybrj_calls, " hybrj calls). Try &hbm start = "// &
+                    "'ladder', a smaller rho, more samples, or a start from a nearby solution"
+                sol%diagnosis = trim(buf)
+            end block
+        else
+            sol%diagnosis = ""
+        end if
+
+        call finish_solution(model, opts, prob, y, sol)
+        call prob%destroy()
+        call system_clock(c1)
+        sol%seconds = real(c1 - c0, dp)/real(rate, dp)
+    end subroutine solve_periodic
+
+    !> One solve on a fixed basis: hybrj, then restarts from the last iterate while it
+    !> stops short of the target without exhausting its evaluations.
+    subroutine solve_stage(prob, y, opts, target_norm, sol, error)
+        type(hb_problem_t), intent(inout) :: prob
+        real(dp), intent(inout) :: y(:)
+        type(hbm_options_t), intent(in) :: opts
+        real(dp), intent(in) :: target_norm
+        type(hbm_solution_t), intent(inout) :: sol
+        type(error_type), allocatable, intent(out) :: error
+        type(hybrj_options_t) :: hopts
+        type(hybrj_report_t) :: report
+        integer :: call_no
+
+        hopts%xtol = opts%xtol
+        hopts%maxfev = opts%maxfev
+        hopts%mode = 1
+        if (opts%stop_at_tol) hopts%ftarget = target_norm
+        sol%converged = .false.
+        do call_no = 1, max_calls_per_stage
+            call solve_hybrj(prob, y, hopts, report, error)
+            sol%nfev = sol%nfev + report%nfev
+            sol%njev = sol%njev + report%njev
+            sol%hybrj_calls = sol%hybrj_calls + 1
+            if (allocated(error)) then
+                if (error%stat == stickslip_stat%callback) then
+                    error%message = "the residual or its Jacobian became NaN during the solve"
+                    error%stat = stickslip_stat%numerical
+                end if
+                return
+            end if
+            sol%info = report%info
+            sol%fnorm = report%fnorm
+            if (report%target_met .or. report%fnorm <= target_norm) then
+                sol%converged = .true.
+                return
+            end if
+            if (report%info == 2) return
+        end do
+    end subroutine solve_stage
+
+    !> Climb from `ladder_first` harmonics, doubling, each stage warm-started from the one
+    !> before (the lower basis is a prefix of the higher one), up to the requested basis.
+    subroutine solve_ladder(model, opts, prob, y, target_norm, sol, error)
+        type(model_t), intent(in) :: model
+        type(hbm_options_t), intent(in) :: opts
+        type(hb_problem_t), intent(inout) :: prob
+        real(dp), intent(inout) :: y(:)
+        real(dp), intent(in) :: target_norm
+        type(hbm_solution_t), intent(inout) :: sol
+        type(error_type), allocatable, intent(out) :: error
+        type(hb_problem_t) :: low
+        real(dp), allocatable :: ylow(:), rlow(:, :), rfull(:, :)
+        integer :: h, nbl, nb, nc
+        real(dp) :: low_target
+
+        nb = prob%basis%nb
+        nc = prob%nc
+        allocate (rfull(nb, nc))
+        rfull = reshape(y, [nb, nc])
+        h = ladder_first
+        do while (h < opts%harmonics)
+            call new_hb_problem(low, model, h, opts%odd_only, opts%samples, opts%rho, error)
+            if (allocated(error)) return
+            nbl = low%basis%nb
+            rlow = rfull(1:nbl, :)
+            ylow = reshape(rlow, [nbl*nc])
+            ! the stages only need to be good starts: a looser target
+            low_target = max(target_norm, 1.0e-6_dp*sol%fscale)
+            call solve_stage(low, ylow, opts, low_target, sol, error)
+            call low%destroy()
+            if (allocated(error)) return
+            rfull(1:nbl, :) = reshape(ylow, [nbl, nc])
+            h = 2*h
+        end do
+        y = reshape(rfull, [nb*nc])
+        call solve_stage(prob, y, opts, target_norm, sol, error)
+    end subroutine solve_ladder
+
+    !> Settle undetermined mean forces, recover every DOF, energies, stick statistics and
+    !> samples.
+    subroutine finish_solution(model, opts, prob, y, sol)
+        type(model_t), intent(in) :: model
+        type(hbm_options_t), intent(in) :: opts
+        type(hb_problem_t), intent(inout) :: prob
+        real(dp), intent(inout) :: y(:)
+        type(hbm_solution_t), intent(inout) :: sol
+        real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:)
+        complex(dp), allocatable :: cw(:)
+        integer :: nb, nc, nt, n, j, i, k, p, q, i0
+        real(dp) :: period, lo, hi, shift
+
+        nb = prob%basis%nb
+        nc = prob%nc
+        nt = prob%basis%nt
+        n = model%ndof
+        i0 = prob%basis%i0
+        period = two_pi/model%omega
+        allocate (rs(nt, nc), vs(nt, nc), ss(nt, nc), sol%offset_undetermined(nc))
+        sol%offset_undetermined = .false.
+        if (nc > 0) call prob%contact_samples(y, rs, vs, ss)
+
+        ! A contact stuck over the whole period holds any mean force in an interval:
+        ! choose the admissible value closest to zero (minimum norm), never an arbitrary one.
+        if (prob%basis%has_zero) then
+            do j = 1, nc
+                if (all(ss(:, j) > 0.5_dp)) then
+                    sol%offset_undetermined(j) = .true.
+                    k = (j - 1)*nb + i0
+                    lo = -prob%limit(j) - minval(rs(:, j) - y(k))
+                    hi = prob%limit(j) - maxval(rs(:, j) - y(k))
+                    shift = min(max(0.0_dp, lo), hi) - y(k)
+                    y(k) = y(k) + shift
+                    rs(:, j) = rs(:, j) + shift
+                end if
+            end do
+        end if
+
+        sol%rcoef = reshape(y, [nb, nc])
+        allocate (sol%xcoef(nb, n), sol%vcoef(nb, n))
+        call prob%dyn%displacement(prob%basis, sol%rcoef, sol%xcoef)
+        do p = 1, n
+            call prob%basis%derivative(sol%xcoef(:, p), model%omega, sol%vcoef(:, p))
+        end do
+
+        allocate (sol%stick_fraction(nc), sol%stick_phases(nc))
+        do j = 1, nc
+            sol%stick_fraction(j) = sum(ss(:, j))/real(nt, dp)
+            sol%stick_phases(j) = count_phases(ss(:, j) > 0.5_dp, &
+                                               max(1, nt/(2*max(1, opts%harmonics))))
+        end do
+
+        ! energy balance over one period, exact for the truncated series (Parseval)
+        allocate (fcoef(nb, n), vc(nb, nc))
+        fcoef = 0.0_dp
+        do i = 1, model%nforce()
+            p = model%force_dof(i)
+            if (model%force_harmonic(i) == 0) then
+                fcoef(i0, p) = fcoef(i0, p) + model%force_amplitude(i)*cos(model%force_phase(i))
+            else
+                k = prob%basis%icos(findloc(prob%basis%harm, model%force_harmonic(i), 1))
+                fcoef(k, p) = fcoef(k, p) + model%force_amplitude(i)*cos(model%force_phase(i))
+                fcoef(k + 1, p) = fcoef(k + 1, p) - model%force_amplitude(i)*sin(model%force_phase(i))
+            end if
+        end do
+        do j = 1, nc
+            vc(:, j) = matmul(sol%vcoef, contact_velocity_direction(model, j))
+        end do
+        sol%work_forcing = 0.0_dp
+        do p = 1, n
+            sol%work_forcing = sol%work_forcing + inner(fcoef(:, p), sol%vcoef(:, p))
+        end do
+        sol%diss_friction = 0.0_dp
+        sol%diss_coulomb = 0.0_dp
+        do j = 1, nc
+            sol%diss_friction = sol%diss_friction - inner(sol%rcoef(:, j), vc(:, j))
+            sol%diss_coulomb = sol%diss_coulomb + prob%limit(j)*period*sum(abs(vs(:, j)))/nt
+        end do
+        sol%diss_damping = 0.0_dp
+        do q = 1, n
+            do p = 1, n
+                if (model%damping(p, q) /= 0.0_dp) sol%diss_damping = sol%diss_damping + &
+                    model%damping(p, q)*inner(sol%vcoef(:, p), sol%vcoef(:, q))
+            end do
+        end do
+
+        if (opts%want_samples) then
+            allocate (sol%t(nt), sol%x(nt, n), sol%v(nt, n), work(nt), cw(nt/2 + 1))
+            sol%t = [(period*real(k, dp)/real(nt, dp), k=0, nt - 1)]
+            do p = 1, n
+                call prob%basis%synthesize(sol%xcoef(:, p), sol%x(:, p), cw)
+                call prob%basis%synthesize(sol%vcoef(:, p), sol%v(:, p), cw)
+            end do
+            sol%r = rs
+            sol%stick = ss
+        end if
+
+    contains
+
+        !> integral over one period of the product of two functions given by coefficients
+        pure real(dp) function inner(a, b)
+            real(dp), intent(in) :: a(:), b(:)
+            inner = 0.5_dp*period*dot_product(a, b)
+            if (i0 > 0) inner = inner + 0.5_dp*period*a(i0)*b(i0)
+        end function inner
+    end subroutine finish_solution
+
+    !> Number of stick phases in one period of the cyclic stick indicator `stick`, counted at
+    !> the resolution of the basis: slip gaps and stick phases shorter than `minlen` samples
+    !> (half a period of the highest harmonic) are ripples of the truncated series around the
+    !> friction limit, not phases: gaps are closed, then short phases are not counted.
+    pure integer function count_phases(stick, minlen) result(phases)
+        !> Stick indicator at the samples.
+        logical, intent(in) :: stick(:)
+        !> Shortest run, in samples, the basis can resolve.
+        integer, intent(in) :: minlen
+        logical :: s(size(stick))
+        integer :: nt, k, first, len
+        nt = size(stick)
+        phases = 0
+        if (all(stick)) phases = 1
+        if (all(stick) .or. .not. any(stick)) return
+        first = 1
+        do k = 1, nt
+            if (stick(k) .neqv. stick(modulo(k - 2, nt) + 1)) then
+                first = k
+                exit
+            end if
+        end do
+        s = cshift(stick, first - 1)
+        ! close short slip gaps
+        k = 1
+        do while (k <= nt)
+            len = run_length(k)
+            if (.not. s(k) .and. len < minlen) s(k:k + len - 1) = .true.
+            k = k + len
+        end do
+        if (all(s)) then
+            phases = 1
+            return
+        end if
+        ! count the stick runs the basis resolves (a run may now wrap around the end)
+        if (s(1)) then
+            do while (s(1))
+                s = cshift(s, 1)
+            end do
+        end if
+        k = 1
+        do while (k <= nt)
+            len = run_length(k)
+            if (s(k) .and. len >= minlen) phases = phases + 1
+            k = k + len
+        end do
+
+    contains
+
+        pure integer function run_length(k0)
+            integer, intent(in) :: k0
+            run_length = 1
+            do while (k0 + run_length <= nt)
+                if (s(k0 + run_length) .neqv. s(k0)) exit
+                run_length = run_length + 1
+            end do
+        end function run_length
+    end function count_phases
+end module stickslip_hbm

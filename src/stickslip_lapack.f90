@@ -1,0 +1,62 @@
+!> Explicit interfaces to the few LAPACK routines stickslip calls (system liblapack).
+!> Only interfaces: no state, no wrappers that hide `info`.
+module stickslip_lapack
+    use stickslip_kinds, only: dp
+    implicit none
+    private
+    public :: dpotrf, zgetrf, zgetrs, zgecon, zlange
+
+    interface
+        !> Cholesky factorization of a real symmetric positive definite matrix.
+        subroutine dpotrf(uplo, n, a, lda, info)
+            import :: dp
+            character(len=1), intent(in) :: uplo
+            integer, intent(in) :: n, lda
+            real(dp), intent(inout) :: a(lda, *)
+            integer, intent(out) :: info
+        end subroutine dpotrf
+
+        !> LU factorization of a general complex matrix with partial pivoting.
+        subroutine zgetrf(m, n, a, lda, ipiv, info)
+            import :: dp
+            integer, intent(in) :: m, n, lda
+            complex(dp), intent(inout) :: a(lda, *)
+            integer, intent(out) :: ipiv(*)
+            integer, intent(out) :: info
+        end subroutine zgetrf
+
+        !> Solve with the LU factors from zgetrf.
+        subroutine zgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+            import :: dp
+            character(len=1), intent(in) :: trans
+            integer, intent(in) :: n, nrhs, lda, ldb
+            complex(dp), intent(in) :: a(lda, *)
+            integer, intent(in) :: ipiv(*)
+            complex(dp), intent(inout) :: b(ldb, *)
+            integer, intent(out) :: info
+        end subroutine zgetrs
+
+        !> Reciprocal condition number estimate from the LU factors.
+        subroutine zgecon(norm, n, a, lda, anorm, rcond, work, rwork, info)
+            import :: dp
+            character(len=1), intent(in) :: norm
+            integer, intent(in) :: n, lda
+            complex(dp), intent(in) :: a(lda, *)
+            real(dp), intent(in) :: anorm
+            real(dp), intent(out) :: rcond
+            complex(dp), intent(out) :: work(*)
+            real(dp), intent(out) :: rwork(*)
+            integer, intent(out) :: info
+        end subroutine zgecon
+
+        !> Matrix norm of a complex matrix.
+        function zlange(norm, m, n, a, lda, work) result(anorm)
+            import :: dp
+            character(len=1), intent(in) :: norm
+            integer, intent(in) :: m, n, lda
+            complex(dp), intent(in) :: a(lda, *)
+            real(dp), intent(out) :: work(*)
+            real(dp) :: anorm
+        end function zlange
+    end interface
+end module stickslip_lapack

@@ -1,0 +1,106 @@
+!> What a weighted-residual solve is asked (options) and what it returns (solution):
+!> coefficients, the convergence report, per-contact diagnostics, the energy balance and,
+!> on request, time samples. Plain data; filled by stickslip_hbm.
+module stickslip_solution
+    use stickslip_kinds, only: dp
+    implicit none
+    private
+    public :: hbm_options_t, hbm_solution_t
+
+    !> Options of the weighted-residual (harmonic balance) solve.
+    type :: hbm_options_t
+        !> Highest harmonic H of the basis.
+        integer :: harmonics = 30
+        !> Use only the odd harmonics 1, 3, .., <= H (no constant term).
+        logical :: odd_only = .false.
+        !> Weight rho > 0 of the friction equality Psi [m/(N s)].
+        real(dp) :: rho = 0.2_dp
+        !> Quadrature samples per period nt (>= 2 H + 1).
+        integer :: samples = 1024
+        !> Convergence: ||F||_2 <= tol * fscale (see hbm_solution_t%fscale).
+        real(dp) :: tol = 1.0e-9_dp
+        !> hybrj's relative step tolerance.
+        real(dp) :: xtol = 1.0e-13_dp
+        !> Maximum residual evaluations per hybrj call (0: 200 * (n + 1)).
+        integer :: maxfev = 0
+        !> Start strategy: 'auto' (cold start at H, then the harmonic ladder if that fails),
+        !> 'direct' (only the cold start) or 'ladder' (always climb from few harmonics).
+        character(len=8) :: start = 'auto'
+        !> Stop hybrj as soon as a residual meets the tolerance (reported as hybrj info -1);
+        !> .false. lets hybrj run to its own step-size test (info 1, or 4/5 at a kink).
+        logical :: stop_at_tol = .true.
+        !> Also return time samples of x, v, r and the stick indicator.
+        logical :: want_samples = .true.
+    end type hbm_options_t
+
+    !> Result of a weighted-residual solve. Coefficient vectors follow stickslip_basis:
+    !> [c0, a_h1, b_h1, ...], u(t) = c0 + sum a_h cos(h omega t) + b_h sin(h omega t).
+    type :: hbm_solution_t
+        !> The residual met the tolerance.
+        logical :: converged = .false.
+        !> hybrj's info of the last call: -1 stopped by stickslip because the residual met
+        !> the tolerance (the usual outcome), 1 xtol met, 2 maxfev reached, 4 or 5 no
+        !> progress (README, "Convergence").
+        integer :: info = 0
+        !> Residual evaluations, all stages and restarts included.
+        integer :: nfev = 0
+        !> Jacobian evaluations, all stages and restarts included.
+        integer :: njev = 0
+        !> Number of hybrj calls made (ladder stages and restarts).
+        integer :: hybrj_calls = 0
+        !> Final residual norm ||F||_2 of the projected friction equations [m/s].
+        real(dp) :: fnorm = huge(1.0_dp)
+        !> Residual scale: max(||V0||_2, rho * max_j mu_j N_j), V0 the contact velocities
+        !> of the structure without friction forces [m/s].
+        real(dp) :: fscale = 0.0_dp
+        !> Wall-clock seconds spent in the solve (condensation, hybrj, recovery).
+        real(dp) :: seconds = 0.0_dp
+        !> Empty when converged, otherwise what went wrong and what to try.
+        character(len=:), allocatable :: diagnosis
+        !> Highest harmonic H.
+        integer :: harmonics = 0
+        !> Odd harmonics only.
+        logical :: odd_only = .false.
+        !> Samples per period nt.
+        integer :: samples = 0
+        !> Number of basis functions per unknown function.
+        integer :: nb = 0
+        !> Fundamental angular frequency [rad/s].
+        real(dp) :: omega = 0.0_dp
+        !> Harmonic of each coefficient index (0 for the constant), length nb.
+        integer, allocatable :: harmonic(:)
+        !> Displacement coefficients, nb x N [m].
+        real(dp), allocatable :: xcoef(:, :)
+        !> Velocity coefficients, nb x N [m/s].
+        real(dp), allocatable :: vcoef(:, :)
+        !> Friction force coefficients, nb x n_c [N] (the unknowns of the nonlinear solve).
+        real(dp), allocatable :: rcoef(:, :)
+        !> Fraction of the samples in the stick region, per contact.
+        real(dp), allocatable :: stick_fraction(:)
+        !> Number of stick phases per period, per contact.
+        integer, allocatable :: stick_phases(:)
+        !> True for a contact that sticks over the whole period while the basis holds the
+        !> constant: its mean force is undetermined and the admissible value closest to zero
+        !> was chosen (README, "Undetermined offset").
+        logical, allocatable :: offset_undetermined(:)
+        !> Work of the forcing over one period [J].
+        real(dp) :: work_forcing = 0.0_dp
+        !> Energy dissipated by friction over one period, -integral r . W^T v dt [J].
+        real(dp) :: diss_friction = 0.0_dp
+        !> Coulomb dissipation over one period, integral mu N |W^T v| dt [J]; equals
+        !> diss_friction for an exact solution of Coulomb's law.
+        real(dp) :: diss_coulomb = 0.0_dp
+        !> Energy dissipated by viscous damping over one period, integral v^T C v dt [J].
+        real(dp) :: diss_damping = 0.0_dp
+        !> Sample instants t_k = k T / nt [s] (when samples were asked for).
+        real(dp), allocatable :: t(:)
+        !> Displacements at the samples, nt x N [m].
+        real(dp), allocatable :: x(:, :)
+        !> Velocities at the samples, nt x N [m/s].
+        real(dp), allocatable :: v(:, :)
+        !> Friction forces at the samples, nt x n_c [N].
+        real(dp), allocatable :: r(:, :)
+        !> Stick indicator (1 stick, 0 slip) at the samples, nt x n_c.
+        real(dp), allocatable :: stick(:, :)
+    end type hbm_solution_t
+end module stickslip_solution

@@ -16,12 +16,21 @@ if [ ${#missing[@]} -gt 0 ]; then
     sudo=""
     [ "$(id -u)" -eq 0 ] || sudo="sudo"
     export DEBIAN_FRONTEND=noninteractive
-    $sudo apt-get update -qq >/dev/null
-    $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+    log=$(mktemp)
+    if ! { $sudo apt-get update -qq && \
+           $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
+        cat "$log" >&2
+        echo "setup: apt-get failed" >&2
+        exit 1
+    fi
+    rm -f "$log"
 fi
 if ! command -v fpm >/dev/null 2>&1; then
     echo "setup: installing fpm from PyPI" >&2
-    python3 -m pip install --quiet --disable-pip-version-check fpm >/dev/null
+    if ! python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore fpm \
+            >/dev/null 2>&1; then
+        python3 -m pip install --disable-pip-version-check fpm >&2 || exit 1
+    fi
     hash -r
     command -v fpm >/dev/null 2>&1 || { echo "setup: fpm installed but not on PATH (add ~/.local/bin)" >&2; exit 1; }
 fi

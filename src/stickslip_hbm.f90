@@ -289,7 +289,7 @@ contains
         do j = 1, nc
             sol%stick_fraction(j) = sum(ss(:, j))/real(nt, dp)
             sol%stick_phases(j) = count_phases(ss(:, j) > 0.5_dp, &
-                                               max(1, nt/(2*max(1, opts%harmonics))))
+                                               max(1, nt/max(1, opts%harmonics)))
         end do
 
         ! energy balance over one period, exact for the truncated series (Parseval)
@@ -349,7 +349,7 @@ contains
 
     !> Number of stick phases in one period of the cyclic stick indicator `stick`, counted at
     !> the resolution of the basis: slip gaps and stick phases shorter than `minlen` samples
-    !> (half a period of the highest harmonic) are ripples of the truncated series around the
+    !> (one period of the highest harmonic) are ripples of the truncated series around the
     !> friction limit, not phases: gaps are closed, then short phases are not counted.
     pure integer function count_phases(stick, minlen) result(phases)
         !> Stick indicator at the samples.

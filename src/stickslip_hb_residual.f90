@@ -8,6 +8,7 @@
 !> A_j = P diag(s_j) Q built from one FFT of s_j (stickslip_basis%stick_product):
 !>     dF_j / dR_l = A_j G_jl + delta_jl rho (I - A_j).
 module stickslip_hb_residual
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
@@ -111,7 +112,7 @@ contains
             self%ps = psi(self%rs, self%vs, self%limit(j), self%rho)
             call self%basis%analyse(self%ps, f((j - 1)*nb + 1:j*nb), self%cw)
         end do
-        if (any(f /= f)) stat = 1
+        if (.not. all(ieee_is_finite(f))) stat = 1
     end subroutine hb_residual
 
     !> dF/dR, an element of the generalized (Clarke) Jacobian; exact, no finite differences.
@@ -153,7 +154,7 @@ contains
                 jac(rj + i, rj + i) = jac(rj + i, rj + i) + self%rho
             end do
         end do
-        if (any(jac /= jac)) stat = 1
+        if (.not. all(ieee_is_finite(jac))) stat = 1
     end subroutine hb_jacobian
 
     !> Samples of the friction force r_j, slip velocity v_j and stick indicator s_j of every

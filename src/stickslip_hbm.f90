@@ -321,7 +321,7 @@ contains
         sol%diss_damping = 0.0_dp
         do q = 1, n
             do p = 1, n
-                if (model%damping(p, q) /= 0.0_dp) sol%diss_damping = sol%diss_damping + &
+                sol%diss_damping = sol%diss_damping + &
                     model%damping(p, q)*inner(sol%vcoef(:, p), sol%vcoef(:, q))
             end do
         end do

@@ -105,8 +105,7 @@ contains
         type(hybrj_report_t), intent(out) :: report
         !> Set on misuse or callback failure.
         type(error_type), allocatable, intent(out) :: error
-        type(session_t), target :: session
-        type(session_t), pointer :: previous
+        type(session_t), pointer :: session, previous
         integer :: n, maxfev, info, nfev, njev, lr
         real(dp), allocatable :: fvec(:), fjac(:, :), diag(:), r(:), qtf(:), wa(:, :)
 
@@ -136,6 +135,7 @@ contains
             diag = 1.0_dp
         end if
 
+        allocate (session)
         session%sys => sys
         session%ftarget = opts%ftarget
         allocate (session%xhit(n), session%fhit(n))
@@ -157,6 +157,7 @@ contains
         end if
         report%fnorm = norm2(fvec)
         if (session%hit) then
+            deallocate (session)
             return
         else if (info == 0) then
             call fatal_error(error, "solve_hybrj: hybrj rejected its input (info 0)", &
@@ -165,6 +166,7 @@ contains
             call fatal_error(error, "solve_hybrj: the system's callback stopped the solve", &
                              stickslip_stat%callback)
         end if
+        deallocate (session)
     end subroutine solve_hybrj
 
     !> The legacy callback: dispatch to the active system.

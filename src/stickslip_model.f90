@@ -2,6 +2,7 @@
 !> friction contacts and harmonic forcing. Plain data plus validation; it knows nothing of
 !> how the periodic solution is computed nor of files.
 module stickslip_model
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_lapack, only: dpotrf
@@ -107,6 +108,7 @@ contains
                 return
             end if
         end do
+        allocate (chol(n, n))
         chol = model%mass
         call dpotrf('U', n, chol, n, info)
         if (info /= 0) then
@@ -250,7 +252,7 @@ contains
     !> True when x is neither NaN nor infinite.
     elemental logical function finite(x)
         real(dp), intent(in) :: x
-        finite = x == x .and. abs(x) <= huge(x)
+        finite = ieee_is_finite(x)
     end function finite
 
 end module stickslip_model

@@ -1,0 +1,18 @@
+!> The stickslip command: `stickslip case.nml [--quiet] [--help] [--version]`.
+!> Gathers the arguments, runs them (stickslip_cli) and exits with the code it returns.
+program main
+    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+    use stickslip, only: string_t, run_cli
+    implicit none
+    type(string_t), allocatable :: args(:)
+    integer :: i, n, code
+
+    allocate (args(command_argument_count()))
+    do i = 1, size(args)
+        call get_command_argument(i, length=n)
+        allocate (character(len=n) :: args(i)%s)
+        call get_command_argument(i, args(i)%s)
+    end do
+    code = run_cli(args, output_unit, error_unit)
+    if (code /= 0) stop code, quiet=.true.
+end program main

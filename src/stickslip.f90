@@ -1,0 +1,23 @@
+!> stickslip: periodic vibration of structures with Coulomb dry friction by the
+!> equality-based weighted-residual method. The one module a host code needs.
+module stickslip
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
+    use stickslip_model, only: model_t, validate_model
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic, validate_options
+    use stickslip_case, only: case_t, read_case, write_case
+    use stickslip_output, only: make_directory, write_hbm_csv, write_coefficients_csv, &
+        write_summary, energy_balance_error
+    use stickslip_run, only: run_case
+    use stickslip_cli, only: string_t, run_cli, stickslip_version
+    implicit none
+    private
+    public :: dp, error_type, fatal_error, stickslip_stat, exit_code_of
+    public :: model_t, validate_model, hbm_options_t, hbm_solution_t
+    public :: solve_periodic, validate_options
+    public :: case_t, read_case, write_case, run_case
+    public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &
+              energy_balance_error
+    public :: string_t, run_cli, stickslip_version
+end module stickslip

@@ -1,0 +1,458 @@
+!> The case file: namelist groups &system, &forcing, &friction, &hbm, &output read into a
+!> `case_t` (the model, the solver options and the output directory), validated with messages
+!> that name the file, the group, the variable and what is wrong. Also writes a case back as
+!> namelist text (the effective case echoed into the summary). Knows nothing of the solver.
+module stickslip_case
+    use, intrinsic :: iso_fortran_env, only: iostat_end
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_model, only: model_t, validate_model
+    use stickslip_solution, only: hbm_options_t
+    use stickslip_hbm, only: validate_options
+    implicit none
+    private
+    public :: case_t, read_case, write_case, max_dof, max_terms
+
+    !> Largest ndof a case file can hold (host codes calling the library have no limit).
+    integer, parameter :: max_dof = 64
+    !> Largest number of forcing terms or contacts a case file can hold.
+    integer, parameter :: max_terms = 256
+
+    real(dp), parameter :: unset = -huge(1.0_dp)
+    integer, parameter :: iunset = -huge(1)
+
+    !> A case: where it came from, the model, the solver options and where results go.
+    type :: case_t
+        !> Path of the case file ('' for a case built in memory).
+        character(len=:), allocatable :: path
+        !> The structure, its contacts and forcing.
+        type(model_t) :: model
+        !> Weighted-residual options (&hbm).
+        type(hbm_options_t) :: hbm
+        !> Output directory (&output directory), created if missing.
+        character(len=:), allocatable :: directory
+    end type case_t
+
+contains
+
+    !> Read and validate the case file `path`. Errors: stat io if the file cannot be opened;
+    !> stat input for a missing required group, a malformed group, an unknown variable, a
+    !> missing, inconsistent, non-finite or out-of-range value. Every message starts with
+    !> "<path>: &<group> <variable>: ".
+    subroutine read_case(path, case, error)
+        !> Path of the namelist file.
+        character(len=*), intent(in) :: path
+        !> The case read.
+        type(case_t), intent(out) :: case
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat
+        character(len=512) :: msg
+        ! &system
+        integer :: ndof
+        real(dp) :: mass(max_dof**2), stiffness(max_dof**2), damping(max_dof**2)
+        ! &forcing
+        real(dp) :: omega
+        integer :: force_dof(max_terms), force_harmonic(max_terms)
+        real(dp) :: force_amplitude(max_terms), force_phase(max_terms)
+        ! &friction
+        integer :: contact_dof(max_terms), contact_dof2(max_terms)
+        real(dp) :: mu(max_terms), normal_load(max_terms)
+        ! &hbm
+        integer :: harmonics, samples, maxfev
+        logical :: odd_only
+        real(dp) :: rho, tol
+        character(len=16) :: start
+        ! &output
+        character(len=1024) :: directory
+        namelist /system/ ndof, mass, stiffness, damping
+        namelist /forcing/ omega, force_dof, force_harmonic, force_amplitude, force_phase
+        namelist /friction/ contact_dof, contact_dof2, mu, normal_load
+        namelist /hbm/ harmonics, odd_only, rho, samples, tol, start, maxfev
+        namelist /output/ directory
+        integer :: n, nf, nc
+        type(hbm_options_t) :: defaults
+
+        case%path = path
+        open (newunit=u, file=path, status='old', action='read', iostat=stat, iomsg=msg)
+        if (stat /= 0) then
+            call fatal_error(error, path//": cannot open the case file: "//trim(msg), &
+                             stickslip_stat%io)
+            return
+        end if
+
+        ndof = iunset
+        mass = unset
+        stiffness = unset
+        damping = unset
+        rewind (u)
+        read (u, nml=system, iostat=stat, iomsg=msg)
+        call group_status("system", .true.)
+        if (allocated(error)) return
+
+        omega = unset
+        force_dof = iunset
+        force_harmonic = iunset
+        force_amplitude = unset
+        force_phase = unset
+        rewind (u)
+        read (u, nml=forcing, iostat=stat, iomsg=msg)
+        call group_status("forcing", .true.)
+        if (allocated(error)) return
+
+        contact_dof = iunset
+        contact_dof2 = iunset
+        mu = unset
+        normal_load = unset
+        rewind (u)
+        read (u, nml=friction, iostat=stat, iomsg=msg)
+        call group_status("friction", .false.)
+        if (allocated(error)) return
+
+        harmonics = defaults%harmonics
+        odd_only = defaults%odd_only
+        rho = defaults%rho
+        samples = defaults%samples
+        tol = defaults%tol
+        start = defaults%start
+        maxfev = defaults%maxfev
+        rewind (u)
+        read (u, nml=hbm, iostat=stat, iomsg=msg)
+        call group_status("hbm", .false.)
+        if (allocated(error)) return
+
+        directory = 'out'
+        rewind (u)
+        read (u, nml=output, iostat=stat, iomsg=msg)
+        call group_status("output", .false.)
+        if (allocated(error)) return
+        close (u)
+
+        ! &system
+        if (ndof == iunset) then
+            call input_error("&system ndof: missing (number of degrees of freedom)")
+            return
+        end if
+        if (ndof < 1 .or. ndof > max_dof) then
+            call input_error("&system ndof = "//itoa(ndof)//": must be in 1.."//itoa(max_dof)// &
+                             " in a case file (larger models: call the library)")
+            return
+        end if
+        n = ndof
+        case%model%ndof = n
+        call take_matrix("mass", mass, .true., case%model%mass)
+        if (allocated(error)) return
+        call take_matrix("stiffness", stiffness, .true., case%model%stiffness)
+        if (allocated(error)) return
+        call take_matrix("damping", damping, .false., case%model%damping)
+        if (allocated(error)) return
+
+        ! &forcing
+        if (omega == unset) then
+            call input_error("&forcing omega: missing (angular frequency of the forcing, rad/s)")
+            return
+        end if
+        case%model%omega = omega
+        nf = count_given_int(force_dof)
+        if (nf < 0) then
+            call input_error("&forcing force_dof: entries must be given without gaps")
+            return
+        end if
+        if (nf == 0) then
+            call input_error("&forcing force_dof: missing (at least one forcing term)")
+            return
+        end if
+        call take_real("&forcing", "force_amplitude", force_amplitude, nf, .true., 0.0_dp, &
+                       case%model%force_amplitude)
+        if (allocated(error)) return
+        call take_real("&forcing", "force_phase", force_phase, nf, .false., 0.0_dp, &
+                       case%model%force_phase)
+        if (allocated(error)) return
+        call take_int("&forcing", "force_harmonic", force_harmonic, nf, 1, &
+                      case%model%force_harmonic)
+        if (allocated(error)) return
+        case%model%force_dof = force_dof(1:nf)
+
+        ! &friction
+        nc = count_given_int(contact_dof)
+        if (nc < 0) then
+            call input_error("&friction contact_dof: entries must be given without gaps")
+            return
+        end if
+        call take_real("&friction", "mu", mu, nc, .true., 0.0_dp, case%model%mu)
+        if (allocated(error)) return
+        call take_real("&friction", "normal_load", normal_load, nc, .true., 0.0_dp, &
+                       case%model%normal_load)
+        if (allocated(error)) return
+        call take_int("&friction", "contact_dof2", contact_dof2, nc, 0, case%model%contact_dof2)
+        if (allocated(error)) return
+        case%model%contact_dof = contact_dof(1:nc)
+
+        ! &hbm, &output
+        if (.not. ieee_is_finite(rho)) then
+            call input_error("&hbm rho: not a finite number")
+            return
+        end if
+        if (.not. ieee_is_finite(tol)) then
+            call input_error("&hbm tol: not a finite number")
+            return
+        end if
+        case%hbm%harmonics = harmonics
+        case%hbm%odd_only = odd_only
+        case%hbm%rho = rho
+        case%hbm%samples = samples
+        case%hbm%tol = tol
+        if (len_trim(start) > len(case%hbm%start)) then
+            call input_error("&hbm start = '"//trim(start)// &
+                             "': must be 'auto', 'direct' or 'ladder'")
+            return
+        end if
+        case%hbm%start = trim(start)
+        case%hbm%maxfev = maxfev
+        if (len_trim(directory) == 0) then
+            call input_error("&output directory: must not be empty")
+            return
+        end if
+        case%directory = trim(directory)
+
+        call validate_model(case%model, error)
+        if (allocated(error)) then
+            error%message = path//": "//error%message
+            return
+        end if
+        call validate_options(case%hbm, error)
+        if (allocated(error)) then
+            error%message = path//": "//error%message
+            return
+        end if
+
+    contains
+
+        subroutine input_error(message)
+            character(len=*), intent(in) :: message
+            call fatal_error(error, path//": "//message, stickslip_stat%input)
+        end subroutine input_error
+
+        !> Turn the iostat of one group's read into an error (or nothing).
+        subroutine group_status(group, required)
+            character(len=*), intent(in) :: group
+            logical, intent(in) :: required
+            if (stat == 0) return
+            if (stat == iostat_end) then
+                if (group_present(u, group)) then
+                    call input_error("&"//group//": the group is not closed by '/'")
+                else if (required) then
+                    call input_error("&"//group//": required group not found")
+                end if
+            else
+                call input_error("&"//group//": "//trim(msg)// &
+                                 " (an unknown variable, a bad value or too many values)")
+            end if
+            if (allocated(error)) close (u)
+        end subroutine group_status
+
+        subroutine take_matrix(name, values, required, a)
+            character(len=*), intent(in) :: name
+            real(dp), intent(in) :: values(:)
+            logical, intent(in) :: required
+            real(dp), allocatable, intent(out) :: a(:, :)
+            integer :: given, i
+            given = count_given_real(values)
+            if (given == 0 .and. .not. required) then
+                allocate (a(n, n))
+                a = 0.0_dp
+                return
+            end if
+            if (given /= n*n) then
+                if (given < 0) then
+                    call input_error("&system "//name//": entries must be given without gaps")
+                else
+                    call input_error("&system "//name//": "//itoa(given)// &
+                                     " values given, expected ndof**2 = "//itoa(n*n)// &
+                                     " (column-major)")
+                end if
+                return
+            end if
+            do i = 1, n*n
+                if (.not. ieee_is_finite(values(i))) then
+                    call input_error("&system "//name//"("//itoa(i)// &
+                                     "): not a finite number (NaN or Inf)")
+                    return
+                end if
+            end do
+            a = reshape(values(1:n*n), [n, n])
+        end subroutine take_matrix
+
+        subroutine take_real(group, name, values, count, required, default, a)
+            character(len=*), intent(in) :: group, name
+            real(dp), intent(in) :: values(:)
+            integer, intent(in) :: count
+            logical, intent(in) :: required
+            real(dp), intent(in) :: default
+            real(dp), allocatable, intent(out) :: a(:)
+            integer :: given, i
+            given = count_given_real(values)
+            if (given == 0 .and. .not. required) then
+                allocate (a(count))
+                a = default
+                return
+            end if
+            if (given /= count) then
+                call input_error(group//" "//name//": "//itoa(max(given, 0))// &
+                                 " values given, expected "//itoa(count)// &
+                                 " (one per entry of "//merge("force_dof  ", "contact_dof", &
+                                 group == "&forcing")//")")
+                return
+            end if
+            do i = 1, count
+                if (.not. ieee_is_finite(values(i))) then
+                    call input_error(group//" "//name//"("//itoa(i)// &
+                                     "): not a finite number (NaN or Inf)")
+                    return
+                end if
+            end do
+            a = values(1:count)
+        end subroutine take_real
+
+        subroutine take_int(group, name, values, count, default, a)
+            character(len=*), intent(in) :: group, name
+            integer, intent(in) :: values(:)
+            integer, intent(in) :: count
+            integer, intent(in) :: default
+            integer, allocatable, intent(out) :: a(:)
+            integer :: given
+            given = count_given_int(values)
+            if (given == 0) then
+                allocate (a(count))
+                a = default
+                return
+            end if
+            if (given /= count) then
+                call input_error(group//" "//name//": "//itoa(max(given, 0))// &
+                                 " values given, expected "//itoa(count)// &
+                                 " (one per entry of "//merge("force_dof  ", "contact_dof", &
+                                 group == "&forcing")//")")
+                return
+            end if
+            a = values(1:count)
+        end subroutine take_int
+    end subroutine read_case
+
+    !> Number of leading entries that were given (not the sentinel); -1 if there is a gap.
+    pure integer function count_given_real(values) result(given)
+        real(dp), intent(in) :: values(:)
+        integer :: last
+        given = 0
+        do last = size(values), 1, -1
+            if (values(last) /= unset) exit
+        end do
+        if (last < 1) return
+        given = last
+        if (any(values(1:last) == unset)) given = -1
+    end function count_given_real
+
+    pure integer function count_given_int(values) result(given)
+        integer, intent(in) :: values(:)
+        integer :: last
+        given = 0
+        do last = size(values), 1, -1
+            if (values(last) /= iunset) exit
+        end do
+        if (last < 1) return
+        given = last
+        if (any(values(1:last) == iunset)) given = -1
+    end function count_given_int
+
+    !> Whether the text of the file on unit u holds '&group' (case-insensitive).
+    logical function group_present(u, group)
+        integer, intent(in) :: u
+        character(len=*), intent(in) :: group
+        character(len=4096) :: line
+        integer :: stat, k
+        group_present = .false.
+        rewind (u)
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            k = index(lower(line), "&"//lower(group))
+            if (k > 0) then
+                group_present = .true.
+                exit
+            end if
+        end do
+    end function group_present
+
+    pure function lower(s) result(t)
+        character(len=*), intent(in) :: s
+        character(len=len(s)) :: t
+        integer :: i
+        t = s
+        do i = 1, len(s)
+            if (s(i:i) >= 'A' .and. s(i:i) <= 'Z') t(i:i) = achar(iachar(s(i:i)) + 32)
+        end do
+    end function lower
+
+    pure function itoa(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function itoa
+
+    !> Write `case` as namelist text that read_case reads back (full precision), to `unit`.
+    subroutine write_case(unit, case)
+        !> An open formatted unit.
+        integer, intent(in) :: unit
+        !> The case.
+        type(case_t), intent(in) :: case
+        character(len=*), parameter :: fr = '(*(es24.16e3, :, ", "))', fi = '(*(i0, :, ", "))'
+        associate (m => case%model, o => case%hbm)
+            write (unit, '(a)') "&system"
+            write (unit, '(a,i0)') "  ndof = ", m%ndof
+            write (unit, '(a)', advance='no') "  mass = "
+            write (unit, fr) m%mass
+            write (unit, '(a)', advance='no') "  stiffness = "
+            write (unit, fr) m%stiffness
+            write (unit, '(a)', advance='no') "  damping = "
+            write (unit, fr) m%damping
+            write (unit, '(a)') "/"
+            write (unit, '(a)') "&forcing"
+            write (unit, '(a,es24.16e3)') "  omega = ", m%omega
+            write (unit, '(a)', advance='no') "  force_dof = "
+            write (unit, fi) m%force_dof
+            write (unit, '(a)', advance='no') "  force_harmonic = "
+            write (unit, fi) m%force_harmonic
+            write (unit, '(a)', advance='no') "  force_amplitude = "
+            write (unit, fr) m%force_amplitude
+            write (unit, '(a)', advance='no') "  force_phase = "
+            write (unit, fr) m%force_phase
+            write (unit, '(a)') "/"
+            write (unit, '(a)') "&friction"
+            if (m%ncontact() > 0) then
+                write (unit, '(a)', advance='no') "  contact_dof = "
+                write (unit, fi) m%contact_dof
+                write (unit, '(a)', advance='no') "  contact_dof2 = "
+                write (unit, fi) m%contact_dof2
+                write (unit, '(a)', advance='no') "  mu = "
+                write (unit, fr) m%mu
+                write (unit, '(a)', advance='no') "  normal_load = "
+                write (unit, fr) m%normal_load
+            end if
+            write (unit, '(a)') "/"
+            write (unit, '(a)') "&hbm"
+            write (unit, '(a,i0)') "  harmonics = ", o%harmonics
+            write (unit, '(a,l1)') "  odd_only = ", o%odd_only
+            write (unit, '(a,es24.16e3)') "  rho = ", o%rho
+            write (unit, '(a,i0)') "  samples = ", o%samples
+            write (unit, '(a,es24.16e3)') "  tol = ", o%tol
+            write (unit, '(a)') "  start = '"//trim(o%start)//"'"
+            write (unit, '(a,i0)') "  maxfev = ", o%maxfev
+            write (unit, '(a)') "/"
+            write (unit, '(a)') "&output"
+            write (unit, '(a)') "  directory = '"//case%directory//"'"
+            write (unit, '(a)') "/"
+        end associate
+    end subroutine write_case
+end module stickslip_case

@@ -1,0 +1,152 @@
+!> The command line: `stickslip case.nml [--quiet] [--help] [--version]`. Parsing and the
+!> whole run take the arguments as an array and write to units the caller gives, so tests run
+!> them in-process and the library never writes to standard output behind its host's back.
+module stickslip_cli
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
+    use stickslip_case, only: case_t, read_case
+    use stickslip_solution, only: hbm_solution_t
+    use stickslip_run, only: run_case
+    use stickslip_output, only: energy_balance_error
+    implicit none
+    private
+    public :: string_t, cli_options_t, parse_args, run_cli, stickslip_version
+
+    !> Version of stickslip.
+    character(len=*), parameter :: stickslip_version = "0.1.0"
+
+    !> A string, for arrays of arguments of different lengths.
+    type :: string_t
+        character(len=:), allocatable :: s
+    end type string_t
+
+    !> What the command line asked for.
+    type :: cli_options_t
+        !> Case file path.
+        character(len=:), allocatable :: case_path
+        !> No summary on standard output.
+        logical :: quiet = .false.
+        !> Print usage and exit.
+        logical :: help = .false.
+        !> Print the version and exit.
+        logical :: version = .false.
+    end type cli_options_t
+
+    character(len=*), parameter :: usage = &
+        "usage: stickslip CASE.nml [--quiet] [--help] [--version]"//new_line('a')// &
+        "  Periodic response of a structure with Coulomb friction contacts by the"//new_line('a')// &
+        "  weighted-residual (harmonic balance) method. Results go to &output directory:"// &
+        new_line('a')//"  hbm.csv, coefficients.csv, summary.nml."//new_line('a')// &
+        "  Exit codes: 0 ok, 1 usage or input error, 2 numerical failure, 3 I/O error."
+
+contains
+
+    !> Parse the arguments. Errors (stat input): an unknown option, no case file, more than
+    !> one case file.
+    subroutine parse_args(args, opts, error)
+        !> The arguments (without the program name).
+        type(string_t), intent(in) :: args(:)
+        !> What they ask for.
+        type(cli_options_t), intent(out) :: opts
+        !> Set on a usage error.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: i
+        do i = 1, size(args)
+            select case (args(i)%s)
+            case ("--quiet", "-q")
+                opts%quiet = .true.
+            case ("--help", "-h")
+                opts%help = .true.
+            case ("--version")
+                opts%version = .true.
+            case default
+                if (len(args(i)%s) > 0) then
+                    if (args(i)%s(1:1) == "-") then
+                        call fatal_error(error, "unknown option '"//args(i)%s//"'"// &
+                                         new_line('a')//usage, stickslip_stat%input)
+                        return
+                    end if
+                end if
+                if (allocated(opts%case_path)) then
+                    call fatal_error(error, "one case file at a time (got '"//opts%case_path// &
+                                     "' and '"//args(i)%s//"')"//new_line('a')//usage, &
+                                     stickslip_stat%input)
+                    return
+                end if
+                opts%case_path = args(i)%s
+            end select
+        end do
+        if (.not. (opts%help .or. opts%version .or. allocated(opts%case_path))) then
+            call fatal_error(error, "no case file given"//new_line('a')//usage, &
+                             stickslip_stat%input)
+        end if
+    end subroutine parse_args
+
+    !> Everything the program does: parse, read the case, solve, write the results, print a
+    !> short summary on `out_unit` (unless --quiet) and errors as one message on `err_unit`.
+    !> Returns the exit code: 0 ok, 1 usage or input error, 2 numerical failure (not
+    !> converged, singular dynamic stiffness), 3 I/O error.
+    integer function run_cli(args, out_unit, err_unit) result(code)
+        !> The arguments (without the program name).
+        type(string_t), intent(in) :: args(:)
+        !> Unit for the human summary.
+        integer, intent(in) :: out_unit
+        !> Unit for error messages.
+        integer, intent(in) :: err_unit
+        type(cli_options_t) :: opts
+        type(error_type), allocatable :: error
+        type(case_t) :: case
+        type(hbm_solution_t) :: sol
+
+        code = 0
+        call parse_args(args, opts, error)
+        if (.not. allocated(error)) then
+            if (opts%help) then
+                write (out_unit, '(a)') usage
+                return
+            end if
+            if (opts%version) then
+                write (out_unit, '(a)') "stickslip "//stickslip_version
+                return
+            end if
+            call read_case(opts%case_path, case, error)
+        end if
+        if (.not. allocated(error)) call run_case(case, sol, error)
+        if (allocated(error)) then
+            write (err_unit, '(a)') "stickslip: error: "//error%message
+            code = exit_code_of(error%stat)
+            if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
+                allocated(sol%diagnosis)) write (err_unit, '(a)') &
+                "stickslip: the summary was written to "//case%directory//"/summary.nml"
+            return
+        end if
+        if (.not. opts%quiet) call print_summary(out_unit, case, sol)
+    end function run_cli
+
+    subroutine print_summary(u, case, sol)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(hbm_solution_t), intent(in) :: sol
+        integer :: j
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,es9.2,a,i0,a,i0,a,i0,a,f0.3,a)') "  converged: residual ", sol%fnorm, &
+            " (hybrj info ", sol%info, ", ", sol%nfev, " evaluations, ", sol%njev, &
+            " Jacobians) in ", 1.0e3_dp*sol%seconds, " ms"
+        write (u, '(a,i0,a,a,a,i0,a,g0.4)') "  basis: harmonics ", sol%harmonics, " (", &
+            trim(merge("odd only", "all     ", sol%odd_only)), "), samples ", sol%samples, &
+            ", rho ", case%hbm%rho
+        do j = 1, size(sol%stick_fraction)
+            write (u, '(a,i0,a,f0.1,a,i0,a,g0.4,a,g0.4,a)', advance='no') "  contact ", j, &
+                ": sticks ", 100*sol%stick_fraction(j), "% of the period in ", &
+                sol%stick_phases(j), " phase(s); max |r| ", maxval(abs(sol%r(:, j))), &
+                " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+            if (sol%offset_undetermined(j)) write (u, '(a)', advance='no') &
+                "; stuck all period: mean force set to the admissible value closest to 0"
+            write (u, '(a)') ""
+        end do
+        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+            sol%work_forcing, ", friction ", sol%diss_friction, ", damping ", sol%diss_damping, &
+            " (balance error ", energy_balance_error(sol), ")"
+        write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, summary.nml}"
+    end subroutine print_summary
+end module stickslip_cli

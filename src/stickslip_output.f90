@@ -1,0 +1,268 @@
+!> Result files: hbm.csv (one period of samples), coefficients.csv (Fourier coefficients of x
+!> and r) and summary.nml (convergence report, diagnostics, energy balance and the effective
+!> case). Every file is written under a temporary name in the output directory and renamed
+!> when complete, so a reader never sees a partial file. Knows nothing of how results are
+!> computed.
+module stickslip_output
+    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_solution, only: hbm_solution_t
+    use stickslip_case, only: case_t, write_case
+    implicit none
+    private
+    public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &
+              energy_balance_error
+
+    interface
+        function c_mkdir(path, mode) bind(c, name='mkdir') result(stat)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int), value :: mode
+            integer(c_int) :: stat
+        end function c_mkdir
+
+        function c_rename(old, new) bind(c, name='rename') result(stat)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: old(*), new(*)
+            integer(c_int) :: stat
+        end function c_rename
+    end interface
+
+    character(len=*), parameter :: real_fmt = 'es25.17e3'
+
+contains
+
+    !> Create directory `path` and its missing parents (like mkdir -p). Error (stat io) when
+    !> a component cannot be created.
+    subroutine make_directory(path, error)
+        !> Directory path.
+        character(len=*), intent(in) :: path
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: k, stat
+        logical :: exists
+        do k = 1, len(path)
+            if (k < len(path) .and. path(k:k) /= '/') cycle
+            if (k == 1 .and. path(1:1) == '/') cycle
+            if (path(k:k) == '/') then
+                if (is_directory(path(1:k - 1))) cycle
+                stat = c_mkdir(path(1:k - 1)//c_null_char, int(o'755', c_int))
+            else
+                if (is_directory(path)) cycle
+                stat = c_mkdir(path//c_null_char, int(o'755', c_int))
+            end if
+        end do
+        exists = is_directory(path)
+        if (.not. exists) call fatal_error(error, path//": cannot create the output directory", &
+                                           stickslip_stat%io)
+    end subroutine make_directory
+
+    logical function is_directory(path)
+        character(len=*), intent(in) :: path
+        inquire (file=path//'/.', exist=is_directory)
+    end function is_directory
+
+    !> Open `dir/name.tmp` for writing; finish with close_and_rename.
+    subroutine open_temporary(dir, name, unit, error)
+        character(len=*), intent(in) :: dir, name
+        integer, intent(out) :: unit
+        type(error_type), allocatable, intent(out) :: error
+        integer :: stat
+        character(len=512) :: msg
+        open (newunit=unit, file=dir//'/'//name//'.tmp', status='replace', action='write', &
+              iostat=stat, iomsg=msg)
+        if (stat /= 0) call fatal_error(error, dir//'/'//name//".tmp: cannot open for writing: "// &
+                                        trim(msg), stickslip_stat%io)
+    end subroutine open_temporary
+
+    subroutine close_and_rename(dir, name, unit, stat_write, msg_write, error)
+        character(len=*), intent(in) :: dir, name
+        integer, intent(in) :: unit, stat_write
+        character(len=*), intent(in) :: msg_write
+        type(error_type), allocatable, intent(out) :: error
+        integer :: stat
+        character(len=512) :: msg
+        if (stat_write /= 0) then
+            close (unit, status='delete', iostat=stat)
+            call fatal_error(error, dir//'/'//name//": write failed: "//trim(msg_write), &
+                             stickslip_stat%io)
+            return
+        end if
+        close (unit, iostat=stat, iomsg=msg)
+        if (stat /= 0) then
+            call fatal_error(error, dir//'/'//name//": close failed: "//trim(msg), stickslip_stat%io)
+            return
+        end if
+        if (c_rename(dir//'/'//name//'.tmp'//c_null_char, dir//'/'//name//c_null_char) /= 0) &
+            call fatal_error(error, dir//'/'//name//": cannot rename the temporary file", &
+                             stickslip_stat%io)
+    end subroutine close_and_rename
+
+    !> Write `dir`/hbm.csv: header t,x1..xN,v1..vN,r1..rC and one row per sample
+    !> t_k = k T / nt, full double precision. Needs the solution's samples. Error: stat io.
+    subroutine write_hbm_csv(dir, sol, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> A solution with samples.
+        type(hbm_solution_t), intent(in) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, n, nc, stat
+        character(len=512) :: msg
+        character(len=:), allocatable :: header
+        character(len=80) :: fmt
+
+        n = size(sol%x, 2)
+        nc = size(sol%r, 2)
+        header = "t"
+        do i = 1, n
+            header = header//",x"//itoa(i)
+        end do
+        do i = 1, n
+            header = header//",v"//itoa(i)
+        end do
+        do i = 1, nc
+            header = header//",r"//itoa(i)
+        end do
+        write (fmt, '(a,i0,a)') '(', 1 + 2*n + nc, '(' // real_fmt // ',:,","))'
+        call open_temporary(dir, "hbm.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, size(sol%t)
+            if (stat /= 0) exit
+            write (u, fmt, iostat=stat, iomsg=msg) sol%t(k), sol%x(k, :), sol%v(k, :), sol%r(k, :)
+        end do
+        call close_and_rename(dir, "hbm.csv", u, stat, msg, error)
+    end subroutine write_hbm_csv
+
+    !> Write `dir`/coefficients.csv: header harmonic,kind,x1..xN,r1..rC and one row per basis
+    !> function, kind c0 (constant), cos or sin; u(t) = c0 + sum a cos(h omega t) + b sin(...).
+    subroutine write_coefficients_csv(dir, sol, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The solution.
+        type(hbm_solution_t), intent(in) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, n, nc, stat
+        character(len=512) :: msg
+        character(len=:), allocatable :: header, kind
+        character(len=80) :: fmt
+
+        n = size(sol%xcoef, 2)
+        nc = size(sol%rcoef, 2)
+        header = "harmonic,kind"
+        do i = 1, n
+            header = header//",x"//itoa(i)
+        end do
+        do i = 1, nc
+            header = header//",r"//itoa(i)
+        end do
+        write (fmt, '(a,i0,a)') '(i0,",",a,",",', n + nc, '(' // real_fmt // ',:,","))'
+        call open_temporary(dir, "coefficients.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, sol%nb
+            if (stat /= 0) exit
+            if (sol%harmonic(k) == 0) then
+                kind = "c0"
+            else if (k > 1 .and. sol%harmonic(max(k - 1, 1)) == sol%harmonic(k)) then
+                kind = "sin"
+            else
+                kind = "cos"
+            end if
+            write (u, fmt, iostat=stat, iomsg=msg) sol%harmonic(k), kind, sol%xcoef(k, :), &
+                sol%rcoef(k, :)
+        end do
+        call close_and_rename(dir, "coefficients.csv", u, stat, msg, error)
+    end subroutine write_coefficients_csv
+
+    !> Relative energy balance error over one period:
+    !> |work_forcing - diss_friction - diss_damping| / max(|work_forcing|, tiny).
+    pure real(dp) function energy_balance_error(sol) result(e)
+        !> The solution.
+        type(hbm_solution_t), intent(in) :: sol
+        e = abs(sol%work_forcing - sol%diss_friction - sol%diss_damping)/ &
+            max(abs(sol%work_forcing), tiny(1.0_dp))
+    end function energy_balance_error
+
+    !> Write `dir`/summary.nml: a namelist group &summary (one `key = value` per line) with
+    !> the convergence report and diagnostics, followed by the effective case as namelist
+    !> groups (read_case reads the file back as a case).
+    subroutine write_summary(dir, case, sol, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case solved.
+        type(case_t), intent(in) :: case
+        !> The solution (converged or not).
+        type(hbm_solution_t), intent(in) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, nc
+        character(len=512) :: msg
+        character(len=*), parameter :: fr = '(a,' // real_fmt // ')'
+        character(len=*), parameter :: frs = '(a,*(' // real_fmt // ', :, ", "))'
+        character(len=*), parameter :: fis = '(a,*(i0, :, ", "))'
+        character(len=*), parameter :: fls = '(a,*(l1, :, ", "))'
+
+        nc = 0
+        if (allocated(sol%stick_fraction)) nc = size(sol%stick_fraction)
+        call open_temporary(dir, "summary.nml", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) &
+            "! stickslip summary: the group &summary, then the effective case (&system ... &output)"
+        if (stat == 0) then
+            write (u, '(a)') "&summary"
+            write (u, '(a,l1)') "  converged = ", sol%converged
+            write (u, '(a,i0)') "  info = ", sol%info
+            write (u, '(a,i0)') "  nfev = ", sol%nfev
+            write (u, '(a,i0)') "  njev = ", sol%njev
+            write (u, '(a,i0)') "  hybrj_calls = ", sol%hybrj_calls
+            write (u, fr) "  fnorm = ", sol%fnorm
+            write (u, fr) "  fscale = ", sol%fscale
+            write (u, fr) "  solve_seconds = ", sol%seconds
+            write (u, '(a,i0)') "  harmonics = ", sol%harmonics
+            write (u, '(a,l1)') "  odd_only = ", sol%odd_only
+            write (u, '(a,i0)') "  samples = ", sol%samples
+            write (u, '(a,i0)') "  ncontact = ", nc
+            if (nc > 0) then
+                write (u, frs) "  stick_fraction = ", sol%stick_fraction
+                write (u, fis) "  stick_phases = ", sol%stick_phases
+                write (u, fls) "  offset_undetermined = ", sol%offset_undetermined
+            end if
+            write (u, fr) "  work_forcing = ", sol%work_forcing
+            write (u, fr) "  diss_friction = ", sol%diss_friction
+            write (u, fr) "  diss_damping = ", sol%diss_damping
+            write (u, fr) "  diss_coulomb = ", sol%diss_coulomb
+            write (u, fr) "  energy_balance_error = ", energy_balance_error(sol)
+            write (u, '(a)') "  diagnosis = '"//quote(sol%diagnosis)//"'"
+            write (u, '(a)', iostat=stat, iomsg=msg) "/"
+        end if
+        if (stat == 0) call write_case(u, case)
+        call close_and_rename(dir, "summary.nml", u, stat, msg, error)
+    end subroutine write_summary
+
+    !> Double the single quotes of a string for a namelist character value.
+    pure function quote(s) result(t)
+        character(len=*), intent(in) :: s
+        character(len=:), allocatable :: t
+        integer :: i
+        t = ""
+        do i = 1, len(s)
+            if (s(i:i) == "'") then
+                t = t//"''"
+            else
+                t = t//s(i:i)
+            end if
+        end do
+    end function quote
+
+    pure function itoa(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function itoa
+end module stickslip_output

@@ -1,0 +1,360 @@
+!> Tests of the case file reader, the CLI and the result files: every class of bad input is
+!> rejected with a message naming the file, the group and the variable, and the right exit
+!> code; the examples run end to end and write complete files.
+module test_case
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_case, only: case_t, read_case
+    use stickslip_cli, only: string_t, run_cli
+    use stickslip_output, only: make_directory
+    use testing, only: test_counter_t, check, check_close, check_error
+    implicit none
+    private
+    public :: run_case_tests
+
+    character(len=*), parameter :: scratch = "build/test-scratch"
+    character(len=*), parameter :: good_system = &
+        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /"
+    character(len=*), parameter :: good_forcing = "&forcing omega = 4.5, force_dof = 1, " // &
+        "force_amplitude = 10.0 /"
+    character(len=*), parameter :: good_friction = "&friction contact_dof = 2, mu = 0.45, " // &
+        "normal_load = 1.0 /"
+    character(len=*), parameter :: good_hbm = "&hbm harmonics = 10, samples = 128 /"
+
+contains
+
+    subroutine run_case_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        type(error_type), allocatable :: error
+        call make_directory(scratch, error)
+        call check_error(t, error, "scratch directory", .false.)
+        if (allocated(error)) return
+        call test_good_case(t)
+        call test_bad_inputs(t)
+        call test_cli(t)
+    end subroutine run_case_tests
+
+    subroutine write_lines(path, lines)
+        character(len=*), intent(in) :: path
+        character(len=*), intent(in) :: lines(:)
+        integer :: u, i
+        open (newunit=u, file=path, status='replace', action='write')
+        do i = 1, size(lines)
+            write (u, '(a)') trim(lines(i))
+        end do
+        close (u)
+    end subroutine write_lines
+
+    subroutine test_good_case(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        character(len=*), parameter :: path = scratch//"/good.nml"
+        call write_lines(path, [character(len=120) :: good_system, good_forcing, good_friction, &
+                                good_hbm, "&output directory = '"//scratch//"/good' /"])
+        call read_case(trim(path), c, error)
+        call check_error(t, error, "good case read", .false.)
+        if (allocated(error)) return
+        call check(t, c%model%ndof == 2 .and. size(c%model%mu) == 1, "good case: sizes")
+        call check_close(t, c%model%stiffness(1, 2), -1.0_dp, "good case: column-major stiffness")
+        call check_close(t, c%model%damping(2, 2), 0.0_dp, "good case: damping defaults to 0")
+        call check(t, c%model%force_harmonic(1) == 1, "good case: force_harmonic defaults to 1")
+        call check_close(t, c%model%force_phase(1), 0.0_dp, "good case: force_phase defaults to 0")
+        call check(t, c%model%contact_dof2(1) == 0, "good case: contact_dof2 defaults to ground")
+        call check(t, c%hbm%harmonics == 10 .and. c%hbm%samples == 128 .and. &
+                   .not. c%hbm%odd_only, "good case: &hbm values")
+        call check_close(t, c%hbm%rho, 0.2_dp, "good case: rho default")
+        call check(t, c%directory == scratch//"/good", "good case: output directory")
+    end subroutine test_good_case
+
+    !> One bad case: the error must carry the status and every expected fragment.
+    subroutine expect_bad(t, name, lines, stat, fragments)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), intent(in) :: name
+        character(len=*), intent(in) :: lines(:)
+        integer, intent(in) :: stat
+        character(len=*), intent(in) :: fragments(:)
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        character(len=200) :: path, expected(size(fragments) + 1)
+        path = scratch//"/bad_"//name//".nml"
+        call write_lines(trim(path), lines)
+        call read_case(trim(path), c, error)
+        expected(1) = path
+        expected(2:) = fragments
+        call check_error(t, error, "bad input rejected: "//name, .true., expected)
+        if (allocated(error)) call check(t, error%stat == stat, "bad input status: "//name, &
+                                         error%message)
+    end subroutine expect_bad
+
+    subroutine test_bad_inputs(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        integer, parameter :: inp = stickslip_stat%input
+        character(len=120) :: base(4)
+        base = [character(len=120) :: good_system, good_forcing, good_friction, good_hbm]
+
+        call read_case(scratch//"/no_such_file.nml", c, error)
+        call check_error(t, error, "missing case file rejected", .true., &
+                         [character(len=60) :: "no_such_file.nml", "cannot open"])
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%io, "missing file: io")
+
+        call expect_bad(t, "unknown_variable", [character(len=120) :: good_system, &
+            "&forcing omega = 4.5, kx = 3, force_dof = 1, force_amplitude = 10.0 /", &
+            good_friction], inp, [character(len=60) :: "&forcing", "kx"])
+        call expect_bad(t, "bad_value", [character(len=120) :: &
+            "&system ndof = two, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
+            [character(len=60) :: "&system", "two"])
+        call expect_bad(t, "missing_group", [character(len=120) :: good_system, good_friction], &
+            inp, [character(len=60) :: "&forcing", "required group not found"])
+        call expect_bad(t, "unterminated", [character(len=120) :: good_system, &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0"], inp, &
+            [character(len=60) :: "&forcing", "not closed"])
+        call expect_bad(t, "negative_mass", [character(len=120) :: &
+            "&system ndof = 2, mass = -1,0,0,1, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
+            [character(len=60) :: "&system", "mass(1,1)", "must be > 0"])
+        call expect_bad(t, "nonsymmetric_mass", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0.5,0,1, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
+            [character(len=60) :: "&system", "mass", "not symmetric"])
+        call expect_bad(t, "indefinite_mass", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,2,2,1, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
+            [character(len=60) :: "&system", "mass", "not positive definite"])
+        call expect_bad(t, "short_matrix", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0,0, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
+            [character(len=60) :: "&system", "mass", "3 values given", "expected ndof**2 = 4"])
+        call expect_bad(t, "nan_stiffness", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,NaN /", good_forcing], inp, &
+            [character(len=60) :: "&system", "stiffness(4)", "not a finite number"])
+        call expect_bad(t, "negative_mu", [character(len=120) :: base(1:2), &
+            "&friction contact_dof = 2, mu = -0.2, normal_load = 1.0 /"], inp, &
+            [character(len=60) :: "&friction", "mu(1)", "must be finite and >= 0"])
+        call expect_bad(t, "nan_mu", [character(len=120) :: base(1:2), &
+            "&friction contact_dof = 2, mu = NaN, normal_load = 1.0 /"], inp, &
+            [character(len=60) :: "&friction", "mu(1)", "not a finite number"])
+        call expect_bad(t, "mu_count", [character(len=120) :: base(1:2), &
+            "&friction contact_dof = 2, 1, mu = 0.3, normal_load = 1.0, 1.0 /"], inp, &
+            [character(len=60) :: "&friction", "mu", "1 values given, expected 2"])
+        call expect_bad(t, "dof_range", [character(len=120) :: base(1:2), &
+            "&friction contact_dof = 3, mu = 0.3, normal_load = 1.0 /"], inp, &
+            [character(len=60) :: "&friction", "contact_dof(1) = 3", "1..2"])
+        call expect_bad(t, "too_few_samples", [character(len=120) :: base(1:3), &
+            "&hbm harmonics = 30, samples = 50 /"], inp, &
+            [character(len=60) :: "&hbm", "samples = 50", "too few samples", "61"])
+        call expect_bad(t, "bad_rho", [character(len=120) :: base(1:3), &
+            "&hbm harmonics = 10, samples = 64, rho = 0 /"], inp, &
+            [character(len=60) :: "&hbm", "rho", "> 0"])
+        call expect_bad(t, "bad_start", [character(len=120) :: base(1:3), &
+            "&hbm start = 'quick' /"], inp, [character(len=60) :: "&hbm", "start", "'ladder'"])
+        call expect_bad(t, "missing_omega", [character(len=120) :: base(1), &
+            "&forcing force_dof = 1, force_amplitude = 10.0 /"], inp, &
+            [character(len=60) :: "&forcing", "omega", "missing"])
+        call expect_bad(t, "negative_omega", [character(len=120) :: base(1), &
+            "&forcing omega = -1, force_dof = 1, force_amplitude = 10.0 /"], inp, &
+            [character(len=60) :: "&forcing", "omega", "> 0"])
+        call expect_bad(t, "missing_ndof", [character(len=120) :: &
+            "&system mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
+            [character(len=60) :: "&system", "ndof", "missing"])
+        call expect_bad(t, "relative_same_dof", [character(len=120) :: base(1:2), &
+            "&friction contact_dof = 2, contact_dof2 = 2, mu = 0.3, normal_load = 1.0 /"], inp, &
+            [character(len=60) :: "&friction", "contact_dof2(1)"])
+    end subroutine test_bad_inputs
+
+    !> Run the CLI in-process; return its exit code and what it wrote to each unit.
+    subroutine cli(args, code, out, err)
+        character(len=*), intent(in) :: args(:)
+        integer, intent(out) :: code
+        character(len=:), allocatable, intent(out) :: out, err
+        type(string_t), allocatable :: a(:)
+        integer :: i, uo, ue
+        allocate (a(size(args)))
+        do i = 1, size(args)
+            a(i)%s = trim(args(i))
+        end do
+        if (size(args) == 1) then
+            if (len_trim(args(1)) == 0) deallocate (a)
+            if (.not. allocated(a)) allocate (a(0))
+        end if
+        open (newunit=uo, status='scratch', action='readwrite')
+        open (newunit=ue, status='scratch', action='readwrite')
+        code = run_cli(a, uo, ue)
+        out = slurp(uo)
+        err = slurp(ue)
+        close (uo)
+        close (ue)
+    end subroutine cli
+
+    function slurp(u) result(text)
+        integer, intent(in) :: u
+        character(len=:), allocatable :: text
+        character(len=1000) :: line
+        integer :: stat
+        text = ""
+        rewind (u)
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            text = text//trim(line)//new_line('a')
+        end do
+    end function slurp
+
+    !> A copy of an example with its output directory moved to the scratch area.
+    function scratch_copy(example) result(path)
+        character(len=*), intent(in) :: example
+        character(len=:), allocatable :: path
+        integer :: ui, uo, stat, k
+        character(len=1000) :: line
+        path = scratch//"/"//example//".nml"
+        open (newunit=ui, file="examples/"//example//".nml", status='old', action='read')
+        open (newunit=uo, file=path, status='replace', action='write')
+        do
+            read (ui, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            k = index(line, "&output")
+            if (k > 0) line = "&output directory = '"//scratch//"/out_"//example//"' /"
+            write (uo, '(a)') trim(line)
+        end do
+        close (ui)
+        close (uo)
+    end function scratch_copy
+
+    subroutine test_cli(t)
+        type(test_counter_t), intent(inout) :: t
+        integer :: code, i, nrows, u, stat
+        character(len=:), allocatable :: out, err
+        character(len=200) :: path, dir
+        character(len=20), parameter :: examples(3) = [character(len=20) :: "seed", "mirrored", &
+                                                        "chain4"]
+        character(len=4000) :: line
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        logical :: exists
+
+        do i = 1, size(examples)
+            path = scratch_copy(trim(examples(i)))
+            dir = scratch//"/out_"//trim(examples(i))
+            call cli([character(len=200) :: path], code, out, err)
+            call check(t, code == 0, "cli example "//trim(examples(i))//": exit 0", err)
+            call check(t, index(out, "converged") > 0, "cli example "//trim(examples(i))// &
+                       ": summary printed")
+            open (newunit=u, file=trim(dir)//"/hbm.csv", status='old', action='read', iostat=stat)
+            call check(t, stat == 0, "cli example "//trim(examples(i))//": hbm.csv written")
+            if (stat /= 0) cycle
+            read (u, '(a)') line
+            call read_case(trim(path), c, error)
+            call check(t, trim(line) == expected_header(c%model%ndof, c%model%ncontact()), &
+                       "cli example "//trim(examples(i))//": hbm.csv header", trim(line))
+            nrows = 0
+            do
+                read (u, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                nrows = nrows + 1
+            end do
+            close (u)
+            call check(t, nrows == c%hbm%samples, "cli example "//trim(examples(i))// &
+                       ": one row per sample")
+            inquire (file=trim(dir)//"/coefficients.csv", exist=exists)
+            call check(t, exists, "cli example "//trim(examples(i))//": coefficients.csv written")
+            inquire (file=trim(dir)//"/hbm.csv.tmp", exist=exists)
+            call check(t, .not. exists, "cli example "//trim(examples(i))//": no temporary left")
+            ! the summary is itself a case file holding the effective case
+            call read_case(trim(dir)//"/summary.nml", c, error)
+            call check_error(t, error, "cli example "//trim(examples(i))// &
+                             ": summary.nml reads back as the case", .false.)
+            call check(t, summary_value(trim(dir)//"/summary.nml", "converged") == "T", &
+                       "cli example "//trim(examples(i))//": summary says converged")
+        end do
+
+        call cli([character(len=200) :: "--help"], code, out, err)
+        call check(t, code == 0 .and. index(out, "usage") > 0, "cli --help")
+        call cli([character(len=200) :: "--bogus", "x.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "unknown option '--bogus'") > 0, &
+                   "cli unknown option: exit 1", err)
+        call cli([character(len=200) :: ""], code, out, err)
+        call check(t, code == 1, "cli no case file: exit 1")
+        call cli([character(len=200) :: scratch//"/no_such.nml"], code, out, err)
+        call check(t, code == 3 .and. index(err, "no_such.nml") > 0, "cli missing file: exit 3", err)
+        call cli([character(len=200) :: scratch//"/bad_negative_mu.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "&friction mu(1)") > 0 .and. &
+                   count_lines(err) == 1, "cli bad input: exit 1, one line naming the variable", err)
+        ! a forcing harmonic outside the basis: rejected, naming the file
+        call write_lines(scratch//"/bad_harmonic.nml", [character(len=120) :: good_system, &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 1.0, force_harmonic = 2 /", &
+            good_friction, "&hbm harmonics = 9, odd_only = .true., samples = 64 /", &
+            "&output directory = '"//scratch//"/out_bad' /"])
+        call cli([character(len=200) :: scratch//"/bad_harmonic.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "bad_harmonic.nml: &forcing force_harmonic(1)") &
+                   > 0, "cli forcing harmonic outside the basis: exit 1", err)
+        ! an undamped resonance: numerical failure, exit 2, no result files
+        call write_lines(scratch//"/resonance.nml", [character(len=120) :: good_system, &
+            "&forcing omega = 0.6180339887498949, force_dof = 1, force_amplitude = 1.0 /", &
+            good_friction, "&hbm harmonics = 5, samples = 64 /", &
+            "&output directory = '"//scratch//"/out_resonance' /"])
+        call cli([character(len=200) :: scratch//"/resonance.nml"], code, out, err)
+        call check(t, code == 2 .and. index(err, "singular") > 0, "cli undamped resonance: exit 2", &
+                   err)
+        inquire (file=scratch//"/out_resonance/hbm.csv", exist=exists)
+        call check(t, .not. exists, "cli undamped resonance: no result written")
+        ! a solve that cannot converge in the evaluations allowed: exit 2, summary only
+        call write_lines(scratch//"/starved.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 30, samples = 256, maxfev = 3, "// &
+            "start = 'direct' /", "&output directory = '"//scratch//"/out_starved' /"])
+        call cli([character(len=200) :: scratch//"/starved.nml"], code, out, err)
+        call check(t, code == 2 .and. index(err, "not converged") > 0, &
+                   "cli non-converged: exit 2 with diagnosis", err)
+        inquire (file=scratch//"/out_starved/hbm.csv", exist=exists)
+        call check(t, .not. exists, "cli non-converged: no hbm.csv")
+        call check(t, summary_value(scratch//"/out_starved/summary.nml", "converged") == "F", &
+                   "cli non-converged: summary says converged = F")
+    end subroutine test_cli
+
+    function expected_header(n, nc) result(h)
+        integer, intent(in) :: n, nc
+        character(len=:), allocatable :: h
+        integer :: i
+        character(len=12) :: b
+        h = "t"
+        do i = 1, n
+            write (b, '(i0)') i
+            h = h//",x"//trim(b)
+        end do
+        do i = 1, n
+            write (b, '(i0)') i
+            h = h//",v"//trim(b)
+        end do
+        do i = 1, nc
+            write (b, '(i0)') i
+            h = h//",r"//trim(b)
+        end do
+    end function expected_header
+
+    integer function count_lines(s)
+        character(len=*), intent(in) :: s
+        integer :: i
+        count_lines = 0
+        do i = 1, len(s)
+            if (s(i:i) == new_line('a')) count_lines = count_lines + 1
+        end do
+    end function count_lines
+
+    !> The value of `key` in a summary.nml (text after "key = "), '' if absent.
+    function summary_value(path, key) result(v)
+        character(len=*), intent(in) :: path, key
+        character(len=:), allocatable :: v
+        character(len=1000) :: line
+        integer :: u, stat, k
+        v = ""
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            k = index(line, " "//key//" = ")
+            if (k > 0) then
+                v = trim(adjustl(line(k + len(key) + 4:)))
+                exit
+            end if
+        end do
+        close (u)
+    end function summary_value
+end module test_case

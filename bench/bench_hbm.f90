@@ -3,6 +3,7 @@
 !> solve_periodic over repeats, nfev, njev, hybrj calls and the residual.
 !> With --sweep it also solves every harmonic count 5..256 from a cold start (all and odd)
 !> and prints how many converged and the worst case.
+!> The model is read from examples/seed.nml (run from the project root).
 !> Run: fpm run --example bench_hbm --profile release [-- --sweep]
 program bench_hbm
     use, intrinsic :: iso_fortran_env, only: output_unit, int64
@@ -11,9 +12,11 @@ program bench_hbm
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_case, only: case_t, read_case
     implicit none
     integer, parameter :: hs(8) = [5, 10, 20, 30, 50, 100, 200, 256]
     type(model_t) :: m
+    type(case_t) :: c
     type(hbm_options_t) :: o
     type(hbm_solution_t) :: s
     type(error_type), allocatable :: error
@@ -27,7 +30,12 @@ program bench_hbm
         call get_command_argument(i, arg)
         if (arg == '--sweep') sweep = .true.
     end do
-    m = seed()
+    call read_case("examples/seed.nml", c, error)
+    if (allocated(error)) then
+        write (output_unit, '(a)') "error: "//error%message
+        stop 1
+    end if
+    m = c%model
     write (output_unit, '(a)') "seed case, samples = 1024, rho = 0.2, cold start (start = 'auto')"
     write (output_unit, '(a)') "| H | basis | unknowns | median solve [ms] | repeats | nfev | njev "// &
         "| hybrj calls | converged | residual |"
@@ -90,23 +98,6 @@ program bench_hbm
     end if
 
 contains
-
-    function seed() result(mm)
-        type(model_t) :: mm
-        mm%ndof = 2
-        mm%mass = reshape([1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp], [2, 2])
-        mm%stiffness = reshape([2.0_dp, -1.0_dp, -1.0_dp, 1.0_dp], [2, 2])
-        mm%damping = 0.0_dp*mm%mass
-        mm%omega = 4.5_dp
-        mm%force_dof = [1]
-        mm%force_harmonic = [1]
-        mm%force_amplitude = [10.0_dp]
-        mm%force_phase = [0.0_dp]
-        mm%contact_dof = [2]
-        mm%contact_dof2 = [0]
-        mm%mu = [0.45_dp]
-        mm%normal_load = [1.0_dp]
-    end function seed
 
     real(dp) function median(x)
         real(dp), intent(in) :: x(:)

@@ -3,6 +3,7 @@
 !> parallel loop, and prints the largest difference between the two (expected: 0) and both
 !> wall times. Build with OpenMP:
 !>   fpm run --example bench_omp --profile release --flag -fopenmp
+!> The model is read from examples/seed.nml (run from the project root).
 !> Without -fopenmp the loop runs serially (and the check is trivially met).
 program bench_omp
     use, intrinsic :: iso_fortran_env, only: output_unit, int64
@@ -11,12 +12,20 @@ program bench_omp
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_case, only: case_t, read_case
     implicit none
     integer, parameter :: npoints = 64
+    type(case_t) :: c
+    type(error_type), allocatable :: read_error
     real(dp) :: serial(npoints), parallel(npoints)
     integer :: nfail
     integer(int64) :: c0, c1, c2, rate
 
+    call read_case("examples/seed.nml", c, read_error)
+    if (allocated(read_error)) then
+        write (output_unit, '(a)') "error: "//read_error%message
+        stop 1
+    end if
     call system_clock(c0, rate)
     call sweep(serial, .false., nfail)
     call system_clock(c1)
@@ -46,7 +55,8 @@ contains
         !$omp parallel do if(in_parallel) private(m, s, error) firstprivate(o) &
         !$omp& reduction(+:nfail) schedule(dynamic)
         do i = 1, size(amp)
-            m = seed(3.0_dp + 3.0_dp*real(i - 1, dp)/real(size(amp) - 1, dp))
+            m = c%model
+            m%omega = 3.0_dp + 3.0_dp*real(i - 1, dp)/real(size(amp) - 1, dp)
             call solve_periodic(m, o, s, error)
             if (allocated(error)) then
                 nfail = nfail + 1
@@ -59,21 +69,4 @@ contains
         !$omp end parallel do
     end subroutine sweep
 
-    function seed(omega) result(mm)
-        real(dp), intent(in) :: omega
-        type(model_t) :: mm
-        mm%ndof = 2
-        mm%mass = reshape([1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp], [2, 2])
-        mm%stiffness = reshape([2.0_dp, -1.0_dp, -1.0_dp, 1.0_dp], [2, 2])
-        mm%damping = 0.0_dp*mm%mass
-        mm%omega = omega
-        mm%force_dof = [1]
-        mm%force_harmonic = [1]
-        mm%force_amplitude = [10.0_dp]
-        mm%force_phase = [0.0_dp]
-        mm%contact_dof = [2]
-        mm%contact_dof2 = [0]
-        mm%mu = [0.45_dp]
-        mm%normal_load = [1.0_dp]
-    end function seed
 end program bench_omp

@@ -75,12 +75,8 @@ contains
         type(hbm_options_t) :: defaults
 
         case%path = path
-        open (newunit=u, file=path, status='old', action='read', iostat=stat, iomsg=msg)
-        if (stat /= 0) then
-            call fatal_error(error, path//": cannot open the case file: "//trim(msg), &
-                             stickslip_stat%io)
-            return
-        end if
+        call open_copy(path, u, error)
+        if (allocated(error)) return
 
         ndof = iunset
         mass = unset
@@ -338,6 +334,43 @@ contains
             a = values(1:count)
         end subroutine take_int
     end subroutine read_case
+
+    !> Open the case file and copy it line by line into a scratch unit `u`, which the
+    !> namelist reads use: gfortran cannot read a group closed on a last line that has no
+    !> newline, and the copy always ends its lines. Error (stat io) if the file is unreadable.
+    subroutine open_copy(path, u, error)
+        character(len=*), intent(in) :: path
+        integer, intent(out) :: u
+        type(error_type), allocatable, intent(out) :: error
+        integer :: uin, stat, nread
+        character(len=512) :: msg
+        character(len=1024) :: chunk
+        open (newunit=uin, file=path, status='old', action='read', iostat=stat, iomsg=msg)
+        if (stat /= 0) then
+            call fatal_error(error, path//": cannot open the case file: "//trim(msg), &
+                             stickslip_stat%io)
+            return
+        end if
+        open (newunit=u, status='scratch', action='readwrite')
+        do
+            read (uin, '(a)', advance='no', size=nread, iostat=stat, iomsg=msg) chunk
+            if (stat > 0) then
+                call fatal_error(error, path//": cannot read the case file: "//trim(msg), &
+                                 stickslip_stat%io)
+                close (uin)
+                close (u)
+                return
+            end if
+            if (stat == iostat_end) exit
+            if (is_iostat_eor(stat)) then
+                write (u, '(a)') chunk(1:nread)
+            else
+                write (u, '(a)', advance='no') chunk(1:nread)
+            end if
+        end do
+        if (nread > 0) write (u, '(a)') ""
+        close (uin)
+    end subroutine open_copy
 
     !> Number of leading entries that were given (not the sentinel); -1 if there is a gap.
     pure integer function count_given_real(values) result(given)

@@ -65,6 +65,22 @@ contains
                    .not. c%hbm%odd_only, "good case: &hbm values")
         call check_close(t, c%hbm%rho, 0.2_dp, "good case: rho default")
         call check(t, c%directory == scratch//"/good", "good case: output directory")
+
+        ! the last group closed on a last line without newline, and no &friction group
+        block
+            integer :: u
+            character(len=*), parameter :: nl = new_line('a')
+            open (newunit=u, file=scratch//"/no_newline.nml", access='stream', &
+                  form='unformatted', status='replace', action='write')
+            write (u) good_system//nl//good_forcing//nl//"&output directory = 'x' /"
+            close (u)
+        end block
+        call read_case(scratch//"/no_newline.nml", c, error)
+        call check_error(t, error, "case without final newline and without &friction", .false.)
+        if (.not. allocated(error)) then
+            call check(t, c%directory == "x", "case without final newline: last group read")
+            call check(t, c%model%ncontact() == 0, "case without &friction: no contact")
+        end if
     end subroutine test_good_case
 
     !> One bad case: the error must carry the status and every expected fragment.

@@ -12,7 +12,7 @@ module stickslip_case
     use stickslip_hbm, only: validate_options
     implicit none
     private
-    public :: case_t, read_case, write_case, max_dof, max_terms
+    public :: case_t, read_case, write_case, max_dof, max_terms, itoa
 
     !> Largest ndof a case file can hold (host codes calling the library have no limit).
     integer, parameter :: max_dof = 64
@@ -426,7 +426,9 @@ contains
         end do
     end function lower
 
+    !> Decimal text of an integer.
     pure function itoa(i) result(s)
+        !> The integer.
         integer, intent(in) :: i
         character(len=:), allocatable :: s
         character(len=24) :: buf

@@ -8,7 +8,7 @@ module stickslip_output
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_case, only: case_t, write_case
+    use stickslip_case, only: case_t, write_case, itoa
     implicit none
     private
     public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &
@@ -257,12 +257,4 @@ contains
             end if
         end do
     end function quote
-
-    pure function itoa(i) result(s)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=24) :: buf
-        write (buf, '(i0)') i
-        s = trim(buf)
-    end function itoa
 end module stickslip_output

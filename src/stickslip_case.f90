@@ -6,13 +6,13 @@ module stickslip_case
     use, intrinsic :: iso_fortran_env, only: iostat_end
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t
     use stickslip_hbm, only: validate_options
     implicit none
     private
-    public :: case_t, read_case, write_case, max_dof, max_terms, itoa
+    public :: case_t, read_case, write_case, max_dof, max_terms
 
     !> Largest ndof a case file can hold (host codes calling the library have no limit).
     integer, parameter :: max_dof = 64
@@ -425,16 +425,6 @@ contains
             if (s(i:i) >= 'A' .and. s(i:i) <= 'Z') t(i:i) = achar(iachar(s(i:i)) + 32)
         end do
     end function lower
-
-    !> Decimal text of an integer.
-    pure function itoa(i) result(s)
-        !> The integer.
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=24) :: buf
-        write (buf, '(i0)') i
-        s = trim(buf)
-    end function itoa
 
     !> Write `case` as namelist text that read_case reads back (full precision), to `unit`.
     subroutine write_case(unit, case)

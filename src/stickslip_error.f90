@@ -3,7 +3,7 @@
 module stickslip_error
     implicit none
     private
-    public :: error_type, fatal_error, stickslip_stat, exit_code_of
+    public :: error_type, fatal_error, stickslip_stat, exit_code_of, itoa
 
     !> Error categories (`error_type%stat`).
     type :: stat_enum_t
@@ -63,4 +63,14 @@ contains
             code = 4
         end select
     end function exit_code_of
+
+    !> Decimal text of an integer.
+    pure function itoa(i) result(s)
+        !> The integer.
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function itoa
 end module stickslip_error

@@ -4,7 +4,7 @@ module stickslip_lapack
     use stickslip_kinds, only: dp
     implicit none
     private
-    public :: dpotrf, zgetrf, zgetrs, zgecon, zlange
+    public :: dpotrf, dpotrs, dgetrf, dgetrs, zgetrf, zgetrs, zgecon, zlange
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -15,6 +15,36 @@ module stickslip_lapack
             real(dp), intent(inout) :: a(lda, *)
             integer, intent(out) :: info
         end subroutine dpotrf
+
+        !> Solve with the Cholesky factor from dpotrf.
+        subroutine dpotrs(uplo, n, nrhs, a, lda, b, ldb, info)
+            import :: dp
+            character(len=1), intent(in) :: uplo
+            integer, intent(in) :: n, nrhs, lda, ldb
+            real(dp), intent(in) :: a(lda, *)
+            real(dp), intent(inout) :: b(ldb, *)
+            integer, intent(out) :: info
+        end subroutine dpotrs
+
+        !> LU factorization of a general real matrix with partial pivoting.
+        subroutine dgetrf(m, n, a, lda, ipiv, info)
+            import :: dp
+            integer, intent(in) :: m, n, lda
+            real(dp), intent(inout) :: a(lda, *)
+            integer, intent(out) :: ipiv(*)
+            integer, intent(out) :: info
+        end subroutine dgetrf
+
+        !> Solve with the LU factors from dgetrf.
+        subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+            import :: dp
+            character(len=1), intent(in) :: trans
+            integer, intent(in) :: n, nrhs, lda, ldb
+            real(dp), intent(in) :: a(lda, *)
+            integer, intent(in) :: ipiv(*)
+            real(dp), intent(inout) :: b(ldb, *)
+            integer, intent(out) :: info
+        end subroutine dgetrs
 
         !> LU factorization of a general complex matrix with partial pivoting.
         subroutine zgetrf(m, n, a, lda, ipiv, info)

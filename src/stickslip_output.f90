@@ -6,9 +6,9 @@
 module stickslip_output
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_case, only: case_t, write_case, itoa
+    use stickslip_case, only: case_t, write_case
     implicit none
     private
     public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &

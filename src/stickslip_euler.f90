@@ -1,0 +1,248 @@
+!> Implicit Euler on velocity level (Moreau-Jean type) for the same model as the weighted
+!> residual: the time-domain comparison method.
+!>
+!>     x_{n+1} = x_n + h v_{n+1}
+!>     M (v_{n+1} - v_n) = h ( f(t_{n+1}) - C v_{n+1} - K x_{n+1} + W r_{n+1} )
+!>     Coulomb's law between r_{n+1} and the slip velocities u = W^T v_{n+1}
+!>
+!> With S = M + h C + h^2 K (factorized once per step size, LAPACK dgetrf):
+!> v_{n+1} = v_free + h S^{-1} W r, and u = u_free + D r, D = h W^T S^{-1} W.
+!> The friction forces solve min 1/2 r^T D r + u_free^T r over the box |r_j| <= mu_j N_j (its
+!> optimality conditions are Coulomb's law): closed form for one contact, projected
+!> Gauss-Seidel for several (it converges when D is symmetric positive definite, i.e. for
+!> symmetric C and K). The step is first order: errors are O(h). No allocation in the step loop.
+module stickslip_euler
+    use, intrinsic :: iso_fortran_env, only: int64
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use stickslip_kinds, only: dp, two_pi
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction
+    use stickslip_lapack, only: dgetrf, dgetrs
+    implicit none
+    private
+    public :: euler_options_t, euler_result_t, integrate_euler, contact_forces
+
+    !> Options of the time integration.
+    type :: euler_options_t
+        !> Time steps per forcing period (h = T / steps_per_period).
+        integer :: steps_per_period = 1000
+        !> Periods integrated at most before giving up on a periodic state.
+        integer :: max_periods = 2000
+        !> Periodic when the states one period apart differ by less than tol times the
+        !> amplitude of the response over that period (x and v separately).
+        real(dp) :: tol = 1.0e-8_dp
+        !> Projected Gauss-Seidel: stop when no force changes by more than contact_tol times
+        !> the largest friction limit.
+        real(dp) :: contact_tol = 1.0e-13_dp
+        !> Projected Gauss-Seidel sweeps at most per step.
+        integer :: contact_max_sweeps = 10000
+    end type euler_options_t
+
+    !> Result of the time integration: the report and the last period.
+    type :: euler_result_t
+        !> A periodic steady state was reached.
+        logical :: periodic = .false.
+        !> Periods integrated.
+        integer :: periods = 0
+        !> Periodicity defect of the last period (relative, the larger of x and v).
+        real(dp) :: defect = huge(1.0_dp)
+        !> Wall-clock seconds of the integration.
+        real(dp) :: seconds = 0.0_dp
+        !> Most projected Gauss-Seidel sweeps needed in one step (0 with one contact).
+        integer :: max_sweeps = 0
+        !> Empty when periodic, otherwise what happened.
+        character(len=:), allocatable :: diagnosis
+        !> Instants t_k = k T / steps_per_period of the last period [s].
+        real(dp), allocatable :: t(:)
+        !> Displacements over the last period, steps x N [m].
+        real(dp), allocatable :: x(:, :)
+        !> Velocities over the last period, steps x N [m/s].
+        real(dp), allocatable :: v(:, :)
+        !> Friction forces over the last period, steps x n_c [N].
+        real(dp), allocatable :: r(:, :)
+    end type euler_result_t
+
+contains
+
+    !> Integrate `model` from rest (or from x0, v0 at t = 0) until the response is periodic.
+    !> Not reaching a periodic state within max_periods is an outcome (res%periodic = F and a
+    !> diagnosis: drift, quasi-periodic or unbounded response). Errors: stat input (invalid
+    !> model or options), stat numerical (singular iteration matrix).
+    subroutine integrate_euler(model, opts, res, error, x0, v0)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> Integration options.
+        type(euler_options_t), intent(in) :: opts
+        !> The report and the last period.
+        type(euler_result_t), intent(out) :: res
+        !> Set on invalid input or a singular iteration matrix.
+        type(error_type), allocatable, intent(out) :: error
+        !> Initial displacements [m] (default 0).
+        real(dp), intent(in), optional :: x0(:)
+        !> Initial velocities [m/s] (default 0).
+        real(dp), intent(in), optional :: v0(:)
+        integer :: n, nc, ns, info, j, k, period, step, sweeps, i
+        real(dp) :: h, period_t, t, ampx, ampv, dx, dv
+        real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), b(:), wk(:), x(:), v(:), &
+                                 xstart(:), vstart(:), r(:), ufree(:), limit(:), famp(:), fph(:)
+        integer, allocatable :: ipiv(:), fdof(:), fh(:)
+        integer(int64) :: c0, c1, rate
+        character(len=300) :: buf
+
+        call system_clock(c0, rate)
+        call validate_model(model, error)
+        if (allocated(error)) return
+        if (opts%steps_per_period < 2) then
+            call fatal_error(error, "&euler steps_per_period: must be >= 2", stickslip_stat%input)
+            return
+        end if
+        if (opts%max_periods < 1) then
+            call fatal_error(error, "&euler max_periods: must be >= 1", stickslip_stat%input)
+            return
+        end if
+        if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
+            call fatal_error(error, "&euler tol: must be in (0, 1)", stickslip_stat%input)
+            return
+        end if
+        n = model%ndof
+        nc = model%ncontact()
+        ns = opts%steps_per_period
+        period_t = two_pi/model%omega
+        h = period_t/ns
+
+        allocate (s(n, n), sw(n, nc), d(nc, nc), w(n, nc), b(n), wk(n), x(n), v(n), xstart(n), &
+                  vstart(n), r(nc), ufree(nc), limit(nc), ipiv(n))
+        s = model%mass + h*model%damping + h*h*model%stiffness
+        call dgetrf(n, n, s, n, ipiv, info)
+        if (info /= 0) then
+            call fatal_error(error, "implicit Euler: the iteration matrix M + h C + h^2 K is "// &
+                             "singular", stickslip_stat%numerical)
+            return
+        end if
+        do j = 1, nc
+            w(:, j) = contact_velocity_direction(model, j)
+        end do
+        sw = w
+        if (nc > 0) call dgetrs('N', n, nc, s, n, ipiv, sw, n, info)
+        d = h*matmul(transpose(w), sw)
+        limit = model%mu*model%normal_load
+        fdof = model%force_dof
+        fh = model%force_harmonic
+        famp = model%force_amplitude
+        fph = model%force_phase
+
+        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc))
+        res%t = [(period_t*real(k, dp)/real(ns, dp), k=0, ns - 1)]
+        x = 0.0_dp
+        v = 0.0_dp
+        if (present(x0)) x = x0
+        if (present(v0)) v = v0
+        r = 0.0_dp
+        res%max_sweeps = 0
+
+        do period = 1, opts%max_periods
+            xstart = x
+            vstart = v
+            do step = 1, ns
+                ! the state at the start of this step is sample step of the period
+                res%x(step, :) = x
+                res%v(step, :) = v
+                res%r(step, :) = r
+                t = period_t*(real(period - 1, dp) + real(step, dp)/real(ns, dp))
+                b = matmul(model%mass, v)
+                wk = matmul(model%stiffness, x)
+                b = b - h*wk
+                do i = 1, size(fdof)
+                    b(fdof(i)) = b(fdof(i)) + h*famp(i)*cos(fh(i)*model%omega*t + fph(i))
+                end do
+                call dgetrs('N', n, 1, s, n, ipiv, b, n, info)
+                v = b
+                if (nc > 0) then
+                    ufree = matmul(v, w)
+                    call contact_forces(d, ufree, limit, r, opts%contact_tol, &
+                                        opts%contact_max_sweeps, sweeps)
+                    res%max_sweeps = max(res%max_sweeps, sweeps)
+                    wk = matmul(sw, r)
+                    v = v + h*wk
+                end if
+                x = x + h*v
+            end do
+            res%periods = period
+            ! the last stored period runs from xstart to x: compare the two ends
+            ampx = maxval(abs(res%x))
+            ampv = maxval(abs(res%v))
+            if (.not. (all(ieee_is_finite(x)) .and. all(ieee_is_finite(v))) .or. &
+                ampx > 1.0e100_dp) then
+                res%diagnosis = "unbounded response: the state overflowed during period "// &
+                                itoa(period)
+                res%defect = huge(1.0_dp)
+                exit
+            end if
+            dx = maxval(abs(x - xstart))/max(ampx, tiny(1.0_dp))
+            dv = maxval(abs(v - vstart))/max(ampv, tiny(1.0_dp))
+            if (ampx == 0.0_dp .and. ampv == 0.0_dp) then
+                dx = 0.0_dp
+                dv = 0.0_dp
+            end if
+            res%defect = max(dx, dv)
+            if (res%defect <= opts%tol) then
+                res%periodic = .true.
+                exit
+            end if
+        end do
+
+        if (.not. res%periodic .and. .not. allocated(res%diagnosis)) then
+            write (buf, '(a,i0,a,es9.2,a,es9.2,a)') "no periodic state after ", res%periods, &
+                " periods: the states one period apart still differ by ", res%defect, &
+                " of the amplitude (tol ", opts%tol, "); the response drifts, is "// &
+                "quasi-periodic or decays too slowly (raise &euler max_periods or add damping)"
+            res%diagnosis = trim(buf)
+        else if (res%periodic) then
+            res%diagnosis = ""
+        end if
+        call system_clock(c1)
+        res%seconds = real(c1 - c0, dp)/real(rate, dp)
+    end subroutine integrate_euler
+
+    !> Friction forces r of one step: the minimizer of 1/2 r^T D r + u_free^T r over the box
+    !> |r_j| <= limit_j, i.e. Coulomb's law between r and u = u_free + D r. Closed form for
+    !> one contact; projected Gauss-Seidel from the given r for several (converges for D
+    !> symmetric positive definite), stopped when no force changes by more than
+    !> tol * max(limit) in a sweep or after max_sweeps sweeps.
+    pure subroutine contact_forces(d, ufree, limit, r, tol, max_sweeps, sweeps)
+        !> Delassus matrix h W^T S^{-1} W, n_c x n_c [m/(N s)].
+        real(dp), intent(in) :: d(:, :)
+        !> Slip velocities without friction [m/s].
+        real(dp), intent(in) :: ufree(:)
+        !> Friction limits mu N [N].
+        real(dp), intent(in) :: limit(:)
+        !> Friction forces: start on entry, solution on exit [N].
+        real(dp), intent(inout) :: r(:)
+        !> Relative tolerance of the sweeps.
+        real(dp), intent(in) :: tol
+        !> Sweeps at most.
+        integer, intent(in) :: max_sweeps
+        !> Sweeps done (0 for one contact).
+        integer, intent(out) :: sweeps
+        integer :: j, nc
+        real(dp) :: change, rnew, scale
+        nc = size(r)
+        sweeps = 0
+        if (nc == 1) then
+            r(1) = max(-limit(1), min(limit(1), -ufree(1)/d(1, 1)))
+            return
+        end if
+        scale = max(maxval(limit), tiny(1.0_dp))
+        do sweeps = 1, max_sweeps
+            change = 0.0_dp
+            do j = 1, nc
+                rnew = r(j) - (ufree(j) + dot_product(d(j, :), r))/d(j, j)
+                rnew = max(-limit(j), min(limit(j), rnew))
+                change = max(change, abs(rnew - r(j)))
+                r(j) = rnew
+            end do
+            if (change <= tol*scale) exit
+        end do
+        sweeps = min(sweeps, max_sweeps)
+    end subroutine contact_forces
+end module stickslip_euler

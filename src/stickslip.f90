@@ -8,16 +8,18 @@ module stickslip
     use stickslip_hbm, only: solve_periodic, validate_options
     use stickslip_case, only: case_t, read_case, write_case
     use stickslip_output, only: make_directory, write_hbm_csv, write_coefficients_csv, &
-        write_summary, energy_balance_error
-    use stickslip_run, only: run_case
+        write_summary, energy_balance_error, write_samples_csv, write_euler_summary
+    use stickslip_run, only: run_case, run_euler_case
+    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
     use stickslip_cli, only: string_t, run_cli, stickslip_version
     implicit none
     private
     public :: dp, error_type, fatal_error, stickslip_stat, exit_code_of
     public :: model_t, validate_model, hbm_options_t, hbm_solution_t
     public :: solve_periodic, validate_options
-    public :: case_t, read_case, write_case, run_case
+    public :: case_t, read_case, write_case, run_case, run_euler_case
+    public :: euler_options_t, euler_result_t, integrate_euler
     public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &
-              energy_balance_error
+              energy_balance_error, write_samples_csv, write_euler_summary
     public :: string_t, run_cli, stickslip_version
 end module stickslip

@@ -10,6 +10,7 @@ module stickslip_case
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t
     use stickslip_hbm, only: validate_options
+    use stickslip_euler, only: euler_options_t
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms
@@ -28,8 +29,12 @@ module stickslip_case
         character(len=:), allocatable :: path
         !> The structure, its contacts and forcing.
         type(model_t) :: model
+        !> Method: 'hbm' (weighted residual) or 'euler' (implicit Euler time stepping).
+        character(len=16) :: method = 'hbm'
         !> Weighted-residual options (&hbm).
         type(hbm_options_t) :: hbm
+        !> Time-stepping options (&euler).
+        type(euler_options_t) :: euler
         !> Output directory (&output directory), created if missing.
         character(len=:), allocatable :: directory
     end type case_t
@@ -66,13 +71,19 @@ contains
         character(len=16) :: start
         ! &output
         character(len=1024) :: directory
+        ! &run, &euler
+        character(len=16) :: method
+        integer :: steps_per_period, max_periods
+        real(dp) :: euler_tol
         namelist /system/ ndof, mass, stiffness, damping
         namelist /forcing/ omega, force_dof, force_harmonic, force_amplitude, force_phase
         namelist /friction/ contact_dof, contact_dof2, mu, normal_load
         namelist /hbm/ harmonics, odd_only, rho, samples, tol, start, maxfev
         namelist /output/ directory
+        namelist /run/ method
         integer :: n, nf, nc
         type(hbm_options_t) :: defaults
+        type(euler_options_t) :: euler_defaults
 
         case%path = path
         call open_copy(path, u, error)
@@ -122,6 +133,19 @@ contains
         rewind (u)
         read (u, nml=output, iostat=stat, iomsg=msg)
         call group_status("output", .false.)
+        if (allocated(error)) return
+
+        method = 'hbm'
+        rewind (u)
+        read (u, nml=run, iostat=stat, iomsg=msg)
+        call group_status("run", .false.)
+        if (allocated(error)) return
+
+        steps_per_period = euler_defaults%steps_per_period
+        max_periods = euler_defaults%max_periods
+        euler_tol = euler_defaults%tol
+        call read_euler_group()
+        call group_status("euler", .false.)
         if (allocated(error)) return
         close (u)
 
@@ -212,6 +236,28 @@ contains
         end if
         case%directory = trim(directory)
 
+        if (method /= 'hbm' .and. method /= 'euler') then
+            call input_error("&run method = '"//trim(method)//"': must be 'hbm' or 'euler'")
+            return
+        end if
+        case%method = method
+        if (steps_per_period < 2) then
+            call input_error("&euler steps_per_period = "//itoa(steps_per_period)// &
+                             ": must be >= 2")
+            return
+        end if
+        if (max_periods < 1) then
+            call input_error("&euler max_periods = "//itoa(max_periods)//": must be >= 1")
+            return
+        end if
+        if (.not. (euler_tol > 0.0_dp .and. euler_tol < 1.0_dp)) then
+            call input_error("&euler tol: must be in (0, 1)")
+            return
+        end if
+        case%euler%steps_per_period = steps_per_period
+        case%euler%max_periods = max_periods
+        case%euler%tol = euler_tol
+
         call validate_model(case%model, error)
         if (allocated(error)) then
             error%message = path//": "//error%message
@@ -224,6 +270,16 @@ contains
         end if
 
     contains
+
+        !> &euler has its own `tol` (the &hbm one is another variable): read it here.
+        subroutine read_euler_group()
+            real(dp) :: tol
+            namelist /euler/ steps_per_period, max_periods, tol
+            tol = euler_tol
+            rewind (u)
+            read (u, nml=euler, iostat=stat, iomsg=msg)
+            euler_tol = tol
+        end subroutine read_euler_group
 
         subroutine input_error(message)
             character(len=*), intent(in) :: message
@@ -477,6 +533,14 @@ contains
             write (unit, '(a)') "/"
             write (unit, '(a)') "&output"
             write (unit, '(a)') "  directory = '"//case%directory//"'"
+            write (unit, '(a)') "/"
+            write (unit, '(a)') "&run"
+            write (unit, '(a)') "  method = '"//trim(case%method)//"'"
+            write (unit, '(a)') "/"
+            write (unit, '(a)') "&euler"
+            write (unit, '(a,i0)') "  steps_per_period = ", case%euler%steps_per_period
+            write (unit, '(a,i0)') "  max_periods = ", case%euler%max_periods
+            write (unit, '(a,es24.16e3)') "  tol = ", case%euler%tol
             write (unit, '(a)') "/"
         end associate
     end subroutine write_case

@@ -6,7 +6,8 @@ module stickslip_cli
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
     use stickslip_case, only: case_t, read_case
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_run, only: run_case
+    use stickslip_run, only: run_case, run_euler_case
+    use stickslip_euler, only: euler_result_t
     use stickslip_output, only: energy_balance_error
     implicit none
     private
@@ -97,6 +98,7 @@ contains
         type(error_type), allocatable :: error
         type(case_t) :: case
         type(hbm_solution_t) :: sol
+        type(euler_result_t) :: res
 
         code = 0
         call parse_args(args, opts, error)
@@ -111,16 +113,28 @@ contains
             end if
             call read_case(opts%case_path, case, error)
         end if
-        if (.not. allocated(error)) call run_case(case, sol, error)
+        if (.not. allocated(error)) then
+            if (case%method == 'euler') then
+                call run_euler_case(case, res, error)
+            else
+                call run_case(case, sol, error)
+            end if
+        end if
         if (allocated(error)) then
             write (err_unit, '(a)') "stickslip: error: "//error%message
             code = exit_code_of(error%stat)
             if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
-                allocated(sol%diagnosis)) write (err_unit, '(a)') &
+                (allocated(sol%diagnosis) .or. allocated(res%diagnosis))) write (err_unit, '(a)') &
                 "stickslip: the summary was written to "//case%directory//"/summary.nml"
             return
         end if
-        if (.not. opts%quiet) call print_summary(out_unit, case, sol)
+        if (.not. opts%quiet) then
+            if (case%method == 'euler') then
+                call print_euler_summary(out_unit, case, res)
+            else
+                call print_summary(out_unit, case, sol)
+            end if
+        end if
     end function run_cli
 
     subroutine print_summary(u, case, sol)
@@ -149,4 +163,20 @@ contains
             " (balance error ", energy_balance_error(sol), ")"
         write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, summary.nml}"
     end subroutine print_summary
+
+    subroutine print_euler_summary(u, case, res)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(euler_result_t), intent(in) :: res
+        integer :: j
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: periodic after ", &
+            res%periods, " periods of ", case%euler%steps_per_period, " steps (defect ", &
+            res%defect, ") in ", 1.0e3_dp*res%seconds, " ms"
+        do j = 1, size(res%r, 2)
+            write (u, '(a,i0,a,g0.4,a,g0.4,a)') "  contact ", j, ": max |r| ", &
+                maxval(abs(res%r(:, j))), " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+        end do
+        write (u, '(a)') "  wrote "//case%directory//"/{euler.csv, summary.nml}"
+    end subroutine print_euler_summary
 end module stickslip_cli

@@ -8,11 +8,12 @@ module stickslip_output
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_solution, only: hbm_solution_t
+    use stickslip_euler, only: euler_result_t
     use stickslip_case, only: case_t, write_case
     implicit none
     private
-    public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &
-              energy_balance_error
+    public :: make_directory, write_hbm_csv, write_samples_csv, write_coefficients_csv, &
+              write_summary, write_euler_summary, energy_balance_error
 
     interface
         function c_mkdir(path, mode) bind(c, name='mkdir') result(stat)
@@ -108,13 +109,33 @@ contains
         type(hbm_solution_t), intent(in) :: sol
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error)
+    end subroutine write_hbm_csv
+
+    !> Write `dir`/`name`: header t,x1..xN,v1..vN,r1..rC and one row per instant, full
+    !> double precision (the format of hbm.csv, also used for euler.csv). Error: stat io.
+    subroutine write_samples_csv(dir, name, t, x, v, r, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> File name.
+        character(len=*), intent(in) :: name
+        !> Instants [s].
+        real(dp), intent(in) :: t(:)
+        !> Displacements, instants x N [m].
+        real(dp), intent(in) :: x(:, :)
+        !> Velocities, instants x N [m/s].
+        real(dp), intent(in) :: v(:, :)
+        !> Friction forces, instants x n_c [N].
+        real(dp), intent(in) :: r(:, :)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
         integer :: u, k, i, n, nc, stat
         character(len=512) :: msg
         character(len=:), allocatable :: header
         character(len=80) :: fmt
 
-        n = size(sol%x, 2)
-        nc = size(sol%r, 2)
+        n = size(x, 2)
+        nc = size(r, 2)
         header = "t"
         do i = 1, n
             header = header//",x"//itoa(i)
@@ -126,15 +147,15 @@ contains
             header = header//",r"//itoa(i)
         end do
         write (fmt, '(a,i0,a)') '(', 1 + 2*n + nc, '(' // real_fmt // ',:,","))'
-        call open_temporary(dir, "hbm.csv", u, error)
+        call open_temporary(dir, name, u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
-        do k = 1, size(sol%t)
+        do k = 1, size(t)
             if (stat /= 0) exit
-            write (u, fmt, iostat=stat, iomsg=msg) sol%t(k), sol%x(k, :), sol%v(k, :), sol%r(k, :)
+            write (u, fmt, iostat=stat, iomsg=msg) t(k), x(k, :), v(k, :), r(k, :)
         end do
-        call close_and_rename(dir, "hbm.csv", u, stat, msg, error)
-    end subroutine write_hbm_csv
+        call close_and_rename(dir, name, u, stat, msg, error)
+    end subroutine write_samples_csv
 
     !> Write `dir`/coefficients.csv: header harmonic,kind,x1..xN,r1..rC and one row per basis
     !> function, kind c0 (constant), cos or sin; u(t) = c0 + sum a cos(h omega t) + b sin(...).
@@ -214,6 +235,7 @@ contains
             "! stickslip summary: the group &summary, then the effective case (&system ... &output)"
         if (stat == 0) then
             write (u, '(a)') "&summary"
+            write (u, '(a)') "  method = 'hbm'"
             write (u, '(a,l1)') "  converged = ", sol%converged
             write (u, '(a,i0)') "  info = ", sol%info
             write (u, '(a,i0)') "  nfev = ", sol%nfev
@@ -242,6 +264,40 @@ contains
         if (stat == 0) call write_case(u, case)
         call close_and_rename(dir, "summary.nml", u, stat, msg, error)
     end subroutine write_summary
+
+    !> Write `dir`/summary.nml for a time integration: a group &summary (method = 'euler',
+    !> periodic, periods, defect, seconds, max_sweeps, diagnosis), then the effective case.
+    subroutine write_euler_summary(dir, case, res, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case integrated.
+        type(case_t), intent(in) :: case
+        !> The integration result.
+        type(euler_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat
+        character(len=512) :: msg
+        character(len=*), parameter :: fr = '(a,' // real_fmt // ')'
+        call open_temporary(dir, "summary.nml", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) &
+            "! stickslip summary: the group &summary, then the effective case (&system ... &euler)"
+        if (stat == 0) then
+            write (u, '(a)') "&summary"
+            write (u, '(a)') "  method = 'euler'"
+            write (u, '(a,l1)') "  periodic = ", res%periodic
+            write (u, '(a,i0)') "  periods = ", res%periods
+            write (u, fr) "  defect = ", res%defect
+            write (u, fr) "  euler_seconds = ", res%seconds
+            write (u, '(a,i0)') "  steps_per_period = ", case%euler%steps_per_period
+            write (u, '(a,i0)') "  max_sweeps = ", res%max_sweeps
+            write (u, '(a)') "  diagnosis = '"//quote(res%diagnosis)//"'"
+            write (u, '(a)', iostat=stat, iomsg=msg) "/"
+        end if
+        if (stat == 0) call write_case(u, case)
+        call close_and_rename(dir, "summary.nml", u, stat, msg, error)
+    end subroutine write_euler_summary
 
     !> Double the single quotes of a string for a namelist character value.
     pure function quote(s) result(t)

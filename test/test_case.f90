@@ -171,6 +171,11 @@ contains
         call expect_bad(t, "missing_ndof", [character(len=120) :: &
             "&system mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
             [character(len=60) :: "&system", "ndof", "missing"])
+        call expect_bad(t, "bad_method", [character(len=120) :: base, "&run method = 'magic' /"], &
+            inp, [character(len=60) :: "&run", "method", "'euler'"])
+        call expect_bad(t, "bad_steps", [character(len=120) :: base, &
+            "&euler steps_per_period = 1 /"], inp, [character(len=60) :: "&euler", &
+            "steps_per_period = 1", ">= 2"])
         call expect_bad(t, "relative_same_dof", [character(len=120) :: base(1:2), &
             "&friction contact_dof = 2, contact_dof2 = 2, mu = 0.3, normal_load = 1.0 /"], inp, &
             [character(len=60) :: "&friction", "contact_dof2(1)"])
@@ -239,8 +244,9 @@ contains
         integer :: code, i, nrows, u, stat
         character(len=:), allocatable :: out, err
         character(len=200) :: path, dir
-        character(len=20), parameter :: examples(3) = [character(len=20) :: "seed", "mirrored", &
-                                                        "chain4"]
+        character(len=20), parameter :: examples(4) = [character(len=20) :: "seed", "mirrored", &
+                                                        "chain4", "seed_euler"]
+        character(len=20) :: samples_file
         character(len=4000) :: line
         type(case_t) :: c
         type(error_type), allocatable :: error
@@ -251,10 +257,13 @@ contains
             dir = scratch//"/out_"//trim(examples(i))
             call cli([character(len=200) :: path], code, out, err)
             call check(t, code == 0, "cli example "//trim(examples(i))//": exit 0", err)
-            call check(t, index(out, "converged") > 0, "cli example "//trim(examples(i))// &
-                       ": summary printed")
-            open (newunit=u, file=trim(dir)//"/hbm.csv", status='old', action='read', iostat=stat)
-            call check(t, stat == 0, "cli example "//trim(examples(i))//": hbm.csv written")
+            samples_file = merge("euler.csv", "hbm.csv  ", examples(i) == "seed_euler")
+            call check(t, index(out, "converged") > 0 .or. index(out, "periodic after") > 0, &
+                       "cli example "//trim(examples(i))//": summary printed")
+            open (newunit=u, file=trim(dir)//"/"//trim(samples_file), status='old', &
+                  action='read', iostat=stat)
+            call check(t, stat == 0, "cli example "//trim(examples(i))//": "// &
+                       trim(samples_file)//" written")
             if (stat /= 0) cycle
             read (u, '(a)') line
             call read_case(trim(path), c, error)
@@ -267,6 +276,13 @@ contains
                 nrows = nrows + 1
             end do
             close (u)
+            if (examples(i) == "seed_euler") then
+                call check(t, nrows == c%euler%steps_per_period, "cli example "// &
+                           trim(examples(i))//": one row per step of the last period")
+                call check(t, summary_value(trim(dir)//"/summary.nml", "periodic") == "T", &
+                           "cli example "//trim(examples(i))//": summary says periodic")
+                cycle
+            end if
             call check(t, nrows == c%hbm%samples, "cli example "//trim(examples(i))// &
                        ": one row per sample")
             inquire (file=trim(dir)//"/coefficients.csv", exist=exists)

@@ -29,13 +29,7 @@ contains
         type(error_type), allocatable :: io_error
 
         call solve_periodic(case%model, case%hbm, sol, error)
-        if (allocated(error)) then
-            if (error%stat == stickslip_stat%input .and. allocated(case%path)) then
-                if (len(case%path) > 0) error%message = case%path//": "//error%message
-            end if
-            return
-        end if
-        call make_directory(case%directory, error)
+        call prepare_output(case, error)
         if (allocated(error)) return
         if (sol%converged) then
             call write_hbm_csv(case%directory, sol, error)
@@ -65,13 +59,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         call integrate_euler(case%model, case%euler, res, error)
-        if (allocated(error)) then
-            if (error%stat == stickslip_stat%input .and. allocated(case%path)) then
-                if (len(case%path) > 0) error%message = case%path//": "//error%message
-            end if
-            return
-        end if
-        call make_directory(case%directory, error)
+        call prepare_output(case, error)
         if (allocated(error)) return
         if (res%periodic) then
             call write_samples_csv(case%directory, "euler.csv", res%t, res%x, res%v, res%r, error)
@@ -84,4 +72,18 @@ contains
         end if
         if (.not. res%periodic) call fatal_error(error, res%diagnosis, stickslip_stat%numerical)
     end subroutine run_euler_case
+
+    !> After a method ran: name the case file in an input error, or else create the output
+    !> directory.
+    subroutine prepare_output(case, error)
+        type(case_t), intent(in) :: case
+        type(error_type), allocatable, intent(inout) :: error
+        if (allocated(error)) then
+            if (error%stat == stickslip_stat%input .and. allocated(case%path)) then
+                if (len(case%path) > 0) error%message = case%path//": "//error%message
+            end if
+            return
+        end if
+        call make_directory(case%directory, error)
+    end subroutine prepare_output
 end module stickslip_run

@@ -32,7 +32,11 @@ if ! command -v fpm >/dev/null 2>&1; then
         python3 -m pip install --disable-pip-version-check fpm >&2 || exit 1
     fi
     hash -r
-    command -v fpm >/dev/null 2>&1 || { echo "setup: fpm installed but not on PATH (add ~/.local/bin)" >&2; exit 1; }
+    if ! command -v fpm >/dev/null 2>&1 && command -v pyenv >/dev/null 2>&1; then
+        pyenv rehash || true
+        hash -r
+    fi
+    command -v fpm >/dev/null 2>&1 || { echo "setup: fpm installed but not on PATH (add $(python3 -m site --user-base)/bin)" >&2; exit 1; }
 fi
 
 if [ "${1:-}" = "--run" ]; then

@@ -14,6 +14,7 @@ module stickslip_case
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms
+    public :: put, rtoa, ltoa, rlist, ilist, llist
 
     !> Largest ndof a case file can hold (host codes calling the library have no limit).
     integer, parameter :: max_dof = 64
@@ -483,65 +484,131 @@ contains
     end function lower
 
     !> Write `case` as namelist text that read_case reads back (full precision), to `unit`.
-    subroutine write_case(unit, case)
+    !> I/O errors do not stop the program: stat /= 0 and msg say what failed.
+    subroutine write_case(unit, case, stat, msg)
         !> An open formatted unit.
         integer, intent(in) :: unit
         !> The case.
         type(case_t), intent(in) :: case
-        character(len=*), parameter :: fr = '(*(es24.16e3, :, ", "))', fi = '(*(i0, :, ", "))'
+        !> 0, or the iostat of the first failed write.
+        integer, intent(out) :: stat
+        !> The iomsg of the first failed write.
+        character(len=*), intent(inout) :: msg
+        stat = 0
         associate (m => case%model, o => case%hbm)
-            write (unit, '(a)') "&system"
-            write (unit, '(a,i0)') "  ndof = ", m%ndof
-            write (unit, '(a)', advance='no') "  mass = "
-            write (unit, fr) m%mass
-            write (unit, '(a)', advance='no') "  stiffness = "
-            write (unit, fr) m%stiffness
-            write (unit, '(a)', advance='no') "  damping = "
-            write (unit, fr) m%damping
-            write (unit, '(a)') "/"
-            write (unit, '(a)') "&forcing"
-            write (unit, '(a,es24.16e3)') "  omega = ", m%omega
-            write (unit, '(a)', advance='no') "  force_dof = "
-            write (unit, fi) m%force_dof
-            write (unit, '(a)', advance='no') "  force_harmonic = "
-            write (unit, fi) m%force_harmonic
-            write (unit, '(a)', advance='no') "  force_amplitude = "
-            write (unit, fr) m%force_amplitude
-            write (unit, '(a)', advance='no') "  force_phase = "
-            write (unit, fr) m%force_phase
-            write (unit, '(a)') "/"
-            write (unit, '(a)') "&friction"
+            call put(unit, "&system", stat, msg)
+            call put(unit, "  ndof = "//itoa(m%ndof), stat, msg)
+            call put(unit, "  mass = "//rlist(reshape(m%mass, [m%ndof**2])), stat, msg)
+            call put(unit, "  stiffness = "//rlist(reshape(m%stiffness, [m%ndof**2])), stat, msg)
+            call put(unit, "  damping = "//rlist(reshape(m%damping, [m%ndof**2])), stat, msg)
+            call put(unit, "/", stat, msg)
+            call put(unit, "&forcing", stat, msg)
+            call put(unit, "  omega = "//rtoa(m%omega), stat, msg)
+            call put(unit, "  force_dof = "//ilist(m%force_dof), stat, msg)
+            call put(unit, "  force_harmonic = "//ilist(m%force_harmonic), stat, msg)
+            call put(unit, "  force_amplitude = "//rlist(m%force_amplitude), stat, msg)
+            call put(unit, "  force_phase = "//rlist(m%force_phase), stat, msg)
+            call put(unit, "/", stat, msg)
+            call put(unit, "&friction", stat, msg)
             if (m%ncontact() > 0) then
-                write (unit, '(a)', advance='no') "  contact_dof = "
-                write (unit, fi) m%contact_dof
-                write (unit, '(a)', advance='no') "  contact_dof2 = "
-                write (unit, fi) m%contact_dof2
-                write (unit, '(a)', advance='no') "  mu = "
-                write (unit, fr) m%mu
-                write (unit, '(a)', advance='no') "  normal_load = "
-                write (unit, fr) m%normal_load
+                call put(unit, "  contact_dof = "//ilist(m%contact_dof), stat, msg)
+                call put(unit, "  contact_dof2 = "//ilist(m%contact_dof2), stat, msg)
+                call put(unit, "  mu = "//rlist(m%mu), stat, msg)
+                call put(unit, "  normal_load = "//rlist(m%normal_load), stat, msg)
             end if
-            write (unit, '(a)') "/"
-            write (unit, '(a)') "&hbm"
-            write (unit, '(a,i0)') "  harmonics = ", o%harmonics
-            write (unit, '(a,l1)') "  odd_only = ", o%odd_only
-            write (unit, '(a,es24.16e3)') "  rho = ", o%rho
-            write (unit, '(a,i0)') "  samples = ", o%samples
-            write (unit, '(a,es24.16e3)') "  tol = ", o%tol
-            write (unit, '(a)') "  start = '"//trim(o%start)//"'"
-            write (unit, '(a,i0)') "  maxfev = ", o%maxfev
-            write (unit, '(a)') "/"
-            write (unit, '(a)') "&output"
-            write (unit, '(a)') "  directory = '"//case%directory//"'"
-            write (unit, '(a)') "/"
-            write (unit, '(a)') "&run"
-            write (unit, '(a)') "  method = '"//trim(case%method)//"'"
-            write (unit, '(a)') "/"
-            write (unit, '(a)') "&euler"
-            write (unit, '(a,i0)') "  steps_per_period = ", case%euler%steps_per_period
-            write (unit, '(a,i0)') "  max_periods = ", case%euler%max_periods
-            write (unit, '(a,es24.16e3)') "  tol = ", case%euler%tol
-            write (unit, '(a)') "/"
+            call put(unit, "/", stat, msg)
+            call put(unit, "&hbm", stat, msg)
+            call put(unit, "  harmonics = "//itoa(o%harmonics), stat, msg)
+            call put(unit, "  odd_only = "//ltoa(o%odd_only), stat, msg)
+            call put(unit, "  rho = "//rtoa(o%rho), stat, msg)
+            call put(unit, "  samples = "//itoa(o%samples), stat, msg)
+            call put(unit, "  tol = "//rtoa(o%tol), stat, msg)
+            call put(unit, "  start = '"//trim(o%start)//"'", stat, msg)
+            call put(unit, "  maxfev = "//itoa(o%maxfev), stat, msg)
+            call put(unit, "/", stat, msg)
+            call put(unit, "&output", stat, msg)
+            call put(unit, "  directory = '"//case%directory//"'", stat, msg)
+            call put(unit, "/", stat, msg)
+            call put(unit, "&run", stat, msg)
+            call put(unit, "  method = '"//trim(case%method)//"'", stat, msg)
+            call put(unit, "/", stat, msg)
+            call put(unit, "&euler", stat, msg)
+            call put(unit, "  steps_per_period = "//itoa(case%euler%steps_per_period), stat, msg)
+            call put(unit, "  max_periods = "//itoa(case%euler%max_periods), stat, msg)
+            call put(unit, "  tol = "//rtoa(case%euler%tol), stat, msg)
+            call put(unit, "/", stat, msg)
         end associate
     end subroutine write_case
+
+    !> Write one line to `unit` unless an earlier write failed (stat /= 0); record the first
+    !> failure in stat and msg. Never stops the program.
+    subroutine put(unit, line, stat, msg)
+        !> An open formatted unit.
+        integer, intent(in) :: unit
+        !> The line.
+        character(len=*), intent(in) :: line
+        !> 0 so far, or the first failure's iostat.
+        integer, intent(inout) :: stat
+        !> The first failure's iomsg.
+        character(len=*), intent(inout) :: msg
+        if (stat /= 0) return
+        write (unit, '(a)', iostat=stat, iomsg=msg) line
+    end subroutine put
+
+    !> A real as text with 17 significant digits.
+    pure function rtoa(x) result(s)
+        !> The value.
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=32) :: buf
+        write (buf, '(es25.17e3)') x
+        s = trim(adjustl(buf))
+    end function rtoa
+
+    !> A logical as namelist text, T or F.
+    pure function ltoa(l) result(s)
+        !> The value.
+        logical, intent(in) :: l
+        character(len=1) :: s
+        s = merge("T", "F", l)
+    end function ltoa
+
+    !> Reals as a comma-separated list.
+    pure function rlist(x) result(s)
+        !> The values.
+        real(dp), intent(in) :: x(:)
+        character(len=:), allocatable :: s
+        integer :: i
+        s = ""
+        do i = 1, size(x)
+            s = s//rtoa(x(i))
+            if (i < size(x)) s = s//", "
+        end do
+    end function rlist
+
+    !> Integers as a comma-separated list.
+    pure function ilist(x) result(s)
+        !> The values.
+        integer, intent(in) :: x(:)
+        character(len=:), allocatable :: s
+        integer :: i
+        s = ""
+        do i = 1, size(x)
+            s = s//itoa(x(i))
+            if (i < size(x)) s = s//", "
+        end do
+    end function ilist
+
+    !> Logicals as a comma-separated list of T and F.
+    pure function llist(x) result(s)
+        !> The values.
+        logical, intent(in) :: x(:)
+        character(len=:), allocatable :: s
+        integer :: i
+        s = ""
+        do i = 1, size(x)
+            s = s//ltoa(x(i))
+            if (i < size(x)) s = s//", "
+        end do
+    end function llist
 end module stickslip_case

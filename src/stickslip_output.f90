@@ -9,7 +9,7 @@ module stickslip_output
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_solution, only: hbm_solution_t
     use stickslip_euler, only: euler_result_t
-    use stickslip_case, only: case_t, write_case
+    use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist
     implicit none
     private
     public :: make_directory, write_hbm_csv, write_samples_csv, write_coefficients_csv, &
@@ -222,46 +222,42 @@ contains
         type(error_type), allocatable, intent(out) :: error
         integer :: u, stat, nc
         character(len=512) :: msg
-        character(len=*), parameter :: fr = '(a,' // real_fmt // ')'
-        character(len=*), parameter :: frs = '(a,*(' // real_fmt // ', :, ", "))'
-        character(len=*), parameter :: fis = '(a,*(i0, :, ", "))'
-        character(len=*), parameter :: fls = '(a,*(l1, :, ", "))'
 
         nc = 0
         if (allocated(sol%stick_fraction)) nc = size(sol%stick_fraction)
         call open_temporary(dir, "summary.nml", u, error)
         if (allocated(error)) return
-        write (u, '(a)', iostat=stat, iomsg=msg) &
-            "! stickslip summary: the group &summary, then the effective case (&system ... &output)"
-        if (stat == 0) then
-            write (u, '(a)') "&summary"
-            write (u, '(a)') "  method = 'hbm'"
-            write (u, '(a,l1)') "  converged = ", sol%converged
-            write (u, '(a,i0)') "  info = ", sol%info
-            write (u, '(a,i0)') "  nfev = ", sol%nfev
-            write (u, '(a,i0)') "  njev = ", sol%njev
-            write (u, '(a,i0)') "  hybrj_calls = ", sol%hybrj_calls
-            write (u, fr) "  fnorm = ", sol%fnorm
-            write (u, fr) "  fscale = ", sol%fscale
-            write (u, fr) "  solve_seconds = ", sol%seconds
-            write (u, '(a,i0)') "  harmonics = ", sol%harmonics
-            write (u, '(a,l1)') "  odd_only = ", sol%odd_only
-            write (u, '(a,i0)') "  samples = ", sol%samples
-            write (u, '(a,i0)') "  ncontact = ", nc
-            if (nc > 0) then
-                write (u, frs) "  stick_fraction = ", sol%stick_fraction
-                write (u, fis) "  stick_phases = ", sol%stick_phases
-                write (u, fls) "  offset_undetermined = ", sol%offset_undetermined
-            end if
-            write (u, fr) "  work_forcing = ", sol%work_forcing
-            write (u, fr) "  diss_friction = ", sol%diss_friction
-            write (u, fr) "  diss_damping = ", sol%diss_damping
-            write (u, fr) "  diss_coulomb = ", sol%diss_coulomb
-            write (u, fr) "  energy_balance_error = ", energy_balance_error(sol)
-            write (u, '(a)') "  diagnosis = '"//quote(sol%diagnosis)//"'"
-            write (u, '(a)', iostat=stat, iomsg=msg) "/"
+        stat = 0
+        msg = ""
+        call put(u, "! stickslip summary: the group &summary, then the effective case "// &
+                 "(&system ... &euler)", stat, msg)
+        call put(u, "&summary", stat, msg)
+        call put(u, "  method = 'hbm'", stat, msg)
+        call put(u, "  converged = "//ltoa(sol%converged), stat, msg)
+        call put(u, "  info = "//itoa(sol%info), stat, msg)
+        call put(u, "  nfev = "//itoa(sol%nfev), stat, msg)
+        call put(u, "  njev = "//itoa(sol%njev), stat, msg)
+        call put(u, "  hybrj_calls = "//itoa(sol%hybrj_calls), stat, msg)
+        call put(u, "  fnorm = "//rtoa(sol%fnorm), stat, msg)
+        call put(u, "  fscale = "//rtoa(sol%fscale), stat, msg)
+        call put(u, "  solve_seconds = "//rtoa(sol%seconds), stat, msg)
+        call put(u, "  harmonics = "//itoa(sol%harmonics), stat, msg)
+        call put(u, "  odd_only = "//ltoa(sol%odd_only), stat, msg)
+        call put(u, "  samples = "//itoa(sol%samples), stat, msg)
+        call put(u, "  ncontact = "//itoa(nc), stat, msg)
+        if (nc > 0) then
+            call put(u, "  stick_fraction = "//rlist(sol%stick_fraction), stat, msg)
+            call put(u, "  stick_phases = "//ilist(sol%stick_phases), stat, msg)
+            call put(u, "  offset_undetermined = "//llist(sol%offset_undetermined), stat, msg)
         end if
-        if (stat == 0) call write_case(u, case)
+        call put(u, "  work_forcing = "//rtoa(sol%work_forcing), stat, msg)
+        call put(u, "  diss_friction = "//rtoa(sol%diss_friction), stat, msg)
+        call put(u, "  diss_damping = "//rtoa(sol%diss_damping), stat, msg)
+        call put(u, "  diss_coulomb = "//rtoa(sol%diss_coulomb), stat, msg)
+        call put(u, "  energy_balance_error = "//rtoa(energy_balance_error(sol)), stat, msg)
+        call put(u, "  diagnosis = '"//quote(sol%diagnosis)//"'", stat, msg)
+        call put(u, "/", stat, msg)
+        if (stat == 0) call write_case(u, case, stat, msg)
         call close_and_rename(dir, "summary.nml", u, stat, msg, error)
     end subroutine write_summary
 
@@ -278,24 +274,23 @@ contains
         type(error_type), allocatable, intent(out) :: error
         integer :: u, stat
         character(len=512) :: msg
-        character(len=*), parameter :: fr = '(a,' // real_fmt // ')'
         call open_temporary(dir, "summary.nml", u, error)
         if (allocated(error)) return
-        write (u, '(a)', iostat=stat, iomsg=msg) &
-            "! stickslip summary: the group &summary, then the effective case (&system ... &euler)"
-        if (stat == 0) then
-            write (u, '(a)') "&summary"
-            write (u, '(a)') "  method = 'euler'"
-            write (u, '(a,l1)') "  periodic = ", res%periodic
-            write (u, '(a,i0)') "  periods = ", res%periods
-            write (u, fr) "  defect = ", res%defect
-            write (u, fr) "  euler_seconds = ", res%seconds
-            write (u, '(a,i0)') "  steps_per_period = ", case%euler%steps_per_period
-            write (u, '(a,i0)') "  max_sweeps = ", res%max_sweeps
-            write (u, '(a)') "  diagnosis = '"//quote(res%diagnosis)//"'"
-            write (u, '(a)', iostat=stat, iomsg=msg) "/"
-        end if
-        if (stat == 0) call write_case(u, case)
+        stat = 0
+        msg = ""
+        call put(u, "! stickslip summary: the group &summary, then the effective case "// &
+                 "(&system ... &euler)", stat, msg)
+        call put(u, "&summary", stat, msg)
+        call put(u, "  method = 'euler'", stat, msg)
+        call put(u, "  periodic = "//ltoa(res%periodic), stat, msg)
+        call put(u, "  periods = "//itoa(res%periods), stat, msg)
+        call put(u, "  defect = "//rtoa(res%defect), stat, msg)
+        call put(u, "  euler_seconds = "//rtoa(res%seconds), stat, msg)
+        call put(u, "  steps_per_period = "//itoa(case%euler%steps_per_period), stat, msg)
+        call put(u, "  max_sweeps = "//itoa(res%max_sweeps), stat, msg)
+        call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        call put(u, "/", stat, msg)
+        if (stat == 0) call write_case(u, case, stat, msg)
         call close_and_rename(dir, "summary.nml", u, stat, msg, error)
     end subroutine write_euler_summary
 

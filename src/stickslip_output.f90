@@ -225,14 +225,8 @@ contains
 
         nc = 0
         if (allocated(sol%stick_fraction)) nc = size(sol%stick_fraction)
-        call open_temporary(dir, "summary.nml", u, error)
+        call begin_summary(dir, "hbm", u, stat, msg, error)
         if (allocated(error)) return
-        stat = 0
-        msg = ""
-        call put(u, "! stickslip summary: the group &summary, then the effective case "// &
-                 "(&system ... &euler)", stat, msg)
-        call put(u, "&summary", stat, msg)
-        call put(u, "  method = 'hbm'", stat, msg)
         call put(u, "  converged = "//ltoa(sol%converged), stat, msg)
         call put(u, "  info = "//itoa(sol%info), stat, msg)
         call put(u, "  nfev = "//itoa(sol%nfev), stat, msg)
@@ -256,9 +250,7 @@ contains
         call put(u, "  diss_coulomb = "//rtoa(sol%diss_coulomb), stat, msg)
         call put(u, "  energy_balance_error = "//rtoa(energy_balance_error(sol)), stat, msg)
         call put(u, "  diagnosis = '"//quote(sol%diagnosis)//"'", stat, msg)
-        call put(u, "/", stat, msg)
-        if (stat == 0) call write_case(u, case, stat, msg)
-        call close_and_rename(dir, "summary.nml", u, stat, msg, error)
+        call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_summary
 
     !> Write `dir`/summary.nml for a time integration: a group &summary (method = 'euler',
@@ -274,14 +266,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         integer :: u, stat
         character(len=512) :: msg
-        call open_temporary(dir, "summary.nml", u, error)
+        call begin_summary(dir, "euler", u, stat, msg, error)
         if (allocated(error)) return
-        stat = 0
-        msg = ""
-        call put(u, "! stickslip summary: the group &summary, then the effective case "// &
-                 "(&system ... &euler)", stat, msg)
-        call put(u, "&summary", stat, msg)
-        call put(u, "  method = 'euler'", stat, msg)
         call put(u, "  periodic = "//ltoa(res%periodic), stat, msg)
         call put(u, "  periods = "//itoa(res%periods), stat, msg)
         call put(u, "  defect = "//rtoa(res%defect), stat, msg)
@@ -289,10 +275,37 @@ contains
         call put(u, "  steps_per_period = "//itoa(case%euler%steps_per_period), stat, msg)
         call put(u, "  max_sweeps = "//itoa(res%max_sweeps), stat, msg)
         call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_euler_summary
+
+    !> Open the temporary summary.nml and write its first lines, up to `method = '...'`.
+    subroutine begin_summary(dir, method, u, stat, msg, error)
+        character(len=*), intent(in) :: dir, method
+        integer, intent(out) :: u, stat
+        character(len=*), intent(out) :: msg
+        type(error_type), allocatable, intent(out) :: error
+        stat = 0
+        msg = ""
+        call open_temporary(dir, "summary.nml", u, error)
+        if (allocated(error)) return
+        call put(u, "! stickslip summary: the group &summary, then the effective case "// &
+                 "(&system ... &euler)", stat, msg)
+        call put(u, "&summary", stat, msg)
+        call put(u, "  method = '"//method//"'", stat, msg)
+    end subroutine begin_summary
+
+    !> Close the group &summary, echo the effective case, close and rename summary.nml.
+    subroutine end_summary(dir, case, u, stat, msg, error)
+        character(len=*), intent(in) :: dir
+        type(case_t), intent(in) :: case
+        integer, intent(in) :: u
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        type(error_type), allocatable, intent(out) :: error
         call put(u, "/", stat, msg)
         if (stat == 0) call write_case(u, case, stat, msg)
         call close_and_rename(dir, "summary.nml", u, stat, msg, error)
-    end subroutine write_euler_summary
+    end subroutine end_summary
 
     !> Double the single quotes of a string for a namelist character value.
     pure function quote(s) result(t)

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Install what stickslip needs on a Debian machine, if missing: gfortran, LAPACK/BLAS, FFTW3,
-# MINPACK (Debian packages) and fpm (PyPI). Idempotent; prints nothing when all is there.
+# MINPACK, gnuplot for the plots (Debian packages) and fpm (PyPI). Idempotent; prints nothing when all is there.
 # Usage: ./setup.sh            install only
 #        ./setup.sh --run      install, build and run the seed example (examples/seed.nml)
 set -euo pipefail
 cd "$(dirname "$0")"
 
-pkgs=(gfortran liblapack-dev libfftw3-dev minpack-dev)
+pkgs=(gfortran liblapack-dev libfftw3-dev minpack-dev gnuplot-nox)
 missing=()
 for p in "${pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,0 +1,471 @@
+!> The exact event-driven reference: the periodic solution of the friction model, exact up
+!> to root-finding and roundoff, that neither the weighted residual nor the time stepper
+!> owns (DESIGN section 5).
+!>
+!> The periodic orbit is found by shooting on the period map, z(t0 + T) = z(t0) for the
+!> state z = [x; v], with MINPACK hybrj and the exact Jacobian of the map (the monodromy
+!> matrix with the saltation matrices at the events; stickslip_flow). The start is a sound
+!> approximation of the orbit: the weighted-residual solution, or the implicit Euler one when
+!> that fails. The section time t0 is taken where the contacts slip fastest in the start
+!> solution, so that the shooting state is away from the stick-slip switching surfaces.
+module stickslip_reference
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use stickslip_kinds, only: dp, two_pi
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction
+    use stickslip_nonlinear, only: nonlinear_system_t
+    use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
+    use stickslip_flow, only: flow_t, new_flow, orbit_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
+    implicit none
+    private
+    public :: reference_options_t, reference_result_t, solve_reference, sample_reference
+    public :: validate_reference_options
+
+    !> Options of the exact reference (&reference).
+    type :: reference_options_t
+        !> Output samples per period (reference.csv), t_k = k T / samples.
+        integer :: samples = 1024
+        !> Steps per period of the event bracketing grid (events closer than a step to each
+        !> other are still found when the event function dips below zero between two grid
+        !> points; more steps guard against grazing events).
+        integer :: bracket_steps = 1000
+        !> Periodicity defect accepted: the states one period apart differ by at most tol
+        !> times the amplitude of the response (x and v separately).
+        real(dp) :: tol = 1.0e-11_dp
+        !> Period-map evaluations allowed per shooting attempt.
+        integer :: maxfev = 200
+        !> Start of the shooting: 'auto' (the weighted residual, then implicit Euler if the
+        !> shooting from it fails), 'hbm' or 'euler'.
+        character(len=8) :: start = 'auto'
+    end type reference_options_t
+
+    !> The reference solution: its report, its events, its energy balance and samples.
+    type :: reference_result_t
+        !> The periodicity defect met the tolerance.
+        logical :: converged = .false.
+        !> Periodicity defect of the final orbit (relative, the larger of x and v).
+        real(dp) :: defect = huge(1.0_dp)
+        !> Period-map evaluations and Jacobians (monodromy matrices), all attempts.
+        integer :: nfev = 0, njev = 0
+        !> CPU seconds of the shooting and sampling, and of computing the start.
+        real(dp) :: seconds = 0.0_dp, start_seconds = 0.0_dp
+        !> The start used: 'hbm' or 'euler' ('' when none could be made).
+        character(len=:), allocatable :: start
+        !> Empty when converged, otherwise what went wrong and what to try.
+        character(len=:), allocatable :: diagnosis
+        !> Section time of the shooting [s].
+        real(dp) :: t_section = 0.0_dp
+        !> Work of the forcing, friction and viscous dissipation over one period [J].
+        real(dp) :: work_forcing = 0.0_dp, diss_friction = 0.0_dp, diss_damping = 0.0_dp
+        !> Share of the period each contact sticks, and its number of stick phases.
+        real(dp), allocatable :: stick_fraction(:)
+        integer, allocatable :: stick_phases(:)
+        !> Events in one period, sorted by time in [0, T): time [s], contact, kind
+        !> (stickslip_flow event_*), slip direction after (0 stuck), force [N] and slip
+        !> velocity [m/s] at the event.
+        integer :: nevent = 0
+        real(dp), allocatable :: event_t(:), event_force(:), event_velocity(:)
+        integer, allocatable :: event_contact(:), event_kind(:), event_direction(:)
+        !> Samples at t_k = k T / samples: instants [s], x [m], v [m/s], r [N].
+        real(dp), allocatable :: t(:), x(:, :), v(:, :), r(:, :)
+        !> The flow and the recorded orbit, to sample the solution on other grids.
+        type(flow_t) :: flow
+        type(orbit_t) :: orbit
+    end type reference_result_t
+
+    !> The shooting equations F(u) = (P(D u) - D u) / D, D the scales of x and v, for hybrj.
+    type, extends(nonlinear_system_t) :: shooting_t
+        type(flow_t) :: flow
+        real(dp) :: t0 = 0.0_dp
+        real(dp), allocatable :: scale(:), ulast(:), mono(:, :)
+        logical :: have_mono = .false.
+        type(error_type), allocatable :: error
+    contains
+        procedure :: residual => shooting_residual
+        procedure :: jacobian => shooting_jacobian
+    end type shooting_t
+
+contains
+
+    !> Check reference options. Errors (stat input) name the &reference variable.
+    subroutine validate_reference_options(opts, error)
+        !> Options to check.
+        type(reference_options_t), intent(in) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=200) :: buf
+        if (opts%samples < 1) then
+            write (buf, '(a,i0,a)') "&reference samples = ", opts%samples, ": must be >= 1"
+        else if (opts%bracket_steps < 8) then
+            write (buf, '(a,i0,a)') "&reference bracket_steps = ", opts%bracket_steps, &
+                ": must be >= 8"
+        else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
+            write (buf, '(a,g0.6,a)') "&reference tol = ", opts%tol, ": must be in (0, 1)"
+        else if (opts%maxfev < 1) then
+            write (buf, '(a,i0,a)') "&reference maxfev = ", opts%maxfev, ": must be >= 1"
+        else if (opts%start /= 'auto' .and. opts%start /= 'hbm' .and. opts%start /= 'euler') then
+            buf = "&reference start = '"//trim(opts%start)//"': must be 'auto', 'hbm' or 'euler'"
+        else
+            return
+        end if
+        call fatal_error(error, trim(buf), stickslip_stat%input)
+    end subroutine validate_reference_options
+
+    !> The exact periodic solution of `model`. The start comes from `hbm_start` /
+    !> `euler_start` when given (solutions already computed), else it is computed with
+    !> `hbm_opts` / `euler_opts` (defaults otherwise). Not converging is an outcome
+    !> (res%converged = F and res%diagnosis). Errors: stat input (invalid model or
+    !> options); stat numerical (dependent stuck contact directions, a start that cannot be
+    !> computed at all, e.g. a singular dynamic stiffness).
+    subroutine solve_reference(model, opts, res, error, hbm_opts, euler_opts, hbm_start, &
+                               euler_start)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> Reference options.
+        type(reference_options_t), intent(in) :: opts
+        !> The reference solution.
+        type(reference_result_t), intent(out) :: res
+        !> Set on invalid input or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        !> Options of the weighted-residual start.
+        type(hbm_options_t), intent(in), optional :: hbm_opts
+        !> Options of the implicit Euler start.
+        type(euler_options_t), intent(in), optional :: euler_opts
+        !> A weighted-residual solution to start from (with samples).
+        type(hbm_solution_t), intent(in), optional :: hbm_start
+        !> An implicit Euler solution to start from.
+        type(euler_result_t), intent(in), optional :: euler_start
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: hs
+        type(euler_options_t) :: eo
+        type(euler_result_t) :: es
+        type(error_type), allocatable :: start_error
+        character(len=:), allocatable :: notes
+        real(dp) :: c0, c1
+        integer :: attempt
+
+        call validate_model(model, error)
+        if (allocated(error)) return
+        call validate_reference_options(opts, error)
+        if (allocated(error)) return
+        res%start = ""
+        notes = ""
+        do attempt = 1, 2
+            if (attempt == 1 .and. opts%start == 'euler') cycle
+            if (attempt == 2 .and. opts%start == 'hbm') exit
+            call cpu_time(c0)
+            if (attempt == 1) then
+                if (present(hbm_start)) then
+                    if (hbm_start%converged .and. allocated(hbm_start%x)) then
+                        call cpu_time(c1)
+                        call shoot("hbm", hbm_start%x, hbm_start%v)
+                        if (allocated(error) .or. res%converged) return
+                        cycle
+                    end if
+                end if
+                if (present(hbm_opts)) ho = hbm_opts
+                ho%want_samples = .true.
+                ho%harmonics = max(ho%harmonics, maxval([0, model%force_harmonic]))
+                if (ho%samples < 2*ho%harmonics + 1) ho%samples = 4*ho%harmonics
+                call solve_periodic(model, ho, hs, start_error)
+                call cpu_time(c1)
+                res%start_seconds = res%start_seconds + (c1 - c0)
+                if (allocated(start_error)) then
+                    notes = notes//" The weighted-residual start failed: "//start_error%message//"."
+                    deallocate (start_error)
+                    cycle
+                end if
+                if (.not. hs%converged) then
+                    notes = notes//" The weighted-residual start did not converge."
+                    cycle
+                end if
+                call shoot("hbm", hs%x, hs%v)
+            else
+                if (present(euler_start)) then
+                    if (euler_start%periodic .and. allocated(euler_start%x)) then
+                        call shoot("euler", euler_start%x, euler_start%v)
+                        if (allocated(error) .or. res%converged) return
+                        cycle
+                    end if
+                end if
+                if (present(euler_opts)) eo = euler_opts
+                call integrate_euler(model, eo, es, start_error)
+                call cpu_time(c1)
+                res%start_seconds = res%start_seconds + (c1 - c0)
+                if (allocated(start_error)) then
+                    notes = notes//" The implicit Euler start failed: "//start_error%message//"."
+                    deallocate (start_error)
+                    cycle
+                end if
+                if (.not. es%periodic) then
+                    notes = notes//" The implicit Euler start reached no periodic state."
+                    cycle
+                end if
+                call shoot("euler", es%x, es%v)
+            end if
+            if (allocated(error) .or. res%converged) return
+        end do
+        if (.not. allocated(res%diagnosis)) then
+            res%diagnosis = "no start for the shooting could be computed."//notes
+            if (len(notes) > 0) res%diagnosis = res%diagnosis(1:len(res%diagnosis) - 1)
+        else
+            res%diagnosis = res%diagnosis//notes
+        end if
+
+    contains
+
+        !> Shoot from the sampled approximation (xs, vs) of one period; on success fill res.
+        subroutine shoot(name, xs, vs)
+            character(len=*), intent(in) :: name
+            real(dp), intent(in) :: xs(:, :), vs(:, :)
+            call shoot_from(model, opts, name, xs, vs, res, error)
+        end subroutine shoot
+    end subroutine solve_reference
+
+    !> One shooting attempt from samples xs, vs (t_k = k T / size(xs, 1)) of an approximate
+    !> periodic solution, then the recording pass, the events and the samples.
+    subroutine shoot_from(model, opts, name, xs, vs, res, error)
+        type(model_t), intent(in) :: model
+        type(reference_options_t), intent(in) :: opts
+        character(len=*), intent(in) :: name
+        real(dp), intent(in) :: xs(:, :), vs(:, :)
+        type(reference_result_t), intent(inout) :: res
+        type(error_type), allocatable, intent(out) :: error
+        type(shooting_t) :: shooting
+        type(hybrj_options_t) :: hopts
+        type(hybrj_report_t) :: report
+        real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:)
+        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv
+        integer :: n, nc, ns, j, k, ksec
+        character(len=400) :: buf
+
+        call cpu_time(c0)
+        n = model%ndof
+        nc = model%ncontact()
+        ns = size(xs, 1)
+        period = two_pi/model%omega
+        res%start = name
+        ! scales of the state and of each contact's slip velocity, from the start
+        xscale = maxval(abs(xs))
+        vscale = maxval(abs(vs))
+        if (.not. (xscale > 0.0_dp)) xscale = 1.0_dp
+        if (.not. (vscale > 0.0_dp)) vscale = 1.0_dp
+        allocate (vref(nc), speed(ns))
+        speed = huge(1.0_dp)
+        do j = 1, nc
+            w = contact_velocity_direction(model, j)
+            vref(j) = maxval(abs(matmul(vs, w)))
+            if (.not. (vref(j) > 0.0_dp)) vref(j) = vscale
+            if (model%mu(j)*model%normal_load(j) > 0.0_dp) &
+                speed = min(speed, abs(matmul(vs, w))/vref(j))
+        end do
+        ! section: where the contacts slip fastest (away from the switching surfaces)
+        ksec = maxloc(speed, 1)
+        if (all(speed == huge(1.0_dp))) ksec = 1
+        res%t_section = period*real(ksec - 1, dp)/real(ns, dp)
+
+        call new_flow(shooting%flow, model, opts%bracket_steps, vref, error)
+        if (allocated(error)) return
+        shooting%t0 = res%t_section
+        shooting%scale = [(xscale, k=1, n), (vscale, k=1, n)]
+        allocate (shooting%mono(2*n, 2*n), shooting%ulast(2*n))
+        u = [xs(ksec, :), vs(ksec, :)]/shooting%scale
+        hopts%mode = 1
+        hopts%maxfev = opts%maxfev
+        hopts%xtol = 1.0e-15_dp
+        hopts%ftarget = opts%tol
+        call solve_hybrj(shooting, u, hopts, report, error)
+        res%nfev = res%nfev + report%nfev
+        res%njev = res%njev + report%njev
+        if (allocated(error)) then
+            if (allocated(shooting%error)) then
+                ! the flow failed at some iterate: an outcome of this start, not of the model
+                res%diagnosis = "shooting from the "//name//" start stopped: "// &
+                                shooting%error%message//"."
+                deallocate (error)
+            end if
+            return
+        end if
+
+        ! the recording pass over the final orbit
+        z0 = u*shooting%scale
+        allocate (z1(2*n))
+        call shooting%flow%period_map(res%t_section, z0, z1, error, orbit=res%orbit)
+        if (allocated(error)) then
+            res%diagnosis = "shooting from the "//name//" start: "//error%message//"."
+            deallocate (error)
+            return
+        end if
+        allocate (res%t(opts%samples), res%x(opts%samples, n), res%v(opts%samples, n), &
+                  res%r(opts%samples, nc))
+        res%t = [(period*real(k, dp)/real(opts%samples, dp), k=0, opts%samples - 1)]
+        call shooting%flow%sample(res%orbit, opts%samples, res%x, res%v, res%r, error)
+        if (allocated(error)) return
+        ampx = max(maxval(abs(res%x)), maxval(abs(z0(1:n))))
+        ampv = max(maxval(abs(res%v)), maxval(abs(z0(n + 1:))))
+        res%defect = max(maxval(abs(z1(1:n) - z0(1:n)))/max(ampx, tiny(1.0_dp)), &
+                         maxval(abs(z1(n + 1:) - z0(n + 1:)))/max(ampv, tiny(1.0_dp)))
+        if (ampx == 0.0_dp .and. ampv == 0.0_dp) res%defect = 0.0_dp
+        res%converged = res%defect <= opts%tol .and. all(ieee_is_finite(z1))
+        res%flow = shooting%flow
+        call finish_events(res, period)
+        res%work_forcing = res%orbit%work_forcing
+        res%diss_friction = res%orbit%diss_friction
+        res%diss_damping = res%orbit%diss_damping
+        res%stick_fraction = res%orbit%stick_time/period
+        res%stick_phases = count_stick_phases(res, nc)
+        if (res%converged) then
+            res%diagnosis = ""
+        else
+            write (buf, '(a,es9.2,a,es9.2,a,i0,a,i0,a)') "shooting from the "//name// &
+                " start did not converge: periodicity defect ", res%defect, " > tol ", &
+                opts%tol, " (hybrj info ", report%info, ", ", report%nfev, &
+                " period maps). The start may be too far from the orbit or the orbit may "// &
+                "graze a switching surface: try &reference start = 'euler' or more "// &
+                "bracket_steps"
+            res%diagnosis = trim(buf)
+        end if
+        call cpu_time(c1)
+        res%seconds = res%seconds + (c1 - c0)
+    end subroutine shoot_from
+
+    !> Events of the recorded orbit, mapped to [0, T) and sorted by time.
+    subroutine finish_events(res, period)
+        type(reference_result_t), intent(inout) :: res
+        real(dp), intent(in) :: period
+        integer :: m, i, k
+        integer, allocatable :: order(:)
+        real(dp), allocatable :: tm(:)
+        m = res%orbit%nevent
+        res%nevent = m
+        allocate (tm(m), order(m))
+        tm = modulo(res%orbit%event_t(1:m), period)
+        ! insertion sort: a handful of events per period
+        order = [(i, i=1, m)]
+        do i = 2, m
+            k = i
+            do while (k > 1)
+                if (tm(order(k - 1)) <= tm(order(k))) exit
+                order([k - 1, k]) = order([k, k - 1])
+                k = k - 1
+            end do
+        end do
+        res%event_t = tm(order)
+        res%event_contact = res%orbit%event_contact(order)
+        res%event_kind = res%orbit%event_kind(order)
+        res%event_direction = res%orbit%event_direction(order)
+        res%event_force = res%orbit%event_force(order)
+        res%event_velocity = res%orbit%event_velocity(order)
+    end subroutine finish_events
+
+    !> Stick phases per contact: runs of stuck phases of positive duration, counted
+    !> cyclically over the period.
+    function count_stick_phases(res, nc) result(phases)
+        type(reference_result_t), intent(in) :: res
+        integer, intent(in) :: nc
+        integer :: phases(nc)
+        integer :: j, p, m, prev
+        logical, allocatable :: stuck(:)
+        real(dp) :: tend, dur
+        m = res%orbit%nphase
+        tend = res%orbit%t0 + res%flow%period
+        do j = 1, nc
+            stuck = [logical ::]
+            do p = 1, m
+                if (p < m) then
+                    dur = res%orbit%phase_t(p + 1) - res%orbit%phase_t(p)
+                else
+                    dur = tend - res%orbit%phase_t(p)
+                end if
+                if (dur <= 0.0_dp) cycle
+                stuck = [stuck, res%flow%modes(res%orbit%phase_mode(p))%code(j) == 0]
+            end do
+            phases(j) = 0
+            if (size(stuck) == 0) cycle
+            if (all(stuck)) then
+                phases(j) = 1
+                cycle
+            end if
+            prev = size(stuck)
+            do p = 1, size(stuck)
+                if (stuck(p) .and. .not. stuck(prev)) phases(j) = phases(j) + 1
+                prev = p
+            end do
+        end do
+    end function count_stick_phases
+
+    !> The reference solution sampled at t_k = k T / ng, k = 0..ng-1 (any grid size, e.g.
+    !> the steps of an implicit Euler run): x(ng, N) [m], v(ng, N) [m/s], r(ng, n_c) [N].
+    !> Errors: stat input (no orbit: the solve did not get that far), stat numerical.
+    subroutine sample_reference(res, ng, x, v, r, error)
+        !> A reference solution.
+        type(reference_result_t), intent(in) :: res
+        !> Number of samples per period.
+        integer, intent(in) :: ng
+        !> Samples.
+        real(dp), allocatable, intent(out) :: x(:, :), v(:, :), r(:, :)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        if (res%orbit%nphase < 1 .or. ng < 1) then
+            call fatal_error(error, "sample_reference: no recorded orbit or ng < 1", &
+                             stickslip_stat%input)
+            return
+        end if
+        allocate (x(ng, res%flow%n), v(ng, res%flow%n), r(ng, res%flow%nc))
+        call res%flow%sample(res%orbit, ng, x, v, r, error)
+    end subroutine sample_reference
+
+    !> F(u) = (P(D u) - D u) / D.
+    subroutine shooting_residual(self, x, f, stat)
+        class(shooting_t), intent(inout) :: self
+        real(dp), intent(in) :: x(:)
+        real(dp), intent(out) :: f(:)
+        integer, intent(inout) :: stat
+        real(dp) :: z0(size(x)), z1(size(x))
+        z0 = x*self%scale
+        self%have_mono = .false.
+        call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono)
+        if (allocated(self%error)) then
+            stat = 1
+            f = 0.0_dp
+            return
+        end if
+        f = (z1 - z0)/self%scale
+        if (.not. all(ieee_is_finite(f))) then
+            call fatal_error(self%error, "reference: the state became unbounded over one "// &
+                             "period", stickslip_stat%numerical)
+            stat = 1
+            return
+        end if
+        self%ulast = x
+        self%have_mono = .true.
+    end subroutine shooting_residual
+
+    !> dF/du = D^{-1} (monodromy - I) D.
+    subroutine shooting_jacobian(self, x, jac, stat)
+        class(shooting_t), intent(inout) :: self
+        real(dp), intent(in) :: x(:)
+        real(dp), intent(out) :: jac(:, :)
+        integer, intent(inout) :: stat
+        real(dp) :: f(size(x))
+        integer :: i, k
+        if (.not. self%have_mono) then
+            call self%residual(x, f, stat)
+        else if (any(x /= self%ulast)) then
+            call self%residual(x, f, stat)
+        end if
+        if (stat /= 0) then
+            jac = 0.0_dp
+            return
+        end if
+        do k = 1, size(x)
+            do i = 1, size(x)
+                jac(i, k) = self%mono(i, k)*self%scale(k)/self%scale(i)
+            end do
+            jac(k, k) = jac(k, k) - 1.0_dp
+        end do
+    end subroutine shooting_jacobian
+end module stickslip_reference

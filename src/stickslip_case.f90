@@ -11,6 +11,8 @@ module stickslip_case
     use stickslip_solution, only: hbm_options_t
     use stickslip_hbm, only: validate_options
     use stickslip_euler, only: euler_options_t
+    use stickslip_reference, only: reference_options_t, validate_reference_options
+    use stickslip_study, only: study_options_t, default_study_options, validate_study_options
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms
@@ -30,12 +32,18 @@ module stickslip_case
         character(len=:), allocatable :: path
         !> The structure, its contacts and forcing.
         type(model_t) :: model
-        !> Method: 'hbm' (weighted residual) or 'euler' (implicit Euler time stepping).
+        !> Method: 'hbm' (weighted residual), 'euler' (implicit Euler time stepping),
+        !> 'reference' (exact event-driven), 'all' (the three side by side) or 'study' (the
+        !> work-precision study).
         character(len=16) :: method = 'hbm'
         !> Weighted-residual options (&hbm).
         type(hbm_options_t) :: hbm
         !> Time-stepping options (&euler).
         type(euler_options_t) :: euler
+        !> Exact reference options (&reference).
+        type(reference_options_t) :: reference
+        !> Work-precision study options (&study).
+        type(study_options_t) :: study = study_options_t()
         !> Output directory (&output directory), created if missing.
         character(len=:), allocatable :: directory
     end type case_t
@@ -148,6 +156,14 @@ contains
         call read_euler_group()
         call group_status("euler", .false.)
         if (allocated(error)) return
+
+        call read_reference_group()
+        call group_status("reference", .false.)
+        if (allocated(error)) return
+
+        call read_study_group()
+        call group_status("study", .false.)
+        if (allocated(error)) return
         close (u)
 
         ! &system
@@ -237,10 +253,13 @@ contains
         end if
         case%directory = trim(directory)
 
-        if (method /= 'hbm' .and. method /= 'euler') then
-            call input_error("&run method = '"//trim(method)//"': must be 'hbm' or 'euler'")
+        select case (method)
+        case ('hbm', 'euler', 'reference', 'all', 'study')
+        case default
+            call input_error("&run method = '"//trim(method)//"': must be 'hbm', 'euler', "// &
+                             "'reference', 'all' or 'study'")
             return
-        end if
+        end select
         case%method = method
         if (steps_per_period < 2) then
             call input_error("&euler steps_per_period = "//itoa(steps_per_period)// &
@@ -269,6 +288,16 @@ contains
             error%message = path//": "//error%message
             return
         end if
+        call validate_reference_options(case%reference, error)
+        if (allocated(error)) then
+            error%message = path//": "//error%message
+            return
+        end if
+        call validate_study_options(case%study, error)
+        if (allocated(error)) then
+            error%message = path//": "//error%message
+            return
+        end if
 
     contains
 
@@ -281,6 +310,79 @@ contains
             read (u, nml=euler, iostat=stat, iomsg=msg)
             euler_tol = tol
         end subroutine read_euler_group
+
+        !> &reference shares variable names with &hbm: read it with its own variables.
+        subroutine read_reference_group()
+            integer :: samples, bracket_steps, maxfev
+            real(dp) :: tol
+            character(len=16) :: start
+            namelist /reference/ samples, bracket_steps, tol, maxfev, start
+            samples = case%reference%samples
+            bracket_steps = case%reference%bracket_steps
+            tol = case%reference%tol
+            maxfev = case%reference%maxfev
+            start = case%reference%start
+            rewind (u)
+            read (u, nml=reference, iostat=stat, iomsg=msg)
+            if (stat /= 0) return
+            if (.not. ieee_is_finite(tol)) then
+                call input_error("&reference tol: not a finite number")
+                return
+            end if
+            if (len_trim(start) > len(case%reference%start)) then
+                call input_error("&reference start = '"//trim(start)// &
+                                 "': must be 'auto', 'hbm' or 'euler'")
+                return
+            end if
+            case%reference%samples = samples
+            case%reference%bracket_steps = bracket_steps
+            case%reference%tol = tol
+            case%reference%maxfev = maxfev
+            case%reference%start = trim(start)
+        end subroutine read_reference_group
+
+        !> &study holds lists named like &hbm and &euler variables: its own variables.
+        subroutine read_study_group()
+            integer :: harmonics(max_terms), samples(max_terms), steps_per_period(max_terms)
+            integer :: error_samples, repeats, nh, ns, ne
+            real(dp) :: repeat_below
+            namelist /study/ harmonics, samples, steps_per_period, error_samples, repeats, &
+                repeat_below
+            case%study = default_study_options()
+            harmonics = iunset
+            samples = iunset
+            steps_per_period = iunset
+            error_samples = case%study%error_samples
+            repeats = case%study%repeats
+            repeat_below = case%study%repeat_below
+            rewind (u)
+            read (u, nml=study, iostat=stat, iomsg=msg)
+            if (stat /= 0) return
+            nh = count_given_int(harmonics)
+            ns = count_given_int(samples)
+            ne = count_given_int(steps_per_period)
+            if (nh < 0) then
+                call input_error("&study harmonics: entries must be given without gaps")
+            else if (ns < 0) then
+                call input_error("&study samples: entries must be given without gaps")
+            else if (ne < 0) then
+                call input_error("&study steps_per_period: entries must be given without gaps")
+            end if
+            if (allocated(error)) return
+            if (.not. ieee_is_finite(repeat_below)) then
+                call input_error("&study repeat_below: not a finite number")
+                return
+            end if
+            ! a single 0 asks for no runs of that method
+            if (nh > 0) case%study%harmonics = pack(harmonics(1:nh), .not. (nh == 1 .and. &
+                                                                         harmonics(1) == 0))
+            if (ns > 0) case%study%samples = samples(1:ns)
+            if (ne > 0) case%study%steps_per_period = pack(steps_per_period(1:ne), &
+                                                           .not. (ne == 1 .and. steps_per_period(1) == 0))
+            case%study%error_samples = error_samples
+            case%study%repeats = repeats
+            case%study%repeat_below = repeat_below
+        end subroutine read_study_group
 
         subroutine input_error(message)
             character(len=*), intent(in) :: message
@@ -494,6 +596,7 @@ contains
         integer, intent(out) :: stat
         !> The iomsg of the first failed write.
         character(len=*), intent(inout) :: msg
+        integer :: i
         stat = 0
         associate (m => case%model, o => case%hbm)
             call put(unit, "&system", stat, msg)
@@ -537,6 +640,28 @@ contains
             call put(unit, "  max_periods = "//itoa(case%euler%max_periods), stat, msg)
             call put(unit, "  tol = "//rtoa(case%euler%tol), stat, msg)
             call put(unit, "/", stat, msg)
+            call put(unit, "&reference", stat, msg)
+            call put(unit, "  samples = "//itoa(case%reference%samples), stat, msg)
+            call put(unit, "  bracket_steps = "//itoa(case%reference%bracket_steps), stat, msg)
+            call put(unit, "  tol = "//rtoa(case%reference%tol), stat, msg)
+            call put(unit, "  maxfev = "//itoa(case%reference%maxfev), stat, msg)
+            call put(unit, "  start = '"//trim(case%reference%start)//"'", stat, msg)
+            call put(unit, "/", stat, msg)
+            if (allocated(case%study%harmonics)) then
+                call put(unit, "&study", stat, msg)
+                ! an empty list is written as the single 0 that asks for it
+                call put(unit, "  harmonics = "//ilist([case%study%harmonics, &
+                         (0, i=1, merge(1, 0, size(case%study%harmonics) == 0))]), stat, msg)
+                if (size(case%study%samples) > 0) &
+                    call put(unit, "  samples = "//ilist(case%study%samples), stat, msg)
+                call put(unit, "  steps_per_period = "//ilist([case%study%steps_per_period, &
+                         (0, i=1, merge(1, 0, size(case%study%steps_per_period) == 0))]), &
+                         stat, msg)
+                call put(unit, "  error_samples = "//itoa(case%study%error_samples), stat, msg)
+                call put(unit, "  repeats = "//itoa(case%study%repeats), stat, msg)
+                call put(unit, "  repeat_below = "//rtoa(case%study%repeat_below), stat, msg)
+                call put(unit, "/", stat, msg)
+            end if
         end associate
     end subroutine write_case
 

@@ -6,9 +6,15 @@ module stickslip_cli
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
     use stickslip_case, only: case_t, read_case
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_run, only: run_case, run_euler_case
+    use stickslip_run, only: run_case, run_euler_case, run_reference_case, &
+        run_side_by_side_case, run_study_case
     use stickslip_euler, only: euler_result_t
-    use stickslip_output, only: energy_balance_error
+    use stickslip_reference, only: reference_result_t
+    use stickslip_side_by_side, only: side_by_side_t
+    use stickslip_study, only: study_result_t
+    use stickslip_compare, only: comparison_t
+    use stickslip_flow, only: event_name
+    use stickslip_output, only: energy_balance_error, reference_balance_error
     implicit none
     private
     public :: string_t, cli_options_t, parse_args, run_cli, stickslip_version
@@ -36,8 +42,11 @@ module stickslip_cli
     character(len=*), parameter :: usage = &
         "usage: stickslip CASE.nml [--quiet] [--help] [--version]"//new_line('a')// &
         "  Periodic response of a structure with Coulomb friction contacts by the"//new_line('a')// &
-        "  weighted-residual (harmonic balance) method. Results go to &output directory:"// &
-        new_line('a')//"  hbm.csv, coefficients.csv, summary.nml."//new_line('a')// &
+        "  weighted-residual (harmonic balance) method, implicit Euler or the exact"//new_line('a')// &
+        "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all' or"// &
+        new_line('a')//"  'study'). Results go to &output directory: hbm.csv, coefficients.csv,"// &
+        new_line('a')//"  euler.csv, reference.csv, events.csv, study.csv, summary.nml."// &
+        new_line('a')// &
         "  Exit codes: 0 ok, 1 usage or input error, 2 numerical failure, 3 I/O error."
 
 contains
@@ -99,6 +108,10 @@ contains
         type(case_t) :: case
         type(hbm_solution_t) :: sol
         type(euler_result_t) :: res
+        type(reference_result_t) :: ref
+        type(side_by_side_t) :: sbs
+        type(study_result_t) :: study
+        logical :: summary_written
 
         code = 0
         call parse_args(args, opts, error)
@@ -114,26 +127,43 @@ contains
             call read_case(opts%case_path, case, error)
         end if
         if (.not. allocated(error)) then
-            if (case%method == 'euler') then
+            select case (case%method)
+            case ('euler')
                 call run_euler_case(case, res, error)
-            else
+            case ('reference')
+                call run_reference_case(case, ref, error)
+            case ('all')
+                call run_side_by_side_case(case, sbs, error)
+            case ('study')
+                call run_study_case(case, study, error)
+            case default
                 call run_case(case, sol, error)
-            end if
+            end select
         end if
         if (allocated(error)) then
             write (err_unit, '(a)') "stickslip: error: "//error%message
             code = exit_code_of(error%stat)
+            summary_written = allocated(sol%diagnosis) .or. allocated(res%diagnosis) .or. &
+                              allocated(ref%diagnosis) .or. allocated(sbs%diagnosis) .or. &
+                              allocated(study%reference%diagnosis)
             if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
-                (allocated(sol%diagnosis) .or. allocated(res%diagnosis))) write (err_unit, '(a)') &
+                summary_written) write (err_unit, '(a)') &
                 "stickslip: the summary was written to "//case%directory//"/summary.nml"
             return
         end if
         if (.not. opts%quiet) then
-            if (case%method == 'euler') then
+            select case (case%method)
+            case ('euler')
                 call print_euler_summary(out_unit, case, res)
-            else
+            case ('reference')
+                call print_reference_summary(out_unit, case, ref)
+            case ('all')
+                call print_side_by_side_summary(out_unit, case, sbs)
+            case ('study')
+                call print_study_summary(out_unit, case, study)
+            case default
                 call print_summary(out_unit, case, sol)
-            end if
+            end select
         end if
     end function run_cli
 
@@ -179,4 +209,100 @@ contains
         end do
         write (u, '(a)') "  wrote "//case%directory//"/{euler.csv, summary.nml}"
     end subroutine print_euler_summary
+
+    subroutine print_reference_summary(u, case, ref)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(reference_result_t), intent(in) :: ref
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        call print_reference_lines(u, case, ref)
+        write (u, '(a)') "  wrote "//case%directory//"/{reference.csv, events.csv, summary.nml}"
+    end subroutine print_reference_summary
+
+    subroutine print_reference_lines(u, case, ref)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(reference_result_t), intent(in) :: ref
+        integer :: j, k
+        write (u, '(a,es9.2,a,i0,a,i0,a,a,a,f0.3,a,f0.3,a)') "  exact reference: periodic "// &
+            "(defect ", ref%defect, ", ", ref%nfev, " period maps, ", ref%njev, &
+            " monodromies) from the ", ref%start, " start in ", 1.0e3_dp*ref%seconds, &
+            " ms CPU (start ", 1.0e3_dp*ref%start_seconds, " ms)"
+        do j = 1, size(ref%stick_fraction)
+            write (u, '(a,i0,a,f0.1,a,i0,a)', advance='no') "  contact ", j, ": sticks ", &
+                100*ref%stick_fraction(j), "% of the period in ", ref%stick_phases(j), &
+                " phase(s); events"
+            do k = 1, ref%nevent
+                if (ref%event_contact(k) == j) write (u, '(a,a,a,f0.5)', advance='no') " ", &
+                    trim(event_name(ref%event_kind(k))), " t=", ref%event_t(k)
+            end do
+            write (u, '(a,g0.4,a)') " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+        end do
+        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+            ref%work_forcing, ", friction ", ref%diss_friction, ", damping ", ref%diss_damping, &
+            " (balance error ", reference_balance_error(ref), ")"
+    end subroutine print_reference_lines
+
+    subroutine print_side_by_side_summary(u, case, sbs)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(side_by_side_t), intent(in) :: sbs
+        integer :: k
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  weighted residual: H = ", &
+            sbs%hbm%harmonics, ", ", sbs%hbm%nfev, " evaluations, residual ", sbs%hbm%fnorm, &
+            ", ", 1.0e3_dp*sbs%hbm_seconds, " ms CPU"
+        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: ", &
+            case%euler%steps_per_period, " steps/period, periodic after ", sbs%euler%periods, &
+            " periods (defect ", sbs%euler%defect, "), ", 1.0e3_dp*sbs%euler_seconds, " ms CPU"
+        call print_reference_lines(u, case, sbs%reference)
+        write (u, '(a,i0,a)') "  differences on the common grid (", sbs%grid, &
+            " points per period), relative to each quantity's amplitude, worst DOF/contact:"
+        write (u, '(a)') "                            max x     max v     max r     rms x"// &
+            "     rms v     rms r"
+        do k = 1, size(sbs%comparisons)
+            call print_comparison(u, sbs%comparisons(k))
+        end do
+        write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, euler.csv, "// &
+            "reference.csv, events.csv, summary.nml}"
+    end subroutine print_side_by_side_summary
+
+    subroutine print_comparison(u, cmp)
+        integer, intent(in) :: u
+        type(comparison_t), intent(in) :: cmp
+        character(len=26) :: label
+        label = "    "//cmp%method//" vs "//cmp%against
+        write (u, '(a,6es10.2)') label, cmp%worst('x'), cmp%worst('v'), cmp%worst('r'), &
+            cmp%worst('x', .true.), cmp%worst('v', .true.), cmp%worst('r', .true.)
+    end subroutine print_comparison
+
+    subroutine print_study_summary(u, case, study)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(study_result_t), intent(in) :: study
+        integer :: k
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        call print_reference_lines(u, case, study%reference)
+        write (u, '(a)') "  work-precision study, errors relative to the reference amplitude:"
+        write (u, '(a)') "    method  parameter  samples  conv   cpu [s]     max x     max v"// &
+            "     max r"
+        do k = 1, size(study%rows)
+            associate (row => study%rows(k))
+                if (allocated(row%cmp%max_error)) then
+                    write (u, '(4x,a6,i11,i9,a6,es10.2,3es10.2)') trim(row%method), &
+                        row%parameter, row%samples, merge("   yes", "    no", row%converged), &
+                        row%cpu_seconds, row%cmp%worst('x'), row%cmp%worst('v'), &
+                        row%cmp%worst('r')
+                else
+                    write (u, '(4x,a6,i11,i9,a6,es10.2,a)') trim(row%method), row%parameter, &
+                        row%samples, merge("   yes", "    no", row%converged), &
+                        row%cpu_seconds, "  (no solution)"
+                end if
+            end associate
+        end do
+        if (study%skipped > 0) write (u, '(a,i0,a)') "  skipped ", study%skipped, &
+            " (harmonics, samples) pair(s) with samples < 2 H + 1 or a forcing harmonic > H"
+        write (u, '(a)') "  wrote "//case%directory//"/{study.csv, reference.csv, events.csv, "// &
+            "summary.nml}"
+    end subroutine print_study_summary
 end module stickslip_cli

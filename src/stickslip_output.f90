@@ -1,19 +1,28 @@
-!> Result files: hbm.csv (one period of samples), coefficients.csv (Fourier coefficients of x
-!> and r) and summary.nml (convergence report, diagnostics, energy balance and the effective
-!> case). Every file is written under a temporary name in the output directory and renamed
+!> Result files: hbm.csv, euler.csv and reference.csv (one period of samples),
+!> coefficients.csv (Fourier coefficients of x and r), events.csv (the reference's events),
+!> study.csv (the work-precision study) and summary.nml (convergence reports, diagnostics,
+!> energy balance, differences between methods and the effective case). Every file is written under a temporary name in the output directory and renamed
 !> when complete, so a reader never sees a partial file. Knows nothing of how results are
 !> computed.
 module stickslip_output
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_solution, only: hbm_solution_t
     use stickslip_euler, only: euler_result_t
     use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist
+    use stickslip_reference, only: reference_result_t
+    use stickslip_flow, only: event_name
+    use stickslip_compare, only: comparison_t, quantity_names
+    use stickslip_side_by_side, only: side_by_side_t
+    use stickslip_study, only: study_result_t
     implicit none
     private
     public :: make_directory, write_hbm_csv, write_samples_csv, write_coefficients_csv, &
               write_summary, write_euler_summary, energy_balance_error
+    public :: write_events_csv, write_reference_summary, write_side_by_side_summary
+    public :: write_study_csv, write_study_summary, reference_balance_error
 
     interface
         function c_mkdir(path, mode) bind(c, name='mkdir') result(stat)
@@ -220,13 +229,43 @@ contains
         type(hbm_solution_t), intent(in) :: sol
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer :: u, stat, nc
+        integer :: u, stat
         character(len=512) :: msg
 
-        nc = 0
-        if (allocated(sol%stick_fraction)) nc = size(sol%stick_fraction)
         call begin_summary(dir, "hbm", u, stat, msg, error)
         if (allocated(error)) return
+        call put_hbm_keys(u, sol, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_summary
+
+    !> Write `dir`/summary.nml for a time integration: a group &summary (method = 'euler',
+    !> periodic, periods, defect, seconds, max_sweeps, diagnosis), then the effective case.
+    subroutine write_euler_summary(dir, case, res, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case integrated.
+        type(case_t), intent(in) :: case
+        !> The integration result.
+        type(euler_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat
+        character(len=512) :: msg
+        call begin_summary(dir, "euler", u, stat, msg, error)
+        if (allocated(error)) return
+        call put_euler_keys(u, case, res, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_euler_summary
+
+    !> The keys of a weighted-residual solution (README, "summary.nml").
+    subroutine put_hbm_keys(u, sol, stat, msg)
+        integer, intent(in) :: u
+        type(hbm_solution_t), intent(in) :: sol
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        integer :: nc
+        nc = 0
+        if (allocated(sol%stick_fraction)) nc = size(sol%stick_fraction)
         call put(u, "  converged = "//ltoa(sol%converged), stat, msg)
         call put(u, "  info = "//itoa(sol%info), stat, msg)
         call put(u, "  nfev = "//itoa(sol%nfev), stat, msg)
@@ -250,24 +289,15 @@ contains
         call put(u, "  diss_coulomb = "//rtoa(sol%diss_coulomb), stat, msg)
         call put(u, "  energy_balance_error = "//rtoa(energy_balance_error(sol)), stat, msg)
         call put(u, "  diagnosis = '"//quote(sol%diagnosis)//"'", stat, msg)
-        call end_summary(dir, case, u, stat, msg, error)
-    end subroutine write_summary
+    end subroutine put_hbm_keys
 
-    !> Write `dir`/summary.nml for a time integration: a group &summary (method = 'euler',
-    !> periodic, periods, defect, seconds, max_sweeps, diagnosis), then the effective case.
-    subroutine write_euler_summary(dir, case, res, error)
-        !> Output directory (must exist).
-        character(len=*), intent(in) :: dir
-        !> The case integrated.
+    !> The keys of an implicit Euler integration.
+    subroutine put_euler_keys(u, case, res, stat, msg)
+        integer, intent(in) :: u
         type(case_t), intent(in) :: case
-        !> The integration result.
         type(euler_result_t), intent(in) :: res
-        !> Set on failure.
-        type(error_type), allocatable, intent(out) :: error
-        integer :: u, stat
-        character(len=512) :: msg
-        call begin_summary(dir, "euler", u, stat, msg, error)
-        if (allocated(error)) return
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
         call put(u, "  periodic = "//ltoa(res%periodic), stat, msg)
         call put(u, "  periods = "//itoa(res%periods), stat, msg)
         call put(u, "  defect = "//rtoa(res%defect), stat, msg)
@@ -275,8 +305,230 @@ contains
         call put(u, "  steps_per_period = "//itoa(case%euler%steps_per_period), stat, msg)
         call put(u, "  max_sweeps = "//itoa(res%max_sweeps), stat, msg)
         call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+    end subroutine put_euler_keys
+
+    !> Relative energy balance error of the reference over one period:
+    !> |work_forcing - diss_friction - diss_damping| / max(|work_forcing|, tiny).
+    pure real(dp) function reference_balance_error(ref) result(e)
+        !> A reference solution.
+        type(reference_result_t), intent(in) :: ref
+        e = abs(ref%work_forcing - ref%diss_friction - ref%diss_damping)/ &
+            max(abs(ref%work_forcing), tiny(1.0_dp))
+    end function reference_balance_error
+
+    !> The keys of a reference solution.
+    subroutine put_reference_keys(u, ref, stat, msg)
+        integer, intent(in) :: u
+        type(reference_result_t), intent(in) :: ref
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        integer :: nc
+        nc = 0
+        if (allocated(ref%stick_fraction)) nc = size(ref%stick_fraction)
+        call put(u, "  converged = "//ltoa(ref%converged), stat, msg)
+        call put(u, "  defect = "//rtoa(ref%defect), stat, msg)
+        call put(u, "  nfev = "//itoa(ref%nfev), stat, msg)
+        call put(u, "  njev = "//itoa(ref%njev), stat, msg)
+        call put(u, "  start = '"//ref%start//"'", stat, msg)
+        call put(u, "  shooting_seconds = "//rtoa(ref%seconds), stat, msg)
+        call put(u, "  start_seconds = "//rtoa(ref%start_seconds), stat, msg)
+        call put(u, "  t_section = "//rtoa(ref%t_section), stat, msg)
+        call put(u, "  ncontact = "//itoa(nc), stat, msg)
+        if (nc > 0) then
+            call put(u, "  stick_fraction = "//rlist(ref%stick_fraction), stat, msg)
+            call put(u, "  stick_phases = "//ilist(ref%stick_phases), stat, msg)
+        end if
+        call put(u, "  nevent = "//itoa(ref%nevent), stat, msg)
+        call put(u, "  work_forcing = "//rtoa(ref%work_forcing), stat, msg)
+        call put(u, "  diss_friction = "//rtoa(ref%diss_friction), stat, msg)
+        call put(u, "  diss_damping = "//rtoa(ref%diss_damping), stat, msg)
+        call put(u, "  energy_balance_error = "//rtoa(reference_balance_error(ref)), stat, msg)
+        call put(u, "  diagnosis = '"//quote(ref%diagnosis)//"'", stat, msg)
+    end subroutine put_reference_keys
+
+    !> Write `dir`/summary.nml for the reference: a group &summary (method = 'reference',
+    !> converged, defect, nfev, njev, start, shooting_seconds, start_seconds, t_section,
+    !> ncontact, stick_fraction, stick_phases, nevent, energies, diagnosis), then the case.
+    subroutine write_reference_summary(dir, case, ref, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case solved.
+        type(case_t), intent(in) :: case
+        !> The reference (converged or not).
+        type(reference_result_t), intent(in) :: ref
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat
+        character(len=512) :: msg
+        call begin_summary(dir, "reference", u, stat, msg, error)
+        if (allocated(error)) return
+        call put_reference_keys(u, ref, stat, msg)
         call end_summary(dir, case, u, stat, msg, error)
-    end subroutine write_euler_summary
+    end subroutine write_reference_summary
+
+    !> Write `dir`/events.csv: header t,contact,kind,direction,force,velocity and one row per
+    !> event of the reference in one period, sorted by time in [0, T): kind is stick, slip,
+    !> reversal or graze, direction the slip direction after the event (0 stuck, +1, -1),
+    !> force [N] and slip velocity [m/s] at the event. Error: stat io.
+    subroutine write_events_csv(dir, ref, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> A reference solution.
+        type(reference_result_t), intent(in) :: ref
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, stat
+        character(len=512) :: msg
+        character(len=*), parameter :: fmt = '(' // real_fmt // ',",",i0,",",a,",",i0,",",' // &
+                                              real_fmt // ',",",' // real_fmt // ')'
+        call open_temporary(dir, "events.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) "t,contact,kind,direction,force,velocity"
+        do k = 1, ref%nevent
+            if (stat /= 0) exit
+            write (u, fmt, iostat=stat, iomsg=msg) ref%event_t(k), ref%event_contact(k), &
+                event_name(ref%event_kind(k)), ref%event_direction(k), ref%event_force(k), &
+                ref%event_velocity(k)
+        end do
+        call close_and_rename(dir, "events.csv", u, stat, msg, error)
+    end subroutine write_events_csv
+
+    !> The keys of the differences: for each comparison `<method>_vs_<against>_max` and
+    !> `_rms`, one value per quantity in the order of `quantities`.
+    subroutine put_comparison_keys(u, cmp, stat, msg)
+        integer, intent(in) :: u
+        type(comparison_t), intent(in) :: cmp
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        call put(u, "  "//cmp%method//"_vs_"//cmp%against//"_max = "//rlist(cmp%max_error), &
+                 stat, msg)
+        call put(u, "  "//cmp%method//"_vs_"//cmp%against//"_rms = "//rlist(cmp%rms_error), &
+                 stat, msg)
+    end subroutine put_comparison_keys
+
+    !> Write `dir`/summary.nml for the three methods side by side: a group &summary
+    !> (method = 'all', the CPU seconds of each method, the common grid, the quantity names
+    !> and the relative max and RMS differences per quantity), then the groups
+    !> &summary_hbm, &summary_euler and &summary_reference with each method's own keys,
+    !> then the effective case.
+    subroutine write_side_by_side_summary(dir, case, res, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case solved.
+        type(case_t), intent(in) :: case
+        !> The three solutions.
+        type(side_by_side_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, k
+        character(len=512) :: msg
+        character(len=12), allocatable :: names(:)
+        character(len=:), allocatable :: line
+        call begin_summary(dir, "all", u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  hbm_cpu_seconds = "//rtoa(res%hbm_seconds), stat, msg)
+        call put(u, "  euler_cpu_seconds = "//rtoa(res%euler_seconds), stat, msg)
+        call put(u, "  reference_cpu_seconds = "//rtoa(res%reference_seconds), stat, msg)
+        call put(u, "  grid = "//itoa(res%grid), stat, msg)
+        names = quantity_names(case%model%ndof, case%model%ncontact())
+        line = "  quantities = "
+        do k = 1, size(names)
+            line = line//"'"//trim(names(k))//"'"
+            if (k < size(names)) line = line//", "
+        end do
+        call put(u, line, stat, msg)
+        do k = 1, size(res%comparisons)
+            call put_comparison_keys(u, res%comparisons(k), stat, msg)
+        end do
+        call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_hbm", stat, msg)
+        call put_hbm_keys(u, res%hbm, stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_euler", stat, msg)
+        call put_euler_keys(u, case, res%euler, stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_reference", stat, msg)
+        call put_reference_keys(u, res%reference, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_side_by_side_summary
+
+    !> Write `dir`/study.csv: header method,parameter,samples,converged,cpu_seconds,repeats,
+    !> iterations,err_x,err_v,err_r,rms_x,rms_v,rms_r, then err_<q> for every quantity q
+    !> (x1..xN, v1..vN, r1..); one row per run. err_* are max errors relative to the
+    !> reference amplitude of each quantity (err_x: the worst DOF), rms_* the RMS ones;
+    !> NaN when the run produced no solution. Error: stat io.
+    subroutine write_study_csv(dir, study, n, nc, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The study.
+        type(study_result_t), intent(in) :: study
+        !> Degrees of freedom and contacts of the model.
+        integer, intent(in) :: n, nc
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, stat
+        character(len=512) :: msg
+        character(len=12), allocatable :: names(:)
+        character(len=:), allocatable :: header
+        character(len=80) :: fmt
+        real(dp), allocatable :: e(:)
+        real(dp) :: nan
+        nan = ieee_value(1.0_dp, ieee_quiet_nan)
+        names = quantity_names(n, nc)
+        header = "method,parameter,samples,converged,cpu_seconds,repeats,iterations," // &
+                 "err_x,err_v,err_r,rms_x,rms_v,rms_r"
+        do i = 1, size(names)
+            header = header//",err_"//trim(names(i))
+        end do
+        write (fmt, '(a,i0,a)') '(a,",",i0,",",i0,",",a,",",' // real_fmt // &
+            ',",",i0,",",i0,",",', 6 + size(names), '(' // real_fmt // ',:,","))'
+        call open_temporary(dir, "study.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, size(study%rows)
+            if (stat /= 0) exit
+            associate (row => study%rows(k))
+                if (allocated(row%cmp%max_error)) then
+                    e = [row%cmp%worst('x'), row%cmp%worst('v'), row%cmp%worst('r'), &
+                         row%cmp%worst('x', .true.), row%cmp%worst('v', .true.), &
+                         row%cmp%worst('r', .true.), row%cmp%max_error]
+                else
+                    e = [(nan, i=1, 6 + size(names))]
+                end if
+                write (u, fmt, iostat=stat, iomsg=msg) trim(row%method), row%parameter, &
+                    row%samples, ltoa(row%converged), row%cpu_seconds, row%repeats, &
+                    row%iterations, e
+            end associate
+        end do
+        call close_and_rename(dir, "study.csv", u, stat, msg, error)
+    end subroutine write_study_csv
+
+    !> Write `dir`/summary.nml for a study: a group &summary (method = 'study', rows,
+    !> skipped, reference_cpu_seconds), the group &summary_reference, then the case.
+    subroutine write_study_summary(dir, case, study, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case studied.
+        type(case_t), intent(in) :: case
+        !> The study.
+        type(study_result_t), intent(in) :: study
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, nrow
+        character(len=512) :: msg
+        nrow = 0
+        if (allocated(study%rows)) nrow = size(study%rows)
+        call begin_summary(dir, "study", u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  rows = "//itoa(nrow), stat, msg)
+        call put(u, "  skipped = "//itoa(study%skipped), stat, msg)
+        call put(u, "  reference_cpu_seconds = "//rtoa(study%reference_seconds), stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_reference", stat, msg)
+        call put_reference_keys(u, study%reference, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_study_summary
 
     !> Open the temporary summary.nml and write its first lines, up to `method = '...'`.
     subroutine begin_summary(dir, method, u, stat, msg, error)
@@ -288,8 +540,8 @@ contains
         msg = ""
         call open_temporary(dir, "summary.nml", u, error)
         if (allocated(error)) return
-        call put(u, "! stickslip summary: the group &summary, then the effective case "// &
-                 "(&system ... &euler)", stat, msg)
+        call put(u, "! stickslip summary: the group &summary (and for several methods "// &
+                 "&summary_<method>), then the effective case (&system ... &study)", stat, msg)
         call put(u, "&summary", stat, msg)
         call put(u, "  method = '"//method//"'", stat, msg)
     end subroutine begin_summary

@@ -1,4 +1,5 @@
-!> The whole workflow of one case: case -> model -> weighted-residual solve -> result files.
+!> The whole workflow of one case: case -> model -> method (weighted residual, implicit
+!> Euler, the exact reference, all three, or the work-precision study) -> result files.
 !> What the CLI runs, and what a host code calls to run a case it read or built.
 module stickslip_run
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
@@ -6,11 +7,17 @@ module stickslip_run
     use stickslip_solution, only: hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_output, only: make_directory, write_hbm_csv, write_coefficients_csv, &
-        write_summary, write_samples_csv, write_euler_summary
+        write_summary, write_samples_csv, write_euler_summary, write_events_csv, &
+        write_reference_summary, write_side_by_side_summary, write_study_csv, &
+        write_study_summary
     use stickslip_euler, only: euler_result_t, integrate_euler
+    use stickslip_reference, only: reference_result_t, solve_reference
+    use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
+    use stickslip_study, only: study_options_t, study_result_t, run_study, default_study_options
     implicit none
     private
-    public :: run_case, run_euler_case
+    public :: run_case, run_euler_case, run_reference_case, run_side_by_side_case
+    public :: run_study_case
 
 contains
 
@@ -72,6 +79,124 @@ contains
         end if
         if (.not. res%periodic) call fatal_error(error, res%diagnosis, stickslip_stat%numerical)
     end subroutine run_euler_case
+
+    !> Compute the exact reference of `case` and write reference.csv (&reference samples, the
+    !> format of hbm.csv), events.csv and summary.nml into case%directory. When the shooting
+    !> does not converge only summary.nml is written (converged = F and the diagnosis) and an
+    !> error with stat numerical is returned. Other errors: stat input, stat numerical, io.
+    subroutine run_reference_case(case, res, error)
+        !> The case to run.
+        type(case_t), intent(in) :: case
+        !> The reference solution.
+        type(reference_result_t), intent(out) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(error_type), allocatable :: io_error
+        call solve_reference(case%model, case%reference, res, error, hbm_opts=case%hbm, &
+                             euler_opts=case%euler)
+        call prepare_output(case, error)
+        if (allocated(error)) return
+        if (res%converged) then
+            call write_reference_files(case, res, error)
+            if (allocated(error)) return
+        end if
+        call write_reference_summary(case%directory, case, res, io_error)
+        if (allocated(io_error)) then
+            call move_alloc(io_error, error)
+            return
+        end if
+        if (.not. res%converged) call fatal_error(error, res%diagnosis, stickslip_stat%numerical)
+    end subroutine run_reference_case
+
+    !> Solve `case` with the weighted residual, implicit Euler and the exact reference and
+    !> write each one's files (hbm.csv and coefficients.csv, euler.csv, reference.csv and
+    !> events.csv; only for the methods that converged) and one summary.nml with each one's
+    !> CPU seconds and their differences. When a method did not converge, an error with stat
+    !> numerical naming it is returned after the files are written. Other errors: stat
+    !> input, stat numerical (singular matrices), stat io.
+    subroutine run_side_by_side_case(case, res, error)
+        !> The case to run.
+        type(case_t), intent(in) :: case
+        !> The three solutions and their differences.
+        type(side_by_side_t), intent(out) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(error_type), allocatable :: io_error
+        call solve_side_by_side(case%model, case%hbm, case%euler, case%reference, res, error)
+        call prepare_output(case, error)
+        if (allocated(error)) return
+        if (res%hbm%converged) then
+            call write_hbm_csv(case%directory, res%hbm, error)
+            if (allocated(error)) return
+            call write_coefficients_csv(case%directory, res%hbm, error)
+            if (allocated(error)) return
+        end if
+        if (res%euler%periodic) then
+            call write_samples_csv(case%directory, "euler.csv", res%euler%t, res%euler%x, &
+                                   res%euler%v, res%euler%r, error)
+            if (allocated(error)) return
+        end if
+        if (res%reference%converged) then
+            call write_reference_files(case, res%reference, error)
+            if (allocated(error)) return
+        end if
+        call write_side_by_side_summary(case%directory, case, res, io_error)
+        if (allocated(io_error)) then
+            call move_alloc(io_error, error)
+            return
+        end if
+        if (len(res%diagnosis) > 0) call fatal_error(error, res%diagnosis, &
+                                                     stickslip_stat%numerical)
+    end subroutine run_side_by_side_case
+
+    !> Run the work-precision study of `case` (&study) and write study.csv, reference.csv,
+    !> events.csv and summary.nml into case%directory. Errors: stat input (invalid case),
+    !> stat numerical (no reference: nothing to measure errors against; summary.nml is
+    !> written when the reference was attempted), stat io.
+    subroutine run_study_case(case, res, error)
+        !> The case to study.
+        type(case_t), intent(in) :: case
+        !> The study.
+        type(study_result_t), intent(out) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(error_type), allocatable :: io_error
+        type(study_options_t) :: opts
+        opts = case%study
+        if (.not. allocated(opts%harmonics)) opts = default_study_options()
+        call run_study(case%model, case%hbm, case%euler, case%reference, opts, res, error)
+        if (allocated(error)) then
+            if (error%stat /= stickslip_stat%numerical .or. &
+                .not. allocated(res%reference%diagnosis)) then
+                call prepare_output(case, error)
+                return
+            end if
+            ! the reference failed: its report is still worth a summary
+            call make_directory(case%directory, io_error)
+            if (.not. allocated(io_error)) &
+                call write_study_summary(case%directory, case, res, io_error)
+            if (allocated(io_error)) call move_alloc(io_error, error)
+            return
+        end if
+        call prepare_output(case, error)
+        if (allocated(error)) return
+        call write_study_csv(case%directory, res, case%model%ndof, case%model%ncontact(), error)
+        if (allocated(error)) return
+        call write_reference_files(case, res%reference, error)
+        if (allocated(error)) return
+        call write_study_summary(case%directory, case, res, error)
+    end subroutine run_study_case
+
+    !> reference.csv and events.csv of a converged reference.
+    subroutine write_reference_files(case, res, error)
+        type(case_t), intent(in) :: case
+        type(reference_result_t), intent(in) :: res
+        type(error_type), allocatable, intent(out) :: error
+        call write_samples_csv(case%directory, "reference.csv", res%t, res%x, res%v, res%r, &
+                               error)
+        if (allocated(error)) return
+        call write_events_csv(case%directory, res, error)
+    end subroutine write_reference_files
 
     !> After a method ran: name the case file in an input error, or else create the output
     !> directory.

@@ -32,6 +32,7 @@ contains
         call test_good_case(t)
         call test_bad_inputs(t)
         call test_cli(t)
+        call test_methods_cli(t)
     end subroutine run_case_tests
 
     subroutine write_lines(path, lines)
@@ -176,6 +177,22 @@ contains
         call expect_bad(t, "bad_steps", [character(len=120) :: base, &
             "&euler steps_per_period = 1 /"], inp, [character(len=60) :: "&euler", &
             "steps_per_period = 1", ">= 2"])
+        call expect_bad(t, "reference_samples", [character(len=120) :: base, &
+            "&reference samples = 0 /"], inp, [character(len=60) :: "&reference", &
+            "samples = 0", ">= 1"])
+        call expect_bad(t, "reference_start", [character(len=120) :: base, &
+            "&reference start = 'cold' /"], inp, [character(len=60) :: "&reference", "start", &
+            "'euler'"])
+        call expect_bad(t, "reference_tol", [character(len=120) :: base, &
+            "&reference tol = NaN /"], inp, [character(len=60) :: "&reference", "tol", &
+            "not a finite number"])
+        call expect_bad(t, "study_harmonics", [character(len=120) :: base, &
+            "&study harmonics = 5, -1 /"], inp, [character(len=60) :: "&study", "harmonics", &
+            ">= 1"])
+        call expect_bad(t, "study_repeats", [character(len=120) :: base, &
+            "&study repeats = 0 /"], inp, [character(len=60) :: "&study", "repeats = 0"])
+        call expect_bad(t, "study_unknown", [character(len=120) :: base, &
+            "&study harmonic = 5 /"], inp, [character(len=60) :: "&study", "harmonic"])
         call expect_bad(t, "relative_same_dof", [character(len=120) :: base(1:2), &
             "&friction contact_dof = 2, contact_dof2 = 2, mu = 0.3, normal_load = 1.0 /"], inp, &
             [character(len=60) :: "&friction", "contact_dof2(1)"])
@@ -339,6 +356,217 @@ contains
         call check(t, summary_value(scratch//"/out_starved/summary.nml", "converged") == "F", &
                    "cli non-converged: summary says converged = F")
     end subroutine test_cli
+
+    !> &run method = 'reference', 'all' and 'study' end to end: the files, their rows and
+    !> headers, the summary fields, and the differences recomputed from the CSV files.
+    subroutine test_methods_cli(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_methods"
+        character(len=120) :: base(4)
+        character(len=:), allocatable :: out, err, v
+        integer :: code, nrows, nev, u, stat, k
+        real(dp), allocatable :: eu(:, :), rf(:, :)
+        real(dp) :: summary_err(5), e1, amp
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        logical :: ok
+        character(len=400) :: line
+        character(len=16) :: kind
+        character(len=24), parameter :: cpu_keys(3) = [character(len=24) :: "hbm_cpu_seconds", &
+                                                       "euler_cpu_seconds", "reference_cpu_seconds"]
+
+        base = [character(len=120) :: good_system, good_forcing, good_friction, &
+                "&hbm harmonics = 20, samples = 256 /"]
+        ! all three methods; the reference sampled on the Euler grid so that the CSV files
+        ! give the Euler-vs-reference difference independently of the comparison code
+        call write_lines(scratch//"/all.nml", [character(len=120) :: base, &
+            "&run method = 'all' /", "&euler steps_per_period = 400 /", &
+            "&reference samples = 400 /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/all.nml"], code, out, err)
+        call check(t, code == 0, "method all: exit 0", err)
+        call check(t, index(out, "euler vs reference") > 0 .and. &
+                   index(out, "hbm vs reference") > 0, "method all: differences printed", out)
+        call check(t, csv_rows(dir//"/hbm.csv") == 256, "method all: hbm.csv rows")
+        call check(t, csv_rows(dir//"/euler.csv") == 400, "method all: euler.csv rows")
+        call check(t, csv_rows(dir//"/reference.csv") == 400, "method all: reference.csv rows")
+        call check(t, first_line(dir//"/reference.csv") == expected_header(2, 1), &
+                   "method all: reference.csv header")
+        call check(t, first_line(dir//"/events.csv") == "t,contact,kind,direction,force,velocity", &
+                   "method all: events.csv header")
+        ! events: at least one stick and one slip per period, kinds from the documented set
+        nev = 0
+        ok = .true.
+        open (newunit=u, file=dir//"/events.csv", status='old', action='read', iostat=stat)
+        if (stat == 0) then
+            read (u, '(a)') line
+            do
+                read (u, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                nev = nev + 1
+                kind = line(index(line, ",1,") + 3:)
+                kind = kind(1:index(kind, ",") - 1)
+                ok = ok .and. any(kind == [character(len=16) :: "stick", "slip", "reversal", &
+                                           "graze"])
+            end do
+            close (u)
+        end if
+        call check(t, nev >= 2 .and. ok, "method all: events.csv holds valid events")
+        v = summary_value(dir//"/summary.nml", "method")
+        call check(t, v == "'all'", "method all: summary method", v)
+        do k = 1, 3
+            v = summary_value(dir//"/summary.nml", trim(cpu_keys(k)))
+            read (v, *, iostat=stat) e1
+            call check(t, stat == 0 .and. e1 > 0.0_dp, "method all: "//trim(cpu_keys(k)), v)
+        end do
+        call check(t, summary_value(dir//"/summary.nml", "grid") == "400", "method all: grid")
+        call check(t, summary_value(dir//"/summary.nml", "quantities") == &
+                   "'x1', 'x2', 'v1', 'v2', 'r1'", "method all: quantities")
+        v = summary_value(dir//"/summary.nml", "euler_vs_reference_max")
+        read (v, *, iostat=stat) summary_err
+        call check(t, stat == 0, "method all: euler_vs_reference_max has 5 values", v)
+        ! the x1 difference recomputed from euler.csv and reference.csv
+        eu = read_csv(dir//"/euler.csv", 400, 6)
+        rf = read_csv(dir//"/reference.csv", 400, 6)
+        if (size(eu, 1) == 400 .and. size(rf, 1) == 400) then
+            call check_close(t, maxval(abs(rf(:, 1) - eu(:, 1))), 0.0_dp, &
+                             "method all: euler.csv and reference.csv on the same instants", &
+                             atol=1.0e-12_dp)
+            amp = maxval(abs(rf(:, 2)))
+            e1 = maxval(abs(eu(:, 2) - rf(:, 2)))/amp
+            call check_close(t, summary_err(1), e1, "method all: x1 difference from the CSVs", &
+                             rtol=1.0e-9_dp)
+            ! first order at 400 steps: a visible but small difference
+            call check(t, e1 > 1.0e-4_dp .and. e1 < 0.2_dp, "method all: Euler error plausible")
+        else
+            call check(t, .false., "method all: CSV files readable")
+        end if
+        v = summary_value(dir//"/summary.nml", "hbm_vs_reference_rms")
+        call check(t, len(v) > 0, "method all: hbm_vs_reference_rms present")
+        v = summary_value(dir//"/summary.nml", "hbm_vs_euler_max")
+        call check(t, len(v) > 0, "method all: hbm_vs_euler_max present")
+        call read_case(dir//"/summary.nml", c, error)
+        call check_error(t, error, "method all: summary.nml reads back as the case", .false.)
+        if (.not. allocated(error)) call check(t, c%method == 'all' .and. &
+                                               c%reference%samples == 400, &
+                                               "method all: effective case echoed")
+
+        ! the reference alone
+        call write_lines(scratch//"/ref.nml", [character(len=120) :: base, &
+            "&run method = 'reference' /", "&reference samples = 300 /", &
+            "&output directory = '"//scratch//"/out_ref' /"])
+        call cli([character(len=200) :: scratch//"/ref.nml"], code, out, err)
+        call check(t, code == 0, "method reference: exit 0", err)
+        call check(t, csv_rows(scratch//"/out_ref/reference.csv") == 300, &
+                   "method reference: reference.csv rows")
+        call check(t, summary_value(scratch//"/out_ref/summary.nml", "converged") == "T", &
+                   "method reference: summary converged")
+        v = summary_value(scratch//"/out_ref/summary.nml", "energy_balance_error")
+        read (v, *, iostat=stat) e1
+        call check(t, stat == 0 .and. e1 < 1.0e-9_dp, "method reference: energy balance", v)
+
+        ! a small study
+        call write_lines(scratch//"/study.nml", [character(len=120) :: base, &
+            "&run method = 'study' /", "&study harmonics = 5, 20, samples = 0, " // &
+            "steps_per_period = 200, 400, repeats = 1 /", &
+            "&output directory = '"//scratch//"/out_study' /"])
+        call cli([character(len=200) :: scratch//"/study.nml"], code, out, err)
+        call check(t, code == 0, "method study: exit 0", err)
+        call check(t, csv_rows(scratch//"/out_study/study.csv") == 4, "method study: 4 rows")
+        call check(t, first_line(scratch//"/out_study/study.csv") == &
+                   "method,parameter,samples,converged,cpu_seconds,repeats,iterations,"// &
+                   "err_x,err_v,err_r,rms_x,rms_v,rms_r,err_x1,err_x2,err_v1,err_v2,err_r1", &
+                   "method study: study.csv header")
+        call check(t, summary_value(scratch//"/out_study/summary.nml", "rows") == "4", &
+                   "method study: summary rows")
+        block
+            real(dp) :: ex(4)
+            character(len=8) :: m(4)
+            integer :: p(4), i
+            open (newunit=u, file=scratch//"/out_study/study.csv", status='old', &
+                  action='read', iostat=stat)
+            if (stat /= 0) return
+            read (u, '(a)') line
+            do i = 1, 4
+                read (u, '(a)') line
+                call split_row(line, m(i), p(i), ex(i))
+            end do
+            close (u)
+            call check(t, all(m == [character(len=8) :: "hbm", "hbm", "euler", "euler"]) .and. &
+                       all(p == [5, 20, 200, 400]), "method study: row order and parameters")
+            call check(t, ex(2) < ex(1), "method study: more harmonics, smaller error")
+            call check(t, ex(4)/ex(3) > 0.4_dp .and. ex(4)/ex(3) < 0.6_dp, &
+                       "method study: Euler error halves with the step (first order)")
+        end block
+    end subroutine test_methods_cli
+
+    !> method, parameter and err_x (the 8th field) of a study.csv row.
+    subroutine split_row(line, method, parameter, err_x)
+        character(len=*), intent(in) :: line
+        character(len=*), intent(out) :: method
+        integer, intent(out) :: parameter
+        real(dp), intent(out) :: err_x
+        character(len=64) :: f(8)
+        integer :: i, k, start
+        start = 1
+        do i = 1, 8
+            k = index(line(start:), ",")
+            f(i) = line(start:start + k - 2)
+            start = start + k
+        end do
+        method = f(1)
+        read (f(2), *) parameter
+        read (f(8), *) err_x
+    end subroutine split_row
+
+    !> Data rows of a CSV file (-1 if it cannot be opened).
+    integer function csv_rows(path)
+        character(len=*), intent(in) :: path
+        integer :: u, stat
+        character(len=10) :: line
+        csv_rows = -1
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        csv_rows = 0
+        read (u, '(a)', iostat=stat) line
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            csv_rows = csv_rows + 1
+        end do
+        close (u)
+    end function csv_rows
+
+    !> The first line of a file ('' if it cannot be read).
+    function first_line(path) result(line)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: line
+        character(len=1000) :: buf
+        integer :: u, stat
+        line = ""
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat) buf
+        if (stat == 0) line = trim(buf)
+        close (u)
+    end function first_line
+
+    !> The numeric rows of a CSV file with a header: rows x cols (0 rows on failure).
+    function read_csv(path, rows, cols) result(a)
+        character(len=*), intent(in) :: path
+        integer, intent(in) :: rows, cols
+        real(dp), allocatable :: a(:, :)
+        integer :: u, stat, k
+        allocate (a(rows, cols))
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat == 0) read (u, '(a)', iostat=stat)
+        do k = 1, rows
+            if (stat /= 0) exit
+            read (u, *, iostat=stat) a(k, :)
+        end do
+        if (stat /= 0) deallocate (a)
+        if (stat /= 0) allocate (a(0, cols))
+        close (u)
+    end function read_csv
 
     function expected_header(n, nc) result(h)
         integer, intent(in) :: n, nc

@@ -1,0 +1,131 @@
+!> The three methods on one model, side by side: the weighted residual, implicit Euler and
+!> the exact event-driven reference, each one's CPU time, and the differences between them
+!> on a common time grid (&run method = 'all').
+module stickslip_side_by_side
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type
+    use stickslip_model, only: model_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
+    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
+        sample_reference
+    use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
+    implicit none
+    private
+    public :: side_by_side_t, solve_side_by_side
+
+    !> The three solutions, their CPU times and their differences.
+    type :: side_by_side_t
+        type(hbm_solution_t) :: hbm
+        type(euler_result_t) :: euler
+        type(reference_result_t) :: reference
+        !> CPU seconds of each method [s]; the reference's start is the weighted-residual
+        !> (or Euler) solution already computed, so its time is the shooting alone.
+        real(dp) :: hbm_seconds = 0.0_dp, euler_seconds = 0.0_dp, reference_seconds = 0.0_dp
+        !> Points per period of the common grid: the Euler steps when Euler reached a
+        !> periodic state, else the weighted-residual samples.
+        integer :: grid = 0
+        !> The differences that could be computed, in the order hbm vs reference, euler vs
+        !> reference, hbm vs euler (a pair is left out when one of its solutions failed).
+        type(comparison_t), allocatable :: comparisons(:)
+        !> Empty when all three succeeded, otherwise the diagnoses of those that did not.
+        character(len=:), allocatable :: diagnosis
+    end type side_by_side_t
+
+contains
+
+    !> Solve `model` with the three methods and compare them. A method that does not
+    !> converge is an outcome (its flag, its diagnosis and res%diagnosis). Errors: stat
+    !> input (invalid model or options), stat numerical (singular dynamic stiffness or
+    !> iteration matrix), from whichever method meets it first.
+    subroutine solve_side_by_side(model, hbm, euler, ref, res, error)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> Weighted-residual options.
+        type(hbm_options_t), intent(in) :: hbm
+        !> Time-stepping options.
+        type(euler_options_t), intent(in) :: euler
+        !> Reference options.
+        type(reference_options_t), intent(in) :: ref
+        !> The three solutions and their differences.
+        type(side_by_side_t), intent(out) :: res
+        !> Set on invalid input or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        type(hbm_options_t) :: ho
+        type(comparison_t) :: cmp
+        real(dp), allocatable :: xh(:, :), vh(:, :), rh(:, :), xr(:, :), vr(:, :), rr(:, :)
+        real(dp) :: c0, c1
+        logical :: hbm_ok, euler_ok, ref_ok
+
+        ho = hbm
+        ho%want_samples = .true.
+        call cpu_time(c0)
+        call solve_periodic(model, ho, res%hbm, error)
+        call cpu_time(c1)
+        res%hbm_seconds = c1 - c0
+        if (allocated(error)) return
+
+        call cpu_time(c0)
+        call integrate_euler(model, euler, res%euler, error)
+        call cpu_time(c1)
+        res%euler_seconds = c1 - c0
+        if (allocated(error)) return
+
+        call solve_reference(model, ref, res%reference, error, hbm_opts=ho, euler_opts=euler, &
+                             hbm_start=res%hbm, euler_start=res%euler)
+        res%reference_seconds = res%reference%seconds + res%reference%start_seconds
+        if (allocated(error)) return
+
+        hbm_ok = res%hbm%converged
+        euler_ok = res%euler%periodic
+        ref_ok = res%reference%converged
+        res%diagnosis = ""
+        if (.not. hbm_ok) res%diagnosis = "weighted residual: "//res%hbm%diagnosis
+        if (.not. euler_ok) call add("implicit Euler: "//res%euler%diagnosis)
+        if (.not. ref_ok) call add("reference: "//res%reference%diagnosis)
+
+        if (euler_ok) then
+            res%grid = euler%steps_per_period
+        else
+            res%grid = ho%samples
+        end if
+        allocate (res%comparisons(0))
+        if (hbm_ok) then
+            call evaluate_series(res%hbm, res%grid, xh, vh, rh, error)
+            if (allocated(error)) return
+        end if
+        if (ref_ok) then
+            call sample_reference(res%reference, res%grid, xr, vr, rr, error)
+            if (allocated(error)) return
+        end if
+        if (hbm_ok .and. ref_ok) then
+            call compare_samples('hbm', xh, vh, rh, 'reference', xr, vr, rr, cmp, error)
+            if (allocated(error)) return
+            res%comparisons = [res%comparisons, cmp]
+        end if
+        if (euler_ok .and. ref_ok) then
+            call compare_samples('euler', res%euler%x, res%euler%v, res%euler%r, 'reference', &
+                                 xr, vr, rr, cmp, error)
+            if (allocated(error)) return
+            res%comparisons = [res%comparisons, cmp]
+        end if
+        if (hbm_ok .and. euler_ok) then
+            call compare_samples('hbm', xh, vh, rh, 'euler', res%euler%x, res%euler%v, &
+                                 res%euler%r, cmp, error)
+            if (allocated(error)) return
+            res%comparisons = [res%comparisons, cmp]
+        end if
+
+    contains
+
+        subroutine add(text)
+            character(len=*), intent(in) :: text
+            if (len(res%diagnosis) > 0) then
+                res%diagnosis = res%diagnosis//"; "//text
+            else
+                res%diagnosis = text
+            end if
+        end subroutine add
+    end subroutine solve_side_by_side
+end module stickslip_side_by_side

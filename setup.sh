@@ -2,7 +2,8 @@
 # Install what stickslip needs on a Debian machine, if missing: gfortran, LAPACK/BLAS, FFTW3,
 # MINPACK, gnuplot for the plots (Debian packages) and fpm (PyPI). Idempotent; prints nothing when all is there.
 # Usage: ./setup.sh            install only
-#        ./setup.sh --run      install, build and run the seed example (examples/seed.nml)
+#        ./setup.sh --run      install, build, run the seed example (examples/seed.nml: the
+#                              three methods side by side) and draw out/seed/figure3.png
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -41,4 +42,6 @@ fi
 
 if [ "${1:-}" = "--run" ]; then
     fpm run --profile release -- examples/seed.nml
+    gnuplot -e "dir='out/seed'" examples/figure3.gp
+    echo "setup: drew out/seed/figure3.png"
 fi

@@ -23,9 +23,9 @@ set multiplot layout 1,2 title sprintf("%s: work-precision (error relative to th
 set title 'displacement: max error, worst DOF'
 set ylabel 'max |x - x_{ref}| / max |x_{ref}|'
 plot for [i=1:words(samples)] rows(sprintf("$1 == \"hbm\" && $3 == %s", word(samples, i))) \
-         u 5:8 w lp lw 2 pt 7 ps 0.8 lc i t sprintf('weighted residual, %s samples (H labelled)', word(samples, i)), \
-     for [i=1:words(samples)] rows(sprintf("$1 == \"hbm\" && $3 == %s", word(samples, i))) \
-         u 5:8:(sprintf('%d', $2)) w labels offset 0.9,0.6 font ',8' tc lt i notitle, \
+         u 5:8 w lp lw 2 pt 7 ps 0.8 lc i t sprintf('weighted residual, %s samples', word(samples, i)).(i == 1 ? ' (H labelled)' : ''), \
+     rows(sprintf("$1 == \"hbm\" && $3 == %s", word(samples, 1))) \
+         u 5:8:(sprintf('%d', $2)) w labels offset 0.9,0.6 font ',8' tc lt 1 notitle, \
      rows('$1 == "euler"') u 5:8 w lp lw 2 pt 5 ps 0.8 lc rgb '#d1495b' dt 2 t 'implicit Euler (steps/period labelled)', \
      rows('$1 == "euler"') u 5:8:(sprintf('%d', $2)) w labels offset 0,-0.8 font ',8' tc rgb '#d1495b' notitle
 

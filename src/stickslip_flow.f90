@@ -25,7 +25,7 @@
 !>
 !> The period map z(t0) -> z(t0 + T) also returns its Jacobian (the monodromy matrix): the
 !> product of the phase flows exp(A_zz tau) and of the saltation matrices
-!> I + (f- - f+) c^T / (c . f-) at the events. Knows nothing of files or of the other methods.
+!> I + (f+ - f-) c^T / (c . f-) at the events. Knows nothing of files or of the other methods.
 module stickslip_flow
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, pi, two_pi
@@ -463,7 +463,7 @@ contains
                 if (abs(h) > 1.0e-300_dp) then
                     sal = identity(nz)
                     do k = 1, nz
-                        sal(:, k) = sal(:, k) + (fm(1:nz) - fp(1:nz))*c(k)/h
+                        sal(:, k) = sal(:, k) + (fp(1:nz) - fm(1:nz))*c(k)/h
                     end do
                     jac = matmul(sal, jac)
                 end if

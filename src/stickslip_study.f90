@@ -170,7 +170,14 @@ contains
                 ho = hbm
                 ho%harmonics = opts%harmonics(i)
                 ns = opts%samples(j)
-                if (ns == 0) ns = max(hbm%samples, 2**ceiling(log(4.0_dp*ho%harmonics)/log(2.0_dp)))
+                if (ns == 0) then
+                    ! the &hbm samples, or the smallest power of two >= 4 H when fewer
+                    ns = 1
+                    do while (ns < 4*ho%harmonics)
+                        ns = 2*ns
+                    end do
+                    ns = max(hbm%samples, ns)
+                end if
                 if (ns < 2*ho%harmonics + 1 .or. .not. forcing_in_basis(ho)) then
                     res%skipped = res%skipped + 1
                     cycle

@@ -6,6 +6,7 @@ program tester
     use test_hbm, only: run_hbm_tests
     use test_case, only: run_case_tests
     use test_euler, only: run_euler_tests
+    use test_exact_reference, only: run_exact_reference_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i
@@ -16,6 +17,7 @@ program tester
     call run_hbm_tests(t)
     call run_case_tests(t)
     call run_euler_tests(t)
+    call run_exact_reference_tests(t)
     write (output_unit, '(i0," passed, ",i0," failed")') t%passed, t%failed
     if (t%failed > 0) error stop 1
 end program tester

@@ -12,7 +12,7 @@ module test_hbm
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
-    public :: run_hbm_tests, seed_model
+    public :: run_hbm_tests, seed_model, chain_model
 
 contains
 

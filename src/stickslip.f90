@@ -12,7 +12,18 @@ module stickslip
         write_events_csv, write_reference_summary, write_side_by_side_summary, &
         write_study_csv, write_study_summary, reference_balance_error
     use stickslip_run, only: run_case, run_euler_case, run_reference_case, &
-        run_side_by_side_case, run_study_case
+        run_side_by_side_case, run_study_case, run_sweep_case
+    use stickslip_output, only: write_frc_csv, write_sweep_summary, write_frc_plot_script
+    use stickslip_continuation, only: parametric_system_t, continuation_options_t, &
+        continuation_state_t, continuation_report_t, start_continuation, continuation_step
+    use stickslip_sweep, only: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, &
+        run_sweep, friction_family_t, new_friction_family, set_sweep_parameter
+    use stickslip_checkpoint, only: checkpoint_writer_t, read_checkpoint, case_fingerprint
+    use stickslip_stability, only: floquet_t, floquet_multipliers, periodic_stability, &
+        verify_periodicity
+    use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance
+    use stickslip_checks, only: hbm_checks_t, solve_and_check
+    use stickslip_rho, only: automatic_rho
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference
@@ -40,4 +51,13 @@ module stickslip
     public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &
               energy_balance_error, write_samples_csv, write_euler_summary
     public :: string_t, run_cli, stickslip_version
+    public :: run_sweep_case, write_frc_csv, write_sweep_summary, write_frc_plot_script
+    public :: parametric_system_t, continuation_options_t, continuation_state_t, &
+              continuation_report_t, start_continuation, continuation_step
+    public :: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, run_sweep, &
+              friction_family_t, new_friction_family, set_sweep_parameter
+    public :: checkpoint_writer_t, read_checkpoint, case_fingerprint
+    public :: floquet_t, floquet_multipliers, periodic_stability, verify_periodicity
+    public :: truncation_t, estimate_truncation, solve_to_tolerance
+    public :: hbm_checks_t, solve_and_check, automatic_rho
 end module stickslip

@@ -13,6 +13,9 @@ module stickslip_case
     use stickslip_euler, only: euler_options_t
     use stickslip_reference, only: reference_options_t, validate_reference_options
     use stickslip_study, only: study_options_t, default_study_options, validate_study_options
+    use stickslip_sweep, only: sweep_options_t, validate_sweep_options
+    use stickslip_robustness, only: robustness_options_t, default_robustness_options, &
+        validate_robustness_options
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms
@@ -44,6 +47,12 @@ module stickslip_case
         type(reference_options_t) :: reference
         !> Work-precision study options (&study).
         type(study_options_t) :: study = study_options_t()
+        !> Forced-response curve options (&sweep; used by method 'sweep').
+        type(sweep_options_t) :: sweep
+        !> The &sweep group was given.
+        logical :: has_sweep = .false.
+        !> Robustness study options (&robustness; used by method 'robustness').
+        type(robustness_options_t) :: robustness = robustness_options_t()
         !> Output directory (&output directory), created if missing.
         character(len=:), allocatable :: directory
     end type case_t
@@ -74,9 +83,9 @@ contains
         integer :: contact_dof(max_terms), contact_dof2(max_terms)
         real(dp) :: mu(max_terms), normal_load(max_terms)
         ! &hbm
-        integer :: harmonics, samples, maxfev
-        logical :: odd_only
-        real(dp) :: rho, tol
+        integer :: harmonics, samples, maxfev, max_harmonics, verify_periods
+        logical :: odd_only, stability
+        real(dp) :: rho, tol, harmonics_tol
         character(len=16) :: start
         ! &output
         character(len=1024) :: directory
@@ -87,7 +96,8 @@ contains
         namelist /system/ ndof, mass, stiffness, damping
         namelist /forcing/ omega, force_dof, force_harmonic, force_amplitude, force_phase
         namelist /friction/ contact_dof, contact_dof2, mu, normal_load
-        namelist /hbm/ harmonics, odd_only, rho, samples, tol, start, maxfev
+        namelist /hbm/ harmonics, odd_only, rho, samples, tol, start, maxfev, harmonics_tol, &
+            max_harmonics, stability, verify_periods
         namelist /output/ directory
         namelist /run/ method
         integer :: n, nf, nc
@@ -133,6 +143,10 @@ contains
         tol = defaults%tol
         start = defaults%start
         maxfev = defaults%maxfev
+        harmonics_tol = defaults%harmonics_tol
+        max_harmonics = defaults%max_harmonics
+        stability = defaults%stability
+        verify_periods = defaults%verify_periods
         rewind (u)
         read (u, nml=hbm, iostat=stat, iomsg=msg)
         call group_status("hbm", .false.)
@@ -163,6 +177,14 @@ contains
 
         call read_study_group()
         call group_status("study", .false.)
+        if (allocated(error)) return
+
+        call read_sweep_group()
+        call group_status("sweep", .false.)
+        if (allocated(error)) return
+
+        call read_robustness_group()
+        call group_status("robustness", .false.)
         if (allocated(error)) return
         close (u)
 
@@ -247,6 +269,14 @@ contains
         end if
         case%hbm%start = trim(start)
         case%hbm%maxfev = maxfev
+        if (.not. ieee_is_finite(harmonics_tol)) then
+            call input_error("&hbm harmonics_tol: not a finite number")
+            return
+        end if
+        case%hbm%harmonics_tol = harmonics_tol
+        case%hbm%max_harmonics = max_harmonics
+        case%hbm%stability = stability
+        case%hbm%verify_periods = verify_periods
         if (len_trim(directory) == 0) then
             call input_error("&output directory: must not be empty")
             return
@@ -254,12 +284,17 @@ contains
         case%directory = trim(directory)
 
         select case (method)
-        case ('hbm', 'euler', 'reference', 'all', 'study')
+        case ('hbm', 'euler', 'reference', 'all', 'study', 'sweep', 'robustness')
         case default
             call input_error("&run method = '"//trim(method)//"': must be 'hbm', 'euler', "// &
-                             "'reference', 'all' or 'study'")
+                             "'reference', 'all', 'study', 'sweep' or 'robustness'")
             return
         end select
+        if (method == 'sweep' .and. .not. case%has_sweep) then
+            call input_error("&sweep: missing (method = 'sweep' needs the group with at "// &
+                             "least start and stop)")
+            return
+        end if
         case%method = method
         if (steps_per_period < 2) then
             call input_error("&euler steps_per_period = "//itoa(steps_per_period)// &
@@ -297,6 +332,18 @@ contains
         if (allocated(error)) then
             error%message = path//": "//error%message
             return
+        end if
+        call validate_robustness_options(case%robustness, error)
+        if (allocated(error)) then
+            error%message = path//": "//error%message
+            return
+        end if
+        if (case%has_sweep) then
+            call validate_sweep_options(case%model, case%sweep, error)
+            if (allocated(error)) then
+                error%message = path//": "//error%message
+                return
+            end if
         end if
 
     contains
@@ -383,6 +430,106 @@ contains
             case%study%repeats = repeats
             case%study%repeat_below = repeat_below
         end subroutine read_study_group
+
+        !> &sweep shares names with &hbm (tol) and is read with its own variables.
+        subroutine read_sweep_group()
+            character(len=32) :: parameter
+            real(dp) :: start, stop, step, min_step, max_step
+            integer :: max_points, max_failures
+            logical :: stability, truncation, resume, plot
+            namelist /sweep/ parameter, start, stop, step, min_step, max_step, max_points, &
+                max_failures, stability, truncation, resume, plot
+            case%has_sweep = group_present(u, "sweep")
+            parameter = case%sweep%parameter
+            start = unset
+            stop = unset
+            step = case%sweep%step
+            min_step = case%sweep%min_step
+            max_step = case%sweep%max_step
+            max_points = case%sweep%max_points
+            max_failures = case%sweep%max_failures
+            stability = case%sweep%stability
+            truncation = case%sweep%truncation
+            resume = case%sweep%resume
+            plot = case%sweep%plot
+            rewind (u)
+            read (u, nml=sweep, iostat=stat, iomsg=msg)
+            if (stat /= 0 .or. .not. case%has_sweep) return
+            if (start == unset) then
+                call input_error("&sweep start: missing (first value of the parameter)")
+            else if (stop == unset) then
+                call input_error("&sweep stop: missing (last value of the parameter)")
+            else if (.not. all(ieee_is_finite([start, stop, step, min_step, max_step]))) then
+                call input_error("&sweep start, stop, step, min_step, max_step: not finite numbers")
+            else if (len_trim(parameter) > len(case%sweep%parameter)) then
+                call input_error("&sweep parameter = '"//trim(parameter)//"': must be "// &
+                                 "'omega', 'force_amplitude', 'mu' or 'normal_load'")
+            end if
+            if (allocated(error)) return
+            case%sweep%parameter = lower(trim(parameter))
+            case%sweep%start = start
+            case%sweep%stop = stop
+            case%sweep%step = step
+            case%sweep%min_step = min_step
+            case%sweep%max_step = max_step
+            case%sweep%max_points = max_points
+            case%sweep%max_failures = max_failures
+            case%sweep%stability = stability
+            case%sweep%truncation = truncation
+            case%sweep%resume = resume
+            case%sweep%plot = plot
+        end subroutine read_sweep_group
+
+        !> &robustness holds lists named like &hbm and &euler variables: its own variables.
+        subroutine read_robustness_group()
+            real(dp) :: omegas(max_terms), mus(max_terms), rhos(max_terms)
+            integer :: harmonics(max_terms), samples(max_terms), steps_per_period(max_terms)
+            integer :: error_samples, no, nm, nr, nh, ns, ne
+            logical :: warm
+            real(dp) :: wrong_tol
+            namelist /robustness/ omegas, mus, harmonics, rhos, samples, steps_per_period, &
+                warm, error_samples, wrong_tol
+            case%robustness = default_robustness_options()
+            omegas = unset
+            mus = unset
+            rhos = unset
+            harmonics = iunset
+            samples = iunset
+            steps_per_period = iunset
+            warm = case%robustness%warm
+            error_samples = case%robustness%error_samples
+            wrong_tol = case%robustness%wrong_tol
+            rewind (u)
+            read (u, nml=robustness, iostat=stat, iomsg=msg)
+            if (stat /= 0) return
+            no = count_given_real(omegas)
+            nm = count_given_real(mus)
+            nr = count_given_real(rhos)
+            nh = count_given_int(harmonics)
+            ns = count_given_int(samples)
+            ne = count_given_int(steps_per_period)
+            if (min(no, nm, nr, nh, ns, ne) < 0) then
+                call input_error("&robustness omegas, mus, rhos, harmonics, samples, "// &
+                                 "steps_per_period: entries must be given without gaps")
+                return
+            end if
+            if (.not. all(ieee_is_finite([omegas(1:max(no, 0)), mus(1:max(nm, 0)), &
+                                          rhos(1:max(nr, 0)), wrong_tol]))) then
+                call input_error("&robustness omegas, mus, rhos, wrong_tol: not finite numbers")
+                return
+            end if
+            if (no > 0) case%robustness%omegas = omegas(1:no)
+            if (nm > 0) case%robustness%mus = mus(1:nm)
+            if (nr > 0) case%robustness%rhos = rhos(1:nr)
+            if (nh > 0) case%robustness%harmonics = harmonics(1:nh)
+            if (ns > 0) case%robustness%samples = samples(1:ns)
+            ! a single 0 asks for no Euler runs (the default)
+            if (ne > 0) case%robustness%steps_per_period = pack(steps_per_period(1:ne), &
+                                                                .not. (ne == 1 .and. steps_per_period(1) == 0))
+            case%robustness%warm = warm
+            case%robustness%error_samples = error_samples
+            case%robustness%wrong_tol = wrong_tol
+        end subroutine read_robustness_group
 
         subroutine input_error(message)
             character(len=*), intent(in) :: message
@@ -628,6 +775,10 @@ contains
             call put(unit, "  tol = "//rtoa(o%tol), stat, msg)
             call put(unit, "  start = '"//trim(o%start)//"'", stat, msg)
             call put(unit, "  maxfev = "//itoa(o%maxfev), stat, msg)
+            call put(unit, "  harmonics_tol = "//rtoa(o%harmonics_tol), stat, msg)
+            call put(unit, "  max_harmonics = "//itoa(o%max_harmonics), stat, msg)
+            call put(unit, "  stability = "//ltoa(o%stability), stat, msg)
+            call put(unit, "  verify_periods = "//itoa(o%verify_periods), stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&output", stat, msg)
             call put(unit, "  directory = '"//case%directory//"'", stat, msg)
@@ -661,6 +812,40 @@ contains
                 call put(unit, "  repeats = "//itoa(case%study%repeats), stat, msg)
                 call put(unit, "  repeat_below = "//rtoa(case%study%repeat_below), stat, msg)
                 call put(unit, "/", stat, msg)
+            end if
+            if (case%method == 'robustness') then
+                associate (b => case%robustness)
+                    call put(unit, "&robustness", stat, msg)
+                    call put(unit, "  omegas = "//rlist(b%omegas), stat, msg)
+                    call put(unit, "  mus = "//rlist(b%mus), stat, msg)
+                    call put(unit, "  harmonics = "//ilist(b%harmonics), stat, msg)
+                    call put(unit, "  rhos = "//rlist(b%rhos), stat, msg)
+                    call put(unit, "  samples = "//ilist(b%samples), stat, msg)
+                    call put(unit, "  steps_per_period = "//ilist([b%steps_per_period, &
+                             (0, i=1, merge(1, 0, size(b%steps_per_period) == 0))]), stat, msg)
+                    call put(unit, "  warm = "//ltoa(b%warm), stat, msg)
+                    call put(unit, "  error_samples = "//itoa(b%error_samples), stat, msg)
+                    call put(unit, "  wrong_tol = "//rtoa(b%wrong_tol), stat, msg)
+                    call put(unit, "/", stat, msg)
+                end associate
+            end if
+            if (case%has_sweep) then
+                associate (w => case%sweep)
+                    call put(unit, "&sweep", stat, msg)
+                    call put(unit, "  parameter = '"//trim(w%parameter)//"'", stat, msg)
+                    call put(unit, "  start = "//rtoa(w%start), stat, msg)
+                    call put(unit, "  stop = "//rtoa(w%stop), stat, msg)
+                    call put(unit, "  step = "//rtoa(w%step), stat, msg)
+                    call put(unit, "  min_step = "//rtoa(w%min_step), stat, msg)
+                    call put(unit, "  max_step = "//rtoa(w%max_step), stat, msg)
+                    call put(unit, "  max_points = "//itoa(w%max_points), stat, msg)
+                    call put(unit, "  max_failures = "//itoa(w%max_failures), stat, msg)
+                    call put(unit, "  stability = "//ltoa(w%stability), stat, msg)
+                    call put(unit, "  truncation = "//ltoa(w%truncation), stat, msg)
+                    call put(unit, "  resume = "//ltoa(w%resume), stat, msg)
+                    call put(unit, "  plot = "//ltoa(w%plot), stat, msg)
+                    call put(unit, "/", stat, msg)
+                end associate
             end if
         end associate
     end subroutine write_case

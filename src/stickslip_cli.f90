@@ -7,7 +7,10 @@ module stickslip_cli
     use stickslip_case, only: case_t, read_case
     use stickslip_solution, only: hbm_solution_t
     use stickslip_run, only: run_case, run_euler_case, run_reference_case, &
-        run_side_by_side_case, run_study_case
+        run_side_by_side_case, run_study_case, run_sweep_case, run_robustness_case
+    use stickslip_robustness, only: robustness_row_t
+    use stickslip_sweep, only: sweep_result_t
+    use stickslip_checks, only: hbm_checks_t, sampling_notes
     use stickslip_euler, only: euler_result_t
     use stickslip_reference, only: reference_result_t
     use stickslip_side_by_side, only: side_by_side_t
@@ -43,9 +46,10 @@ module stickslip_cli
         "usage: stickslip CASE.nml [--quiet] [--help] [--version]"//new_line('a')// &
         "  Periodic response of a structure with Coulomb friction contacts by the"//new_line('a')// &
         "  weighted-residual (harmonic balance) method, implicit Euler or the exact"//new_line('a')// &
-        "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all' or"// &
-        new_line('a')//"  'study'). Results go to &output directory: hbm.csv, coefficients.csv,"// &
-        new_line('a')//"  euler.csv, reference.csv, events.csv, study.csv, summary.nml."// &
+        "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all',"// &
+        new_line('a')//"  'study' or 'sweep'). Results go to &output directory: hbm.csv,"// &
+        new_line('a')//"  coefficients.csv, euler.csv, reference.csv, events.csv, study.csv,"// &
+        new_line('a')//"  frc.csv (+ frc.gp, frc.png), summary.nml."// &
         new_line('a')// &
         "  Exit codes: 0 ok, 1 usage or input error, 2 numerical failure, 3 I/O error."
 
@@ -111,6 +115,9 @@ contains
         type(reference_result_t) :: ref
         type(side_by_side_t) :: sbs
         type(study_result_t) :: study
+        type(sweep_result_t) :: sweep
+        type(hbm_checks_t) :: checks
+        type(robustness_row_t), allocatable :: rows(:)
         logical :: summary_written
 
         code = 0
@@ -136,8 +143,16 @@ contains
                 call run_side_by_side_case(case, sbs, error)
             case ('study')
                 call run_study_case(case, study, error)
+            case ('sweep')
+                call run_sweep_case(case, sweep, error)
+                if (case%sweep%plot .and. sweep%npoints > 1) &
+                    call draw(case, "frc.gp", ["frc.png"], err_unit)
+            case ('robustness')
+                call run_robustness_case(case, rows, error)
+                if (.not. allocated(error)) call draw(case, "robustness.gp", &
+                    [character(len=20) :: "robustness_cold.png", "robustness_warm.png"], err_unit)
             case default
-                call run_case(case, sol, error)
+                call run_case(case, sol, error, checks)
             end select
         end if
         if (allocated(error)) then
@@ -145,7 +160,7 @@ contains
             code = exit_code_of(error%stat)
             summary_written = allocated(sol%diagnosis) .or. allocated(res%diagnosis) .or. &
                               allocated(ref%diagnosis) .or. allocated(sbs%diagnosis) .or. &
-                              allocated(study%reference%diagnosis)
+                              allocated(study%reference%diagnosis) .or. sweep%npoints > 0
             if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
                 summary_written) write (err_unit, '(a)') &
                 "stickslip: the summary was written to "//case%directory//"/summary.nml"
@@ -161,16 +176,21 @@ contains
                 call print_side_by_side_summary(out_unit, case, sbs)
             case ('study')
                 call print_study_summary(out_unit, case, study)
+            case ('sweep')
+                call print_sweep_summary(out_unit, case, sweep)
+            case ('robustness')
+                call print_robustness_summary(out_unit, case, rows)
             case default
-                call print_summary(out_unit, case, sol)
+                call print_summary(out_unit, case, sol, checks)
             end select
         end if
     end function run_cli
 
-    subroutine print_summary(u, case, sol)
+    subroutine print_summary(u, case, sol, checks)
         integer, intent(in) :: u
         type(case_t), intent(in) :: case
         type(hbm_solution_t), intent(in) :: sol
+        type(hbm_checks_t), intent(in) :: checks
         integer :: j
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
         write (u, '(a,es9.2,a,i0,a,i0,a,i0,a,f0.3,a)') "  converged: residual ", sol%fnorm, &
@@ -178,7 +198,7 @@ contains
             " Jacobians) in ", 1.0e3_dp*sol%seconds, " ms"
         write (u, '(a,i0,a,a,a,i0,a,g0.4)') "  basis: harmonics ", sol%harmonics, " (", &
             trim(merge("odd only", "all     ", sol%odd_only)), "), samples ", sol%samples, &
-            ", rho ", case%hbm%rho
+            ", rho ", sol%rho
         do j = 1, size(sol%stick_fraction)
             write (u, '(a,i0,a,f0.1,a,i0,a,g0.4,a,g0.4,a)', advance='no') "  contact ", j, &
                 ": sticks ", 100*sol%stick_fraction(j), "% of the period in ", &
@@ -191,6 +211,22 @@ contains
         write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
             sol%work_forcing, ", friction ", sol%diss_friction, ", damping ", sol%diss_damping, &
             " (balance error ", energy_balance_error(sol), ")"
+        if (checks%truncation%available) write (u, '(a,es9.2,a,i0,a)') &
+            "  truncation error estimate ", checks%truncation%estimate, " (relative; vs H = ", &
+            checks%truncation%coarse_harmonics, " and the oversampled Coulomb defect)"
+        if (checks%truncation%tolerance > 0.0_dp) write (u, '(a,es9.2,a)') &
+            "  harmonics_tol ", checks%truncation%tolerance, &
+            trim(merge(" met                                  ", &
+                       " NOT met: max_harmonics reached       ", checks%truncation%met))
+        if (checks%stability) write (u, '(a)') "  stability: "//checks%floquet%diagnosis
+        if (allocated(checks%notes)) then
+            if (len(checks%notes) > 0) write (u, '(a)') "  note: "//checks%notes
+        end if
+        if (allocated(checks%defect)) then
+            if (size(checks%defect) > 0) write (u, '(a,i0,a,es9.2)') &
+                "  periodicity defect of the exact flow after ", size(checks%defect), &
+                " period(s): ", checks%defect(size(checks%defect))
+        end if
         write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, summary.nml}"
     end subroutine print_summary
 
@@ -305,4 +341,71 @@ contains
         write (u, '(a)') "  wrote "//case%directory//"/{study.csv, reference.csv, events.csv, "// &
             "summary.nml}"
     end subroutine print_study_summary
+
+    !> Run the gnuplot `script` in the output directory, its PNGs `pngs` written under
+    !> temporary names (the script's variable suffix = '.tmp') and renamed. Without gnuplot,
+    !> or when it fails, one warning on err_unit: the results are complete without pictures.
+    subroutine draw(case, script, pngs, err_unit)
+        type(case_t), intent(in) :: case
+        character(len=*), intent(in) :: script, pngs(:)
+        integer, intent(in) :: err_unit
+        integer :: stat, cstat, k
+        character(len=256) :: cmsg
+        character(len=:), allocatable :: command
+        stat = 1
+        cstat = 0
+        cmsg = ''
+        command = "cd '"//case%directory//"' && gnuplot -e ""suffix='.tmp'"" "//script// &
+                  " >/dev/null 2>&1"
+        do k = 1, size(pngs)
+            command = command//" && { [ ! -f "//trim(pngs(k))//".tmp ] || mv -f "// &
+                      trim(pngs(k))//".tmp "//trim(pngs(k))//"; }"
+        end do
+        call execute_command_line(command, exitstat=stat, cmdstat=cstat, cmdmsg=cmsg)
+        if (cstat /= 0 .or. stat /= 0) write (err_unit, '(a)') "stickslip: warning: "// &
+            "pictures not drawn (is gnuplot installed?); draw them later with: cd "// &
+            case%directory//" && gnuplot "//script
+    end subroutine draw
+
+    subroutine print_sweep_summary(u, case, res)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(sweep_result_t), intent(in) :: res
+        integer :: n
+        n = res%npoints
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,g0.6,a,g0.6,a)') "  forced-response curve in "// &
+            trim(case%sweep%parameter)//": ", n, " points from ", res%points(1)%parameter, &
+            " to ", res%points(n)%parameter, merge(" (complete)  ", " (incomplete)", res%complete)
+        if (res%resumed_points > 0) write (u, '(a,i0,a)') "  resumed from a checkpoint with ", &
+            res%resumed_points, " points"
+        write (u, '(a,i0,a,i0,a,i0)') "  folds passed ", res%folds, ", unstable points ", &
+            count(res%points(1:n)%stable == 0), ", stability unknown ", &
+            count(res%points(1:n)%stable == -1)
+        write (u, '(a,f0.3,a,f0.3,a)') "  CPU ", res%seconds, " s (stability ", &
+            res%stability_seconds, " s)"
+        if (len(sampling_notes(case%hbm%samples, case%hbm%harmonics)) > 0) write (u, '(a)') &
+            "  note: "//sampling_notes(case%hbm%samples, case%hbm%harmonics)
+        write (u, '(a)') "  wrote "//case%directory//"/{frc.csv, frc.gp, summary.nml}"
+    end subroutine print_sweep_summary
+
+    subroutine print_robustness_summary(u, case, rows)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(robustness_row_t), intent(in) :: rows(:)
+        character(len=8), parameter :: methods(3) = [character(len=8) :: 'hbm-cold', &
+                                                     'hbm-warm', 'euler']
+        integer :: k, n
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a)') "  robustness study: ", size(rows), " runs"
+        do k = 1, 3
+            n = count(rows%method == methods(k))
+            if (n == 0) cycle
+            write (u, '(4x,a8,a,i0,a,i0,a,f0.1,a)') methods(k), ": ", &
+                count(rows%method == methods(k) .and. rows%success), " of ", n, &
+                " succeeded (", 100.0_dp*count(rows%method == methods(k) .and. rows%success)/n, &
+                "%)"
+        end do
+        write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, summary.nml}"
+    end subroutine print_robustness_summary
 end module stickslip_cli

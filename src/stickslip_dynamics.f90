@@ -37,8 +37,14 @@ module stickslip_dynamics
         real(dp), allocatable :: x0_static(:)
         !> Static flexibility K^{-1} W, N x n_c (when the basis has the constant) [m/N].
         real(dp), allocatable :: y_static(:, :)
+        !> d V0_h / d omega, n_c x nharm (only when built with_omega_derivative) [m].
+        complex(dp), allocatable :: dv0(:, :)
+        !> d G_h / d omega, n_c x n_c x nharm (only when built with_omega_derivative)
+        !> [m/N].
+        complex(dp), allocatable :: dg(:, :, :)
     contains
         procedure :: contact_velocity
+        procedure :: contact_velocity_derivative
         procedure :: displacement
     end type dynamics_t
 
@@ -51,7 +57,10 @@ contains
     !> contacts. Errors: stat input if a forcing term's harmonic is not in the basis;
     !> stat numerical if Z_h is singular (a natural frequency of the undamped structure at
     !> h omega) or K is singular while the basis holds the constant.
-    subroutine new_dynamics(self, model, basis, error)
+    !> With `with_omega_derivative`, also d V0_h / d omega and d G_h / d omega (for the
+    !> continuation in omega): with X = Z_h^{-1} [F_h, W] and dZ_h/domega = -2 h^2 omega M
+    !> + i h C, d(i h omega W^T X)/domega = i h W^T X - i h omega W^T Z_h^{-1} (dZ_h/domega) X.
+    subroutine new_dynamics(self, model, basis, error, with_omega_derivative)
         !> The condensed dynamics.
         type(dynamics_t), intent(out) :: self
         !> A validated model.
@@ -60,8 +69,11 @@ contains
         type(basis_t), intent(in) :: basis
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> Also compute dv0 and dg (default .false.).
+        logical, intent(in), optional :: with_omega_derivative
         integer :: n, nc, ih, h, j, i, info
-        complex(dp), allocatable :: z(:, :), rhs(:, :), work(:)
+        complex(dp), allocatable :: z(:, :), rhs(:, :), work(:), drhs(:, :)
+        logical :: deriv
         real(dp), allocatable :: rwork(:)
         integer, allocatable :: ipiv(:)
         real(dp) :: anorm, rcond, w(model%ndof)
@@ -93,6 +105,10 @@ contains
         allocate (self%x0(n, basis%nharm), self%y(n, nc, basis%nharm))
         allocate (self%v0(nc, basis%nharm), self%g(nc, nc, basis%nharm))
         allocate (z(n, n), rhs(n, nc + 1), ipiv(n), work(2*n), rwork(2*n))
+        deriv = .false.
+        if (present(with_omega_derivative)) deriv = with_omega_derivative
+        if (deriv) allocate (self%dv0(nc, basis%nharm), self%dg(nc, nc, basis%nharm), &
+                             drhs(n, nc + 1))
 
         do ih = 0, basis%nharm
             if (ih == 0) then
@@ -154,6 +170,21 @@ contains
                     self%g(j, i, ih) = ihw*sum(w*rhs(:, i + 1))
                 end do
             end do
+            if (deriv) then
+                ! Z^{-1} (dZ/domega) Z^{-1} [F, W]
+                drhs = matmul(cmplx(-2.0_dp*h*h*model%omega*model%mass, h*model%damping, dp), &
+                              rhs)
+                call zgetrs('N', n, nc + 1, z, n, ipiv, drhs, n, info)
+                do j = 1, nc
+                    w = contact_velocity_direction(model, j)
+                    self%dv0(j, ih) = cmplx(0.0_dp, real(h, dp), dp)*sum(w*rhs(:, 1)) &
+                                      - ihw*sum(w*drhs(:, 1))
+                    do i = 1, nc
+                        self%dg(j, i, ih) = cmplx(0.0_dp, real(h, dp), dp)*sum(w*rhs(:, i + 1)) &
+                                            - ihw*sum(w*drhs(:, i + 1))
+                    end do
+                end do
+            end if
         end do
     end subroutine new_dynamics
 
@@ -168,20 +199,44 @@ contains
         real(dp), intent(in) :: rcoef(:, :)
         !> Contact velocity coefficients, nb x n_c [m/s].
         real(dp), intent(out) :: vcoef(:, :)
+        call affine_contact(self%ncontact, basis, self%v0, self%g, rcoef, vcoef)
+    end subroutine contact_velocity
+
+    !> d V / d omega = dV0/domega + dG/domega R (nb x n_c) [m] for friction-force
+    !> coefficients R held fixed; needs a dynamics built with_omega_derivative.
+    pure subroutine contact_velocity_derivative(self, basis, rcoef, dvcoef)
+        !> The condensed dynamics.
+        class(dynamics_t), intent(in) :: self
+        !> The basis.
+        type(basis_t), intent(in) :: basis
+        !> Friction force coefficients, nb x n_c [N].
+        real(dp), intent(in) :: rcoef(:, :)
+        !> Derivative of the contact velocity coefficients, nb x n_c [m].
+        real(dp), intent(out) :: dvcoef(:, :)
+        call affine_contact(self%ncontact, basis, self%dv0, self%dg, rcoef, dvcoef)
+    end subroutine contact_velocity_derivative
+
+    !> u_h = a_h + b_h R_h per harmonic (zero constant term), in real coefficient layout.
+    pure subroutine affine_contact(nc, basis, a, b, rcoef, ucoef)
+        integer, intent(in) :: nc
+        type(basis_t), intent(in) :: basis
+        complex(dp), intent(in) :: a(:, :), b(:, :, :)
+        real(dp), intent(in) :: rcoef(:, :)
+        real(dp), intent(out) :: ucoef(:, :)
         integer :: ih, k, j
-        complex(dp) :: v(self%ncontact), r(self%ncontact)
-        if (basis%has_zero) vcoef(basis%i0, :) = 0.0_dp
+        complex(dp) :: v(nc), r(nc)
+        if (basis%has_zero) ucoef(basis%i0, :) = 0.0_dp
         do ih = 1, basis%nharm
             k = basis%icos(ih)
             r = cmplx(rcoef(k, :), -rcoef(k + 1, :), dp)
-            v = self%v0(:, ih)
-            do j = 1, self%ncontact
-                v = v + self%g(:, j, ih)*r(j)
+            v = a(:, ih)
+            do j = 1, nc
+                v = v + b(:, j, ih)*r(j)
             end do
-            vcoef(k, :) = real(v, dp)
-            vcoef(k + 1, :) = -aimag(v)
+            ucoef(k, :) = real(v, dp)
+            ucoef(k + 1, :) = -aimag(v)
         end do
-    end subroutine contact_velocity
+    end subroutine affine_contact
 
     !> Displacement coefficients of every DOF, X = X0 + Y R (nb x N), for friction-force
     !> coefficients R (nb x n_c).

@@ -366,7 +366,7 @@ contains
         real(dp), allocatable :: y(:), yb(:), ye(:), yp(:), phi(:, :), jac(:, :), sal(:, :), &
                                  c(:), fm(:), fp(:)
         real(dp) :: t, tb, te, tp, tend, h
-        logical :: found, want_mono, want_orbit
+        logical :: found, want_mono, want_orbit, full_step
         character(len=200) :: buf
 
         n = self%n
@@ -414,6 +414,7 @@ contains
             if (t >= tend) exit
             if (tend - t <= self%delta*(1.0_dp + 1.0e-9_dp)) then
                 tb = tend
+                full_step = .false.
                 call propagate(self%modes(im)%a, tb - t, y, yb, stat)
                 if (stat /= 0) then
                     call fail("the matrix exponential failed")
@@ -421,6 +422,7 @@ contains
                 end if
             else
                 tb = t + self%delta
+                full_step = .true.
                 yb = matmul(self%modes(im)%step, y)
             end if
             yb(nz + 1:) = self%exo(tb)
@@ -430,7 +432,8 @@ contains
             end if
             call find_event(self, self%modes(im), t, y, tb, yb, found, te, ye, jev, kev, c)
             if (.not. found) then
-                if (want_orbit) call energy(self%modes(im), t, y, tb, tb - t == self%delta)
+                ! a whole grid step: the cached exponentials at the Gauss points serve
+                if (want_orbit) call energy(self%modes(im), t, y, tb, full_step)
                 t = tb
                 y = yb
                 cycle

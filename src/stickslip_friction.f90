@@ -6,7 +6,7 @@ module stickslip_friction
     use stickslip_kinds, only: dp
     implicit none
     private
-    public :: psi, psi_stick
+    public :: psi, psi_stick, psi_limit_derivative
 
 contains
 
@@ -43,4 +43,26 @@ contains
             s = 0.0_dp
         end if
     end function psi_stick
+
+    !> dPsi/dg, the derivative of Psi with respect to the friction limit g = mu N [m/(N s)]:
+    !> +rho in the slip region rho (r + g) - v <= 0 (Psi = rho (r + g)), -rho in the slip
+    !> region rho (r - g) - v >= 0 (Psi = rho (r - g)), 0 in the stick region (Psi = v).
+    !> The same choice on the boundaries as psi_stick.
+    elemental real(dp) function psi_limit_derivative(r, v, g, rho) result(d)
+        !> Friction force [N].
+        real(dp), intent(in) :: r
+        !> Slip velocity [m/s].
+        real(dp), intent(in) :: v
+        !> Friction limit mu N [N].
+        real(dp), intent(in) :: g
+        !> Weight of the force against the velocity.
+        real(dp), intent(in) :: rho
+        if (psi_stick(r, v, g, rho) > 0.5_dp) then
+            d = 0.0_dp
+        else if (rho*(r + g) - v <= 0.0_dp) then
+            d = rho
+        else
+            d = -rho
+        end if
+    end function psi_limit_derivative
 end module stickslip_friction

@@ -13,6 +13,7 @@ module stickslip_hbm
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
+    use stickslip_rho, only: automatic_rho
     implicit none
     private
     public :: solve_periodic, validate_options
@@ -38,14 +39,24 @@ contains
             write (buf, '(a,i0,a,i0,a,i0,a)') "&hbm samples = ", opts%samples, &
                 ": too few samples for the harmonics: need samples >= 2*harmonics+1 = ", &
                 2*opts%harmonics + 1, " (harmonics = ", opts%harmonics, ")"
-        else if (.not. (opts%rho > 0.0_dp) .or. opts%rho > huge(1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&hbm rho = ", opts%rho, ": must be finite and > 0"
+        else if (.not. (opts%rho >= 0.0_dp) .or. opts%rho > huge(1.0_dp)) then
+            write (buf, '(a,g0.6,a)') "&hbm rho = ", opts%rho, &
+                ": must be finite and >= 0 (0: automatic)"
         else if (.not. (opts%tol > 0.0_dp) .or. opts%tol >= 1.0_dp) then
             write (buf, '(a,g0.6,a)') "&hbm tol = ", opts%tol, ": must be in (0, 1)"
         else if (.not. (opts%xtol >= 0.0_dp) .or. opts%xtol >= 1.0_dp) then
             write (buf, '(a,g0.6,a)') "&hbm xtol = ", opts%xtol, ": must be in [0, 1)"
         else if (opts%maxfev < 0) then
             write (buf, '(a,i0,a)') "&hbm maxfev = ", opts%maxfev, ": must be >= 0 (0: automatic)"
+        else if (.not. (opts%harmonics_tol >= 0.0_dp .and. opts%harmonics_tol < 1.0_dp)) then
+            write (buf, '(a,g0.6,a)') "&hbm harmonics_tol = ", opts%harmonics_tol, &
+                ": must be in [0, 1) (0: keep harmonics)"
+        else if (opts%max_harmonics < 0 .or. (opts%max_harmonics > 0 .and. &
+                                               opts%max_harmonics < opts%harmonics)) then
+            write (buf, '(a,i0,a,i0,a)') "&hbm max_harmonics = ", opts%max_harmonics, &
+                ": must be 0 (automatic) or >= harmonics = ", opts%harmonics, ""
+        else if (opts%verify_periods < 0) then
+            write (buf, '(a,i0,a)') "&hbm verify_periods = ", opts%verify_periods, ": must be >= 0"
         else if (opts%start /= 'auto' .and. opts%start /= 'direct' .and. opts%start /= 'ladder') then
             write (buf, '(a)') "&hbm start = '"//trim(opts%start)// &
                 "': must be 'auto', 'direct' or 'ladder'"
@@ -58,6 +69,7 @@ contains
     !> Periodic response of `model` by the weighted-residual method with options `opts`.
     !> Optionally start from friction-force coefficients `r_start` (nb x n_c, the layout of
     !> hbm_solution_t%rcoef for the same basis; a start from fewer harmonics is embedded).
+    !> opts%rho = 0 selects the automatic weight (stickslip_rho); sol%rho is the one used.
     !> A non-converged solve is an outcome: sol%converged = .false. and sol%diagnosis says
     !> why. Errors: stat input (invalid model or options), stat numerical (singular dynamic
     !> stiffness, NaN in the residual).
@@ -72,6 +84,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Optional start for the friction-force coefficients [N].
         real(dp), intent(in), optional :: r_start(:, :)
+        type(hbm_options_t) :: o
         type(hb_problem_t) :: prob
         real(dp), allocatable :: y(:), vzero(:, :)
         integer(int64) :: c0, c1, rate
@@ -83,8 +96,10 @@ contains
         if (allocated(error)) return
         call validate_options(opts, error)
         if (allocated(error)) return
-        call new_hb_problem(prob, model, opts%harmonics, opts%odd_only, opts%samples, opts%rho, &
-                            error)
+        ! the options in effect: rho = 0 asks for the automatic weight
+        o = opts
+        if (o%rho == 0.0_dp) o%rho = automatic_rho(model)
+        call new_hb_problem(prob, model, o%harmonics, o%odd_only, o%samples, o%rho, error)
         if (allocated(error)) return
 
         nb = prob%basis%nb
@@ -92,6 +107,7 @@ contains
         sol%harmonics = opts%harmonics
         sol%odd_only = opts%odd_only
         sol%samples = opts%samples
+        sol%rho = o%rho
         sol%nb = nb
         sol%omega = model%omega
         sol%harmonic = prob%basis%harmonic_of([(ncopy, ncopy=1, nb)])
@@ -116,7 +132,7 @@ contains
             call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
             sol%fscale = norm2(vfree)
         end block
-        if (nc > 0) sol%fscale = max(sol%fscale, opts%rho*maxval(prob%limit))
+        if (nc > 0) sol%fscale = max(sol%fscale, o%rho*maxval(prob%limit))
         target_norm = opts%tol*sol%fscale
 
         if (nc == 0) then
@@ -125,14 +141,14 @@ contains
         else
             select case (opts%start)
             case ('ladder')
-                call solve_ladder(model, opts, prob, y, target_norm, sol, error)
+                call solve_ladder(model, o, prob, y, target_norm, sol, error)
             case default
                 call solve_stage(prob, y, opts, target_norm, sol, error)
                 if (.not. allocated(error) .and. .not. sol%converged .and. opts%start == 'auto' &
                     .and. opts%harmonics > ladder_first) then
                     y = 0.0_dp
                     if (present(r_start)) y = reshape(vzero, [prob%n])
-                    call solve_ladder(model, opts, prob, y, target_norm, sol, error)
+                    call solve_ladder(model, o, prob, y, target_norm, sol, error)
                 end if
             end select
             if (allocated(error)) then
@@ -148,7 +164,8 @@ contains
                     "not converged: residual ||F|| = ", sol%fnorm, " > tol * fscale = ", &
                     target_norm, " (hybrj info ", sol%info, ", ", sol%nfev, &
                     " evaluations, ", sol%hybrj_calls, " hybrj calls). Try &hbm start = "// &
-                    "'ladder', a smaller rho, more samples, or a start from a nearby solution"
+                    "'ladder', rho = 0 (automatic) or a smaller rho, more samples, or a "// &
+                    "start from a nearby solution"
                 sol%diagnosis = trim(buf)
             end block
         else

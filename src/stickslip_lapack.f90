@@ -4,7 +4,7 @@ module stickslip_lapack
     use stickslip_kinds, only: dp
     implicit none
     private
-    public :: dpotrf, dpotrs, dgetrf, dgetrs, zgetrf, zgetrs, zgecon, zlange
+    public :: dpotrf, dpotrs, dgetrf, dgetrs, zgetrf, zgetrs, zgecon, zlange, dgeev
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -88,5 +88,18 @@ module stickslip_lapack
             real(dp), intent(out) :: work(*)
             real(dp) :: anorm
         end function zlange
+
+        !> Eigenvalues wr + i wi and optionally left / right eigenvectors of a general real
+        !> matrix (a is overwritten). lwork = -1 is a workspace query (optimal size in work(1)).
+        subroutine dgeev(jobvl, jobvr, n, a, lda, wr, wi, vl, ldvl, vr, ldvr, work, lwork, info)
+            import :: dp
+            character(len=1), intent(in) :: jobvl, jobvr
+            integer, intent(in) :: n, lda, ldvl, ldvr, lwork
+            real(dp), intent(inout) :: a(lda, *)
+            real(dp), intent(out) :: wr(*), wi(*)
+            real(dp), intent(out) :: vl(ldvl, *), vr(ldvr, *)
+            real(dp), intent(out) :: work(*)
+            integer, intent(out) :: info
+        end subroutine dgeev
     end interface
 end module stickslip_lapack

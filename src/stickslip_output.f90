@@ -17,12 +17,18 @@ module stickslip_output
     use stickslip_compare, only: comparison_t, quantity_names
     use stickslip_side_by_side, only: side_by_side_t
     use stickslip_study, only: study_result_t
+    use stickslip_sweep, only: sweep_result_t, sweep_options_t
+    use stickslip_checks, only: hbm_checks_t
+    use stickslip_robustness, only: robustness_row_t, robustness_options_t
     implicit none
     private
     public :: make_directory, write_hbm_csv, write_samples_csv, write_coefficients_csv, &
               write_summary, write_euler_summary, energy_balance_error
     public :: write_events_csv, write_reference_summary, write_side_by_side_summary
     public :: write_study_csv, write_study_summary, reference_balance_error
+    public :: open_temporary, close_and_rename, real_fmt
+    public :: write_frc_csv, write_sweep_summary, write_frc_plot_script
+    public :: write_robustness_csv, write_robustness_summary, write_robustness_plot_script
 
     interface
         function c_mkdir(path, mode) bind(c, name='mkdir') result(stat)
@@ -73,7 +79,7 @@ contains
         inquire (file=path//'/.', exist=is_directory)
     end function is_directory
 
-    !> Open `dir/name.tmp` for writing; finish with close_and_rename.
+    !> Open `dir/name.tmp` for writing; finish with close_and_rename. Error: stat io.
     subroutine open_temporary(dir, name, unit, error)
         character(len=*), intent(in) :: dir, name
         integer, intent(out) :: unit
@@ -86,6 +92,8 @@ contains
                                         trim(msg), stickslip_stat%io)
     end subroutine open_temporary
 
+    !> Close `unit` (opened by open_temporary) and rename `dir/name.tmp` to `dir/name`; when
+    !> stat_write /= 0 (a write failed) delete the temporary instead. Error: stat io.
     subroutine close_and_rename(dir, name, unit, stat_write, msg_write, error)
         character(len=*), intent(in) :: dir, name
         integer, intent(in) :: unit, stat_write
@@ -220,7 +228,7 @@ contains
     !> Write `dir`/summary.nml: a namelist group &summary (one `key = value` per line) with
     !> the convergence report and diagnostics, followed by the effective case as namelist
     !> groups (read_case reads the file back as a case).
-    subroutine write_summary(dir, case, sol, error)
+    subroutine write_summary(dir, case, sol, error, checks)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The case solved.
@@ -229,14 +237,67 @@ contains
         type(hbm_solution_t), intent(in) :: sol
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> Truncation estimate, stability and periodicity defect of the solution.
+        type(hbm_checks_t), intent(in), optional :: checks
         integer :: u, stat
         character(len=512) :: msg
 
         call begin_summary(dir, "hbm", u, stat, msg, error)
         if (allocated(error)) return
         call put_hbm_keys(u, sol, stat, msg)
+        if (present(checks)) call put_check_keys(u, checks, stat, msg)
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_summary
+
+    !> The keys of the checks of a solution (README, "summary.nml").
+    subroutine put_check_keys(u, checks, stat, msg)
+        integer, intent(in) :: u
+        type(hbm_checks_t), intent(in) :: checks
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        associate (e => checks%truncation)
+            if (e%available) then
+                call put(u, "  truncation_estimate = "//rtoa(e%estimate), stat, msg)
+                call put(u, "  truncation_psi_rms = "//rtoa(e%psi_rms), stat, msg)
+                call put(u, "  truncation_coarse_harmonics = "//itoa(e%coarse_harmonics), &
+                         stat, msg)
+                if (allocated(e%displacement_change_rel)) call put(u, &
+                    "  truncation_displacement_change = "//rlist(e%displacement_change_rel), &
+                    stat, msg)
+                call put(u, "  truncation_dissipation_change = "// &
+                         rtoa(e%dissipation_change_rel), stat, msg)
+            end if
+            if (e%tolerance > 0.0_dp) then
+                call put(u, "  harmonics_tol_met = "//ltoa(e%met), stat, msg)
+                if (allocated(e%history_harmonics)) then
+                    call put(u, "  harmonics_tried = "//ilist(e%history_harmonics), stat, msg)
+                    call put(u, "  estimates_tried = "//rlist(e%history_estimate), stat, msg)
+                end if
+            end if
+        end associate
+        if (checks%stability) then
+            associate (f => checks%floquet)
+                call put(u, "  stability = '"//f%verdict//"'", stat, msg)
+                call put(u, "  stable = "//ltoa(f%stable), stat, msg)
+                if (f%verdict /= 'unknown') then
+                    call put(u, "  floquet_max = "//rtoa(f%max_modulus), stat, msg)
+                    call put(u, "  floquet_multipliers_re = "//rlist(real(f%multipliers, dp)), &
+                             stat, msg)
+                    call put(u, "  floquet_multipliers_im = "//rlist(aimag(f%multipliers)), &
+                             stat, msg)
+                end if
+                if (allocated(f%diagnosis)) call put(u, "  stability_diagnosis = '"// &
+                                                     quote(f%diagnosis)//"'", stat, msg)
+            end associate
+        end if
+        if (allocated(checks%defect)) then
+            if (size(checks%defect) > 0) then
+                call put(u, "  periodicity_defect = "//rlist(checks%defect), stat, msg)
+            end if
+        end if
+        if (allocated(checks%notes)) call put(u, "  notes = '"//quote(checks%notes)//"'", &
+                                              stat, msg)
+    end subroutine put_check_keys
 
     !> Write `dir`/summary.nml for a time integration: a group &summary (method = 'euler',
     !> periodic, periods, defect, seconds, max_sweeps, diagnosis), then the effective case.
@@ -277,6 +338,7 @@ contains
         call put(u, "  harmonics = "//itoa(sol%harmonics), stat, msg)
         call put(u, "  odd_only = "//ltoa(sol%odd_only), stat, msg)
         call put(u, "  samples = "//itoa(sol%samples), stat, msg)
+        call put(u, "  rho = "//rtoa(sol%rho), stat, msg)
         call put(u, "  ncontact = "//itoa(nc), stat, msg)
         if (nc > 0) then
             call put(u, "  stick_fraction = "//rlist(sol%stick_fraction), stat, msg)
@@ -529,6 +591,331 @@ contains
         call put_reference_keys(u, study%reference, stat, msg)
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_study_summary
+
+    !> Write `dir`/frc.csv, one row per point of the forced-response curve: parameter,
+    !> amp_1..amp_N (max_t |x_k| [m]), dissipation (energy dissipated per period, friction +
+    !> viscous [J]), rmax_1..rmax_C (max_t |r_j| [N]), stick_1..stick_C (stick fraction),
+    !> harmonics, residual (||F|| / fscale), status, floquet_max (largest Floquet
+    !> multiplier modulus, NaN when not computed), stable (1 stable, 0 unstable, -1 unknown),
+    !> truncation (relative harmonic truncation error estimate, NaN when not computed), then
+    !> arclength, diss_friction, diss_damping [J], nfev. Error: stat io.
+    subroutine write_frc_csv(dir, res, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The curve.
+        type(sweep_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, stat, n, nc
+        character(len=512) :: msg
+        character(len=:), allocatable :: header
+        character(len=160) :: fmt
+        stat = 0
+        msg = ''
+        n = 0
+        nc = 0
+        if (res%npoints > 0) then
+            n = size(res%points(1)%amplitude)
+            nc = size(res%points(1)%rmax)
+        end if
+        header = "parameter"
+        do i = 1, n
+            header = header//",amp_"//itoa(i)
+        end do
+        header = header//",dissipation"
+        do i = 1, nc
+            header = header//",rmax_"//itoa(i)
+        end do
+        do i = 1, nc
+            header = header//",stick_"//itoa(i)
+        end do
+        header = header//",harmonics,residual,status,floquet_max,stable,truncation,"// &
+                 "arclength,diss_friction,diss_damping,nfev"
+        write (fmt, '(a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // ',","),i0,",",' // &
+            real_fmt // ',",",a,",",' // real_fmt // ',",",i0,",",4(' // real_fmt // &
+            ',","),i0)'
+        call open_temporary(dir, "frc.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, res%npoints
+            if (stat /= 0) exit
+            associate (p => res%points(k))
+                write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude, p%dissipation, &
+                    p%rmax, p%stick, p%harmonics, p%residual, trim(p%status), p%floquet_max, &
+                    p%stable, p%truncation, p%arclength, p%diss_friction, p%diss_damping, p%nfev
+            end associate
+        end do
+        call close_and_rename(dir, "frc.csv", u, stat, msg, error)
+    end subroutine write_frc_csv
+
+    !> Write `dir`/summary.nml for a sweep: &summary (method = 'sweep', complete, points,
+    !> the parameter's range covered, folds, unstable points, CPU seconds, diagnosis), then
+    !> the effective case. Error: stat io.
+    subroutine write_sweep_summary(dir, case, res, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case.
+        type(case_t), intent(in) :: case
+        !> The curve.
+        type(sweep_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat
+        character(len=512) :: msg
+        call begin_summary(dir, "sweep", u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  complete = "//ltoa(res%complete), stat, msg)
+        call put(u, "  points = "//itoa(res%npoints), stat, msg)
+        call put(u, "  resumed_points = "//itoa(res%resumed_points), stat, msg)
+        if (res%npoints > 0) then
+            call put(u, "  parameter_first = "//rtoa(res%points(1)%parameter), stat, msg)
+            call put(u, "  parameter_last = "//rtoa(res%points(res%npoints)%parameter), &
+                     stat, msg)
+            call put(u, "  parameter_min = "//rtoa(minval(res%points(1:res%npoints)%parameter)), &
+                     stat, msg)
+            call put(u, "  parameter_max = "//rtoa(maxval(res%points(1:res%npoints)%parameter)), &
+                     stat, msg)
+            call put(u, "  unstable_points = "//itoa(count(res%points(1:res%npoints)%stable == 0)), &
+                     stat, msg)
+            call put(u, "  unknown_stability_points = "// &
+                     itoa(count(res%points(1:res%npoints)%stable == -1)), stat, msg)
+            call put(u, "  max_residual = "//rtoa(maxval(res%points(1:res%npoints)%residual)), &
+                     stat, msg)
+        end if
+        call put(u, "  folds = "//itoa(res%folds), stat, msg)
+        call put(u, "  rejected_steps = "//itoa(res%state%rejected), stat, msg)
+        call put(u, "  cpu_seconds = "//rtoa(res%seconds), stat, msg)
+        call put(u, "  stability_cpu_seconds = "//rtoa(res%stability_seconds), stat, msg)
+        if (allocated(res%diagnosis)) then
+            call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        end if
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_sweep_summary
+
+    !> Write `dir`/frc.gp, the gnuplot script that draws `dir`/frc.png from frc.csv: the
+    !> amplitude of every DOF against the parameter (log scale), unstable points marked with
+    !> red crosses. `parameter` labels the axis. Error: stat io.
+    subroutine write_frc_plot_script(dir, parameter, ndof, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> Name of the swept parameter.
+        character(len=*), intent(in) :: parameter
+        !> Number of DOFs (columns amp_1..amp_N).
+        integer, intent(in) :: ndof
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, k
+        character(len=512) :: msg
+        stat = 0
+        msg = ''
+        call open_temporary(dir, "frc.gp", u, error)
+        if (allocated(error)) return
+        call put(u, "# Forced-response curve from frc.csv: gnuplot frc.gp (in this directory)", &
+                 stat, msg)
+        call put(u, "set terminal pngcairo size 1100,700 enhanced font ',11'", stat, msg)
+        call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
+        call put(u, "set output 'frc.png'.suffix", stat, msg)
+        call put(u, "set datafile separator ','", stat, msg)
+        call put(u, "set key autotitle columnhead top right", stat, msg)
+        call put(u, "set grid lc rgb '#dddddd'", stat, msg)
+        call put(u, "set logscale y", stat, msg)
+        call put(u, "f = 'frc.csv'", stat, msg)
+        call put(u, "# the y range: four decades below the largest amplitude (a contact stuck "// &
+                 "all period drives its DOF to roundoff)", stat, msg)
+        call put(u, "ymax = 0", stat, msg)
+        call put(u, "do for [k=2:"//itoa(1 + ndof)//"] { stats f using k nooutput; "// &
+                 "if (STATS_max > ymax) { ymax = STATS_max } }", stat, msg)
+        call put(u, "if (ymax > 0) set yrange [ymax*1e-4:ymax*2]", stat, msg)
+        call put(u, "set xlabel '"//parameter//"'", stat, msg)
+        call put(u, "set ylabel 'amplitude max |x_k(t)|'", stat, msg)
+        call put(u, "set title 'Forced-response curve (red crosses: unstable, Floquet)'", &
+                 stat, msg)
+        call put(u, "# the column 'stable' (1, 0 unstable, -1 unknown)", stat, msg)
+        call put(u, "unstable(k) = (column('stable') == 0 ? column(k) : 1/0)", stat, msg)
+        do k = 1, ndof
+            if (k == 1) then
+                call put(u, "plot f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
+                         itoa(k)//"', \", stat, msg)
+            else
+                call put(u, "     f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
+                         itoa(k)//"', \", stat, msg)
+            end if
+            if (k < ndof) then
+                call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points pt 2 "// &
+                         "ps 0.8 lc rgb 'red' notitle, \", stat, msg)
+            else
+                call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points pt 2 "// &
+                         "ps 0.8 lc rgb 'red' title 'unstable'", stat, msg)
+            end if
+        end do
+        call close_and_rename(dir, "frc.gp", u, stat, msg, error)
+    end subroutine write_frc_plot_script
+
+    !> Write `dir`/robustness.csv: header
+    !> method,omega,mu,harmonics,rho,rho_auto,samples,converged,success,iterations,
+    !> cpu_seconds,err_amplitude,diagnosis and one row per run (logicals T/F; success:
+    !> converged and, against the reference, err_amplitude <= wrong_tol; rho NaN for 'euler';
+    !> err_amplitude NaN when unknown; diagnosis quoted, empty for a success). Written under
+    !> a temporary name and renamed when complete. Error: stat io.
+    subroutine write_robustness_csv(dir, rows, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The runs.
+        type(robustness_row_t), intent(in) :: rows(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=*), parameter :: fmt = '(a,",",' // real_fmt // ',",",' // real_fmt // &
+            ',",",i0,",",' // real_fmt // ',",",a,",",i0,",",a,",",a,",",i0,",",' // real_fmt // &
+            ',",",' // real_fmt // ',",",a)'
+        integer :: u, k, stat
+        character(len=512) :: msg
+        call open_temporary(dir, "robustness.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) "method,omega,mu,harmonics,rho,rho_auto,"// &
+            "samples,converged,success,iterations,cpu_seconds,err_amplitude,diagnosis"
+        do k = 1, size(rows)
+            if (stat /= 0) exit
+            associate (row => rows(k))
+                write (u, fmt, iostat=stat, iomsg=msg) trim(row%method), row%omega, row%mu, &
+                    row%harmonics, row%rho, merge("T", "F", row%rho_auto), row%samples, &
+                    merge("T", "F", row%converged), merge("T", "F", row%success), &
+                    row%iterations, row%cpu_seconds, &
+                    row%err_amplitude, csv_quote(row%diagnosis)
+            end associate
+        end do
+        call close_and_rename(dir, "robustness.csv", u, stat, msg, error)
+    end subroutine write_robustness_csv
+
+    !> A CSV field in double quotes, inner double quotes doubled (RFC 4180).
+    pure function csv_quote(s) result(t)
+        character(len=:), allocatable, intent(in) :: s
+        character(len=:), allocatable :: t
+        integer :: i
+        t = '"'
+        if (allocated(s)) then
+            do i = 1, len(s)
+                if (s(i:i) == '"') then
+                    t = t//'""'
+                else
+                    t = t//s(i:i)
+                end if
+            end do
+        end if
+        t = t//'"'
+    end function csv_quote
+    !> Write `dir`/summary.nml for a robustness study: &summary (method = 'robustness', rows,
+    !> then per method runs_<m> and successes_<m>, m = hbm_cold, hbm_warm, euler), then the
+    !> effective case. Error: stat io.
+    subroutine write_robustness_summary(dir, case, rows, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case.
+        type(case_t), intent(in) :: case
+        !> The runs.
+        type(robustness_row_t), intent(in) :: rows(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=8), parameter :: methods(3) = [character(len=8) :: 'hbm-cold', &
+                                                     'hbm-warm', 'euler']
+        character(len=8), parameter :: keys(3) = [character(len=8) :: 'hbm_cold', &
+                                                  'hbm_warm', 'euler']
+        integer :: u, stat, k
+        character(len=512) :: msg
+        call begin_summary(dir, "robustness", u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  rows = "//itoa(size(rows)), stat, msg)
+        do k = 1, 3
+            call put(u, "  runs_"//trim(keys(k))//" = "//itoa(count(rows%method == methods(k))), &
+                     stat, msg)
+            call put(u, "  successes_"//trim(keys(k))//" = "// &
+                     itoa(count(rows%method == methods(k) .and. rows%success)), stat, msg)
+        end do
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_robustness_summary
+
+    !> Write `dir`/robustness.gp, the gnuplot script that draws robustness_cold.png and
+    !> robustness_warm.png from robustness.csv: one panel per (rho, H), omega across and mu
+    !> up (log), each run a square: green success, orange converged to a wrong solution, red
+    !> not converged. Error: stat io.
+    subroutine write_robustness_plot_script(dir, opts, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The grid.
+        type(robustness_options_t), intent(in) :: opts
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, i, j, m
+        character(len=512) :: msg
+        character(len=8), parameter :: methods(2) = [character(len=8) :: 'hbm-cold', 'hbm-warm']
+        character(len=4), parameter :: tags(2) = [character(len=4) :: 'cold', 'warm']
+        character(len=:), allocatable :: sel, label
+        stat = 0
+        msg = ''
+        call open_temporary(dir, "robustness.gp", u, error)
+        if (allocated(error)) return
+        call put(u, "# Robustness maps from robustness.csv: gnuplot robustness.gp (in this "// &
+                 "directory)", stat, msg)
+        call put(u, "# green: converged to the right solution; orange: converged, error > "// &
+                 "wrong_tol; red: not converged", stat, msg)
+        call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
+        call put(u, "set datafile separator ','", stat, msg)
+        call put(u, "set logscale y", stat, msg)
+        call put(u, "set key off", stat, msg)
+        call put(u, "set tics font ',8'", stat, msg)
+        call put(u, "set offsets graph 0.04, graph 0.04, graph 0.08, graph 0.08", stat, msg)
+        call put(u, "colour(c, s) = (s eq 'T' ? 0x2ca02c : (c eq 'T' ? 0xff7f0e : 0xd62728))", &
+                 stat, msg)
+        call put(u, "f = 'robustness.csv'", stat, msg)
+        do m = 1, 2
+            if (m == 2 .and. .not. opts%warm) exit
+            call put(u, "set terminal pngcairo size "//itoa(260*size(opts%harmonics) + 80)// &
+                     ","//itoa(200*size(opts%rhos) + 60)//" font ',9'", stat, msg)
+            call put(u, "set output 'robustness_"//trim(tags(m))//".png'.suffix", stat, msg)
+            call put(u, "set multiplot layout "//itoa(size(opts%rhos))//","// &
+                     itoa(size(opts%harmonics))//" title 'weighted residual, "// &
+                     trim(tags(m))//" starts: x omega [rad/s], y mu'", stat, msg)
+            do i = 1, size(opts%rhos)
+                do j = 1, size(opts%harmonics)
+                    if (opts%rhos(i) == 0.0_dp) then
+                        sel = "strcol(6) eq 'T'"
+                        label = "rho auto"
+                    else
+                        sel = "strcol(6) eq 'F' && abs($5 - "//rtoa(opts%rhos(i))//") <= 1e-12*"// &
+                              rtoa(opts%rhos(i))
+                        label = "rho "//trim(adjustl(gfmt(opts%rhos(i))))
+                    end if
+                    call put(u, "set title '"//label//", H = "//itoa(opts%harmonics(j))//"'", &
+                             stat, msg)
+                    call put(u, "plot f using 2:((strcol(1) eq '"//trim(methods(m))// &
+                             "' && $4 == "//itoa(opts%harmonics(j))//" && "//sel// &
+                             ") ? $3 : 1/0):(colour(strcol(8), strcol(9))) "// &
+                             "every ::1 with points pt 5 ps 1.2 lc rgb variable", stat, msg)
+                end do
+            end do
+            call put(u, "unset multiplot", stat, msg)
+        end do
+        call close_and_rename(dir, "robustness.gp", u, stat, msg, error)
+    end subroutine write_robustness_plot_script
+
+    !> A short real for labels: 0.02, 0.2, 1, 5, 1.5e-05.
+    pure function gfmt(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=16) :: s
+        integer :: k
+        if (abs(x) >= 1.0e-3_dp .and. abs(x) < 1.0e5_dp) then
+            write (s, '(f16.6)') x
+            s = adjustl(s)
+            k = len_trim(s)
+            do while (s(k:k) == '0')
+                s(k:k) = ' '
+                k = k - 1
+            end do
+            if (s(k:k) == '.') s(k:k) = ' '
+        else
+            write (s, '(es10.2)') x
+            s = adjustl(s)
+        end if
+    end function gfmt
 
     !> Open the temporary summary.nml and write its first lines, up to `method = '...'`.
     subroutine begin_summary(dir, method, u, stat, msg, error)

@@ -16,6 +16,7 @@ module stickslip_reference
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_flow, only: flow_t, new_flow, orbit_t
+    use stickslip_lapack, only: dpotrf, dpotrs
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
@@ -74,6 +75,14 @@ module stickslip_reference
         !> The flow and the recorded orbit, to sample the solution on other grids.
         type(flow_t) :: flow
         type(orbit_t) :: orbit
+        !> Monodromy matrix of the final orbit at t_section: the Jacobian dz(t_section + T) /
+        !> dz(t_section) of the period map of z = [x; v] (2N x 2N; phase flows times
+        !> saltation matrices). When contacts are stuck at t_section it includes the
+        !> M-orthogonal projection of the start perturbation onto zero slip velocity of
+        !> those contacts (a velocity kick at a stuck contact is absorbed in a vanishing
+        !> slip), so its zero eigenvalues are the projected directions. Allocated once the
+        !> recording pass ran (also for an orbit that did not meet the tolerance).
+        real(dp), allocatable :: monodromy(:, :)
     end type reference_result_t
 
     !> The shooting equations F(u) = (P(D u) - D u) / D, D the scales of x and v, for hybrj.
@@ -293,12 +302,18 @@ contains
         ! the recording pass over the final orbit
         z0 = u*shooting%scale
         allocate (z1(2*n))
-        call shooting%flow%period_map(res%t_section, z0, z1, error, orbit=res%orbit)
+        if (allocated(res%monodromy)) deallocate (res%monodromy)
+        allocate (res%monodromy(2*n, 2*n))
+        call shooting%flow%period_map(res%t_section, z0, z1, error, mono=res%monodromy, &
+                                      orbit=res%orbit)
         if (allocated(error)) then
             res%diagnosis = "shooting from the "//name//" start: "//error%message//"."
-            deallocate (error)
+            deallocate (error, res%monodromy)
             return
         end if
+        call project_stuck_start(shooting%flow, &
+                                 shooting%flow%modes(res%orbit%phase_mode(1))%code, &
+                                 res%monodromy)
         allocate (res%t(opts%samples), res%x(opts%samples, n), res%v(opts%samples, n), &
                   res%r(opts%samples, nc))
         res%t = [(period*real(k, dp)/real(opts%samples, dp), k=0, opts%samples - 1)]
@@ -331,6 +346,38 @@ contains
         call cpu_time(c1)
         res%seconds = res%seconds + (c1 - c0)
     end subroutine shoot_from
+
+    !> mono <- mono P0, P0 the projection of a start perturbation [dx; dv] onto zero slip
+    !> velocity of the contacts stuck at the start (code 0): dv <- dv - M^-1 W_S G^-1 W_S^T dv,
+    !> G = W_S^T M^-1 W_S. A stuck contact given a slip velocity dv_S slips for a time
+    !> O(|dv_S|) and sticks again; the friction impulse that stops it lies in span(W_S), so
+    !> to first order the velocity is projected and the displacement unchanged. The stuck
+    !> mode's phase flow alone would carry dv_S unchanged.
+    subroutine project_stuck_start(flow, code, mono)
+        type(flow_t), intent(in) :: flow
+        integer, intent(in) :: code(:)
+        real(dp), intent(inout) :: mono(:, :)
+        integer, allocatable :: stuck(:)
+        real(dp), allocatable :: mws(:, :), g(:, :), q(:, :), p0(:, :)
+        integer :: n, ns, j, info
+        n = flow%n
+        stuck = pack([(j, j=1, flow%nc)], code == 0)
+        ns = size(stuck)
+        if (ns == 0) return
+        mws = matmul(flow%minv, flow%w(:, stuck))
+        g = matmul(transpose(flow%w(:, stuck)), mws)
+        q = transpose(flow%w(:, stuck))
+        call dpotrf('U', ns, g, ns, info)
+        if (info /= 0) return
+        call dpotrs('U', ns, n, g, ns, q, ns, info)
+        allocate (p0(2*n, 2*n))
+        p0 = 0.0_dp
+        do j = 1, 2*n
+            p0(j, j) = 1.0_dp
+        end do
+        p0(n + 1:, n + 1:) = p0(n + 1:, n + 1:) - matmul(mws, q)
+        mono = matmul(mono, p0)
+    end subroutine project_stuck_start
 
     !> Events of the recorded orbit, mapped to [0, T) and sorted by time.
     subroutine finish_events(res, period)

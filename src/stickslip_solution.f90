@@ -13,8 +13,10 @@ module stickslip_solution
         integer :: harmonics = 30
         !> Use only the odd harmonics 1, 3, .., <= H (no constant term).
         logical :: odd_only = .false.
-        !> Weight rho > 0 of the friction equality Psi [m/(N s)].
-        real(dp) :: rho = 0.2_dp
+        !> Weight rho of the friction equality Psi [m/(N s)]: > 0 to fix it, 0 (the default)
+        !> for the automatic choice from the model, the contact mobility at the forcing
+        !> frequency (stickslip_rho, automatic_rho). The value used is hbm_solution_t%rho.
+        real(dp) :: rho = 0.0_dp
         !> Quadrature samples per period nt (>= 2 H + 1).
         integer :: samples = 1024
         !> Convergence: ||F||_2 <= tol * fscale (see hbm_solution_t%fscale).
@@ -31,6 +33,17 @@ module stickslip_solution
         logical :: stop_at_tol = .true.
         !> Also return time samples of x, v, r and the stick indicator.
         logical :: want_samples = .true.
+        !> Harmonic truncation tolerance of the CLI's single solve (stickslip_checks): 0 keeps
+        !> H = harmonics; > 0 doubles H from `harmonics` (warm starts) until the relative
+        !> truncation error estimate is below it, or H = max_harmonics.
+        real(dp) :: harmonics_tol = 0.0_dp
+        !> Highest H the harmonics_tol loop may reach (0: 8 * harmonics).
+        integer :: max_harmonics = 0
+        !> Floquet multipliers of the solution (exact event-driven monodromy).
+        logical :: stability = .false.
+        !> Periods of the exact flow integrated from the solution to report its periodicity
+        !> defect (0: none).
+        integer :: verify_periods = 0
     end type hbm_options_t
 
     !> Result of a weighted-residual solve. Coefficient vectors follow stickslip_basis:
@@ -53,6 +66,9 @@ module stickslip_solution
         !> Residual scale: max(||V0||_2, rho * max_j mu_j N_j), V0 the contact velocities
         !> of the structure without friction forces [m/s].
         real(dp) :: fscale = 0.0_dp
+        !> Weight rho of Psi used: hbm_options_t%rho, or the automatic choice when that
+        !> is 0 [m/(N s)].
+        real(dp) :: rho = 0.0_dp
         !> Wall-clock seconds spent in the solve (condensation, hybrj, recovery).
         real(dp) :: seconds = 0.0_dp
         !> Empty when converged, otherwise what went wrong and what to try.

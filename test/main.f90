@@ -7,6 +7,11 @@ program tester
     use test_case, only: run_case_tests
     use test_euler, only: run_euler_tests
     use test_exact_reference, only: run_exact_reference_tests
+    use test_stability, only: run_stability_tests
+    use test_robustness, only: run_robustness_tests
+    use test_continuation, only: run_continuation_tests
+    use test_sweep_files, only: run_sweep_file_tests
+    use test_truncation, only: run_truncation_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i
@@ -18,6 +23,11 @@ program tester
     call run_case_tests(t)
     call run_euler_tests(t)
     call run_exact_reference_tests(t)
+    call run_stability_tests(t)
+    call run_robustness_tests(t)
+    call run_continuation_tests(t)
+    call run_sweep_file_tests(t)
+    call run_truncation_tests(t)
     write (output_unit, '(i0," passed, ",i0," failed")') t%passed, t%failed
     if (t%failed > 0) error stop 1
 end program tester

@@ -10,7 +10,7 @@ module test_case
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
-    public :: run_case_tests
+    public :: run_case_tests, cli, write_lines, scratch
 
     character(len=*), parameter :: scratch = "build/test-scratch"
     character(len=*), parameter :: good_system = &
@@ -64,7 +64,7 @@ contains
         call check(t, c%model%contact_dof2(1) == 0, "good case: contact_dof2 defaults to ground")
         call check(t, c%hbm%harmonics == 10 .and. c%hbm%samples == 128 .and. &
                    .not. c%hbm%odd_only, "good case: &hbm values")
-        call check_close(t, c%hbm%rho, 0.2_dp, "good case: rho default")
+        call check_close(t, c%hbm%rho, 0.0_dp, "good case: rho default (automatic)")
         call check(t, c%directory == scratch//"/good", "good case: output directory")
 
         ! the last group closed on a last line without newline, and no &friction group
@@ -159,8 +159,8 @@ contains
             "&hbm harmonics = 30, samples = 50 /"], inp, &
             [character(len=60) :: "&hbm", "samples = 50", "too few samples", "61"])
         call expect_bad(t, "bad_rho", [character(len=120) :: base(1:3), &
-            "&hbm harmonics = 10, samples = 64, rho = 0 /"], inp, &
-            [character(len=60) :: "&hbm", "rho", "> 0"])
+            "&hbm harmonics = 10, samples = 64, rho = -1 /"], inp, &
+            [character(len=60) :: "&hbm", "rho", ">= 0"])
         call expect_bad(t, "bad_start", [character(len=120) :: base(1:3), &
             "&hbm start = 'quick' /"], inp, [character(len=60) :: "&hbm", "start", "'ladder'"])
         call expect_bad(t, "missing_omega", [character(len=120) :: base(1), &

@@ -1,0 +1,192 @@
+!> The checkpoint of a sweep: `<directory>/frc.checkpoint`, rewritten (atomically) after every
+!> point of a forced-response curve, so that a batch job cut off by its wall-time limit resumes
+!> where it stopped when it is run again on the same case. The file holds a fingerprint of the
+!> case (model, &hbm, &sweep range and steps, &reference): a checkpoint of another case is
+!> refused, never silently continued. Text, full double precision.
+module stickslip_checkpoint
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_case, only: case_t, write_case
+    use stickslip_continuation, only: continuation_state_t
+    use stickslip_sweep, only: sweep_result_t, sweep_observer_t, frc_point_t
+    use stickslip_output, only: open_temporary, close_and_rename, real_fmt
+    implicit none
+    private
+    public :: checkpoint_writer_t, case_fingerprint, read_checkpoint, remove_checkpoint
+    public :: checkpoint_name
+
+    !> File name of the checkpoint in the output directory.
+    character(len=*), parameter :: checkpoint_name = "frc.checkpoint"
+    character(len=*), parameter :: magic = "stickslip sweep checkpoint 1"
+
+    !> Writes the checkpoint after every point of a sweep.
+    type, extends(sweep_observer_t) :: checkpoint_writer_t
+        !> Output directory.
+        character(len=:), allocatable :: directory
+        !> Fingerprint of the case.
+        character(len=16) :: fingerprint = ''
+    contains
+        procedure :: observe => write_checkpoint
+    end type checkpoint_writer_t
+
+contains
+
+    !> A 64-bit FNV-1a hash (16 hexadecimal digits) of the effective case as written by
+    !> write_case, without the variables that may change between a run and its resumption
+    !> (&output directory, &sweep max_points, max_failures, resume, plot).
+    function case_fingerprint(case) result(fp)
+        !> The case.
+        type(case_t), intent(in) :: case
+        character(len=16) :: fp
+        integer(8), parameter :: prime = 1099511628211_8
+        integer(8) :: h
+        integer :: u, stat, i
+        character(len=4096) :: line
+        character(len=512) :: msg
+        h = -3750763034362895579_8
+        open (newunit=u, status='scratch', action='readwrite', iostat=stat)
+        if (stat /= 0) then
+            fp = '0000000000000000'
+            return
+        end if
+        call write_case(u, case, stat, msg)
+        rewind (u)
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            line = adjustl(line)
+            if (index(line, 'directory') == 1 .or. index(line, 'max_points') == 1 .or. &
+                index(line, 'max_failures') == 1 .or. index(line, 'resume') == 1 .or. &
+                index(line, 'plot') == 1) cycle
+            do i = 1, len_trim(line)
+                h = ieor(h, int(ichar(line(i:i)), 8))
+                h = h*prime
+            end do
+        end do
+        close (u)
+        write (fp, '(z16.16)') h
+    end function case_fingerprint
+
+    !> Save the curve so far into <directory>/frc.checkpoint (atomic). Error: stat io.
+    subroutine write_checkpoint(self, res, error)
+        !> The writer.
+        class(checkpoint_writer_t), intent(inout) :: self
+        !> The curve so far.
+        type(sweep_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, k, n
+        character(len=512) :: msg
+        character(len=*), parameter :: rf = '(*(' // real_fmt // ',:,1x))'
+        stat = 0
+        msg = ''
+        call open_temporary(self%directory, checkpoint_name, u, error)
+        if (allocated(error)) return
+        associate (st => res%state)
+            n = size(st%y)
+            write (u, '(a)', iostat=stat, iomsg=msg) magic
+            if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) self%fingerprint
+            if (stat == 0) write (u, '(*(i0,:,1x))', iostat=stat, iomsg=msg) n, &
+                size(res%points(1)%amplitude), size(res%points(1)%rmax), res%npoints, &
+                st%reason, st%points, st%failures, st%rejected, res%folds
+            if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) st%lambda, st%tl, st%ds, &
+                st%arclength, res%seconds, res%stability_seconds
+            if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) st%y
+            if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) st%ty
+        end associate
+        do k = 1, res%npoints
+            if (stat /= 0) exit
+            associate (p => res%points(k))
+                write (u, '(a,1x,i0,1x,i0,1x,i0)', iostat=stat, iomsg=msg) "'"//trim(p%status)//"'", &
+                    p%harmonics, p%nfev, p%stable
+                if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) p%parameter, p%arclength, &
+                    p%dissipation, p%diss_friction, p%diss_damping, p%residual, p%floquet_max, &
+                    p%truncation, p%amplitude, p%rmax, p%stick
+            end associate
+        end do
+        call close_and_rename(self%directory, checkpoint_name, u, stat, msg, error)
+    end subroutine write_checkpoint
+
+    !> Read <directory>/frc.checkpoint into `res` when it exists (found = .true.). Errors:
+    !> stat input when it belongs to another case (fingerprint) or is not a checkpoint,
+    !> stat io when it cannot be read.
+    subroutine read_checkpoint(directory, fingerprint, res, found, error)
+        !> Output directory.
+        character(len=*), intent(in) :: directory
+        !> Fingerprint of the case being run.
+        character(len=*), intent(in) :: fingerprint
+        !> The saved curve.
+        type(sweep_result_t), intent(out) :: res
+        !> A checkpoint was there.
+        logical, intent(out) :: found
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: path
+        character(len=128) :: line
+        character(len=512) :: msg
+        character(len=12) :: status
+        integer :: u, stat, n, ndof, nc, k
+        type(frc_point_t) :: p
+        path = directory//'/'//checkpoint_name
+        inquire (file=path, exist=found)
+        if (.not. found) return
+        open (newunit=u, file=path, status='old', action='read', iostat=stat, iomsg=msg)
+        if (stat /= 0) then
+            call fatal_error(error, path//": cannot open: "//trim(msg), stickslip_stat%io)
+            return
+        end if
+        read (u, '(a)', iostat=stat) line
+        if (stat /= 0 .or. line /= magic) then
+            close (u)
+            call fatal_error(error, path//": not a stickslip sweep checkpoint (delete it)", &
+                             stickslip_stat%input)
+            return
+        end if
+        read (u, '(a)', iostat=stat) line
+        if (stat /= 0 .or. trim(line) /= trim(fingerprint)) then
+            close (u)
+            call fatal_error(error, path//": a checkpoint of another case (the model, "// &
+                             "&hbm, &sweep or &reference changed): delete it, or set "// &
+                             "&sweep resume = .false. to start the curve again", &
+                             stickslip_stat%input)
+            return
+        end if
+        associate (st => res%state)
+            read (u, *, iostat=stat, iomsg=msg) n, ndof, nc, res%npoints, st%reason, &
+                st%points, st%failures, st%rejected, res%folds
+            if (stat == 0) read (u, *, iostat=stat, iomsg=msg) st%lambda, st%tl, st%ds, &
+                st%arclength, res%seconds, res%stability_seconds
+            if (stat == 0) then
+                allocate (st%y(n), st%ty(n))
+                read (u, *, iostat=stat, iomsg=msg) st%y
+            end if
+            if (stat == 0) read (u, *, iostat=stat, iomsg=msg) st%ty
+        end associate
+        if (stat == 0) allocate (res%points(max(1, res%npoints)))
+        allocate (p%amplitude(ndof), p%rmax(nc), p%stick(nc))
+        do k = 1, res%npoints
+            if (stat /= 0) exit
+            read (u, *, iostat=stat, iomsg=msg) status, p%harmonics, p%nfev, p%stable
+            if (stat == 0) read (u, *, iostat=stat, iomsg=msg) p%parameter, p%arclength, &
+                p%dissipation, p%diss_friction, p%diss_damping, p%residual, p%floquet_max, &
+                p%truncation, p%amplitude, p%rmax, p%stick
+            p%status = status
+            res%points(k) = p
+        end do
+        close (u)
+        if (stat /= 0) call fatal_error(error, path//": unreadable checkpoint ("// &
+                                        trim(msg)//"): delete it", stickslip_stat%io)
+    end subroutine read_checkpoint
+
+    !> Delete <directory>/frc.checkpoint if present (the curve is finished).
+    subroutine remove_checkpoint(directory)
+        !> Output directory.
+        character(len=*), intent(in) :: directory
+        integer :: u, stat
+        logical :: exists
+        inquire (file=directory//'/'//checkpoint_name, exist=exists)
+        if (.not. exists) return
+        open (newunit=u, file=directory//'/'//checkpoint_name, status='old', iostat=stat)
+        if (stat == 0) close (u, status='delete', iostat=stat)
+    end subroutine remove_checkpoint
+end module stickslip_checkpoint

@@ -1,0 +1,129 @@
+!> The automatic weight rho of the friction equality
+!>     Psi(r, v) = v + min(0, rho (r + mu N) - v) + max(0, rho (r - mu N) - v),
+!> taken from the problem data when hbm_options_t%rho = 0.
+!>
+!> rho converts a force into a velocity [m/(N s)]: it is a mobility. The natural one is the
+!> contact's own: a friction force r changes the slip velocity by G r, with
+!> G_h = i h omega W^T Z_h^{-1} W (stickslip_dynamics). With rho of the size of |G|,
+!> - rho mu N is the slip velocity that the friction limit can cancel, so the stick interval
+!>   rho (r - mu N) < v < rho (r + mu N) of Psi tests, at every iterate, whether friction can
+!>   hold the motion: the physical stick criterion (from a cold start r = 0 the first stick
+!>   set is |V0(t)| < rho mu N: where the free motion is slower than what friction stops);
+!> - the two kinds of rows of the Jacobian, A G (stick) and rho (I - A) (slip), have the same
+!>   size, so its conditioning does not jump by orders of magnitude when the stick set
+!>   changes between iterations.
+!> A rho much larger than the mobility declares every sample stuck at the start and aims
+!> the first Newton step at the fully stuck response (forces far beyond mu N); that is why
+!> rho = 1 or 5 stalls on the seed case (mobility 0.2 m/(N s)) where rho = 0.02 or 0.2
+!> converges. A rho below the mobility errs on the side of slip, whose Newton step lands on
+!> admissible forces |r| = mu N; far below it the stick rows dominate the Jacobian and the
+!> slip rows fade, and the truncated force overshoots mu N more (the Galerkin solution at
+!> finite H depends on rho). Measured with bare cold starts (&hbm start = 'direct') over
+!> omega = 0.5 .. 6 rad/s x mu = 0.1 .. 3 x H = 10, 30, 100, on the seed case and on the
+!> damped 4-DOF chain with two contacts (examples/chain4.nml): every run converged for
+!> rho / mobility in 0.1 .. 0.5, while 0.03 and 1 .. 3 lost runs at H = 100; at the seed
+!> point for H = 20 .. 200 and 512 .. 4096 samples, 0.1 .. 0.3 never failed and 0.5 failed
+!> only for H >= 160 with fewer than 6.5 H samples. The overshoot of the friction force at
+!> stick-slip transitions grows as rho / mobility falls (seed point, H = 30: 2.6 % of mu N
+!> at 1, 3.5 % at 0.5, 5.0 % at 0.2). The automatic rho takes rho_fraction = 0.5 times the
+!> mobility: inside the robust band, with the smallest overshoot there.
+!>
+!> |G_h| itself has poles at the natural frequencies and zeros at the antiresonances of the
+!> contact (on the seed case: infinite at 0.618 and 1.618 rad/s, zero at 1.414 rad/s), which
+!> would make rho useless right where the response is most interesting. The automatic rho
+!> uses the resonance-free mobility
+!>     rho_j = Omega w_j^T (K + Omega^2 M)^{-1} w_j,     Omega = h_f omega,
+!> (w_j the contact direction, h_f the forcing harmonic of largest amplitude, 1 when the
+!> forcing is static): for a single DOF it is Omega / (k + Omega^2 m), which follows the
+!> stiffness line Omega / k below resonance and the mass line 1 / (Omega m) above, the
+!> envelope of |G| away from resonance, and equals 1 / (2 sqrt(k m)) at resonance. Damping is
+!> left out (it only lowers |G| near resonance). Several contacts share one rho: the
+!> geometric mean of rho_j over the contacts that can hold a force (mu_j N_j > 0; all
+!> contacts when none can), times rho_fraction. On the seed case at omega = 4.5 rad/s the
+!> mobility is 0.212 m/(N s) and rho = 0.106 m/(N s). The choice is invariant under a change
+!> of units: scaling M, C, K, the forces and the normal loads by s scales rho by 1 / s and
+!> leaves every iterate of the solve unchanged.
+!> Knows nothing of the solver: only the model.
+module stickslip_rho
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use stickslip_kinds, only: dp
+    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_lapack, only: dgetrf, dgetrs
+    implicit none
+    private
+    public :: automatic_rho, contact_mobility, rho_fraction
+
+    !> The automatic rho as a fraction of the contact mobility (see the module header).
+    real(dp), parameter :: rho_fraction = 0.5_dp
+
+contains
+
+    !> The automatic weight rho of Psi for `model` [m/(N s)]: rho_fraction times the
+    !> geometric mean over the contacts (those with mu N > 0, or all when none has) of the
+    !> resonance-free contact mobility (contact_mobility) at the dominant forcing frequency.
+    !> Always finite and > 0; 1 for a model without contacts (rho is then unused). `model`
+    !> must be valid (validate_model); no error can occur.
+    function automatic_rho(model) result(rho)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        !> The weight rho > 0 [m/(N s)].
+        real(dp) :: rho
+        real(dp) :: mob(model%ncontact())
+        logical :: holds(model%ncontact())
+        rho = 1.0_dp
+        if (model%ncontact() == 0) return
+        mob = contact_mobility(model)
+        holds = model%mu*model%normal_load > 0.0_dp
+        if (.not. any(holds)) holds = .true.
+        rho = rho_fraction*exp(sum(log(mob), mask=holds)/real(count(holds), dp))
+    end function automatic_rho
+
+    !> Resonance-free mobility of every contact, Omega w_j^T (K + Omega^2 M)^{-1} w_j
+    !> [m/(N s)], at Omega = h_f omega, h_f the harmonic of the forcing term of largest
+    !> amplitude (h > 0; 1 when the forcing is static). Falls back on the mass line
+    !> w_j^T M^{-1} w_j / Omega when K + Omega^2 M is singular or the value is not positive
+    !> (an indefinite K). `model` must be valid (validate_model); no error can occur.
+    function contact_mobility(model) result(mob)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        !> Mobility of each contact [m/(N s)].
+        real(dp) :: mob(model%ncontact())
+        real(dp) :: s(model%ndof, model%ndof), w(model%ndof, model%ncontact())
+        real(dp) :: y(model%ndof, model%ncontact()), big
+        integer :: ipiv(model%ndof), n, nc, j, i, info, hf
+        n = model%ndof
+        nc = model%ncontact()
+        if (nc == 0) return
+        hf = 1
+        big = 0.0_dp
+        do i = 1, model%nforce()
+            if (model%force_harmonic(i) > 0 .and. abs(model%force_amplitude(i)) > big) then
+                big = abs(model%force_amplitude(i))
+                hf = model%force_harmonic(i)
+            end if
+        end do
+        do j = 1, nc
+            w(:, j) = contact_velocity_direction(model, j)
+        end do
+        associate (big_omega => hf*model%omega)
+            s = model%stiffness + big_omega**2*model%mass
+            y = w
+            call dgetrf(n, n, s, n, ipiv, info)
+            if (info == 0) call dgetrs('N', n, nc, s, n, ipiv, y, n, info)
+            do j = 1, nc
+                mob(j) = -1.0_dp
+                if (info == 0) mob(j) = big_omega*dot_product(w(:, j), y(:, j))
+            end do
+            if (all(mob > 0.0_dp .and. ieee_is_finite(mob))) return
+            ! mass line: Omega w^T (Omega^2 M)^{-1} w
+            s = model%mass
+            y = w
+            call dgetrf(n, n, s, n, ipiv, info)
+            call dgetrs('N', n, nc, s, n, ipiv, y, n, info)
+            do j = 1, nc
+                if (mob(j) > 0.0_dp .and. ieee_is_finite(mob(j))) cycle
+                mob(j) = dot_product(w(:, j), y(:, j))/big_omega
+            end do
+        end associate
+    end function contact_mobility
+end module stickslip_rho

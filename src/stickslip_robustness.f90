@@ -1,0 +1,455 @@
+!> The robustness study, "where methods fail, measured": one model solved over a grid of
+!> forcing frequencies omega x friction coefficients mu, by the weighted residual for every
+!> harmonic count H, quadrature sample count and weight rho (0: automatic), from a cold start
+!> and from a warm start (the converged solution at the previous omega of the grid), and by
+!> implicit Euler for every number of steps per period. Each run records whether it
+!> converged, its work (hybrj residual evaluations, or periods integrated), its CPU time and
+!> its error against the exact event-driven reference of its (omega, mu), computed once per
+!> grid point and shared by every run there. A run that fails is a row, never an error.
+!> Mirrors stickslip_study (the work-precision study at one point); also writes
+!> robustness.csv.
+module stickslip_robustness
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_model, only: model_t, validate_model
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic, validate_options
+    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
+    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
+        sample_reference, validate_reference_options
+    use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
+    use stickslip_rho, only: automatic_rho
+    implicit none
+    private
+    public :: robustness_options_t, robustness_row_t, run_robustness
+    public :: validate_robustness_options, default_robustness_options, robustness_samples
+    public :: robustness_success
+
+    !> Options of the robustness study (&robustness).
+    type :: robustness_options_t
+        !> Forcing frequencies of the grid, in sweep order (warm starts follow it) [rad/s].
+        real(dp), allocatable :: omegas(:)
+        !> Friction coefficients of the grid, each given to every contact (>= 0).
+        real(dp), allocatable :: mus(:)
+        !> Harmonic counts H of the weighted-residual runs (>= 1).
+        integer, allocatable :: harmonics(:)
+        !> Weights rho of Psi [m/(N s)]; 0 is the automatic choice (stickslip_rho).
+        real(dp), allocatable :: rhos(:)
+        !> Quadrature samples, each combined with every H (0: the &hbm samples, raised to
+        !> the smallest power of two >= 4 H when fewer; see robustness_samples).
+        integer, allocatable :: samples(:)
+        !> Steps per period of the implicit Euler runs (integrated from rest until
+        !> periodic); empty: no Euler run.
+        integer, allocatable :: steps_per_period(:)
+        !> Also run every weighted-residual configuration from a warm start.
+        logical :: warm = .true.
+        !> Points per period of the grid on which weighted-residual errors are measured.
+        integer :: error_samples = 1024
+        !> A converged run whose error exceeds this is counted as a failure ("wrong
+        !> solution": another root, or a basis or step far too coarse). The default is
+        !> loose: at H = 10 the truncation alone reaches 0.4 at a contact DOF that barely
+        !> moves.
+        real(dp) :: wrong_tol = 0.5_dp
+    end type robustness_options_t
+
+    !> One run of the robustness study.
+    type :: robustness_row_t
+        !> 'hbm-cold', 'hbm-warm' or 'euler'.
+        character(len=8) :: method = ''
+        !> Forcing frequency [rad/s] and friction coefficient of the grid point.
+        real(dp) :: omega = 0.0_dp, mu = 0.0_dp
+        !> Highest harmonic H (0 for 'euler').
+        integer :: harmonics = 0
+        !> Weight rho used [m/(N s)] (NaN for 'euler').
+        real(dp) :: rho = 0.0_dp
+        !> rho was the automatic choice (the option rho = 0).
+        logical :: rho_auto = .false.
+        !> Quadrature samples ('hbm-*'), steps per period ('euler').
+        integer :: samples = 0
+        !> Converged ('hbm-*': residual met the tolerance) or periodic ('euler').
+        logical :: converged = .false.
+        !> Residual evaluations, all hybrj calls included ('hbm-*'), periods integrated
+        !> ('euler').
+        integer :: iterations = 0
+        !> CPU seconds of the run [s].
+        real(dp) :: cpu_seconds = 0.0_dp
+        !> Largest error of the displacements against the reference, max over DOFs and
+        !> instants of |x - x_ref| relative to the amplitude max |x_ref| of that DOF (err_x
+        !> of study.csv; it bounds the relative error of each amplitude); NaN when there is
+        !> no reference or the run produced no solution.
+        real(dp) :: err_amplitude = 0.0_dp
+        !> Converged and, when the reference is known, err_amplitude <= wrong_tol.
+        logical :: success = .false.
+        !> What happened, '; '-separated: 'not converged ...', 'not periodic: ...',
+        !> 'wrong solution ...', 'failed: <error>', 'no reference: ...', and for a warm row
+        !> without a converged neighbour 'cold start: ...'. Empty for a plain success.
+        character(len=:), allocatable :: diagnosis
+    end type robustness_row_t
+
+    !> The reference of one grid point, sampled for the error measurements.
+    type :: point_reference_t
+        logical :: ok = .false.
+        character(len=:), allocatable :: diagnosis
+        real(dp), allocatable :: x(:, :), v(:, :), r(:, :)
+    end type point_reference_t
+
+contains
+
+    !> The default grid: omega = 0.5, 1, .., 6 rad/s, mu = 0.1, 0.45, 1, 3, H = 10, 30, 100,
+    !> rho = 0.02, 0.2, 1, 5 and automatic, the &hbm samples, warm starts, no Euler run.
+    pure function default_robustness_options() result(opts)
+        type(robustness_options_t) :: opts
+        integer :: i
+        opts%omegas = [(0.5_dp*i, i=1, 12)]
+        opts%mus = [0.1_dp, 0.45_dp, 1.0_dp, 3.0_dp]
+        opts%harmonics = [10, 30, 100]
+        opts%rhos = [0.02_dp, 0.2_dp, 1.0_dp, 5.0_dp, 0.0_dp]
+        opts%samples = [0]
+        allocate (opts%steps_per_period(0))
+    end function default_robustness_options
+
+    !> Check robustness options. Errors (stat input) name the &robustness variable.
+    subroutine validate_robustness_options(opts, error)
+        !> Options to check.
+        type(robustness_options_t), intent(in) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: msg
+        integer :: i, j
+        msg = ""
+        if (.not. (allocated(opts%omegas) .and. allocated(opts%mus) .and. &
+                   allocated(opts%harmonics) .and. allocated(opts%rhos) .and. &
+                   allocated(opts%samples) .and. allocated(opts%steps_per_period))) then
+            msg = "&robustness: omegas, mus, harmonics, rhos, samples and steps_per_period "// &
+                  "must be set"
+        else if (size(opts%omegas) == 0 .or. size(opts%mus) == 0) then
+            msg = "&robustness omegas, mus: both need at least one value"
+        else if (size(opts%harmonics)*size(opts%rhos)*size(opts%samples) + &
+                 size(opts%steps_per_period) == 0) then
+            msg = "&robustness harmonics, rhos, samples, steps_per_period: nothing to run"
+        else if (.not. all(opts%omegas > 0.0_dp .and. opts%omegas < huge(1.0_dp))) then
+            msg = "&robustness omegas: every entry must be finite and > 0"
+        else if (.not. all(opts%mus >= 0.0_dp .and. opts%mus < huge(1.0_dp))) then
+            msg = "&robustness mus: every entry must be finite and >= 0"
+        else if (any(opts%harmonics < 1)) then
+            msg = "&robustness harmonics: every entry must be >= 1"
+        else if (.not. all(opts%rhos >= 0.0_dp .and. opts%rhos < huge(1.0_dp))) then
+            msg = "&robustness rhos: every entry must be finite and >= 0 (0: automatic)"
+        else if (any(opts%samples < 0)) then
+            msg = "&robustness samples: every entry must be >= 0 (0: the &hbm samples)"
+        else if (any(opts%steps_per_period < 2)) then
+            msg = "&robustness steps_per_period: every entry must be >= 2"
+        else if (opts%error_samples < 2) then
+            msg = "&robustness error_samples = "//itoa(opts%error_samples)//": must be >= 2"
+        else if (.not. (opts%wrong_tol > 0.0_dp .and. opts%wrong_tol < huge(1.0_dp))) then
+            msg = "&robustness wrong_tol: must be finite and > 0"
+        else
+            do i = 1, size(opts%harmonics)
+                do j = 1, size(opts%samples)
+                    if (opts%samples(j) > 0 .and. &
+                        opts%samples(j) < 2*opts%harmonics(i) + 1) then
+                        msg = "&robustness samples = "//itoa(opts%samples(j))// &
+                              ": too few for harmonics = "//itoa(opts%harmonics(i))// &
+                              " (need >= "//itoa(2*opts%harmonics(i) + 1)//")"
+                        exit
+                    end if
+                end do
+                if (len(msg) > 0) exit
+            end do
+        end if
+        if (len(msg) > 0) call fatal_error(error, msg, stickslip_stat%input)
+    end subroutine validate_robustness_options
+
+    !> Quadrature samples of a run with H harmonics for the option value `samples`: itself
+    !> when > 0, otherwise `hbm_samples` (the &hbm samples) raised to the smallest power of
+    !> two >= 4 H when fewer (the rule of the work-precision study).
+    pure integer function robustness_samples(samples, harmonics, hbm_samples) result(ns)
+        !> Option value (0: automatic).
+        integer, intent(in) :: samples
+        !> Highest harmonic H.
+        integer, intent(in) :: harmonics
+        !> The &hbm samples.
+        integer, intent(in) :: hbm_samples
+        ns = samples
+        if (ns > 0) return
+        ns = 1
+        do while (ns < 4*harmonics)
+            ns = 2*ns
+        end do
+        ns = max(hbm_samples, ns)
+    end function robustness_samples
+
+    !> Run the robustness study on `model` (its omega and every contact's mu replaced by
+    !> the grid values). Per grid point (omega, mu): the exact reference (options `ref_opts`,
+    !> started from the weighted residual with `hbm_opts`, or implicit Euler with
+    !> `euler_opts`), then one 'euler' row per steps per period. Then per (mu, H, samples,
+    !> rho), sweeping omega in grid order: an 'hbm-cold' row (start from zero forces; the
+    !> `hbm_opts%start` strategy applies, so 'auto' may climb the harmonic ladder) and, with
+    !> opts%warm, an 'hbm-warm' row started from the converged solution at the previous
+    !> omega (warm if converged there, else cold; cold again when none converged). Rows are
+    !> ordered by mu, then Euler before the weighted residual, then H, samples, rho, omega.
+    !> Failures of runs and references are rows (converged = F, diagnosis). Errors: stat input
+    !> (invalid model or options).
+    subroutine run_robustness(model, hbm_opts, euler_opts, ref_opts, opts, rows, error)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> Weighted-residual options (harmonics, samples and rho are replaced).
+        type(hbm_options_t), intent(in) :: hbm_opts
+        !> Time-stepping options (steps_per_period is replaced).
+        type(euler_options_t), intent(in) :: euler_opts
+        !> Options of the reference.
+        type(reference_options_t), intent(in) :: ref_opts
+        !> Robustness options.
+        type(robustness_options_t), intent(in) :: opts
+        !> The runs.
+        type(robustness_row_t), allocatable, intent(out) :: rows(:)
+        !> Set on invalid input.
+        type(error_type), allocatable, intent(out) :: error
+        type(model_t) :: m
+        type(hbm_options_t) :: ho
+        type(euler_options_t) :: eo
+        type(point_reference_t), allocatable :: refs(:)
+        type(hbm_solution_t) :: cold, warm
+        real(dp), allocatable :: last_r(:, :)
+        real(dp) :: nan
+        integer :: nw, nrow, k, i, ih, is, ir, irow
+        logical :: have_last
+
+        call validate_model(model, error)
+        if (allocated(error)) return
+        call validate_robustness_options(opts, error)
+        if (allocated(error)) return
+        call validate_reference_options(ref_opts, error)
+        if (allocated(error)) return
+        call validate_options(hbm_opts, error)
+        if (allocated(error)) return
+
+        nan = ieee_value(1.0_dp, ieee_quiet_nan)
+        nw = size(opts%omegas)
+        nrow = size(opts%mus)*nw*(size(opts%steps_per_period) + size(opts%harmonics)* &
+               size(opts%samples)*size(opts%rhos)*merge(2, 1, opts%warm))
+        allocate (rows(nrow), refs(nw))
+        irow = 0
+        m = model
+
+        do k = 1, size(opts%mus)
+            m%mu = [(opts%mus(k), i=1, m%ncontact())]
+
+            ! the references of this mu, and the Euler runs beside each
+            do i = 1, nw
+                m%omega = opts%omegas(i)
+                call point_reference(refs(i), error)
+                if (allocated(error)) return
+            end do
+
+            ! the weighted residual, cold and warm, sweeping omega
+            do ih = 1, size(opts%harmonics)
+                do is = 1, size(opts%samples)
+                    do ir = 1, size(opts%rhos)
+                        ho = hbm_opts
+                        ho%harmonics = opts%harmonics(ih)
+                        ho%samples = robustness_samples(opts%samples(is), ho%harmonics, &
+                                                        hbm_opts%samples)
+                        ho%rho = opts%rhos(ir)
+                        ho%want_samples = .false.
+                        have_last = .false.
+                        do i = 1, nw
+                            m%omega = opts%omegas(i)
+                            call hbm_row('hbm-cold', refs(i), cold, error)
+                            if (allocated(error)) return
+                            if (.not. opts%warm) cycle
+                            if (have_last) then
+                                call hbm_row('hbm-warm', refs(i), warm, error, last_r)
+                                if (allocated(error)) return
+                            else
+                                call hbm_row('hbm-warm', refs(i), warm, error)
+                                if (allocated(error)) return
+                                rows(irow)%diagnosis = join(rows(irow)%diagnosis, &
+                                    "cold start: no converged solution at a previous omega")
+                            end if
+                            ! the start of the next omega: this omega's solution, warm first
+                            have_last = .false.
+                            if (warm%converged .and. allocated(warm%rcoef)) then
+                                last_r = warm%rcoef
+                                have_last = .true.
+                            else if (cold%converged .and. allocated(cold%rcoef)) then
+                                last_r = cold%rcoef
+                                have_last = .true.
+                            end if
+                        end do
+                    end do
+                end do
+            end do
+        end do
+        if (irow /= nrow) error stop "run_robustness: row count mismatch"
+
+    contains
+
+        !> The reference at the current (omega, mu), sampled on the error grid, and the
+        !> Euler rows of that point. A reference that fails is recorded, not raised.
+        subroutine point_reference(pr, error)
+            type(point_reference_t), intent(out) :: pr
+            type(error_type), allocatable, intent(out) :: error
+            type(reference_result_t) :: ref
+            integer :: j
+            call solve_reference(m, ref_opts, ref, error, hbm_opts=hbm_opts, &
+                                 euler_opts=euler_opts)
+            if (allocated(error)) then
+                if (error%stat /= stickslip_stat%numerical) return
+                pr%diagnosis = "no reference: "//error%message
+                deallocate (error)
+            else if (.not. ref%converged) then
+                pr%diagnosis = "no reference: "//ref%diagnosis
+            else
+                call sample_reference(ref, opts%error_samples, pr%x, pr%v, pr%r, error)
+                if (allocated(error)) return
+                pr%ok = .true.
+                pr%diagnosis = ""
+            end if
+            do j = 1, size(opts%steps_per_period)
+                eo = euler_opts
+                eo%steps_per_period = opts%steps_per_period(j)
+                call euler_row(ref, pr, error)
+                if (allocated(error)) return
+            end do
+        end subroutine point_reference
+
+        !> One weighted-residual run with the options ho at the current (omega, mu).
+        subroutine hbm_row(method, pr, sol, error, r_start)
+            character(len=*), intent(in) :: method
+            type(point_reference_t), intent(in) :: pr
+            type(hbm_solution_t), intent(out) :: sol
+            type(error_type), allocatable, intent(out) :: error
+            real(dp), intent(in), optional :: r_start(:, :)
+            real(dp), allocatable :: xs(:, :), vs(:, :), rs(:, :)
+            type(comparison_t) :: cmp
+            real(dp) :: c0, c1
+            irow = irow + 1
+            associate (row => rows(irow))
+                row%method = method
+                row%omega = m%omega
+                row%mu = opts%mus(k)
+                row%harmonics = ho%harmonics
+                row%rho_auto = ho%rho == 0.0_dp
+                row%rho = ho%rho
+                if (row%rho_auto) row%rho = automatic_rho(m)
+                row%samples = ho%samples
+                row%err_amplitude = nan
+                row%diagnosis = ""
+                call cpu_time(c0)
+                call solve_periodic(m, ho, sol, error, r_start)
+                call cpu_time(c1)
+                row%cpu_seconds = c1 - c0
+                if (allocated(error)) then
+                    if (error%stat /= stickslip_stat%numerical) return
+                    row%diagnosis = "failed: "//error%message
+                    deallocate (error)
+                    return
+                end if
+                row%rho = sol%rho
+                row%converged = sol%converged
+                row%iterations = sol%nfev
+                if (.not. sol%converged) then
+                    block
+                        character(len=80) :: buf
+                        write (buf, '(a,i0,a,es9.2)') "not converged: hybrj info ", &
+                            sol%info, "; ||F||/fscale = ", sol%fnorm/max(sol%fscale, tiny(1.0_dp))
+                        row%diagnosis = trim(buf)
+                    end block
+                end if
+                if (pr%ok .and. allocated(sol%xcoef)) then
+                    call evaluate_series(sol, opts%error_samples, xs, vs, rs, error)
+                    if (allocated(error)) return
+                    call compare_samples('hbm', xs, vs, rs, 'reference', pr%x, pr%v, pr%r, &
+                                         cmp, error)
+                    if (allocated(error)) return
+                    row%err_amplitude = cmp%worst('x')
+                end if
+                call judge(row, pr)
+            end associate
+        end subroutine hbm_row
+
+        !> One implicit Euler run with the options eo at the current (omega, mu).
+        subroutine euler_row(ref, pr, error)
+            type(reference_result_t), intent(in) :: ref
+            type(point_reference_t), intent(in) :: pr
+            type(error_type), allocatable, intent(out) :: error
+            type(euler_result_t) :: es
+            type(comparison_t) :: cmp
+            real(dp), allocatable :: xe(:, :), ve(:, :), re(:, :)
+            real(dp) :: c0, c1
+            irow = irow + 1
+            associate (row => rows(irow))
+                row%method = 'euler'
+                row%omega = m%omega
+                row%mu = opts%mus(k)
+                row%harmonics = 0
+                row%rho = nan
+                row%samples = eo%steps_per_period
+                row%err_amplitude = nan
+                row%diagnosis = ""
+                call cpu_time(c0)
+                call integrate_euler(m, eo, es, error)
+                call cpu_time(c1)
+                row%cpu_seconds = c1 - c0
+                if (allocated(error)) then
+                    if (error%stat /= stickslip_stat%numerical) return
+                    row%diagnosis = "failed: "//error%message
+                    deallocate (error)
+                    return
+                end if
+                row%converged = es%periodic
+                row%iterations = es%periods
+                if (.not. es%periodic) row%diagnosis = "not periodic: "//es%diagnosis
+                if (pr%ok .and. allocated(es%x)) then
+                    call sample_reference(ref, eo%steps_per_period, xe, ve, re, error)
+                    if (allocated(error)) return
+                    call compare_samples('euler', es%x, es%v, es%r, 'reference', xe, ve, re, &
+                                         cmp, error)
+                    if (allocated(error)) return
+                    row%err_amplitude = cmp%worst('x')
+                end if
+                call judge(row, pr)
+            end associate
+        end subroutine euler_row
+
+        !> success and the diagnosis of a finished run.
+        subroutine judge(row, pr)
+            type(robustness_row_t), intent(inout) :: row
+            type(point_reference_t), intent(in) :: pr
+            character(len=80) :: buf
+            row%success = robustness_success(row, opts%wrong_tol)
+            if (row%converged .and. .not. row%success) then
+                write (buf, '(a,es9.2,a,es9.2)') "wrong solution: err_amplitude ", &
+                    row%err_amplitude, " > wrong_tol ", opts%wrong_tol
+                row%diagnosis = join(row%diagnosis, trim(buf))
+            end if
+            if (.not. pr%ok) row%diagnosis = join(row%diagnosis, pr%diagnosis)
+        end subroutine judge
+    end subroutine run_robustness
+
+    !> A run succeeds when it converged and its error is at most `wrong_tol` (or unknown:
+    !> no reference).
+    elemental logical function robustness_success(row, wrong_tol) result(ok)
+        !> The run.
+        type(robustness_row_t), intent(in) :: row
+        !> Largest err_amplitude of a success.
+        real(dp), intent(in) :: wrong_tol
+        ok = row%converged
+        if (ok .and. ieee_is_finite(row%err_amplitude)) ok = row%err_amplitude <= wrong_tol
+    end function robustness_success
+
+    !> Two diagnoses joined by "; " (either may be empty).
+    pure function join(a, b) result(s)
+        character(len=*), intent(in) :: a, b
+        character(len=:), allocatable :: s
+        if (len(a) == 0) then
+            s = b
+        else if (len(b) == 0) then
+            s = a
+        else
+            s = a//"; "//b
+        end if
+    end function join
+end module stickslip_robustness

@@ -1,0 +1,457 @@
+!> Harmonic truncation error of a weighted-residual solution: estimated, and controlled by
+!> raising the number of harmonics until a requested tolerance is met (issue 4, part 4).
+!>
+!> Two independent indicators, both relative (dimensionless):
+!> - the Coulomb defect: the residual Psi(r(t), v(t)) of the friction law evaluated from the
+!>   coefficients on a grid truncation_oversample times finer than the quadrature, each
+!>   sample measured in the unit of its region: where Psi says stick, Psi = v is a slip
+!>   velocity, divided by the contact's peak slip velocity; where it says slip,
+!>   Psi = rho (r -/+ mu N) is rho times a force error, divided by rho mu N (rho only picks
+!>   the region, not the size). Its RMS over the period costs no solve. (The max is reported
+!>   too, but it is the Gibbs overshoot of r at the stick onsets and does not decrease.)
+!> - the change from a coarser harmonic set H_c = H/2 (same samples; the coarse solve is
+!>   warm-started from the fine coefficients truncated to the coarse basis, a prefix of the
+!>   fine one, so it is cheap): of the displacement history of every DOF,
+!>   max_t |x_p(t; H) - x_p(t; H_c)| relative to the amplitude A_p = max_t |x_p(t)|, and of
+!>   the friction dissipation per period relative to the forcing work per period. For an
+!>   error decaying like C H^-p this change is (2^p - 1) times the error at H; it also sees
+!>   what a residual cannot (an ill-conditioned response). The sup norm, not the change of
+!>   A_p itself (also reported), because two maxima can agree by coincidence.
+!> estimate = max(Coulomb defect RMS, displacement changes, dissipation change): the two
+!> indicators fail differently (the change can be small by coincidence when the errors at H
+!> and H/2 agree; the defect decays like 1/H, slower than the displacement error of a
+!> well-damped response), so their max is the safe side of both. Measured against the exact
+!> reference: within a factor 0.5 to 5 of the true relative error in amplitude and
+!> dissipation on the seed case for 5 <= H <= 224 (test_truncation); on the damped 4-DOF
+!> chain with two contacts (test_hbm) 1.6 to 2.6 for H <= 112, rising to 13 at H = 300,
+!> where the displacement error falls like H^-2 and the defect like H^-1 (conservative).
+!>
+!> Knows the solution's coefficients and the model; solves only through solve_periodic.
+!> Writes nothing: the summary and frc.csv are written by the output modules.
+module stickslip_truncation
+    use, intrinsic :: iso_fortran_env, only: int64
+    use stickslip_kinds, only: dp, pi
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_basis, only: basis_t, new_basis
+    use stickslip_friction, only: psi, psi_stick
+    use stickslip_hbm, only: solve_periodic
+    implicit none
+    private
+    public :: truncation_t, estimate_truncation, solve_to_tolerance, coarse_harmonics
+    public :: truncation_oversample
+
+    !> Fine-grid factor: the Coulomb defect and the amplitudes are evaluated at
+    !> truncation_oversample * samples points per period.
+    integer, parameter :: truncation_oversample = 4
+    !> Velocity floor of the Coulomb defect, relative to the peak velocity of the structure:
+    !> a contact stuck all period (slip velocity ~ solver tolerance) is not divided by ~0.
+    real(dp), parameter :: velocity_floor = 1.0e-4_dp
+
+    !> Truncation error estimate of one solution, and the record of an adaptive solve.
+    type :: truncation_t
+        !> The solution converged, so `estimate` is defined (otherwise it is huge and `note`
+        !> says why).
+        logical :: available = .false.
+        !> The relative truncation error estimate (dimensionless): the largest of psi_rms,
+        !> maxval(displacement_change_rel) and dissipation_change_rel. This is what
+        !> solve_to_tolerance compares with the tolerance.
+        real(dp) :: estimate = huge(1.0_dp)
+        !> Highest harmonic H of the solution estimated.
+        integer :: harmonics = 0
+        !> Highest harmonic H_c of the coarser set compared with (H/2, at least the highest
+        !> forcing harmonic); 0 when no comparison was made (no coarser set holds the
+        !> forcing, or the coarse solve did not converge): then the changes below are 0 and
+        !> the estimate is the Coulomb defect alone.
+        integer :: coarse_harmonics = 0
+        !> Quadrature samples per period of the solution (and of the coarse solve).
+        integer :: samples = 0
+        !> Points per period of the fine grid (truncation_oversample * samples).
+        integer :: fine_samples = 0
+        !> Coulomb defect, RMS over the fine grid, worst contact (dimensionless): Psi divided
+        !> by max(max_t |v_j(t)|, 1e-4 max_p max_t |v_p(t)|) where the contact sticks, by
+        !> max(rho mu_j N_j, the same velocity floor) where it slips.
+        real(dp) :: psi_rms = 0.0_dp
+        !> The same defect, max over the fine grid (dimensionless; O(1) at any H: the Gibbs
+        !> overshoot of the friction force; a diagnostic, not part of the estimate).
+        real(dp) :: psi_max = 0.0_dp
+        !> Amplitude per DOF of the solution, A_p = max_t |x_p(t)| on the fine grid [m].
+        real(dp), allocatable :: amplitude(:)
+        !> Change of the amplitude per DOF from the coarse set, |A_p(H) - A_p(H_c)| [m].
+        real(dp), allocatable :: amplitude_change(:)
+        !> amplitude_change / A_p(H) (dimensionless; a DOF whose amplitude is below 1e-12 of
+        !> the largest one is measured against 1e-12 times the largest instead).
+        real(dp), allocatable :: amplitude_change_rel(:)
+        !> Change of the whole displacement history per DOF from the coarse set,
+        !> max_t |x_p(t; H) - x_p(t; H_c)| / A_p(H) (same floor; dimensionless). It bounds
+        !> amplitude_change_rel and, unlike it, cannot vanish by a coincidence of the two
+        !> maxima (a phase shift, another peak): this is the part of the estimate.
+        real(dp), allocatable :: displacement_change_rel(:)
+        !> Friction dissipation per period of the solution, diss_friction [J].
+        real(dp) :: dissipation = 0.0_dp
+        !> Change of the friction dissipation per period from the coarse set [J].
+        real(dp) :: dissipation_change = 0.0_dp
+        !> dissipation_change / E, E the forcing work per period (= friction + viscous
+        !> dissipation), floored at 1e-12 pi sum_i |f_i| max_p A_p (dimensionless).
+        real(dp) :: dissipation_change_rel = 0.0_dp
+        !> Wall-clock seconds spent on this estimate (coarse solve and fine-grid evaluation;
+        !> small when solve_to_tolerance reused the previous level as the coarse solution) [s].
+        real(dp) :: seconds = 0.0_dp
+        !> Tolerance asked of solve_to_tolerance (0 for a plain estimate).
+        real(dp) :: tolerance = 0.0_dp
+        !> solve_to_tolerance: estimate <= tolerance was reached.
+        logical :: met = .false.
+        !> solve_to_tolerance: the highest harmonic of each level tried, in order.
+        integer, allocatable :: history_harmonics(:)
+        !> solve_to_tolerance: the quadrature samples of each level.
+        integer, allocatable :: history_samples(:)
+        !> solve_to_tolerance: whether each level's solve converged.
+        logical, allocatable :: history_converged(:)
+        !> solve_to_tolerance: the estimate of each level (huge when not converged).
+        real(dp), allocatable :: history_estimate(:)
+        !> Empty, or what limited the estimate / why the tolerance was not met.
+        character(len=:), allocatable :: note
+    end type truncation_t
+
+contains
+
+    !> Highest harmonic of the coarser set used to estimate the truncation error at
+    !> `harmonics`: harmonics / 2, raised to the highest forcing harmonic (which every basis
+    !> must hold) and to 1 with odd_only. Returns 0 when that set is not smaller.
+    pure integer function coarse_harmonics(model, harmonics, odd_only) result(hc)
+        !> The model (its forcing harmonics).
+        type(model_t), intent(in) :: model
+        !> Highest harmonic H of the fine set.
+        integer, intent(in) :: harmonics
+        !> Odd harmonics only.
+        logical, intent(in) :: odd_only
+        integer :: hforce
+        hforce = 0
+        if (model%nforce() > 0) hforce = maxval(model%force_harmonic)
+        hc = max(harmonics/2, hforce, merge(1, 0, odd_only))
+        if (odd_only) then
+            ! the highest odd harmonics <= hc and <= harmonics must differ
+            if (hc - mod(hc + 1, 2) >= harmonics - mod(harmonics + 1, 2)) hc = 0
+        else if (hc >= harmonics) then
+            hc = 0
+        end if
+    end function coarse_harmonics
+
+    !> Truncation error estimate `est` of the solution `sol` of `model` solved with options
+    !> `opts`: the Coulomb defect on a grid truncation_oversample times finer than the
+    !> quadrature, and the changes from one coarse solve at coarse_harmonics(H) warm-started
+    !> from sol. An unconverged sol (est%available = .false.), no coarser set or an
+    !> unconverged coarse solve (est%coarse_harmonics = 0) are outcomes, told in est%note.
+    !> Errors: stat input when sol was not solved with opts (harmonics, odd_only, samples)
+    !> or holds no coefficients; the errors of solve_periodic on the coarse set.
+    subroutine estimate_truncation(model, opts, sol, est, error)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> The options sol was solved with.
+        type(hbm_options_t), intent(in) :: opts
+        !> The solution whose truncation error is estimated.
+        type(hbm_solution_t), intent(in) :: sol
+        !> The estimate.
+        type(truncation_t), intent(out) :: est
+        !> Set on misuse or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        type(hbm_options_t) :: copts
+        type(hbm_solution_t) :: coarse
+        integer(int64) :: c0, c1, rate
+        integer :: hc, nbc
+
+        call system_clock(c0, rate)
+        call check_match(opts, sol, error)
+        if (allocated(error)) return
+        call diagnose(model, opts, sol, est, error)
+        if (allocated(error)) return
+        hc = coarse_harmonics(model, sol%harmonics, sol%odd_only)
+        if (est%available .and. hc > 0) then
+            copts = opts
+            copts%harmonics = hc
+            copts%rho = sol%rho      ! the same weight as the fine solution
+            copts%want_samples = .false.
+            nbc = count(sol%harmonic <= hc)
+            call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :))
+            if (allocated(error)) then
+                error%message = "truncation estimate, coarse solve at H = "//itoa(hc)// &
+                                ": "//error%message
+                return
+            end if
+            call compare_with_coarse(model, sol, coarse, est, error)
+            if (allocated(error)) return
+        else if (est%available) then
+            est%note = "no coarser harmonic set holds the forcing: the estimate is the "// &
+                       "Coulomb defect alone"
+        end if
+        call system_clock(c1)
+        est%seconds = real(c1 - c0, dp)/real(rate, dp)
+    end subroutine estimate_truncation
+
+    !> Solve `model` with as few harmonics as the tolerance asks: start at opts%harmonics,
+    !> estimate the truncation error, and double H (samples raised to the smallest power of
+    !> two >= 4 H when opts%samples is fewer), each level warm-started from the one before,
+    !> until est%estimate <= tol or H = max_harmonics (the last step is clipped to it).
+    !> The previous level is the coarse solution of the estimate when it is exactly
+    !> coarse_harmonics(H) with the same samples, so after the first level an estimate costs
+    !> no extra solve. Returns the last converged level. Not meeting tol (est%met = .false.)
+    !> or a level that does not converge is an outcome told in est%note, not an error;
+    !> est%history_* record every level tried. Errors: stat input for tol not in (0, 1) or
+    !> max_harmonics < opts%harmonics; the errors of solve_periodic and estimate_truncation.
+    subroutine solve_to_tolerance(model, opts, tol, max_harmonics, sol, est, error)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> Solver options; opts%harmonics is the first level (small for the fewest harmonics).
+        type(hbm_options_t), intent(in) :: opts
+        !> Requested relative truncation error, compared with est%estimate.
+        real(dp), intent(in) :: tol
+        !> Highest harmonic allowed.
+        integer, intent(in) :: max_harmonics
+        !> The solution of the last converged level (of the first level if none converged).
+        type(hbm_solution_t), intent(out) :: sol
+        !> Its truncation estimate, the outcome and the history of the levels.
+        type(truncation_t), intent(out) :: est
+        !> Set on invalid input or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        type(hbm_options_t) :: lopts
+        type(hbm_solution_t) :: prev, cur
+        type(truncation_t) :: lest
+        integer, allocatable :: hist_h(:), hist_s(:)
+        logical, allocatable :: hist_c(:)
+        real(dp), allocatable :: hist_e(:)
+        integer :: h
+        logical :: have_prev
+        integer(int64) :: c0, c1, rate
+        character(len=200) :: buf
+
+        if (.not. (tol > 0.0_dp .and. tol < 1.0_dp)) then
+            write (buf, '(a,g0.6,a)') "truncation tolerance = ", tol, ": must be in (0, 1)"
+            call fatal_error(error, trim(buf), stickslip_stat%input)
+            return
+        end if
+        if (max_harmonics < opts%harmonics) then
+            write (buf, '(a,i0,a,i0,a)') "max_harmonics = ", max_harmonics, &
+                ": must be >= harmonics = ", opts%harmonics, " (the first level)"
+            call fatal_error(error, trim(buf), stickslip_stat%input)
+            return
+        end if
+        allocate (hist_h(0), hist_s(0), hist_c(0), hist_e(0))
+        have_prev = .false.
+        lopts = opts
+        h = opts%harmonics
+        do
+            lopts%harmonics = h
+            lopts%samples = max(opts%samples, power_of_two_at_least(4*h))
+            if (have_prev) then
+                call solve_periodic(model, lopts, cur, error, r_start=prev%rcoef)
+            else
+                call solve_periodic(model, lopts, cur, error)
+            end if
+            if (allocated(error)) return
+            if (have_prev .and. cur%converged .and. prev%samples == cur%samples .and. &
+                prev%harmonics == coarse_harmonics(model, h, opts%odd_only)) then
+                call system_clock(c0, rate)
+                call diagnose(model, lopts, cur, lest, error)
+                if (allocated(error)) return
+                call compare_with_coarse(model, cur, prev, lest, error)
+                if (allocated(error)) return
+                call system_clock(c1)
+                lest%seconds = real(c1 - c0, dp)/real(rate, dp)
+            else
+                call estimate_truncation(model, lopts, cur, lest, error)
+                if (allocated(error)) return
+            end if
+            hist_h = [hist_h, h]
+            hist_s = [hist_s, lopts%samples]
+            hist_c = [hist_c, cur%converged]
+            hist_e = [hist_e, lest%estimate]
+            if (.not. cur%converged) then
+                if (have_prev) then
+                    sol = prev          ! est still holds the estimate of prev
+                    est%note = "the solve at H = "//itoa(h)//" did not converge: the "// &
+                               "previous level is returned"
+                else
+                    sol = cur
+                    est = lest
+                end if
+                exit
+            end if
+            est = lest
+            if (est%estimate <= tol) then
+                est%met = .true.
+                sol = cur
+                exit
+            end if
+            if (h >= max_harmonics) then
+                sol = cur
+                write (buf, '(a,es9.2,a,i0,a,es9.2)') "tolerance ", tol, &
+                    " not met at max_harmonics = ", h, ": estimate ", est%estimate
+                est%note = trim(buf)
+                exit
+            end if
+            prev = cur
+            have_prev = .true.
+            h = min(max(2*h, 1), max_harmonics)
+        end do
+        est%tolerance = tol
+        est%history_harmonics = hist_h
+        est%history_samples = hist_s
+        est%history_converged = hist_c
+        est%history_estimate = hist_e
+        if (.not. allocated(est%note)) est%note = ""
+    end subroutine solve_to_tolerance
+
+    !> The parts of the estimate that need only the solution: sizes, amplitudes and the
+    !> Coulomb defect; the estimate is the defect until a coarse comparison is added.
+    subroutine diagnose(model, opts, sol, est, error)
+        type(model_t), intent(in) :: model
+        type(hbm_options_t), intent(in) :: opts
+        type(hbm_solution_t), intent(in) :: sol
+        type(truncation_t), intent(out) :: est
+        type(error_type), allocatable, intent(out) :: error
+        type(basis_t) :: fb
+        real(dp), allocatable :: rt(:), vt(:), pt(:), st(:), vc(:), xt(:)
+        complex(dp), allocatable :: cw(:)
+        real(dp) :: vstruct, vfloor, vslip, limit, rho
+        integer :: nf, j, p
+
+        est%harmonics = sol%harmonics
+        est%samples = sol%samples
+        est%fine_samples = truncation_oversample*sol%samples
+        est%coarse_harmonics = 0
+        est%dissipation = sol%diss_friction
+        est%dissipation_change = 0.0_dp
+        est%dissipation_change_rel = 0.0_dp
+        est%psi_rms = 0.0_dp
+        est%psi_max = 0.0_dp
+        est%note = ""
+        nf = est%fine_samples
+        call new_basis(fb, sol%harmonics, sol%odd_only, nf, error)
+        if (allocated(error)) return
+        allocate (rt(nf), vt(nf), pt(nf), st(nf), xt(nf), cw(nf/2 + 1), vc(sol%nb))
+        allocate (est%amplitude(model%ndof), est%amplitude_change(model%ndof), &
+                  est%amplitude_change_rel(model%ndof), est%displacement_change_rel(model%ndof))
+        est%amplitude_change = 0.0_dp
+        est%amplitude_change_rel = 0.0_dp
+        est%displacement_change_rel = 0.0_dp
+        vstruct = 0.0_dp
+        do p = 1, model%ndof
+            call fb%synthesize(sol%xcoef(:, p), xt, cw)
+            est%amplitude(p) = maxval(abs(xt))
+            call fb%synthesize(sol%vcoef(:, p), xt, cw)
+            vstruct = max(vstruct, maxval(abs(xt)))
+        end do
+        vfloor = velocity_floor*vstruct
+        ! the weight the solution was solved with (opts%rho = 0 asks for the automatic one)
+        rho = sol%rho
+        if (.not. (rho > 0.0_dp)) rho = opts%rho
+        do j = 1, model%ncontact()
+            limit = model%mu(j)*model%normal_load(j)
+            vc = matmul(sol%vcoef, contact_velocity_direction(model, j))
+            call fb%synthesize(sol%rcoef(:, j), rt, cw)
+            call fb%synthesize(vc, vt, cw)
+            pt = psi(rt, vt, limit, rho)
+            st = psi_stick(rt, vt, limit, rho)
+            vslip = max(maxval(abs(vt)), vfloor)
+            where (st > 0.5_dp)
+                pt = pt/max(vslip, tiny(1.0_dp))
+            elsewhere
+                pt = pt/max(rho*limit, vfloor, tiny(1.0_dp))
+            end where
+            est%psi_rms = max(est%psi_rms, sqrt(sum(pt**2)/nf))
+            est%psi_max = max(est%psi_max, maxval(abs(pt)))
+        end do
+        call fb%destroy()
+        est%available = sol%converged
+        if (est%available) then
+            est%estimate = est%psi_rms
+        else
+            est%estimate = huge(1.0_dp)
+            est%note = "the solution did not converge: no truncation estimate"
+        end if
+    end subroutine diagnose
+
+    !> Add to est (already diagnosed for `fine`) the changes from the solution `coarse` on
+    !> a prefix basis of fine's, and fold them into the estimate.
+    subroutine compare_with_coarse(model, fine, coarse, est, error)
+        type(model_t), intent(in) :: model
+        type(hbm_solution_t), intent(in) :: fine
+        type(hbm_solution_t), intent(in) :: coarse
+        type(truncation_t), intent(inout) :: est
+        type(error_type), allocatable, intent(out) :: error
+        type(basis_t) :: fb
+        real(dp), allocatable :: xt(:), xc(:)
+        complex(dp), allocatable :: cw(:)
+        real(dp) :: amax, floor_amp, energy, floor_energy
+        integer :: nf, nbc, p
+
+        if (.not. coarse%converged) then
+            est%note = "the coarse solve at H = "//itoa(coarse%harmonics)//" did not "// &
+                       "converge: the estimate is the Coulomb defect alone"
+            return
+        end if
+        nbc = coarse%nb
+        if (nbc > fine%nb .or. (coarse%odd_only .neqv. fine%odd_only)) then
+            call fatal_error(error, "truncation estimate: the coarse basis is not a prefix "// &
+                             "of the fine one", stickslip_stat%internal)
+            return
+        end if
+        est%coarse_harmonics = coarse%harmonics
+        nf = est%fine_samples
+        call new_basis(fb, fine%harmonics, fine%odd_only, nf, error)
+        if (allocated(error)) return
+        allocate (xt(nf), xc(fine%nb), cw(nf/2 + 1))
+        amax = maxval(est%amplitude)
+        floor_amp = max(1.0e-12_dp*amax, tiny(1.0_dp))
+        do p = 1, model%ndof
+            ! the coarse series, embedded in the fine basis, and the difference
+            xc = 0.0_dp
+            xc(1:nbc) = coarse%xcoef(:, p)
+            call fb%synthesize(xc, xt, cw)
+            est%amplitude_change(p) = abs(est%amplitude(p) - maxval(abs(xt)))
+            est%amplitude_change_rel(p) = est%amplitude_change(p)/max(est%amplitude(p), floor_amp)
+            xc = fine%xcoef(:, p) - xc
+            call fb%synthesize(xc, xt, cw)
+            est%displacement_change_rel(p) = maxval(abs(xt))/max(est%amplitude(p), floor_amp)
+        end do
+        call fb%destroy()
+
+        est%dissipation_change = abs(fine%diss_friction - coarse%diss_friction)
+        floor_energy = 0.0_dp
+        if (model%nforce() > 0) floor_energy = 1.0e-12_dp*pi*sum(abs(model%force_amplitude))*amax
+        energy = max(abs(fine%work_forcing), fine%diss_friction + fine%diss_damping, &
+                     floor_energy, tiny(1.0_dp))
+        est%dissipation_change_rel = est%dissipation_change/energy
+        est%estimate = max(est%psi_rms, maxval(est%displacement_change_rel), &
+                           est%dissipation_change_rel)
+    end subroutine compare_with_coarse
+
+    !> Error (stat input) unless sol was solved with the basis of opts and holds coefficients.
+    subroutine check_match(opts, sol, error)
+        type(hbm_options_t), intent(in) :: opts
+        type(hbm_solution_t), intent(in) :: sol
+        type(error_type), allocatable, intent(out) :: error
+        if (.not. (allocated(sol%rcoef) .and. allocated(sol%xcoef) .and. &
+                   allocated(sol%vcoef) .and. allocated(sol%harmonic))) then
+            call fatal_error(error, "truncation estimate: the solution holds no coefficients", &
+                             stickslip_stat%input)
+        else if (sol%harmonics /= opts%harmonics .or. (sol%odd_only .neqv. opts%odd_only) &
+                 .or. sol%samples /= opts%samples) then
+            call fatal_error(error, "truncation estimate: the solution (H = "// &
+                             itoa(sol%harmonics)//", samples = "//itoa(sol%samples)// &
+                             ") was not solved with these options (H = "// &
+                             itoa(opts%harmonics)//", samples = "//itoa(opts%samples)//")", &
+                             stickslip_stat%input)
+        end if
+    end subroutine check_match
+
+    !> Smallest power of two >= n.
+    pure integer function power_of_two_at_least(n) result(m)
+        integer, intent(in) :: n
+        m = 1
+        do while (m < n)
+            m = 2*m
+        end do
+    end function power_of_two_at_least
+end module stickslip_truncation

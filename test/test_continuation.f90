@@ -1,0 +1,324 @@
+!> Tests of the pseudo-arclength continuation (generic, on a smooth system with two known
+!> folds) and of the forced-response sweep of the friction equations (analytic parameter
+!> derivatives against central differences, the curve against point-by-point solves).
+module test_continuation
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat, itoa
+    use stickslip_case, only: rtoa
+    use stickslip_model, only: model_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_reference, only: reference_options_t
+    use stickslip_continuation, only: parametric_system_t, continuation_options_t, &
+        continuation_state_t, continuation_report_t, start_continuation, continuation_step, &
+        reason_running, reason_end
+    use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep, &
+        friction_family_t, new_friction_family, set_sweep_parameter, sweep_parameter_value
+    use testing, only: test_counter_t, check, check_close, check_error
+    use test_hbm, only: seed_model
+    implicit none
+    private
+    public :: run_continuation_tests, damped_seed
+
+    !> F1 = y1^3 - 3 y1 + lambda, F2 = y2 - y1^2: folds at (y1, lambda) = (1, 2), (-1, -2).
+    type, extends(parametric_system_t) :: cubic_t
+        integer :: evaluations = 0
+    contains
+        procedure :: residual => cubic_residual
+        procedure :: jacobian => cubic_jacobian
+    end type cubic_t
+
+contains
+
+    subroutine run_continuation_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call test_folds(t)
+        call test_parameter_derivatives(t)
+        call test_sweep_against_solves(t)
+        call test_sweep_amplitude(t)
+        call test_bad_sweep(t)
+    end subroutine run_continuation_tests
+
+    subroutine cubic_residual(self, y, lambda, f, stat)
+        class(cubic_t), intent(inout) :: self
+        real(dp), intent(in) :: y(:), lambda
+        real(dp), intent(out) :: f(:)
+        integer, intent(inout) :: stat
+        self%evaluations = self%evaluations + 1
+        f(1) = y(1)**3 - 3.0_dp*y(1) + lambda
+        f(2) = y(2) - y(1)**2
+        if (.false.) stat = 1
+    end subroutine cubic_residual
+
+    subroutine cubic_jacobian(self, y, lambda, jy, jl, stat)
+        class(cubic_t), intent(inout) :: self
+        real(dp), intent(in) :: y(:), lambda
+        real(dp), intent(out) :: jy(:, :), jl(:)
+        integer, intent(inout) :: stat
+        jy(1, :) = [3.0_dp*y(1)**2 - 3.0_dp, 0.0_dp]
+        jy(2, :) = [-2.0_dp*y(1), 1.0_dp]
+        jl = [1.0_dp, 0.0_dp]
+        if (.false.) stat = int(lambda) + self%evaluations
+    end subroutine cubic_jacobian
+
+    !> From lambda = -3 (y1 = 2.1038) to lambda = 3 (y1 = -2.1038) the curve must pass the
+    !> fold at lambda = 2 going back to lambda = -2, then forward again.
+    subroutine test_folds(t)
+        type(test_counter_t), intent(inout) :: t
+        type(cubic_t) :: sys
+        type(continuation_options_t) :: co
+        type(continuation_state_t) :: st
+        type(continuation_report_t) :: rep
+        type(error_type), allocatable :: error
+        real(dp) :: lmax, lmin, ymin_at_lmax, worst, tl_old, y1_end
+        integer :: folds, k
+        co%start = -3.0_dp
+        co%stop = 3.0_dp
+        co%step = 0.05_dp
+        co%min_step = 1.0e-6_dp
+        co%max_step = 0.2_dp
+        co%tol = 1.0e-12_dp
+        co%yscale = [1.0_dp]
+        call start_continuation(sys, co, [2.0_dp, 4.0_dp], st, rep, error)
+        call check_error(t, error, "fold: start", .false.)
+        call check(t, st%reason == reason_running, "fold: started")
+        lmax = -huge(1.0_dp)
+        lmin = huge(1.0_dp)
+        ymin_at_lmax = 0.0_dp
+        worst = 0.0_dp
+        folds = 0
+        do k = 1, 2000
+            tl_old = st%tl
+            call continuation_step(sys, co, st, rep, error)
+            if (allocated(error)) exit
+            if (rep%accepted) then
+                if (tl_old*st%tl < 0.0_dp) folds = folds + 1
+                worst = max(worst, abs(st%y(1)**3 - 3.0_dp*st%y(1) + st%lambda), &
+                            abs(st%y(2) - st%y(1)**2))
+                if (st%y(1) > 0.0_dp .and. st%lambda > lmax) then
+                    lmax = st%lambda
+                    ymin_at_lmax = st%y(1)
+                end if
+                if (st%y(1) < 0.5_dp .and. st%y(1) > -1.5_dp) lmin = min(lmin, st%lambda)
+            end if
+            if (st%reason /= reason_running) exit
+        end do
+        call check_error(t, error, "fold: steps", .false.)
+        call check(t, st%reason == reason_end, "fold: reached the end of the range")
+        y1_end = -2.10380340273554_dp
+        call check_close(t, st%lambda, 3.0_dp, "fold: last point at the end exactly", 1.0e-14_dp)
+        call check_close(t, st%y(1), y1_end, "fold: the far branch at the end", 1.0e-9_dp)
+        call check(t, folds == 2, "fold: two turning points passed", "folds = "//itoa(folds))
+        call check(t, lmax <= 2.0_dp + 1.0e-9_dp .and. lmax > 1.98_dp, &
+                   "fold: the upper fold lambda = 2 is approached")
+        call check_close(t, ymin_at_lmax, 1.0_dp, "fold: upper fold at y1 = 1", atol=0.15_dp)
+        call check(t, lmin >= -2.0_dp - 1.0e-9_dp .and. lmin < -1.98_dp, &
+                   "fold: the lower fold lambda = -2 is approached")
+        call check(t, worst <= 1.0e-10_dp, "fold: every point solves F = 0")
+        call check(t, st%points > 40 .and. st%points < 400, "fold: a reasonable number of points", &
+                   "points = "//itoa(st%points))
+    end subroutine test_folds
+
+    !> dF/dlambda of the friction family against central differences, for every parameter.
+    subroutine test_parameter_derivatives(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=16), parameter :: names(4) = [character(len=16) :: 'omega', &
+                                                   'force_amplitude', 'mu', 'normal_load']
+        type(model_t) :: m
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(friction_family_t) :: fam
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: y(:), jy(:, :), jl(:), fp(:), fm(:), fd(:)
+        real(dp) :: p, h, err
+        integer :: k, n, stat
+        character(len=120) :: buf
+        m = damped_seed()
+        ho%harmonics = 15
+        ho%samples = 256
+        ho%rho = 0.2_dp
+        call solve_periodic(m, ho, sol, error)
+        call check_error(t, error, "dF/dlambda: solve", .false.)
+        if (allocated(error)) return
+        do k = 1, size(names)
+            p = sweep_parameter_value(m, names(k))
+            call new_friction_family(fam, m, ho, names(k), p, 0.2_dp, error)
+            call check_error(t, error, "dF/dlambda "//trim(names(k))//": family", .false.)
+            if (allocated(error)) return
+            n = fam%prob%n
+            ! a point off the solution, so that every term of the derivative is exercised
+            y = reshape(sol%rcoef, [n])*0.9_dp
+            allocate (jy(n, n), jl(n), fp(n), fm(n))
+            stat = 0
+            call fam%jacobian(y, p, jy, jl, stat)
+            h = 1.0e-6_dp*abs(p)
+            call fam%residual(y, p + h, fp, stat)
+            call fam%residual(y, p - h, fm, stat)
+            fd = (fp - fm)/(2.0_dp*h)
+            err = maxval(abs(fd - jl))/maxval(abs(fd))
+            write (buf, '(a,es9.2,a,es9.2)') "relative difference ", err, ", |dF/dl| ", &
+                maxval(abs(fd))
+            call check(t, stat == 0 .and. err <= 1.0e-6_dp .and. maxval(abs(fd)) > 0.0_dp, &
+                       "dF/dlambda "//trim(names(k))//" = central differences", trim(buf))
+            call fam%destroy()
+            deallocate (jy, jl, fp, fm)
+        end do
+    end subroutine test_parameter_derivatives
+
+    !> A curve in omega through both resonances of the damped seed system; every point must
+    !> be the solution a separate solve finds at its omega, the energy must balance and the
+    !> points above the resonances must be stable.
+    subroutine test_sweep_against_solves(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m, mk
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(reference_options_t) :: ro
+        type(error_type), allocatable :: error
+        real(dp) :: worst, balance, amp(2), peak
+        integer :: k, i, nstable_high, nhigh
+        logical :: monotone
+        m = damped_seed()
+        ho%harmonics = 15
+        ho%samples = 64
+        ho%rho = 0.2_dp
+        so%parameter = 'omega'
+        so%start = 0.3_dp
+        so%stop = 3.0_dp
+        so%step = 0.05_dp
+        so%max_step = 0.1_dp
+        so%stability = .false.
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "sweep omega: no error", .false.)
+        if (allocated(error)) return
+        call check(t, res%complete, "sweep omega: reached the end", res%diagnosis)
+        call check(t, res%npoints > 20, "sweep omega: points", itoa(res%npoints))
+        call check_close(t, res%points(res%npoints)%parameter, 3.0_dp, "sweep omega: ends at stop")
+        worst = 0.0_dp
+        balance = 0.0_dp
+        monotone = .true.
+        nhigh = 0
+        nstable_high = 0
+        do k = 1, res%npoints, 3
+            mk = m
+            mk%omega = res%points(k)%parameter
+            call solve_periodic(mk, ho, sol, error)
+            if (allocated(error)) exit
+            amp = [(maxval(abs(sol%x(:, i))), i=1, 2)]
+            worst = max(worst, maxval(abs(amp - res%points(k)%amplitude)/amp))
+            balance = max(balance, abs(sol%work_forcing - res%points(k)%dissipation)/ &
+                          sol%work_forcing)
+        end do
+        call check_error(t, error, "sweep omega: point solves", .false.)
+        call check(t, worst <= 1.0e-6_dp, "sweep omega: amplitudes = separate solves", &
+                   "worst relative difference "//rtoa(worst))
+        call check(t, balance <= 1.0e-6_dp, "sweep omega: dissipation = forcing work")
+        do k = 2, res%npoints
+            if (res%points(k)%arclength <= res%points(k - 1)%arclength) monotone = .false.
+        end do
+        call check(t, monotone, "sweep omega: arclength increases")
+        ! the stability of a few points above the resonances
+        so%start = 2.0_dp
+        so%stop = 3.0_dp
+        so%step = 0.25_dp
+        so%max_step = 0.25_dp
+        so%stability = .true.
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "sweep omega with stability: no error", .false.)
+        if (allocated(error)) return
+        do k = 1, res%npoints
+            nhigh = nhigh + 1
+            if (res%points(k)%stable == 1 .and. res%points(k)%floquet_max < 1.0_dp) &
+                nstable_high = nstable_high + 1
+        end do
+        call check(t, nhigh > 3 .and. nstable_high == nhigh, &
+                   "sweep omega: stable above the resonances", itoa(nstable_high)//"/"//itoa(nhigh))
+        peak = 0.0_dp
+        do k = 1, res%npoints
+            peak = max(peak, res%points(k)%amplitude(2))
+        end do
+        call check(t, peak > 3.0_dp*res%points(res%npoints)%amplitude(2), &
+                   "sweep omega: a resonance peak")
+    end subroutine test_sweep_against_solves
+
+    !> A sweep in the forcing amplitude and one in mu, checked at their ends against solves.
+    subroutine test_sweep_amplitude(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=16), parameter :: names(3) = [character(len=16) :: 'force_amplitude', &
+                                                   'mu', 'normal_load']
+        real(dp), parameter :: lo(3) = [2.0_dp, 0.2_dp, 0.5_dp], hi(3) = [15.0_dp, 1.5_dp, 3.0_dp]
+        type(model_t) :: m, mk
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(reference_options_t) :: ro
+        type(error_type), allocatable :: error
+        real(dp) :: amp(2)
+        integer :: k, i, last
+        m = damped_seed()
+        m%omega = 1.2_dp
+        ho%harmonics = 15
+        ho%samples = 64
+        ho%rho = 0.2_dp
+        do k = 1, 3
+            so%parameter = names(k)
+            so%start = lo(k)
+            so%stop = hi(k)
+            so%step = 0.0_dp
+            so%max_step = 0.0_dp
+            so%stability = .false.
+            call run_sweep(m, ho, ro, so, res, error)
+            call check_error(t, error, "sweep "//trim(names(k))//": no error", .false.)
+            if (allocated(error)) return
+            call check(t, res%complete, "sweep "//trim(names(k))//": complete", res%diagnosis)
+            last = res%npoints
+            mk = m
+            call set_sweep_parameter(mk, names(k), res%points(last)%parameter, m%force_amplitude)
+            call solve_periodic(mk, ho, sol, error)
+            if (allocated(error)) return
+            amp = [(maxval(abs(sol%x(:, i))), i=1, 2)]
+            call check_close(t, res%points(last)%amplitude, amp, "sweep "//trim(names(k))// &
+                             ": last point = a separate solve", 1.0e-6_dp)
+            call check(t, all(res%points(1:last)%stable == -1), "sweep "//trim(names(k))// &
+                       ": stability not computed when not asked")
+        end do
+    end subroutine test_sweep_amplitude
+
+    !> Bad sweep options are input errors naming &sweep.
+    subroutine test_bad_sweep(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m
+        type(hbm_options_t) :: ho
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(reference_options_t) :: ro
+        type(error_type), allocatable :: error
+        m = damped_seed()
+        so%parameter = 'stiffness'
+        so%start = 1.0_dp
+        so%stop = 2.0_dp
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "bad sweep: unknown parameter", .true.)
+        if (allocated(error)) call check(t, index(error%message, "&sweep parameter") > 0 .and. &
+                                         error%stat == stickslip_stat%input, &
+                                         "bad sweep: names &sweep parameter", error%message)
+        so%parameter = 'omega'
+        so%start = -1.0_dp
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "bad sweep: omega < 0", .true.)
+        so%start = 1.0_dp
+        so%stop = 1.0_dp
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "bad sweep: empty range", .true.)
+    end subroutine test_bad_sweep
+
+    !> The seed system with light Rayleigh damping C = 0.02 M + 0.02 K.
+    function damped_seed() result(m)
+        type(model_t) :: m
+        m = seed_model()
+        m%damping = 0.02_dp*m%mass + 0.02_dp*m%stiffness
+    end function damped_seed
+end module test_continuation

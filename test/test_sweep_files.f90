@@ -1,0 +1,223 @@
+!> Tests of the sweep end to end: the case group &sweep, the CLI, frc.csv and summary.nml,
+!> the checkpoint of an interrupted run and its resumption, and bad &sweep input; the
+!> robustness study through the CLI (&robustness, robustness.csv, the maps' script).
+module test_sweep_files
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_case, only: case_t, read_case
+    use stickslip_sweep, only: sweep_result_t, run_sweep
+    use stickslip_run, only: run_sweep_case
+    use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
+    use stickslip_output, only: make_directory
+    use test_case, only: cli, write_lines, scratch
+    use testing, only: test_counter_t, check, check_close, check_error
+    implicit none
+    private
+    public :: run_sweep_file_tests
+
+    !> A checkpoint writer that stops the sweep after `stop_after` points, like a batch job
+    !> killed at its wall-time limit (the checkpoint of that point is on disk).
+    type, extends(checkpoint_writer_t) :: killed_writer_t
+        integer :: stop_after = 0
+    contains
+        procedure :: observe => killed_observe
+    end type killed_writer_t
+
+    character(len=*), parameter :: lines_common(6) = [character(len=120) :: &
+        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1, damping = 0.06,-0.02,-0.02,0.04 /", &
+        "&forcing omega = 2.0, force_dof = 1, force_amplitude = 10.0 /", &
+        "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
+        "&hbm harmonics = 10, rho = 0.2, samples = 64 /", &
+        "&run method = 'sweep' /", &
+        "&sweep parameter = 'omega', start = 2.0, stop = 3.0, step = 0.1, max_step = 0.1 /"]
+
+contains
+
+    subroutine run_sweep_file_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call test_cli_sweep(t)
+        call test_resume(t)
+        call test_bad_sweep_input(t)
+        call test_cli_robustness(t)
+    end subroutine run_sweep_file_tests
+
+    !> method = 'robustness' on a tiny grid: exit 0, robustness.csv with one row per run,
+    !> robustness.gp, the summary's counts; a bad &robustness entry names the variable.
+    subroutine test_cli_robustness(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/robustness_cli"
+        character(len=:), allocatable :: out, err
+        character(len=2000) :: line
+        integer :: code, u, stat, rows
+        logical :: exists
+        call write_lines(dir//".nml", [lines_common(1:4), &
+            "&run method = 'robustness' /" // repeat(' ', 0), &
+            "&robustness omegas = 2.0, 4.5, mus = 0.45, harmonics = 5, rhos = 0.2, 0, "// &
+            "steps_per_period = 500 /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: dir//".nml"], code, out, err)
+        call check(t, code == 0, "robustness cli: exit 0", err)
+        call check(t, index(out, "hbm-cold: 4 of 4 succeeded") > 0, "robustness cli: summary", out)
+        open (newunit=u, file=dir//"/robustness.csv", status='old', action='read', iostat=stat)
+        call check(t, stat == 0, "robustness cli: robustness.csv written")
+        if (stat /= 0) return
+        rows = -1
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            rows = rows + 1
+        end do
+        close (u)
+        ! 2 omegas x (2 rho x (cold + warm) + 1 Euler)
+        call check(t, rows == 10, "robustness cli: one row per run")
+        inquire (file=dir//"/robustness.gp", exist=exists)
+        call check(t, exists, "robustness cli: robustness.gp written")
+        call write_lines(dir//".nml", [lines_common(1:4), &
+            "&run method = 'robustness' /" // repeat(' ', 0), &
+            "&robustness omegas = 2.0, -1.0 /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: dir//".nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "&robustness omegas") > 0, &
+                   "robustness cli: bad omegas named", err)
+    end subroutine test_cli_robustness
+
+    subroutine killed_observe(self, res, error)
+        class(killed_writer_t), intent(inout) :: self
+        type(sweep_result_t), intent(in) :: res
+        type(error_type), allocatable, intent(out) :: error
+        call self%checkpoint_writer_t%observe(res, error)
+        if (allocated(error)) return
+        if (res%npoints >= self%stop_after) call fatal_error(error, "killed", stickslip_stat%io)
+    end subroutine killed_observe
+
+    !> The CLI runs a sweep case: exit 0, frc.csv with its header and one row per point,
+    !> summary.nml complete, no checkpoint left.
+    subroutine test_cli_sweep(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/sweep_cli"
+        character(len=:), allocatable :: out, err, header
+        character(len=2000) :: line
+        integer :: code, u, stat, rows
+        logical :: exists
+        call write_lines(dir//".nml", [lines_common, &
+            "&output directory = '"//dir//"' /" // repeat(' ', 0)])
+        call cli([character(len=200) :: dir//".nml"], code, out, err)
+        call check(t, code == 0, "sweep cli: exit 0", err)
+        call check(t, index(out, "forced-response curve in omega") > 0, "sweep cli: summary", out)
+        open (newunit=u, file=dir//"/frc.csv", status='old', action='read', iostat=stat)
+        call check(t, stat == 0, "sweep cli: frc.csv written")
+        if (stat /= 0) return
+        read (u, '(a)') line
+        header = trim(line)
+        rows = 0
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            rows = rows + 1
+        end do
+        close (u)
+        call check(t, header == "parameter,amp_1,amp_2,dissipation,rmax_1,stick_1,harmonics,"// &
+                   "residual,status,floquet_max,stable,truncation,arclength,diss_friction,"// &
+                   "diss_damping,nfev", "sweep cli: frc.csv header", header)
+        call check(t, rows >= 11, "sweep cli: rows")
+        inquire (file=dir//"/"//checkpoint_name, exist=exists)
+        call check(t, .not. exists, "sweep cli: checkpoint removed when done")
+        inquire (file=dir//"/frc.gp", exist=exists)
+        call check(t, exists, "sweep cli: frc.gp written")
+        open (newunit=u, file=dir//"/summary.nml", status='old', action='read', iostat=stat)
+        call check(t, stat == 0, "sweep cli: summary.nml")
+        if (stat /= 0) return
+        exists = .false.
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            if (trim(adjustl(line)) == "complete = T") exists = .true.
+        end do
+        close (u)
+        call check(t, exists, "sweep cli: summary says complete")
+    end subroutine test_cli_sweep
+
+    !> A run killed after 4 points leaves its checkpoint; running the case again resumes
+    !> from it and ends with the same curve as an uninterrupted run. A checkpoint of another
+    !> case is refused with a message; resume = .false. starts afresh.
+    subroutine test_resume(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/sweep_resume"
+        type(case_t) :: c, c2
+        type(killed_writer_t) :: killer
+        type(sweep_result_t) :: whole, cut, resumed
+        type(error_type), allocatable :: error
+        logical :: exists, same
+        integer :: k
+        call write_lines(dir//".nml", [lines_common, "&output directory = '"//dir//"' /"])
+        call read_case(dir//".nml", c, error)
+        call check_error(t, error, "resume: read case", .false.)
+        if (allocated(error)) return
+        call make_directory(dir, error)
+        call run_sweep(c%model, c%hbm, c%reference, c%sweep, whole, error)
+        call check_error(t, error, "resume: uninterrupted run", .false.)
+        if (allocated(error)) return
+        killer%directory = dir
+        killer%fingerprint = case_fingerprint(c)
+        killer%stop_after = 4
+        call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
+        call check_error(t, error, "resume: the killed run stops", .true.)
+        inquire (file=dir//"/"//checkpoint_name, exist=exists)
+        call check(t, exists, "resume: the checkpoint survives the kill")
+        call run_sweep_case(c, resumed, error)
+        call check_error(t, error, "resume: resumed run", .false.)
+        if (allocated(error)) return
+        call check(t, resumed%resumed_points == 4, "resume: continued from 4 points")
+        same = resumed%npoints == whole%npoints
+        if (same) then
+            do k = 1, whole%npoints
+                same = same .and. abs(resumed%points(k)%parameter - whole%points(k)%parameter) &
+                       <= 1.0e-12_dp .and. all(abs(resumed%points(k)%amplitude - &
+                       whole%points(k)%amplitude) <= 1.0e-10_dp*whole%points(k)%amplitude)
+            end do
+        end if
+        call check(t, same, "resume: the same curve as an uninterrupted run")
+        ! a checkpoint of another case
+        killer%stop_after = 2
+        call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
+        c2 = c
+        c2%model%mu = 0.5_dp
+        call run_sweep_case(c2, resumed, error)
+        call check_error(t, error, "resume: checkpoint of another case refused", .true.)
+        if (allocated(error)) call check(t, index(error%message, "another case") > 0 .and. &
+                                         error%stat == stickslip_stat%input, &
+                                         "resume: the message says why", error%message)
+        c2%sweep%resume = .false.
+        call run_sweep_case(c2, resumed, error)
+        call check_error(t, error, "resume: resume = .false. starts afresh", .false.)
+        if (.not. allocated(error)) call check(t, resumed%resumed_points == 0, &
+                                               "resume: no points taken from the checkpoint")
+    end subroutine test_resume
+
+    !> Bad &sweep input: a message naming the file, &sweep and the variable; exit code 1.
+    subroutine test_bad_sweep_input(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=120) :: bad(5, 2)
+        character(len=:), allocatable :: out, err
+        character(len=*), parameter :: path = scratch//"/sweep_bad.nml"
+        integer :: code, k
+        bad(1, :) = [character(len=120) :: "&sweep parameter = 'stiffness', start = 1, stop = 2 /", &
+                     "&sweep parameter"]
+        bad(2, :) = [character(len=120) :: "&sweep start = 1 /", "&sweep stop: missing"]
+        bad(3, :) = [character(len=120) :: "&sweep start = -1, stop = 2 /", "omega must stay > 0"]
+        bad(4, :) = [character(len=120) :: "&sweep start = 1, stop = 2, step = -0.1 /", &
+                     "&sweep step"]
+        bad(5, :) = [character(len=120) :: "&sweep start = 1, stop = 2, max_points = 1 /", &
+                     "&sweep max_points"]
+        do k = 1, size(bad, 1)
+            call write_lines(path, [lines_common(1:5), bad(k, 1), &
+                                    "&output directory = '"//scratch//"/sweep_bad' /"])
+            call cli([character(len=200) :: path], code, out, err)
+            call check(t, code == 1 .and. index(err, trim(bad(k, 2))) > 0 .and. &
+                       index(err, path) > 0, "bad &sweep input "//trim(bad(k, 1)), err)
+        end do
+        call write_lines(path, [lines_common(1:5), &
+                                "&output directory = '"//scratch//"/sweep_bad' /"])
+        call cli([character(len=200) :: path], code, out, err)
+        call check(t, code == 1 .and. index(err, "&sweep: missing") > 0, &
+                   "method 'sweep' without &sweep", err)
+    end subroutine test_bad_sweep_input
+end module test_sweep_files

@@ -386,6 +386,9 @@ contains
             res%stability_seconds, " s)"
         if (len(sampling_notes(case%hbm%samples, case%hbm%harmonics)) > 0) write (u, '(a)') &
             "  note: "//sampling_notes(case%hbm%samples, case%hbm%harmonics)
+        if (allocated(res%notes)) then
+            if (len(res%notes) > 0) write (u, '(a)') "  note: "//res%notes
+        end if
         write (u, '(a)') "  wrote "//case%directory//"/{frc.csv, frc.gp, summary.nml}"
     end subroutine print_sweep_summary
 

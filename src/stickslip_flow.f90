@@ -107,6 +107,8 @@ module stickslip_flow
         integer, allocatable :: event_contact(:), event_kind(:), event_direction(:)
         !> Work of the forcing, friction and viscous dissipation over the period [J].
         real(dp) :: work_forcing = 0.0_dp, diss_friction = 0.0_dp, diss_damping = 0.0_dp
+        !> Gross work of the forcing, integral |f . v| dt [J].
+        real(dp) :: work_gross = 0.0_dp
         !> Time spent stuck, per contact [s].
         real(dp), allocatable :: stick_time(:)
     end type orbit_t
@@ -584,7 +586,7 @@ contains
             type(mode_t), intent(in) :: md
             real(dp), intent(in) :: ta, ya(:), tz
             logical, intent(in) :: full_step
-            real(dp) :: yg(na), e(na, na), half
+            real(dp) :: yg(na), e(na, na), half, power
             integer :: ig, st
             half = 0.5_dp*(tz - ta)
             if (half <= 0.0_dp) return
@@ -596,8 +598,9 @@ contains
                     yg = matmul(e, ya)
                 end if
                 yg(nz + 1:) = self%exo(ta + half*(1.0_dp + self%gx(ig)))
-                orbit%work_forcing = orbit%work_forcing + half*self%gw(ig)* &
-                    dot_product(matmul(self%hf(:, nz + 1:), yg(nz + 1:)), yg(n + 1:nz))
+                power = dot_product(matmul(self%hf(:, nz + 1:), yg(nz + 1:)), yg(n + 1:nz))
+                orbit%work_forcing = orbit%work_forcing + half*self%gw(ig)*power
+                orbit%work_gross = orbit%work_gross + half*self%gw(ig)*abs(power)
                 orbit%diss_damping = orbit%diss_damping + half*self%gw(ig)* &
                     dot_product(yg(n + 1:nz), matmul(self%damping, yg(n + 1:nz)))
             end do

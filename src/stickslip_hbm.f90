@@ -329,6 +329,19 @@ contains
         do p = 1, n
             sol%work_forcing = sol%work_forcing + inner(fcoef(:, p), sol%vcoef(:, p))
         end do
+        ! the gross work, integral |f . v| dt: the scale of the energy balance
+        block
+            real(dp) :: fs(nt), vt(nt), pw(nt)
+            complex(dp) :: cwork(nt/2 + 1)
+            pw = 0.0_dp
+            do p = 1, n
+                if (all(fcoef(:, p) == 0.0_dp)) cycle
+                call prob%basis%synthesize(fcoef(:, p), fs, cwork)
+                call prob%basis%synthesize(sol%vcoef(:, p), vt, cwork)
+                pw = pw + fs*vt
+            end do
+            sol%work_gross = period*sum(abs(pw))/nt
+        end block
         sol%diss_friction = 0.0_dp
         sol%diss_coulomb = 0.0_dp
         do j = 1, nc

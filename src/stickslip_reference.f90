@@ -61,6 +61,8 @@ module stickslip_reference
         real(dp) :: t_section = 0.0_dp
         !> Work of the forcing, friction and viscous dissipation over one period [J].
         real(dp) :: work_forcing = 0.0_dp, diss_friction = 0.0_dp, diss_damping = 0.0_dp
+        !> Gross work of the forcing over one period, integral |f . v| dt [J].
+        real(dp) :: work_gross = 0.0_dp
         !> Share of the period each contact sticks, and its number of stick phases.
         real(dp), allocatable :: stick_fraction(:)
         integer, allocatable :: stick_phases(:)
@@ -328,6 +330,7 @@ contains
         res%flow = shooting%flow
         call finish_events(res, period)
         res%work_forcing = res%orbit%work_forcing
+        res%work_gross = res%orbit%work_gross
         res%diss_friction = res%orbit%diss_friction
         res%diss_damping = res%orbit%diss_damping
         res%stick_fraction = res%orbit%stick_time/period

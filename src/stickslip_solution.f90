@@ -101,6 +101,9 @@ module stickslip_solution
         logical, allocatable :: offset_undetermined(:)
         !> Work of the forcing over one period [J].
         real(dp) :: work_forcing = 0.0_dp
+        !> Gross work of the forcing over one period, integral |f . v| dt [J]: the scale of
+        !> the energy balance when the net work is ~0 (a contact stuck all period).
+        real(dp) :: work_gross = 0.0_dp
         !> Energy dissipated by friction over one period, -integral r . W^T v dt [J].
         real(dp) :: diss_friction = 0.0_dp
         !> Coulomb dissipation over one period, integral mu N |W^T v| dt [J]; equals

@@ -21,6 +21,7 @@ module stickslip_sweep
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_dynamics, only: dynamics_t, new_dynamics
     use stickslip_friction, only: psi_limit_derivative
+    use stickslip_lapack, only: dgetrf, dgetrs, dgeev
     use stickslip_continuation, only: parametric_system_t, continuation_options_t, &
         continuation_state_t, continuation_report_t, start_continuation, continuation_step, &
         validate_continuation_options, reason_running, reason_end, reason_failures, &
@@ -33,6 +34,7 @@ module stickslip_sweep
     public :: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, run_sweep
     public :: validate_sweep_options, sweep_parameter_value, set_sweep_parameter
     public :: continuation_options_of, reason_text, friction_family_t, new_friction_family
+    public :: undamped_resonance_notes
 
     !> Options of a sweep (&sweep).
     type :: sweep_options_t
@@ -102,6 +104,8 @@ module stickslip_sweep
         real(dp) :: seconds = 0.0_dp, stability_seconds = 0.0_dp
         !> Turning points passed (sign changes of the parameter's tangent component).
         integer :: folds = 0
+        !> Warnings about the curve ('' when none): undamped_resonance_notes.
+        character(len=:), allocatable :: notes
     end type sweep_result_t
 
     !> Called after every point; a checkpoint writer extends it.
@@ -402,6 +406,11 @@ contains
         call fam%prob%destroy()
         if (allocated(error)) return
         res%complete = res%state%reason == reason_end
+        if (opts%parameter == 'omega') then
+            res%notes = undamped_resonance_notes(model, opts%start, opts%stop)
+        else
+            res%notes = ""
+        end if
         if (.not. allocated(res%diagnosis)) res%diagnosis = ""
         if (.not. res%complete) then
             if (len(res%diagnosis) > 0) then
@@ -525,6 +534,63 @@ contains
         if (stat /= 0) call fatal_error(error, "sweep: the structure has no dynamics at "// &
                                         "the start of the range", stickslip_stat%numerical)
     end subroutine new_friction_family
+
+    !> Warnings for a sweep in omega over [lo, hi] of a structure without viscous damping:
+    !> the forcing frequencies h omega that hit a natural frequency of the structure without
+    !> friction (eigenvalues of M^-1 K). There the dynamic stiffness is singular and, unless
+    !> friction can bound it, the response is unbounded; the friction forces (the unknowns)
+    !> stay bounded, so the continuation passes such a point without noticing, and the curve
+    !> shows a finite peak between two points. '' when damped or when no such point lies in
+    !> the range.
+    function undamped_resonance_notes(model, lo, hi) result(notes)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> The range of omega [rad/s].
+        real(dp), intent(in) :: lo, hi
+        character(len=:), allocatable :: notes
+        real(dp), allocatable :: a(:, :), b(:, :), wr(:), wi(:), work(:), vdum(:, :)
+        integer, allocatable :: ipiv(:)
+        integer :: n, info, k, i, h
+        real(dp) :: wn, om
+        character(len=80) :: buf
+        notes = ""
+        if (any(model%damping /= 0.0_dp)) return
+        n = model%ndof
+        a = model%mass
+        b = model%stiffness
+        allocate (ipiv(n), wr(n), wi(n), work(8*n), vdum(1, 1))
+        call dgetrf(n, n, a, n, ipiv, info)
+        if (info /= 0) return
+        call dgetrs('N', n, n, a, n, ipiv, b, n, info)
+        if (info /= 0) return
+        call dgeev('N', 'N', n, b, n, wr, wi, vdum, 1, vdum, 1, work, size(work), info)
+        if (info /= 0) return
+        do k = 1, n
+            if (.not. (wr(k) > 0.0_dp)) cycle
+            wn = sqrt(wr(k))
+            do i = 1, model%nforce()
+                h = model%force_harmonic(i)
+                if (h == 0) cycle
+                om = wn/h
+                if (om >= min(lo, hi) .and. om <= max(lo, hi) .and. index(notes, trim(fmt(om))) == 0) then
+                    write (buf, '(a,i0,a)') trim(fmt(om))//" rad/s (h = ", h, ")"
+                    if (len(notes) > 0) notes = notes//", "
+                    notes = notes//trim(buf)
+                end if
+            end do
+        end do
+        if (len(notes) > 0) notes = "no damping: the range crosses natural frequencies of "// &
+            "the structure without friction at omega = "//notes//"; there the response "// &
+            "may be unbounded (friction does not always bound it) while the curve shows a "// &
+            "finite peak between two points: add damping, or refine max_step there"
+    contains
+        function fmt(x) result(t)
+            real(dp), intent(in) :: x
+            character(len=20) :: t
+            write (t, '(f0.5)') x
+            if (t(1:1) == '.') t = '0'//t
+        end function fmt
+    end function undamped_resonance_notes
 
     !> Words for a continuation_state_t%reason.
     pure function reason_text(reason) result(text)

@@ -13,7 +13,9 @@ module test_continuation
         continuation_state_t, continuation_report_t, start_continuation, continuation_step, &
         reason_running, reason_end
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep, &
-        friction_family_t, new_friction_family, set_sweep_parameter, sweep_parameter_value
+        friction_family_t, new_friction_family, set_sweep_parameter, sweep_parameter_value, &
+        undamped_resonance_notes
+    use stickslip_checks, only: sampling_notes
     use testing, only: test_counter_t, check, check_close, check_error
     use test_hbm, only: seed_model
     implicit none
@@ -37,7 +39,28 @@ contains
         call test_sweep_against_solves(t)
         call test_sweep_amplitude(t)
         call test_bad_sweep(t)
+        call test_notes(t)
     end subroutine run_continuation_tests
+
+    !> The warnings printed with a result: an undamped sweep across a natural frequency, odd
+    !> or few samples.
+    subroutine test_notes(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: note
+        note = undamped_resonance_notes(seed_model(), 0.5_dp, 0.8_dp)
+        call check(t, index(note, "0.61803 rad/s (h = 1)") > 0 .and. &
+                   index(note, "1.61803") == 0, "notes: undamped resonance in the range", note)
+        note = undamped_resonance_notes(seed_model(), 0.5_dp, 2.0_dp)
+        call check(t, index(note, "0.61803") > 0 .and. index(note, "1.61803") > 0, &
+                   "notes: both natural frequencies", note)
+        note = undamped_resonance_notes(damped_seed(), 0.5_dp, 2.0_dp)
+        call check(t, len(note) == 0, "notes: none with damping", note)
+        note = undamped_resonance_notes(seed_model(), 2.0_dp, 6.0_dp)
+        call check(t, len(note) == 0, "notes: none outside the range", note)
+        call check(t, index(sampling_notes(41, 10), "odd") > 0, "notes: odd samples")
+        call check(t, index(sampling_notes(30, 10), "< 4 H") > 0, "notes: fewer than 4 H")
+        call check(t, len(sampling_notes(1024, 30)) == 0, "notes: none for 1024 samples, H = 30")
+    end subroutine test_notes
 
     subroutine cubic_residual(self, y, lambda, f, stat)
         class(cubic_t), intent(inout) :: self

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Regenerate the README figures: Figure 3 of the paper (examples/seed.nml, the three methods
-# side by side) and the work-precision diagrams of examples/seed_study.nml and
-# examples/chain4_study.nml, release build. Writes doc/*.png; the runs' files stay in out/.
+# side by side), the work-precision diagrams of examples/seed_study.nml and
+# examples/chain4_study.nml, the forced-response curve of examples/seed_frc.nml and the
+# robustness maps of examples/seed_robustness.nml, release build. Writes doc/*.png; the runs'
+# files stay in out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 fpm build --profile release >/dev/null
@@ -14,4 +16,10 @@ for c in seed_study chain4_study; do
     gnuplot -e "dir='out/$c'" examples/work_precision.gp
     cp "out/$c/work_precision.png" "doc/work_precision_${c%_study}.png"
 done
-echo "wrote doc/figure3.png doc/work_precision_seed.png doc/work_precision_chain4.png"
+run examples/seed_frc.nml
+cp out/seed_frc/frc.png doc/frc_seed.png
+run examples/seed_robustness.nml
+cp out/seed_robustness/robustness_cold.png doc/robustness_cold.png
+cp out/seed_robustness/robustness_warm.png doc/robustness_warm.png
+echo "wrote doc/figure3.png doc/work_precision_seed.png doc/work_precision_chain4.png" \
+     "doc/frc_seed.png doc/robustness_cold.png doc/robustness_warm.png"

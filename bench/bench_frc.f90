@@ -9,7 +9,8 @@ program bench_frc
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
     use stickslip_case, only: case_t, read_case
-    use stickslip_sweep, only: sweep_result_t, run_sweep, sweep_options_t
+    use stickslip_study, only: median
+    use stickslip_sweep, only: sweep_result_t, run_sweep
     implicit none
     type(case_t) :: c
     type(error_type), allocatable :: error
@@ -66,27 +67,4 @@ contains
             res%folds, res%state%rejected, median(times), 1.0e3_dp*median(times)/res%npoints, &
             res%complete
     end subroutine measure
-
-    pure real(dp) function median(a)
-        real(dp), intent(in) :: a(:)
-        real(dp) :: b(size(a)), x
-        integer :: i, j, n
-        n = size(a)
-        b = a
-        do i = 2, n
-            x = b(i)
-            j = i - 1
-            do while (j >= 1)
-                if (b(j) <= x) exit
-                b(j + 1) = b(j)
-                j = j - 1
-            end do
-            b(j + 1) = x
-        end do
-        if (mod(n, 2) == 1) then
-            median = b((n + 1)/2)
-        else
-            median = 0.5_dp*(b(n/2) + b(n/2 + 1))
-        end if
-    end function median
 end program bench_frc

@@ -13,6 +13,7 @@ program bench_hbm
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_case, only: case_t, read_case
+    use stickslip_study, only: median
     implicit none
     integer, parameter :: hs(8) = [5, 10, 20, 30, 50, 100, 200, 256]
     type(model_t) :: m
@@ -96,28 +97,4 @@ program bench_hbm
                 " at H = ", worst_h
         end do
     end if
-
-contains
-
-    real(dp) function median(x)
-        real(dp), intent(in) :: x(:)
-        real(dp) :: y(size(x)), tmp
-        integer :: a, b
-        y = x
-        do a = 2, size(y)
-            tmp = y(a)
-            b = a - 1
-            do while (b >= 1)
-                if (y(b) <= tmp) exit
-                y(b + 1) = y(b)
-                b = b - 1
-            end do
-            y(b + 1) = tmp
-        end do
-        if (mod(size(y), 2) == 1) then
-            median = y((size(y) + 1)/2)
-        else
-            median = 0.5_dp*(y(size(y)/2) + y(size(y)/2 + 1))
-        end if
-    end function median
 end program bench_hbm

@@ -13,6 +13,7 @@ program bench_robustness
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
     use stickslip_case, only: case_t, read_case
+    use stickslip_study, only: median
     use stickslip_output, only: make_directory, write_robustness_csv
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         default_robustness_options
@@ -222,28 +223,4 @@ contains
         write (output_unit, '(a,i0,a,i0,a,i0,a)', advance='no') "| ", ok, "/", n, " (", &
             nint(100.0_dp*ok/max(n, 1)), "%) "
     end subroutine rate
-
-    real(dp) function median(x)
-        real(dp), intent(in) :: x(:)
-        real(dp) :: y(size(x)), tmp
-        integer :: a, b
-        median = 0.0_dp
-        if (size(x) == 0) return
-        y = x
-        do a = 2, size(y)
-            tmp = y(a)
-            b = a - 1
-            do while (b >= 1)
-                if (y(b) <= tmp) exit
-                y(b + 1) = y(b)
-                b = b - 1
-            end do
-            y(b + 1) = tmp
-        end do
-        if (mod(size(y), 2) == 1) then
-            median = y((size(y) + 1)/2)
-        else
-            median = 0.5_dp*(y(size(y)/2) + y(size(y)/2 + 1))
-        end if
-    end function median
 end program bench_robustness

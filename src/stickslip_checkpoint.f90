@@ -4,6 +4,7 @@
 !> case (model, &hbm, &sweep range and steps, &reference): a checkpoint of another case is
 !> refused, never silently continued. Text, full double precision.
 module stickslip_checkpoint
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_case, only: case_t, write_case
@@ -31,19 +32,20 @@ module stickslip_checkpoint
 
 contains
 
-    !> A 64-bit FNV-1a hash (16 hexadecimal digits) of the effective case as written by
-    !> write_case, without the variables that may change between a run and its resumption
-    !> (&output directory, &sweep max_points, max_failures, resume, plot).
+    !> A hash (16 hexadecimal digits: two 32-bit FNV-1a hashes with different offsets, in
+    !> exact integer arithmetic) of the effective case as written by write_case, without the
+    !> variables that may change between a run and its resumption (&output directory, &sweep
+    !> max_points, max_failures, resume, plot).
     function case_fingerprint(case) result(fp)
         !> The case.
         type(case_t), intent(in) :: case
         character(len=16) :: fp
-        integer(8), parameter :: prime = 1099511628211_8
-        integer(8) :: h
+        integer(int64), parameter :: prime = 16777619_int64, modulus = 4294967296_int64
+        integer(int64) :: h(2)
         integer :: u, stat, i
         character(len=4096) :: line
         character(len=512) :: msg
-        h = -3750763034362895579_8
+        h = [2166136261_int64, 84696351_int64]
         open (newunit=u, status='scratch', action='readwrite', iostat=stat)
         if (stat /= 0) then
             fp = '0000000000000000'
@@ -59,12 +61,11 @@ contains
                 index(line, 'max_failures') == 1 .or. index(line, 'resume') == 1 .or. &
                 index(line, 'plot') == 1) cycle
             do i = 1, len_trim(line)
-                h = ieor(h, int(ichar(line(i:i)), 8))
-                h = h*prime
+                h = modulo(ieor(h, int(ichar(line(i:i)), int64))*prime, modulus)
             end do
         end do
         close (u)
-        write (fp, '(z16.16)') h
+        write (fp, '(2z8.8)') h
     end function case_fingerprint
 
     !> Save the curve so far into <directory>/frc.checkpoint (atomic). Error: stat io.

@@ -40,7 +40,43 @@ contains
         call test_sweep_amplitude(t)
         call test_bad_sweep(t)
         call test_notes(t)
+        call test_recovery(t)
     end subroutine run_continuation_tests
+
+    !> The recovery of a failed point: the harmonic ladder at a fixed parameter, from a bad
+    !> start, lands on the solution a separate solve finds.
+    subroutine test_recovery(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(friction_family_t) :: fam
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: y(:), f(:)
+        logical :: ok
+        integer :: stat
+        m = damped_seed()
+        ho%harmonics = 30
+        ho%samples = 256
+        ho%rho = 0.2_dp
+        call new_friction_family(fam, m, ho, 'omega', 3.0_dp, 0.2_dp, error)
+        call check_error(t, error, "recovery: family", .false.)
+        if (allocated(error)) return
+        ! a start far from the solution: forces of twice the limit everywhere
+        y = [(0.9_dp, stat=1, fam%prob%n)]
+        call fam%recover(y, 3.0_dp, ok, error)
+        call check_error(t, error, "recovery: no error", .false.)
+        call check(t, ok, "recovery: the ladder converged")
+        allocate (f(size(y)))
+        stat = 0
+        call fam%residual(y, 3.0_dp, f, stat)
+        m%omega = 3.0_dp
+        call solve_periodic(m, ho, sol, error)
+        call check(t, norm2(f) <= ho%tol*sol%fscale, "recovery: F = 0 there (solve's tolerance)")
+        call check_close(t, y, reshape(sol%rcoef, [size(y)]), "recovery: = a separate solve", &
+                         atol=1.0e-8_dp)
+        call fam%destroy()
+    end subroutine test_recovery
 
     !> The warnings printed with a result: an undamped sweep across a natural frequency, odd
     !> or few samples.

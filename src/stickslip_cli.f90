@@ -145,8 +145,14 @@ contains
                 call run_study_case(case, study, error)
             case ('sweep')
                 call run_sweep_case(case, sweep, error)
-                if (case%sweep%plot .and. sweep%npoints > 1) &
-                    call draw(case, "frc.gp", ["frc.png"], err_unit)
+                ! a curve that stopped early (stat numerical) was written too: draw it
+                if (case%sweep%plot .and. sweep%npoints > 1) then
+                    if (.not. allocated(error)) then
+                        call draw(case, "frc.gp", ["frc.png"], err_unit)
+                    else if (error%stat == stickslip_stat%numerical) then
+                        call draw(case, "frc.gp", ["frc.png"], err_unit)
+                    end if
+                end if
             case ('robustness')
                 call run_robustness_case(case, rows, error)
                 if (.not. allocated(error)) call draw(case, "robustness.gp", &

@@ -541,7 +541,6 @@ contains
         !> Parameter.
         real(dp), intent(in) :: lambda
         s = 0.0_dp
-        if (.false.) s = lambda
     end function unit_scale
 
     !> The default recovery: none.
@@ -557,6 +556,5 @@ contains
         !> Set on breakdown.
         type(error_type), allocatable, intent(out) :: error
         ok = .false.
-        if (.false.) y = y*lambda
     end subroutine no_recovery
 end module stickslip_continuation

@@ -106,7 +106,6 @@ contains
         self%evaluations = self%evaluations + 1
         f(1) = y(1)**3 - 3.0_dp*y(1) + lambda
         f(2) = y(2) - y(1)**2
-        if (.false.) stat = 1
     end subroutine cubic_residual
 
     subroutine cubic_jacobian(self, y, lambda, jy, jl, stat)
@@ -117,7 +116,6 @@ contains
         jy(1, :) = [3.0_dp*y(1)**2 - 3.0_dp, 0.0_dp]
         jy(2, :) = [-2.0_dp*y(1), 1.0_dp]
         jl = [1.0_dp, 0.0_dp]
-        if (.false.) stat = int(lambda) + self%evaluations
     end subroutine cubic_jacobian
 
     !> From lambda = -3 (y1 = 2.1038) to lambda = 3 (y1 = -2.1038) the curve must pass the

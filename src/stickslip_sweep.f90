@@ -379,7 +379,10 @@ contains
                 return
             end if
             call add_point("start")
-            if (allocated(error)) return
+            if (allocated(error)) then
+                call fam%prob%destroy()
+                return
+            end if
         end if
 
         do while (res%state%reason == reason_running)

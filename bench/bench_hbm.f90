@@ -47,6 +47,7 @@ program bench_hbm
             o%odd_only = io == 1
             o%harmonics = hs(i) - merge(1, 0, o%odd_only .and. mod(hs(i), 2) == 0)
             o%samples = 1024
+            o%rho = 0.2_dp
             o%want_samples = .false.
             nrep = 0
             do k = 1, size(times)
@@ -78,6 +79,7 @@ program bench_hbm
                 if (o%odd_only .and. mod(h, 2) == 0) cycle
                 o%harmonics = h
                 o%samples = 1024
+                o%rho = 0.2_dp
                 o%want_samples = .false.
                 call solve_periodic(m, o, s, error)
                 if (.not. allocated(error)) then

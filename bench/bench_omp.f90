@@ -52,6 +52,7 @@ contains
         nfail = 0
         o%harmonics = 15
         o%samples = 256
+        o%rho = c%hbm%rho
         !$omp parallel do if(in_parallel) private(m, s, error) firstprivate(o) &
         !$omp& reduction(+:nfail) schedule(dynamic)
         do i = 1, size(amp)

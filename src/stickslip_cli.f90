@@ -47,9 +47,10 @@ module stickslip_cli
         "  Periodic response of a structure with Coulomb friction contacts by the"//new_line('a')// &
         "  weighted-residual (harmonic balance) method, implicit Euler or the exact"//new_line('a')// &
         "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all',"// &
-        new_line('a')//"  'study' or 'sweep'). Results go to &output directory: hbm.csv,"// &
-        new_line('a')//"  coefficients.csv, euler.csv, reference.csv, events.csv, study.csv,"// &
-        new_line('a')//"  frc.csv (+ frc.gp, frc.png), summary.nml."// &
+        new_line('a')//"  'study', 'sweep' or 'robustness'). Results go to &output directory:"// &
+        new_line('a')//"  hbm.csv, coefficients.csv, euler.csv, reference.csv, events.csv,"// &
+        new_line('a')//"  study.csv, frc.csv (+ frc.gp, frc.png), robustness.csv (+ maps),"// &
+        new_line('a')//"  summary.nml."// &
         new_line('a')// &
         "  Exit codes: 0 ok, 1 usage or input error, 2 numerical failure, 3 I/O error."
 

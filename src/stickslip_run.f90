@@ -1,5 +1,6 @@
 !> The whole workflow of one case: case -> model -> method (weighted residual, implicit
-!> Euler, the exact reference, all three, or the work-precision study) -> result files.
+!> Euler, the exact reference, all three, the work-precision study, a forced-response sweep
+!> or the robustness study) -> result files.
 !> What the CLI runs, and what a host code calls to run a case it read or built.
 module stickslip_run
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
@@ -202,8 +203,8 @@ contains
     end subroutine run_study_case
 
     !> Continue the periodic solution of `case` over the &sweep range and write frc.csv,
-    !> frc.gp (the gnuplot script of frc.png) and summary.nml into case%directory. After every
-    !> point the curve is saved in frc.checkpoint; with &sweep resume (the default) a run of
+    !> frc.gp (the gnuplot script of frc.png) and summary.nml into case%directory. The curve is
+    !> saved in frc.checkpoint after its first point, then at most once a second; with &sweep resume (the default) a run of
     !> the same case that finds a checkpoint goes on from it. The checkpoint is removed once
     !> the files are written. A curve that stopped before the end of the range is written
     !> too, and an error with stat numerical is returned with the diagnosis. Errors: stat

@@ -158,6 +158,8 @@ contains
         killer%directory = dir
         killer%fingerprint = case_fingerprint(c)
         killer%stop_after = 4
+        ! a checkpoint after every point, so that the kill after point 4 finds 4 saved
+        killer%interval = 0.0_dp
         call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
         call check_error(t, error, "resume: the killed run stops", .true.)
         inquire (file=dir//"/"//checkpoint_name, exist=exists)
@@ -177,6 +179,7 @@ contains
         call check(t, same, "resume: the same curve as an uninterrupted run")
         ! a checkpoint of another case
         killer%stop_after = 2
+        killer%last = -1
         call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
         c2 = c
         c2%model%mu = 0.5_dp

@@ -14,6 +14,7 @@
 module stickslip_sweep
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
     use stickslip_kinds, only: dp
+    use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
@@ -106,6 +107,8 @@ module stickslip_sweep
         integer :: folds = 0
         !> Warnings about the curve ('' when none): undamped_resonance_notes.
         character(len=:), allocatable :: notes
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
     end type sweep_result_t
 
     !> Called after every point; a checkpoint writer extends it.

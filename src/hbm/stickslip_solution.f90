@@ -3,6 +3,7 @@
 !> on request, time samples. Plain data; filled by stickslip_hbm.
 module stickslip_solution
     use stickslip_kinds, only: dp
+    use stickslip_diagnostics, only: diagnostics_t
     implicit none
     private
     public :: hbm_options_t, hbm_solution_t
@@ -33,17 +34,6 @@ module stickslip_solution
         logical :: stop_at_tol = .true.
         !> Also return time samples of x, v, r and the stick indicator.
         logical :: want_samples = .true.
-        !> Harmonic truncation tolerance of the CLI's single solve (stickslip_checks): 0 keeps
-        !> H = harmonics; > 0 doubles H from `harmonics` (warm starts) until the relative
-        !> truncation error estimate is below it, or H = max_harmonics.
-        real(dp) :: harmonics_tol = 0.0_dp
-        !> Highest H the harmonics_tol loop may reach (0: 8 * harmonics).
-        integer :: max_harmonics = 0
-        !> Floquet multipliers of the solution (exact event-driven monodromy).
-        logical :: stability = .false.
-        !> Periods of the exact flow integrated from the solution to report its periodicity
-        !> defect (0: none).
-        integer :: verify_periods = 0
     end type hbm_options_t
 
     !> Result of a weighted-residual solve. Coefficient vectors follow stickslip_basis:
@@ -121,5 +111,7 @@ module stickslip_solution
         real(dp), allocatable :: r(:, :)
         !> Stick indicator (1 stick, 0 slip) at the samples, nt x n_c.
         real(dp), allocatable :: stick(:, :)
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
     end type hbm_solution_t
 end module stickslip_solution

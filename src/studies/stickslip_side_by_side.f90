@@ -3,6 +3,7 @@
 !> on a common time grid (&run method = 'all').
 module stickslip_side_by_side
     use stickslip_kinds, only: dp
+    use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
@@ -31,6 +32,8 @@ module stickslip_side_by_side
         type(comparison_t), allocatable :: comparisons(:)
         !> Empty when all three succeeded, otherwise the diagnoses of those that did not.
         character(len=:), allocatable :: diagnosis
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
     end type side_by_side_t
 
 contains

@@ -49,7 +49,7 @@ contains
         type(error_type), allocatable :: io_error
         type(hbm_checks_t) :: ch
 
-        call solve_and_check(case%model, case%hbm, case%reference, sol, ch, error)
+        call solve_and_check(case%model, case%hbm, case%checks, case%reference, sol, ch, error)
         if (present(checks)) checks = ch
         call prepare_output(case, error)
         if (allocated(error)) return

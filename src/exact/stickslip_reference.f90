@@ -11,6 +11,7 @@
 module stickslip_reference
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
+    use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
     use stickslip_nonlinear, only: nonlinear_system_t
@@ -85,6 +86,8 @@ module stickslip_reference
         !> slip), so its zero eigenvalues are the projected directions. Allocated once the
         !> recording pass ran (also for an orbit that did not meet the tolerance).
         real(dp), allocatable :: monodromy(:, :)
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
     end type reference_result_t
 
     !> The shooting equations F(u) = (P(D u) - D u) / D, D the scales of x and v, for hybrj.

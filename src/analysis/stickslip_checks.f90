@@ -5,7 +5,8 @@
 !> writer reports it.
 module stickslip_checks
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type
+    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -14,12 +15,29 @@ module stickslip_checks
     use stickslip_stability, only: floquet_t, periodic_stability, verify_periodicity
     implicit none
     private
-    public :: hbm_checks_t, solve_and_check, sampling_notes
+    public :: check_options_t, validate_check_options, hbm_checks_t, solve_and_check, &
+        sampling_notes
 
     !> A truncation estimate above this makes the stick-phase count a lower bound (the
     !> 8 phases of examples/many_sticks.nml, six shorter than T/20, appear as 2 at H = 10
     !> and 20 (estimates 0.21, 0.13), 6 at H = 30 .. 100 (0.13 .. 0.023), 8 from H = 160).
     real(dp), parameter :: coarse_estimate = 0.05_dp
+
+    !> What to check about a weighted-residual solution (the &hbm variables harmonics_tol,
+    !> max_harmonics, stability, verify_periods of a case file).
+    type :: check_options_t
+        !> Harmonic truncation tolerance: 0 keeps H = harmonics; > 0 doubles H from
+        !> `harmonics` (warm starts) until the relative truncation error estimate is below
+        !> it, or H = max_harmonics.
+        real(dp) :: harmonics_tol = 0.0_dp
+        !> Highest H the harmonics_tol loop may reach (0: 8 * harmonics).
+        integer :: max_harmonics = 0
+        !> Floquet multipliers of the solution (exact event-driven monodromy).
+        logical :: stability = .false.
+        !> Periods of the exact flow integrated from the solution to report its periodicity
+        !> defect (0: none).
+        integer :: verify_periods = 0
+    end type check_options_t
 
     !> The checks of one solution.
     type :: hbm_checks_t
@@ -33,19 +51,49 @@ module stickslip_checks
         real(dp), allocatable :: defect(:)
         !> Warnings about the sampling of the solution ('' when none): sampling_notes.
         character(len=:), allocatable :: notes
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
     end type hbm_checks_t
 
 contains
 
-    !> Solve `model` with `opts` (with opts%harmonics_tol > 0: raise H until the truncation
-    !> estimate meets it, up to opts%max_harmonics) and run the checks opts asks for. A solve
-    !> that does not converge is an outcome (sol%converged = .false.; no checks then). Errors:
-    !> as solve_periodic, and those of the checks (stat input for bad options).
-    subroutine solve_and_check(model, opts, ref, sol, checks, error)
+    !> Check the check options against the solver options `opts`. Errors (stat input) name
+    !> the &hbm variable.
+    subroutine validate_check_options(copts, opts, error)
+        !> Check options.
+        type(check_options_t), intent(in) :: copts
+        !> Solver options (harmonics).
+        type(hbm_options_t), intent(in) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=200) :: buf
+        if (.not. (copts%harmonics_tol >= 0.0_dp .and. copts%harmonics_tol < 1.0_dp)) then
+            write (buf, '(a,g0.6,a)') "&hbm harmonics_tol = ", copts%harmonics_tol, &
+                ": must be in [0, 1) (0: keep harmonics)"
+        else if (copts%max_harmonics < 0 .or. (copts%max_harmonics > 0 .and. &
+                                                copts%max_harmonics < opts%harmonics)) then
+            write (buf, '(a,i0,a,i0,a)') "&hbm max_harmonics = ", copts%max_harmonics, &
+                ": must be 0 (automatic) or >= harmonics = ", opts%harmonics, ""
+        else if (copts%verify_periods < 0) then
+            write (buf, '(a,i0,a)') "&hbm verify_periods = ", copts%verify_periods, &
+                ": must be >= 0"
+        else
+            return
+        end if
+        call fatal_error(error, trim(buf), stickslip_stat%input)
+    end subroutine validate_check_options
+
+    !> Solve `model` with `opts` (with copts%harmonics_tol > 0: raise H until the truncation
+    !> estimate meets it, up to copts%max_harmonics) and run the checks copts asks for. A
+    !> solve that does not converge is an outcome (sol%converged = .false.; no checks then).
+    !> Errors: as solve_periodic, and those of the checks (stat input for bad options).
+    subroutine solve_and_check(model, opts, copts, ref, sol, checks, error)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
-        !> Solver and check options.
+        !> Solver options.
         type(hbm_options_t), intent(in) :: opts
+        !> What to check.
+        type(check_options_t), intent(in) :: copts
         !> Options of the exact reference (stability).
         type(reference_options_t), intent(in) :: ref
         !> The solution.
@@ -56,10 +104,10 @@ contains
         type(error_type), allocatable, intent(out) :: error
         integer :: hmax
         checks%notes = ""
-        if (opts%harmonics_tol > 0.0_dp) then
-            hmax = opts%max_harmonics
+        if (copts%harmonics_tol > 0.0_dp) then
+            hmax = copts%max_harmonics
             if (hmax == 0) hmax = 8*max(1, opts%harmonics)
-            call solve_to_tolerance(model, opts, opts%harmonics_tol, hmax, sol, &
+            call solve_to_tolerance(model, opts, copts%harmonics_tol, hmax, sol, &
                                     checks%truncation, error)
             if (allocated(error)) return
         else
@@ -78,13 +126,13 @@ contains
                 "shorter than a period of the highest harmonic (T/H) are not resolved, so "// &
                 "stick_phases is a lower bound; raise harmonics or set harmonics_tol"
         end if
-        if (opts%stability) then
+        if (copts%stability) then
             checks%stability = .true.
             call periodic_stability(model, sol, ref, checks%floquet, error)
             if (allocated(error)) return
         end if
-        if (opts%verify_periods > 0) then
-            call verify_periodicity(model, sol, opts%verify_periods, checks%defect, error)
+        if (copts%verify_periods > 0) then
+            call verify_periodicity(model, sol, copts%verify_periods, checks%defect, error)
             if (allocated(error)) return
         end if
     end subroutine solve_and_check

@@ -10,6 +10,7 @@ module stickslip_case
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t
     use stickslip_hbm, only: validate_options
+    use stickslip_checks, only: check_options_t, validate_check_options
     use stickslip_euler, only: euler_options_t
     use stickslip_reference, only: reference_options_t, validate_reference_options
     use stickslip_study, only: study_options_t, default_study_options, validate_study_options
@@ -41,6 +42,9 @@ module stickslip_case
         character(len=16) :: method = 'hbm'
         !> Weighted-residual options (&hbm).
         type(hbm_options_t) :: hbm
+        !> What to check about a weighted-residual solution (&hbm harmonics_tol,
+        !> max_harmonics, stability, verify_periods).
+        type(check_options_t) :: checks
         !> Time-stepping options (&euler).
         type(euler_options_t) :: euler
         !> Exact reference options (&reference).
@@ -102,6 +106,7 @@ contains
         namelist /run/ method
         integer :: n, nf, nc
         type(hbm_options_t) :: defaults
+        type(check_options_t) :: check_defaults
         type(euler_options_t) :: euler_defaults
 
         case%path = path
@@ -143,10 +148,10 @@ contains
         tol = defaults%tol
         start = defaults%start
         maxfev = defaults%maxfev
-        harmonics_tol = defaults%harmonics_tol
-        max_harmonics = defaults%max_harmonics
-        stability = defaults%stability
-        verify_periods = defaults%verify_periods
+        harmonics_tol = check_defaults%harmonics_tol
+        max_harmonics = check_defaults%max_harmonics
+        stability = check_defaults%stability
+        verify_periods = check_defaults%verify_periods
         rewind (u)
         read (u, nml=hbm, iostat=stat, iomsg=msg)
         call group_status("hbm", .false.)
@@ -273,10 +278,10 @@ contains
             call input_error("&hbm harmonics_tol: not a finite number")
             return
         end if
-        case%hbm%harmonics_tol = harmonics_tol
-        case%hbm%max_harmonics = max_harmonics
-        case%hbm%stability = stability
-        case%hbm%verify_periods = verify_periods
+        case%checks%harmonics_tol = harmonics_tol
+        case%checks%max_harmonics = max_harmonics
+        case%checks%stability = stability
+        case%checks%verify_periods = verify_periods
         if (len_trim(directory) == 0) then
             call input_error("&output directory: must not be empty")
             return
@@ -319,6 +324,11 @@ contains
             return
         end if
         call validate_options(case%hbm, error)
+        if (allocated(error)) then
+            error%message = path//": "//error%message
+            return
+        end if
+        call validate_check_options(case%checks, case%hbm, error)
         if (allocated(error)) then
             error%message = path//": "//error%message
             return
@@ -775,10 +785,10 @@ contains
             call put(unit, "  tol = "//rtoa(o%tol), stat, msg)
             call put(unit, "  start = '"//trim(o%start)//"'", stat, msg)
             call put(unit, "  maxfev = "//itoa(o%maxfev), stat, msg)
-            call put(unit, "  harmonics_tol = "//rtoa(o%harmonics_tol), stat, msg)
-            call put(unit, "  max_harmonics = "//itoa(o%max_harmonics), stat, msg)
-            call put(unit, "  stability = "//ltoa(o%stability), stat, msg)
-            call put(unit, "  verify_periods = "//itoa(o%verify_periods), stat, msg)
+            call put(unit, "  harmonics_tol = "//rtoa(case%checks%harmonics_tol), stat, msg)
+            call put(unit, "  max_harmonics = "//itoa(case%checks%max_harmonics), stat, msg)
+            call put(unit, "  stability = "//ltoa(case%checks%stability), stat, msg)
+            call put(unit, "  verify_periods = "//itoa(case%checks%verify_periods), stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&output", stat, msg)
             call put(unit, "  directory = '"//case%directory//"'", stat, msg)

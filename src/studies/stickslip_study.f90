@@ -5,6 +5,7 @@
 !> written by stickslip_output.
 module stickslip_study
     use stickslip_kinds, only: dp
+    use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
@@ -68,6 +69,8 @@ module stickslip_study
         !> (H, samples) pairs skipped because samples < 2 H + 1 or because the basis of H
         !> harmonics does not hold every forcing harmonic.
         integer :: skipped = 0
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
     end type study_result_t
 
 contains

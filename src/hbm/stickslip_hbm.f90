@@ -48,15 +48,6 @@ contains
             write (buf, '(a,g0.6,a)') "&hbm xtol = ", opts%xtol, ": must be in [0, 1)"
         else if (opts%maxfev < 0) then
             write (buf, '(a,i0,a)') "&hbm maxfev = ", opts%maxfev, ": must be >= 0 (0: automatic)"
-        else if (.not. (opts%harmonics_tol >= 0.0_dp .and. opts%harmonics_tol < 1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&hbm harmonics_tol = ", opts%harmonics_tol, &
-                ": must be in [0, 1) (0: keep harmonics)"
-        else if (opts%max_harmonics < 0 .or. (opts%max_harmonics > 0 .and. &
-                                               opts%max_harmonics < opts%harmonics)) then
-            write (buf, '(a,i0,a,i0,a)') "&hbm max_harmonics = ", opts%max_harmonics, &
-                ": must be 0 (automatic) or >= harmonics = ", opts%harmonics, ""
-        else if (opts%verify_periods < 0) then
-            write (buf, '(a,i0,a)') "&hbm verify_periods = ", opts%verify_periods, ": must be >= 0"
         else if (opts%start /= 'auto' .and. opts%start /= 'direct' .and. opts%start /= 'ladder') then
             write (buf, '(a)') "&hbm start = '"//trim(opts%start)// &
                 "': must be 'auto', 'direct' or 'ladder'"

@@ -15,6 +15,7 @@ module stickslip_euler
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
+    use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
     use stickslip_lapack, only: dgetrf, dgetrs
@@ -60,6 +61,8 @@ module stickslip_euler
         real(dp), allocatable :: v(:, :)
         !> Friction forces over the last period, steps x n_c [N].
         real(dp), allocatable :: r(:, :)
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
     end type euler_result_t
 
 contains

@@ -10,6 +10,7 @@ module stickslip_checks
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_hbm, only: hbm_max_harmonics
     use stickslip_reference, only: reference_options_t
     use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance
     use stickslip_stability, only: floquet_t, periodic_stability, verify_periodicity
@@ -66,6 +67,8 @@ contains
         type(hbm_options_t), intent(in) :: opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Most periods of the exact flow verify_periods may ask for.
+        integer, parameter :: max_verify_periods = 1000
         character(len=200) :: buf
         if (.not. (copts%harmonics_tol >= 0.0_dp .and. copts%harmonics_tol < 1.0_dp)) then
             write (buf, '(a,g0.6,a)') "&hbm harmonics_tol = ", copts%harmonics_tol, &
@@ -74,9 +77,12 @@ contains
                                                 copts%max_harmonics < opts%harmonics)) then
             write (buf, '(a,i0,a,i0,a)') "&hbm max_harmonics = ", copts%max_harmonics, &
                 ": must be 0 (automatic) or >= harmonics = ", opts%harmonics, ""
-        else if (copts%verify_periods < 0) then
-            write (buf, '(a,i0,a)') "&hbm verify_periods = ", copts%verify_periods, &
-                ": must be >= 0"
+        else if (copts%max_harmonics > hbm_max_harmonics) then
+            write (buf, '(a,i0,a,i0)') "&hbm max_harmonics = ", copts%max_harmonics, &
+                ": must be <= ", hbm_max_harmonics
+        else if (copts%verify_periods < 0 .or. copts%verify_periods > max_verify_periods) then
+            write (buf, '(a,i0,a,i0)') "&hbm verify_periods = ", copts%verify_periods, &
+                ": must be in 0..", max_verify_periods
         else
             return
         end if

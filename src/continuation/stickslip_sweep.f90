@@ -159,6 +159,8 @@ contains
         type(sweep_options_t), intent(in) :: opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Most points of one sweep.
+        integer, parameter :: max_points = 100000
         character(len=200) :: buf
         buf = ""
         select case (opts%parameter)
@@ -185,6 +187,9 @@ contains
             if (opts%step < 0.0_dp .or. opts%min_step < 0.0_dp .or. opts%max_step < 0.0_dp) &
                 buf = "&sweep step, min_step, max_step: must be >= 0 (0: automatic)"
         end if
+        if (len_trim(buf) == 0 .and. opts%max_points > max_points) &
+            write (buf, '(a,i0,a,i0)') "&sweep max_points = ", opts%max_points, &
+            ": must be <= ", max_points
         if (len_trim(buf) > 0) then
             call fatal_error(error, trim(buf), stickslip_stat%input)
             return

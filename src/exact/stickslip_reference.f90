@@ -110,12 +110,22 @@ contains
         type(reference_options_t), intent(in) :: opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Largest samples (the result holds samples x (2 ndof + ncontact + 1) doubles).
+        integer, parameter :: reference_max_samples = 10**6
+        !> Largest bracket_steps (event-search steps per period, each a matrix update).
+        integer, parameter :: reference_max_bracket_steps = 10**5
         character(len=200) :: buf
         if (opts%samples < 1) then
             write (buf, '(a,i0,a)') "&reference samples = ", opts%samples, ": must be >= 1"
+        else if (opts%samples > reference_max_samples) then
+            write (buf, '(a,i0,a,i0)') "&reference samples = ", opts%samples, &
+                ": must be <= ", reference_max_samples
         else if (opts%bracket_steps < 8) then
             write (buf, '(a,i0,a)') "&reference bracket_steps = ", opts%bracket_steps, &
                 ": must be >= 8"
+        else if (opts%bracket_steps > reference_max_bracket_steps) then
+            write (buf, '(a,i0,a,i0)') "&reference bracket_steps = ", opts%bracket_steps, &
+                ": must be <= ", reference_max_bracket_steps
         else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
             write (buf, '(a,g0.6,a)') "&reference tol = ", opts%tol, ": must be in (0, 1)"
         else if (opts%maxfev < 1) then

@@ -17,6 +17,16 @@ module stickslip_hbm
     implicit none
     private
     public :: solve_periodic, validate_options
+    public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns
+
+    !> Largest harmonics H accepted by validate_options (the basis has 2 H + 1 terms).
+    integer, parameter :: hbm_max_harmonics = 4096
+    !> Largest quadrature samples per period accepted by validate_options (2**20).
+    integer, parameter :: hbm_max_samples = 2**20
+    !> Largest number of unknowns (2 H + 1) x contacts of a solve: its dense Jacobian holds
+    !> the square of it (8193**2 doubles = 0.5 GB). Checked by the case reader, which knows
+    !> the model.
+    integer, parameter :: hbm_max_unknowns = 2*hbm_max_harmonics + 1
 
     !> hybrj calls per stage: the first plus restarts from the last iterate.
     integer, parameter :: max_calls_per_stage = 4
@@ -35,6 +45,12 @@ contains
         if (opts%harmonics < 0 .or. (opts%odd_only .and. opts%harmonics < 1)) then
             write (buf, '(a,i0,a)') "&hbm harmonics = ", opts%harmonics, &
                 ": must be >= 0 (>= 1 with odd_only)"
+        else if (opts%harmonics > hbm_max_harmonics) then
+            write (buf, '(a,i0,a,i0)') "&hbm harmonics = ", opts%harmonics, &
+                ": must be <= ", hbm_max_harmonics
+        else if (opts%samples > hbm_max_samples) then
+            write (buf, '(a,i0,a,i0,a)') "&hbm samples = ", opts%samples, &
+                ": must be <= ", hbm_max_samples, " (2**20)"
         else if (opts%samples < 2*opts%harmonics + 1) then
             write (buf, '(a,i0,a,i0,a,i0,a)') "&hbm samples = ", opts%samples, &
                 ": too few samples for the harmonics: need samples >= 2*harmonics+1 = ", &

@@ -10,11 +10,14 @@
 !> robustness.csv.
 module stickslip_robustness
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
+    use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
+    use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference, validate_reference_options
@@ -115,14 +118,25 @@ contains
         type(robustness_options_t), intent(in) :: opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Longest list of omegas, mus, harmonics, rhos, samples or steps_per_period.
+        integer, parameter :: max_list = 256
+        !> Most runs of one study (grid points x configurations).
+        integer(int64), parameter :: max_runs = 100000
+        !> Largest error_samples (points of the error grid per period).
+        integer, parameter :: max_error_samples = 10**6
         character(len=:), allocatable :: msg
         integer :: i, j
+        integer(int64) :: runs
         msg = ""
         if (.not. (allocated(opts%omegas) .and. allocated(opts%mus) .and. &
                    allocated(opts%harmonics) .and. allocated(opts%rhos) .and. &
                    allocated(opts%samples) .and. allocated(opts%steps_per_period))) then
             msg = "&robustness: omegas, mus, harmonics, rhos, samples and steps_per_period "// &
                   "must be set"
+        else if (max(size(opts%omegas), size(opts%mus), size(opts%harmonics), size(opts%rhos), &
+                     size(opts%samples), size(opts%steps_per_period)) > max_list) then
+            msg = "&robustness omegas, mus, harmonics, rhos, samples, steps_per_period: at "// &
+                  "most "//itoa(max_list)//" values each"
         else if (size(opts%omegas) == 0 .or. size(opts%mus) == 0) then
             msg = "&robustness omegas, mus: both need at least one value"
         else if (size(opts%harmonics)*size(opts%rhos)*size(opts%samples) + &
@@ -134,18 +148,34 @@ contains
             msg = "&robustness mus: every entry must be finite and >= 0"
         else if (any(opts%harmonics < 1)) then
             msg = "&robustness harmonics: every entry must be >= 1"
+        else if (any(opts%harmonics > hbm_max_harmonics)) then
+            msg = "&robustness harmonics: every entry must be <= "//itoa(hbm_max_harmonics)
+        else if (any(opts%samples > hbm_max_samples)) then
+            msg = "&robustness samples: every entry must be <= "//itoa(hbm_max_samples)// &
+                  " (2**20)"
+        else if (any(opts%steps_per_period > euler_max_steps_per_period)) then
+            msg = "&robustness steps_per_period: every entry must be <= "// &
+                  itoa(euler_max_steps_per_period)
         else if (.not. all(opts%rhos >= 0.0_dp .and. opts%rhos < huge(1.0_dp))) then
             msg = "&robustness rhos: every entry must be finite and >= 0 (0: automatic)"
         else if (any(opts%samples < 0)) then
             msg = "&robustness samples: every entry must be >= 0 (0: the &hbm samples)"
         else if (any(opts%steps_per_period < 2)) then
             msg = "&robustness steps_per_period: every entry must be >= 2"
-        else if (opts%error_samples < 2) then
-            msg = "&robustness error_samples = "//itoa(opts%error_samples)//": must be >= 2"
+        else if (opts%error_samples < 2 .or. opts%error_samples > max_error_samples) then
+            msg = "&robustness error_samples = "//itoa(opts%error_samples)//": must be in "// &
+                  "2.."//itoa(max_error_samples)
         else if (.not. (opts%wrong_tol > 0.0_dp .and. opts%wrong_tol < huge(1.0_dp))) then
             msg = "&robustness wrong_tol: must be finite and > 0"
         else
+            runs = int(size(opts%omegas), int64)*size(opts%mus)* &
+                   (int(size(opts%harmonics), int64)*size(opts%rhos)*size(opts%samples)* &
+                    merge(2, 1, opts%warm) + size(opts%steps_per_period))
+            if (runs > max_runs) msg = "&robustness: the grid asks for "// &
+                                       itoa(int(min(runs, int(huge(1), int64))))// &
+                                       " runs, at most "//itoa(int(max_runs))//" allowed"
             do i = 1, size(opts%harmonics)
+                if (len(msg) > 0) exit
                 do j = 1, size(opts%samples)
                     if (opts%samples(j) > 0 .and. &
                         opts%samples(j) < 2*opts%harmonics(i) + 1) then

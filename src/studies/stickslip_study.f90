@@ -10,6 +10,8 @@ module stickslip_study
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
+    use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
+    use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference, validate_reference_options
@@ -90,6 +92,12 @@ contains
         type(study_options_t), intent(in) :: opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Longest list of harmonics, samples or steps_per_period.
+        integer, parameter :: max_list = 256
+        !> Largest error_samples (points of the error grid per period).
+        integer, parameter :: max_error_samples = 10**6
+        !> Most repeats of one run.
+        integer, parameter :: max_repeats = 1000
         character(len=:), allocatable :: msg
         msg = ""
         if (.not. (allocated(opts%harmonics) .and. allocated(opts%samples) .and. &
@@ -99,16 +107,28 @@ contains
             msg = "&study harmonics, steps_per_period: both empty, nothing to study"
         else if (size(opts%harmonics) > 0 .and. size(opts%samples) == 0) then
             msg = "&study samples: empty (give 0 for the &hbm samples)"
+        else if (max(size(opts%harmonics), size(opts%samples), size(opts%steps_per_period)) &
+                 > max_list) then
+            msg = "&study harmonics, samples, steps_per_period: at most "//itoa(max_list)// &
+                  " values each"
         else if (any(opts%harmonics < 1)) then
             msg = "&study harmonics: every entry must be >= 1"
+        else if (any(opts%harmonics > hbm_max_harmonics)) then
+            msg = "&study harmonics: every entry must be <= "//itoa(hbm_max_harmonics)
         else if (any(opts%samples < 0)) then
             msg = "&study samples: every entry must be >= 0 (0: the &hbm samples)"
+        else if (any(opts%samples > hbm_max_samples)) then
+            msg = "&study samples: every entry must be <= "//itoa(hbm_max_samples)//" (2**20)"
         else if (any(opts%steps_per_period < 2)) then
             msg = "&study steps_per_period: every entry must be >= 2"
-        else if (opts%error_samples < 2) then
-            msg = "&study error_samples = "//itoa(opts%error_samples)//": must be >= 2"
-        else if (opts%repeats < 1) then
-            msg = "&study repeats = "//itoa(opts%repeats)//": must be >= 1"
+        else if (any(opts%steps_per_period > euler_max_steps_per_period)) then
+            msg = "&study steps_per_period: every entry must be <= "// &
+                  itoa(euler_max_steps_per_period)
+        else if (opts%error_samples < 2 .or. opts%error_samples > max_error_samples) then
+            msg = "&study error_samples = "//itoa(opts%error_samples)//": must be in 2.."// &
+                  itoa(max_error_samples)
+        else if (opts%repeats < 1 .or. opts%repeats > max_repeats) then
+            msg = "&study repeats = "//itoa(opts%repeats)//": must be in 1.."//itoa(max_repeats)
         else if (.not. (opts%repeat_below >= 0.0_dp .and. opts%repeat_below < huge(1.0_dp))) then
             msg = "&study repeat_below: must be a finite number >= 0"
         end if

@@ -22,6 +22,13 @@ module stickslip_euler
     implicit none
     private
     public :: euler_options_t, euler_result_t, integrate_euler, contact_forces
+    public :: validate_euler_options, euler_max_steps_per_period, euler_max_total_steps
+
+    !> Largest steps_per_period accepted by validate_euler_options (the last period is kept:
+    !> steps x (2 ndof + ncontact + 1) doubles).
+    integer, parameter :: euler_max_steps_per_period = 10**7
+    !> Largest steps_per_period x max_periods (time steps of one run) accepted.
+    integer(int64), parameter :: euler_max_total_steps = 2000000000_int64
 
     !> Options of the time integration.
     type :: euler_options_t
@@ -66,6 +73,34 @@ module stickslip_euler
     end type euler_result_t
 
 contains
+
+    !> Check time-stepping options. Errors (stat input) name the &euler variable and the
+    !> limit; the product steps_per_period x max_periods is formed in 64-bit integers.
+    subroutine validate_euler_options(opts, error)
+        !> Options to check.
+        type(euler_options_t), intent(in) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=200) :: buf
+        if (opts%steps_per_period < 2) then
+            write (buf, '(a,i0,a)') "&euler steps_per_period = ", opts%steps_per_period, &
+                ": must be >= 2"
+        else if (opts%steps_per_period > euler_max_steps_per_period) then
+            write (buf, '(a,i0,a,i0)') "&euler steps_per_period = ", opts%steps_per_period, &
+                ": must be <= ", euler_max_steps_per_period
+        else if (opts%max_periods < 1) then
+            write (buf, '(a,i0,a)') "&euler max_periods = ", opts%max_periods, ": must be >= 1"
+        else if (int(opts%steps_per_period, int64)*opts%max_periods > euler_max_total_steps) then
+            write (buf, '(a,i0,a,i0,a,i0,a)') "&euler max_periods = ", opts%max_periods, &
+                ": steps_per_period x max_periods must be <= ", euler_max_total_steps, &
+                " time steps (steps_per_period = ", opts%steps_per_period, ")"
+        else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
+            write (buf, '(a,g0.6,a)') "&euler tol = ", opts%tol, ": must be in (0, 1)"
+        else
+            return
+        end if
+        call fatal_error(error, trim(buf), stickslip_stat%input)
+    end subroutine validate_euler_options
 
     !> Integrate `model` from rest (or from x0, v0 at t = 0) until the response is periodic.
     !> Not reaching a periodic state within max_periods is an outcome (res%periodic = F and a

@@ -1,0 +1,189 @@
+!> Readers of the case-file groups of the solvers and the run: &hbm, &euler, &reference,
+!> &run, &output. Each reads one group of a parsed namelist file into its options type
+!> (defaults where a variable is absent) and validates it with the library's validator, the
+!> message prefixed with the file path.
+module stickslip_case_solvers
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_solution, only: hbm_options_t
+    use stickslip_hbm, only: validate_options
+    use stickslip_checks, only: check_options_t, validate_check_options
+    use stickslip_euler, only: euler_options_t, validate_euler_options
+    use stickslip_reference, only: reference_options_t, validate_reference_options
+    use stickslip_namelist, only: nml_file_t
+    use stickslip_case_model, only: group_error
+    implicit none
+    private
+    public :: read_hbm_group, read_euler_group, read_reference_group, read_run_group
+    public :: read_output_group, known_methods, prefix_path
+
+    !> Methods of &run method.
+    character(len=10), parameter :: known_methods(7) = [character(len=10) :: 'hbm', 'euler', &
+        'reference', 'all', 'study', 'sweep', 'robustness']
+
+contains
+
+    !> Read &hbm (optional) into the solver options and the check options; validate both.
+    subroutine read_hbm_group(nml, hbm_opts, check_opts, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> Weighted-residual options (defaults for absent variables).
+        type(hbm_options_t), intent(out) :: hbm_opts
+        !> Check options: harmonics_tol, max_harmonics, stability, verify_periods.
+        type(check_options_t), intent(out) :: check_opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: start
+        character(len=*), parameter :: g = "hbm"
+        call nml%check_names(g, [character(len=14) :: "harmonics", "odd_only", "rho", &
+                             "samples", "tol", "start", "maxfev", "harmonics_tol", &
+                             "max_harmonics", "stability", "verify_periods"], error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "harmonics", hbm_opts%harmonics, error)
+        if (allocated(error)) return
+        call nml%get_logical(g, "odd_only", hbm_opts%odd_only, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "rho", hbm_opts%rho, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "samples", hbm_opts%samples, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "tol", hbm_opts%tol, error)
+        if (allocated(error)) return
+        start = trim(hbm_opts%start)
+        call nml%get_string(g, "start", start, error)
+        if (allocated(error)) return
+        if (start /= 'auto' .and. start /= 'direct' .and. start /= 'ladder') then
+            call group_error(nml, error, "&hbm start = '"//start// &
+                             "': must be 'auto', 'direct' or 'ladder'")
+            return
+        end if
+        hbm_opts%start = trim(start)
+        call nml%get_integer(g, "maxfev", hbm_opts%maxfev, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "harmonics_tol", check_opts%harmonics_tol, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "max_harmonics", check_opts%max_harmonics, error)
+        if (allocated(error)) return
+        call nml%get_logical(g, "stability", check_opts%stability, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "verify_periods", check_opts%verify_periods, error)
+        if (allocated(error)) return
+        call validate_options(hbm_opts, error)
+        if (allocated(error)) then
+            call prefix_path(nml, error)
+            return
+        end if
+        call validate_check_options(check_opts, hbm_opts, error)
+        if (allocated(error)) call prefix_path(nml, error)
+    end subroutine read_hbm_group
+
+    !> Read &euler (optional): steps_per_period, max_periods, tol; validate.
+    subroutine read_euler_group(nml, opts, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> Time-stepping options (defaults for absent variables).
+        type(euler_options_t), intent(out) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=*), parameter :: g = "euler"
+        call nml%check_names(g, [character(len=16) :: "steps_per_period", "max_periods", &
+                                 "tol"], error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "steps_per_period", opts%steps_per_period, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "max_periods", opts%max_periods, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "tol", opts%tol, error)
+        if (allocated(error)) return
+        call validate_euler_options(opts, error)
+        if (allocated(error)) call prefix_path(nml, error)
+    end subroutine read_euler_group
+
+    !> Read &reference (optional): samples, bracket_steps, tol, maxfev, start; validate.
+    subroutine read_reference_group(nml, opts, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> Reference options (defaults for absent variables).
+        type(reference_options_t), intent(out) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: start
+        character(len=*), parameter :: g = "reference"
+        call nml%check_names(g, [character(len=13) :: "samples", "bracket_steps", "tol", &
+                                 "maxfev", "start"], error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "samples", opts%samples, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "bracket_steps", opts%bracket_steps, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "tol", opts%tol, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "maxfev", opts%maxfev, error)
+        if (allocated(error)) return
+        start = trim(opts%start)
+        call nml%get_string(g, "start", start, error)
+        if (allocated(error)) return
+        if (start /= 'auto' .and. start /= 'hbm' .and. start /= 'euler') then
+            call group_error(nml, error, "&reference start = '"//start// &
+                             "': must be 'auto', 'hbm' or 'euler'")
+            return
+        end if
+        opts%start = trim(start)
+        call validate_reference_options(opts, error)
+        if (allocated(error)) call prefix_path(nml, error)
+    end subroutine read_reference_group
+
+    !> Read &run (optional): method, one of known_methods. `given` tells whether the file
+    !> set it (read_case infers it from &study, &sweep or &robustness otherwise).
+    subroutine read_run_group(nml, method, given, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The method ('hbm' when absent).
+        character(len=:), allocatable, intent(out) :: method
+        !> &run method was given.
+        logical, intent(out) :: given
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        method = 'hbm'
+        given = .false.
+        call nml%check_names("run", [character(len=6) :: "method"], error)
+        if (allocated(error)) return
+        call nml%get_string("run", "method", method, error, given)
+        if (allocated(error)) return
+        if (.not. any(known_methods == method) .or. len_trim(method) == 0) then
+            call group_error(nml, error, "&run method = '"//method//"': must be 'hbm', "// &
+                             "'euler', 'reference', 'all', 'study', 'sweep' or 'robustness'")
+            return
+        end if
+        method = trim(method)
+    end subroutine read_run_group
+
+    !> Read &output (optional): directory (any length, not empty; default 'out').
+    subroutine read_output_group(nml, directory, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The output directory.
+        character(len=:), allocatable, intent(out) :: directory
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        directory = 'out'
+        call nml%check_names("output", [character(len=9) :: "directory"], error)
+        if (allocated(error)) return
+        call nml%get_string("output", "directory", directory, error)
+        if (allocated(error)) return
+        if (len_trim(directory) == 0) then
+            call group_error(nml, error, "&output directory: must not be empty")
+            return
+        end if
+        directory = trim(directory)
+    end subroutine read_output_group
+
+    !> Prefix a library validator's message with the case file path.
+    subroutine prefix_path(nml, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The error to prefix.
+        type(error_type), intent(inout) :: error
+        error%message = nml%path//": "//error%message
+    end subroutine prefix_path
+end module stickslip_case_solvers

@@ -1,0 +1,187 @@
+!> Readers of the case-file groups of the studies: &study, &sweep, &robustness. Each reads one
+!> group of a parsed namelist file into its options type (defaults where a variable or the
+!> group is absent) and validates it with the library's validator, the message prefixed with
+!> the file path.
+module stickslip_case_studies
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type
+    use stickslip_model, only: model_t
+    use stickslip_study, only: study_options_t, default_study_options, validate_study_options
+    use stickslip_sweep, only: sweep_options_t, validate_sweep_options
+    use stickslip_robustness, only: robustness_options_t, default_robustness_options, &
+        validate_robustness_options
+    use stickslip_namelist, only: nml_file_t, lower
+    use stickslip_case_model, only: group_error, max_terms
+    use stickslip_case_solvers, only: prefix_path
+    implicit none
+    private
+    public :: read_study_group, read_sweep_group, read_robustness_group
+
+contains
+
+    !> Read &study (optional): lists harmonics, samples, steps_per_period (at most max_terms
+    !> each; a single 0 asks for no run of that method), error_samples, repeats,
+    !> repeat_below; validate.
+    subroutine read_study_group(nml, opts, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> Study options (default_study_options for absent variables).
+        type(study_options_t), intent(out) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        integer, allocatable :: list(:)
+        logical :: found
+        character(len=*), parameter :: g = "study"
+        opts = default_study_options()
+        call nml%check_names(g, [character(len=16) :: "harmonics", "samples", &
+                             "steps_per_period", "error_samples", "repeats", "repeat_below"], &
+                             error)
+        if (allocated(error)) return
+        call nml%get_integers(g, "harmonics", list, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%harmonics = drop_single_zero(list)
+        call nml%get_integers(g, "samples", list, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%samples = list
+        call nml%get_integers(g, "steps_per_period", list, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%steps_per_period = drop_single_zero(list)
+        call nml%get_integer(g, "error_samples", opts%error_samples, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "repeats", opts%repeats, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "repeat_below", opts%repeat_below, error)
+        if (allocated(error)) return
+        call validate_study_options(opts, error)
+        if (allocated(error)) call prefix_path(nml, error)
+    end subroutine read_study_group
+
+    !> Read &sweep (optional; `given` tells whether it is present): parameter, start and stop
+    !> (both required with the group), step, min_step, max_step, max_points, max_failures,
+    !> stability, truncation, resume, plot; validate against `model`.
+    subroutine read_sweep_group(nml, model, opts, given, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The model swept (for the checks of the parameter).
+        type(model_t), intent(in) :: model
+        !> Sweep options (defaults for absent variables).
+        type(sweep_options_t), intent(out) :: opts
+        !> The group is present.
+        logical, intent(out) :: given
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: parameter
+        logical :: found
+        character(len=*), parameter :: g = "sweep"
+        given = nml%find(g) > 0
+        if (.not. given) return
+        call nml%check_names(g, [character(len=12) :: "parameter", "start", "stop", "step", &
+                             "min_step", "max_step", "max_points", "max_failures", &
+                             "stability", "truncation", "resume", "plot"], error)
+        if (allocated(error)) return
+        parameter = trim(opts%parameter)
+        call nml%get_string(g, "parameter", parameter, error)
+        if (allocated(error)) return
+        parameter = lower(trim(parameter))
+        select case (parameter)
+        case ('omega', 'force_amplitude', 'mu', 'normal_load')
+        case default
+            call group_error(nml, error, "&sweep parameter = '"//parameter//"': must be "// &
+                             "'omega', 'force_amplitude', 'mu' or 'normal_load'")
+            return
+        end select
+        opts%parameter = parameter
+        call nml%get_real(g, "start", opts%start, error, found)
+        if (allocated(error)) return
+        if (.not. found) then
+            call group_error(nml, error, "&sweep start: missing (first value of the parameter)")
+            return
+        end if
+        call nml%get_real(g, "stop", opts%stop, error, found)
+        if (allocated(error)) return
+        if (.not. found) then
+            call group_error(nml, error, "&sweep stop: missing (last value of the parameter)")
+            return
+        end if
+        call nml%get_real(g, "step", opts%step, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "min_step", opts%min_step, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "max_step", opts%max_step, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "max_points", opts%max_points, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "max_failures", opts%max_failures, error)
+        if (allocated(error)) return
+        call nml%get_logical(g, "stability", opts%stability, error)
+        if (allocated(error)) return
+        call nml%get_logical(g, "truncation", opts%truncation, error)
+        if (allocated(error)) return
+        call nml%get_logical(g, "resume", opts%resume, error)
+        if (allocated(error)) return
+        call nml%get_logical(g, "plot", opts%plot, error)
+        if (allocated(error)) return
+        call validate_sweep_options(model, opts, error)
+        if (allocated(error)) call prefix_path(nml, error)
+    end subroutine read_sweep_group
+
+    !> Read &robustness (optional): lists omegas, mus, rhos, harmonics, samples,
+    !> steps_per_period (at most max_terms each; a single 0 steps_per_period asks for no
+    !> Euler run), warm, error_samples, wrong_tol; validate.
+    subroutine read_robustness_group(nml, opts, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> Robustness options (default_robustness_options for absent variables).
+        type(robustness_options_t), intent(out) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        integer, allocatable :: ilist(:)
+        real(dp), allocatable :: rlist(:)
+        logical :: found
+        character(len=*), parameter :: g = "robustness"
+        opts = default_robustness_options()
+        call nml%check_names(g, [character(len=16) :: "omegas", "mus", "harmonics", "rhos", &
+                             "samples", "steps_per_period", "warm", "error_samples", &
+                             "wrong_tol"], error)
+        if (allocated(error)) return
+        call nml%get_reals(g, "omegas", rlist, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%omegas = rlist
+        call nml%get_reals(g, "mus", rlist, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%mus = rlist
+        call nml%get_reals(g, "rhos", rlist, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%rhos = rlist
+        call nml%get_integers(g, "harmonics", ilist, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%harmonics = ilist
+        call nml%get_integers(g, "samples", ilist, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%samples = ilist
+        call nml%get_integers(g, "steps_per_period", ilist, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) opts%steps_per_period = drop_single_zero(ilist)
+        call nml%get_logical(g, "warm", opts%warm, error)
+        if (allocated(error)) return
+        call nml%get_integer(g, "error_samples", opts%error_samples, error)
+        if (allocated(error)) return
+        call nml%get_real(g, "wrong_tol", opts%wrong_tol, error)
+        if (allocated(error)) return
+        call validate_robustness_options(opts, error)
+        if (allocated(error)) call prefix_path(nml, error)
+    end subroutine read_robustness_group
+
+    !> The list, or an empty one for the single value 0 ("no runs of that method").
+    pure function drop_single_zero(list) result(kept)
+        integer, intent(in) :: list(:)
+        integer, allocatable :: kept(:)
+        if (size(list) == 1) then
+            if (list(1) == 0) then
+                allocate (kept(0))
+                return
+            end if
+        end if
+        kept = list
+    end function drop_single_zero
+end module stickslip_case_studies

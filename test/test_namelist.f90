@@ -5,6 +5,8 @@ module test_namelist
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
     use stickslip_namelist, only: nml_file_t, parse_namelist, sanitize, edit_distance
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, &
+        get_string, get_integers, get_reals
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -46,25 +48,25 @@ contains
         call check(t, nml%find("system") == 1 .and. nml%find("hbm") == 2 .and. &
                    nml%find("run") == 3 .and. nml%find("euler") == 0, &
                    "namelist: group names in lower case, comments and outside text ignored")
-        call nml%get_reals("system", "mass", rv, found, 16, error)
+        call get_reals(nml, "system", "mass", rv, found, 16, error)
         call check(t, found .and. .not. allocated(error), "namelist: mass read")
         if (found .and. .not. allocated(error)) &
             call check(t, size(rv) == 4 .and. all(rv == [1, 0, 0, 1]), &
                        "namelist: array over lines, comment after a comma, blank separators")
-        call nml%get_integers("system", "ndof", iv, found, 1, error)
+        call get_integers(nml, "system", "ndof", iv, found, 1, error)
         call check(t, found .and. .not. allocated(error), "namelist: upper-case name found")
         if (found) call check(t, iv(1) == 2, "namelist: NDOF = 2")
         block
             character(len=:), allocatable :: s
             s = "unset"
-            call nml%get_string("run", "method", s, error)
+            call get_string(nml, "run", "method", s, error)
             call check(t, s == "it's / not ! a comment", &
                        "namelist: doubled quote, slash and ! inside a string", s)
         end block
         block
             integer :: h
             h = 0
-            call nml%get_integer("hbm", "harmonics", h, error)
+            call get_integer(nml, "hbm", "harmonics", h, error)
             call check(t, h == 3, "namelist: group closed by &end")
         end block
 
@@ -95,17 +97,17 @@ contains
         l = .false.
         l(1:7:2) = .true.
         l(2:8:2) = .true.
-        call nml%get_logical("g", "a", l(1), error)
-        call nml%get_logical("g", "b", l(2), error)
-        call nml%get_logical("g", "c", l(3), error)
-        call nml%get_logical("g", "d", l(4), error)
-        call nml%get_logical("g", "e", l(5), error)
-        call nml%get_logical("g", "f", l(6), error)
-        call nml%get_logical("g", "g", l(7), error)
-        call nml%get_logical("g", "h", l(8), error)
+        call get_logical(nml, "g", "a", l(1), error)
+        call get_logical(nml, "g", "b", l(2), error)
+        call get_logical(nml, "g", "c", l(3), error)
+        call get_logical(nml, "g", "d", l(4), error)
+        call get_logical(nml, "g", "e", l(5), error)
+        call get_logical(nml, "g", "f", l(6), error)
+        call get_logical(nml, "g", "g", l(7), error)
+        call get_logical(nml, "g", "h", l(8), error)
         call check(t, all(l .eqv. [.true., .false., .true., .false., .true., .false., .true., &
                                    .false.]), "namelist: logical spellings")
-        call nml%get_reals("g", "r", rv, found, 100, error)
+        call get_reals(nml, "g", "r", rv, found, 100, error)
         call check_error(t, error, "namelist: reals read", .false.)
         if (.not. allocated(error)) then
             call check(t, size(rv) == 8, "namelist: repeat count expands (8 values)")
@@ -113,16 +115,16 @@ contains
                                                         0.25_dp, 0.25_dp, 0.25_dp, 7.0_dp], &
                                                 "namelist: real forms", rtol=0.0_dp)
         end if
-        call nml%get_integers("h", "n", iv, found, 4, error)
+        call get_integers(nml, "h", "n", iv, found, 4, error)
         call check(t, .not. allocated(error) .and. found, "namelist: integers read")
         if (found .and. .not. allocated(error)) call check(t, all(iv == [-12, 4, 4, 0]), &
                                                            "namelist: integers and 2*4")
         x = 42.0_dp
-        call nml%get_real("h", "absent", x, error, found)
+        call get_real(nml, "h", "absent", x, error, found)
         call check(t, .not. found .and. x == 42.0_dp .and. .not. allocated(error), &
                    "namelist: absent variable keeps the default")
         k = 7
-        call nml%get_integer("nogroup", "n", k, error, found)
+        call get_integer(nml, "nogroup", "n", k, error, found)
         call check(t, .not. found .and. k == 7, "namelist: absent group keeps the default")
     end subroutine test_values
 
@@ -145,18 +147,18 @@ contains
         if (.not. allocated(error) .and. present(kind)) then
             select case (kind)
             case ('real')
-                call nml%get_real(group, variable, x, error)
+                call get_real(nml, group, variable, x, error)
             case ('integer')
-                call nml%get_integer(group, variable, n, error)
+                call get_integer(nml, group, variable, n, error)
             case ('integers')
-                call nml%get_integers(group, variable, iv, found, 4, error)
+                call get_integers(nml, group, variable, iv, found, 4, error)
             case ('logical')
-                call nml%get_logical(group, variable, l, error)
+                call get_logical(nml, group, variable, l, error)
             case ('string')
                 s = ""
-                call nml%get_string(group, variable, s, error)
+                call get_string(nml, group, variable, s, error)
             case ('names')
-                call nml%check_names(group, [character(len=9) :: "ndof", "mass", "stiffness"], &
+                call check_names(nml, group, [character(len=9) :: "ndof", "mass", "stiffness"], &
                                      error)
             end select
         end if

@@ -7,6 +7,7 @@ module stickslip_case_model
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
     use stickslip_namelist, only: nml_file_t
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_integers, get_reals
     implicit none
     private
     public :: read_system_group, read_forcing_group, read_friction_group
@@ -34,11 +35,11 @@ contains
             call group_error(nml, error, "&system: required group not found")
             return
         end if
-        call nml%check_names("system", [character(len=9) :: "ndof", "mass", "stiffness", &
+        call check_names(nml, "system", [character(len=9) :: "ndof", "mass", "stiffness", &
                                         "damping"], error)
         if (allocated(error)) return
         n = 0
-        call nml%get_integer("system", "ndof", n, error, found)
+        call get_integer(nml, "system", "ndof", n, error, found)
         if (allocated(error)) return
         if (.not. found) then
             call group_error(nml, error, "&system ndof: missing (number of degrees of freedom)")
@@ -64,7 +65,7 @@ contains
             real(dp), allocatable, intent(out) :: a(:, :)
             real(dp), allocatable :: values(:)
             logical :: given
-            call nml%get_reals("system", name, values, given, max_dof**2, error)
+            call get_reals(nml, "system", name, values, given, max_dof**2, error)
             if (allocated(error)) return
             if (.not. given) then
                 if (required) then
@@ -102,11 +103,11 @@ contains
             call group_error(nml, error, "&forcing: required group not found")
             return
         end if
-        call nml%check_names("forcing", [character(len=15) :: "omega", "force_dof", &
+        call check_names(nml, "forcing", [character(len=15) :: "omega", "force_dof", &
                              "force_harmonic", "force_amplitude", "force_phase"], error)
         if (allocated(error)) return
         omega = 0.0_dp
-        call nml%get_real("forcing", "omega", omega, error, found)
+        call get_real(nml, "forcing", "omega", omega, error, found)
         if (allocated(error)) return
         if (.not. found) then
             call group_error(nml, error, &
@@ -114,7 +115,7 @@ contains
             return
         end if
         model%omega = omega
-        call nml%get_integers("forcing", "force_dof", model%force_dof, found, max_terms, error)
+        call get_integers(nml, "forcing", "force_dof", model%force_dof, found, max_terms, error)
         if (allocated(error)) return
         if (.not. found) then
             call group_error(nml, error, "&forcing force_dof: missing (at least one forcing term)")
@@ -141,10 +142,10 @@ contains
         type(error_type), allocatable, intent(out) :: error
         logical :: found
         integer :: nc
-        call nml%check_names("friction", [character(len=12) :: "contact_dof", "contact_dof2", &
+        call check_names(nml, "friction", [character(len=12) :: "contact_dof", "contact_dof2", &
                                           "mu", "normal_load"], error)
         if (allocated(error)) return
-        call nml%get_integers("friction", "contact_dof", model%contact_dof, found, max_terms, &
+        call get_integers(nml, "friction", "contact_dof", model%contact_dof, found, max_terms, &
                               error)
         if (allocated(error)) return
         if (.not. found) allocate (model%contact_dof(0))
@@ -168,7 +169,7 @@ contains
         real(dp), allocatable, intent(out) :: a(:)
         type(error_type), allocatable, intent(out) :: error
         logical :: given
-        call nml%get_reals(group, name, a, given, max_terms, error)
+        call get_reals(nml, group, name, a, given, max_terms, error)
         if (allocated(error)) return
         if (.not. given) then
             allocate (a(count))
@@ -189,7 +190,7 @@ contains
         integer, allocatable, intent(out) :: a(:)
         type(error_type), allocatable, intent(out) :: error
         logical :: given
-        call nml%get_integers(group, name, a, given, max_terms, error)
+        call get_integers(nml, group, name, a, given, max_terms, error)
         if (allocated(error)) return
         if (.not. given) then
             allocate (a(count))

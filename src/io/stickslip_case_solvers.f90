@@ -11,6 +11,7 @@ module stickslip_case_solvers
     use stickslip_euler, only: euler_options_t, validate_euler_options
     use stickslip_reference, only: reference_options_t, validate_reference_options
     use stickslip_namelist, only: nml_file_t
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string
     use stickslip_case_model, only: group_error
     implicit none
     private
@@ -35,22 +36,22 @@ contains
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: start
         character(len=*), parameter :: g = "hbm"
-        call nml%check_names(g, [character(len=14) :: "harmonics", "odd_only", "rho", &
+        call check_names(nml, g, [character(len=14) :: "harmonics", "odd_only", "rho", &
                              "samples", "tol", "start", "maxfev", "harmonics_tol", &
                              "max_harmonics", "stability", "verify_periods"], error)
         if (allocated(error)) return
-        call nml%get_integer(g, "harmonics", hbm_opts%harmonics, error)
+        call get_integer(nml, g, "harmonics", hbm_opts%harmonics, error)
         if (allocated(error)) return
-        call nml%get_logical(g, "odd_only", hbm_opts%odd_only, error)
+        call get_logical(nml, g, "odd_only", hbm_opts%odd_only, error)
         if (allocated(error)) return
-        call nml%get_real(g, "rho", hbm_opts%rho, error)
+        call get_real(nml, g, "rho", hbm_opts%rho, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "samples", hbm_opts%samples, error)
+        call get_integer(nml, g, "samples", hbm_opts%samples, error)
         if (allocated(error)) return
-        call nml%get_real(g, "tol", hbm_opts%tol, error)
+        call get_real(nml, g, "tol", hbm_opts%tol, error)
         if (allocated(error)) return
         start = trim(hbm_opts%start)
-        call nml%get_string(g, "start", start, error)
+        call get_string(nml, g, "start", start, error)
         if (allocated(error)) return
         if (start /= 'auto' .and. start /= 'direct' .and. start /= 'ladder') then
             call group_error(nml, error, "&hbm start = '"//start// &
@@ -58,15 +59,15 @@ contains
             return
         end if
         hbm_opts%start = trim(start)
-        call nml%get_integer(g, "maxfev", hbm_opts%maxfev, error)
+        call get_integer(nml, g, "maxfev", hbm_opts%maxfev, error)
         if (allocated(error)) return
-        call nml%get_real(g, "harmonics_tol", check_opts%harmonics_tol, error)
+        call get_real(nml, g, "harmonics_tol", check_opts%harmonics_tol, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "max_harmonics", check_opts%max_harmonics, error)
+        call get_integer(nml, g, "max_harmonics", check_opts%max_harmonics, error)
         if (allocated(error)) return
-        call nml%get_logical(g, "stability", check_opts%stability, error)
+        call get_logical(nml, g, "stability", check_opts%stability, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "verify_periods", check_opts%verify_periods, error)
+        call get_integer(nml, g, "verify_periods", check_opts%verify_periods, error)
         if (allocated(error)) return
         call validate_options(hbm_opts, error)
         if (allocated(error)) then
@@ -86,14 +87,14 @@ contains
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         character(len=*), parameter :: g = "euler"
-        call nml%check_names(g, [character(len=16) :: "steps_per_period", "max_periods", &
+        call check_names(nml, g, [character(len=16) :: "steps_per_period", "max_periods", &
                                  "tol"], error)
         if (allocated(error)) return
-        call nml%get_integer(g, "steps_per_period", opts%steps_per_period, error)
+        call get_integer(nml, g, "steps_per_period", opts%steps_per_period, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "max_periods", opts%max_periods, error)
+        call get_integer(nml, g, "max_periods", opts%max_periods, error)
         if (allocated(error)) return
-        call nml%get_real(g, "tol", opts%tol, error)
+        call get_real(nml, g, "tol", opts%tol, error)
         if (allocated(error)) return
         call validate_euler_options(opts, error)
         if (allocated(error)) call prefix_path(nml, error)
@@ -109,19 +110,19 @@ contains
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: start
         character(len=*), parameter :: g = "reference"
-        call nml%check_names(g, [character(len=13) :: "samples", "bracket_steps", "tol", &
+        call check_names(nml, g, [character(len=13) :: "samples", "bracket_steps", "tol", &
                                  "maxfev", "start"], error)
         if (allocated(error)) return
-        call nml%get_integer(g, "samples", opts%samples, error)
+        call get_integer(nml, g, "samples", opts%samples, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "bracket_steps", opts%bracket_steps, error)
+        call get_integer(nml, g, "bracket_steps", opts%bracket_steps, error)
         if (allocated(error)) return
-        call nml%get_real(g, "tol", opts%tol, error)
+        call get_real(nml, g, "tol", opts%tol, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "maxfev", opts%maxfev, error)
+        call get_integer(nml, g, "maxfev", opts%maxfev, error)
         if (allocated(error)) return
         start = trim(opts%start)
-        call nml%get_string(g, "start", start, error)
+        call get_string(nml, g, "start", start, error)
         if (allocated(error)) return
         if (start /= 'auto' .and. start /= 'hbm' .and. start /= 'euler') then
             call group_error(nml, error, "&reference start = '"//start// &
@@ -146,9 +147,9 @@ contains
         type(error_type), allocatable, intent(out) :: error
         method = 'hbm'
         given = .false.
-        call nml%check_names("run", [character(len=6) :: "method"], error)
+        call check_names(nml, "run", [character(len=6) :: "method"], error)
         if (allocated(error)) return
-        call nml%get_string("run", "method", method, error, given)
+        call get_string(nml, "run", "method", method, error, given)
         if (allocated(error)) return
         if (.not. any(known_methods == method) .or. len_trim(method) == 0) then
             call group_error(nml, error, "&run method = '"//method//"': must be 'hbm', "// &
@@ -167,9 +168,9 @@ contains
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         directory = 'out'
-        call nml%check_names("output", [character(len=9) :: "directory"], error)
+        call check_names(nml, "output", [character(len=9) :: "directory"], error)
         if (allocated(error)) return
-        call nml%get_string("output", "directory", directory, error)
+        call get_string(nml, "output", "directory", directory, error)
         if (allocated(error)) return
         if (len_trim(directory) == 0) then
             call group_error(nml, error, "&output directory: must not be empty")

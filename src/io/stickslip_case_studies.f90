@@ -11,6 +11,8 @@ module stickslip_case_studies
     use stickslip_robustness, only: robustness_options_t, default_robustness_options, &
         validate_robustness_options
     use stickslip_namelist, only: nml_file_t, lower
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string, &
+        get_integers, get_reals
     use stickslip_case_model, only: group_error, max_terms
     use stickslip_case_solvers, only: prefix_path
     implicit none
@@ -33,24 +35,24 @@ contains
         logical :: found
         character(len=*), parameter :: g = "study"
         opts = default_study_options()
-        call nml%check_names(g, [character(len=16) :: "harmonics", "samples", &
+        call check_names(nml, g, [character(len=16) :: "harmonics", "samples", &
                              "steps_per_period", "error_samples", "repeats", "repeat_below"], &
                              error)
         if (allocated(error)) return
-        call nml%get_integers(g, "harmonics", list, found, max_terms, error)
+        call get_integers(nml, g, "harmonics", list, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%harmonics = drop_single_zero(list)
-        call nml%get_integers(g, "samples", list, found, max_terms, error)
+        call get_integers(nml, g, "samples", list, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%samples = list
-        call nml%get_integers(g, "steps_per_period", list, found, max_terms, error)
+        call get_integers(nml, g, "steps_per_period", list, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%steps_per_period = drop_single_zero(list)
-        call nml%get_integer(g, "error_samples", opts%error_samples, error)
+        call get_integer(nml, g, "error_samples", opts%error_samples, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "repeats", opts%repeats, error)
+        call get_integer(nml, g, "repeats", opts%repeats, error)
         if (allocated(error)) return
-        call nml%get_real(g, "repeat_below", opts%repeat_below, error)
+        call get_real(nml, g, "repeat_below", opts%repeat_below, error)
         if (allocated(error)) return
         call validate_study_options(opts, error)
         if (allocated(error)) call prefix_path(nml, error)
@@ -75,12 +77,12 @@ contains
         character(len=*), parameter :: g = "sweep"
         given = nml%find(g) > 0
         if (.not. given) return
-        call nml%check_names(g, [character(len=12) :: "parameter", "start", "stop", "step", &
+        call check_names(nml, g, [character(len=12) :: "parameter", "start", "stop", "step", &
                              "min_step", "max_step", "max_points", "max_failures", &
                              "stability", "truncation", "resume", "plot"], error)
         if (allocated(error)) return
         parameter = trim(opts%parameter)
-        call nml%get_string(g, "parameter", parameter, error)
+        call get_string(nml, g, "parameter", parameter, error)
         if (allocated(error)) return
         parameter = lower(trim(parameter))
         select case (parameter)
@@ -91,35 +93,35 @@ contains
             return
         end select
         opts%parameter = parameter
-        call nml%get_real(g, "start", opts%start, error, found)
+        call get_real(nml, g, "start", opts%start, error, found)
         if (allocated(error)) return
         if (.not. found) then
             call group_error(nml, error, "&sweep start: missing (first value of the parameter)")
             return
         end if
-        call nml%get_real(g, "stop", opts%stop, error, found)
+        call get_real(nml, g, "stop", opts%stop, error, found)
         if (allocated(error)) return
         if (.not. found) then
             call group_error(nml, error, "&sweep stop: missing (last value of the parameter)")
             return
         end if
-        call nml%get_real(g, "step", opts%step, error)
+        call get_real(nml, g, "step", opts%step, error)
         if (allocated(error)) return
-        call nml%get_real(g, "min_step", opts%min_step, error)
+        call get_real(nml, g, "min_step", opts%min_step, error)
         if (allocated(error)) return
-        call nml%get_real(g, "max_step", opts%max_step, error)
+        call get_real(nml, g, "max_step", opts%max_step, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "max_points", opts%max_points, error)
+        call get_integer(nml, g, "max_points", opts%max_points, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "max_failures", opts%max_failures, error)
+        call get_integer(nml, g, "max_failures", opts%max_failures, error)
         if (allocated(error)) return
-        call nml%get_logical(g, "stability", opts%stability, error)
+        call get_logical(nml, g, "stability", opts%stability, error)
         if (allocated(error)) return
-        call nml%get_logical(g, "truncation", opts%truncation, error)
+        call get_logical(nml, g, "truncation", opts%truncation, error)
         if (allocated(error)) return
-        call nml%get_logical(g, "resume", opts%resume, error)
+        call get_logical(nml, g, "resume", opts%resume, error)
         if (allocated(error)) return
-        call nml%get_logical(g, "plot", opts%plot, error)
+        call get_logical(nml, g, "plot", opts%plot, error)
         if (allocated(error)) return
         call validate_sweep_options(model, opts, error)
         if (allocated(error)) call prefix_path(nml, error)
@@ -140,33 +142,33 @@ contains
         logical :: found
         character(len=*), parameter :: g = "robustness"
         opts = default_robustness_options()
-        call nml%check_names(g, [character(len=16) :: "omegas", "mus", "harmonics", "rhos", &
+        call check_names(nml, g, [character(len=16) :: "omegas", "mus", "harmonics", "rhos", &
                              "samples", "steps_per_period", "warm", "error_samples", &
                              "wrong_tol"], error)
         if (allocated(error)) return
-        call nml%get_reals(g, "omegas", rlist, found, max_terms, error)
+        call get_reals(nml, g, "omegas", rlist, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%omegas = rlist
-        call nml%get_reals(g, "mus", rlist, found, max_terms, error)
+        call get_reals(nml, g, "mus", rlist, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%mus = rlist
-        call nml%get_reals(g, "rhos", rlist, found, max_terms, error)
+        call get_reals(nml, g, "rhos", rlist, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%rhos = rlist
-        call nml%get_integers(g, "harmonics", ilist, found, max_terms, error)
+        call get_integers(nml, g, "harmonics", ilist, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%harmonics = ilist
-        call nml%get_integers(g, "samples", ilist, found, max_terms, error)
+        call get_integers(nml, g, "samples", ilist, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%samples = ilist
-        call nml%get_integers(g, "steps_per_period", ilist, found, max_terms, error)
+        call get_integers(nml, g, "steps_per_period", ilist, found, max_terms, error)
         if (allocated(error)) return
         if (found) opts%steps_per_period = drop_single_zero(ilist)
-        call nml%get_logical(g, "warm", opts%warm, error)
+        call get_logical(nml, g, "warm", opts%warm, error)
         if (allocated(error)) return
-        call nml%get_integer(g, "error_samples", opts%error_samples, error)
+        call get_integer(nml, g, "error_samples", opts%error_samples, error)
         if (allocated(error)) return
-        call nml%get_real(g, "wrong_tol", opts%wrong_tol, error)
+        call get_real(nml, g, "wrong_tol", opts%wrong_tol, error)
         if (allocated(error)) return
         call validate_robustness_options(opts, error)
         if (allocated(error)) call prefix_path(nml, error)

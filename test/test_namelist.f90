@@ -246,6 +246,8 @@ contains
         call expect(t, "unknown variable", "&system bogus_variable = 3 /", &
                     [character(len=60) :: "&system bogus_variable: unknown variable", &
                     "known: ndof, mass, stiffness"], "system", "", "names")
+        call expect(t, "huge list", "&f list = "//repeat("1 ", 70000)//"/", &
+                    [character(len=40) :: "&f list", "too many values (more than 65536)"])
         call expect(t, "repeat count zero", "&f list = 0*3 /", &
                     [character(len=40) :: "&f list", "repeat count"], "f", "list", "integers")
         call expect(t, "repeat without value", "&f list = 3* /", &

@@ -17,10 +17,13 @@ module stickslip_namelist
     private
     public :: nml_token_t, nml_entry_t, nml_group_t, nml_file_t
     public :: read_namelist_file, parse_namelist, sanitize, edit_distance, lower
-    public :: max_case_bytes
+    public :: max_case_bytes, max_entry_values
 
     !> Largest case file read [bytes].
     integer, parameter :: max_case_bytes = 16*1024*1024
+    !> Most values one variable may list (before repeat counts are expanded); the getters
+    !> apply each variable's own, smaller limit.
+    integer, parameter :: max_entry_values = 65536
 
     character(len=*), parameter :: lf = achar(10), cr = achar(13), tab = achar(9)
 
@@ -379,6 +382,11 @@ contains
                 return
             end if
             associate (en => nml%groups(g)%entries(e))
+                if (en%nvalues == max_entry_values) then
+                    call fail(line, gname()//" "//en%name//": too many values (more than "// &
+                              itoa(max_entry_values)//")")
+                    return
+                end if
                 if (en%nvalues == size(en%values)) then
                     allocate (tmp(2*size(en%values)))
                     tmp(1:en%nvalues) = en%values(1:en%nvalues)

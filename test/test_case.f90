@@ -333,6 +333,15 @@ contains
         call expect_bad(t, "sweep_max_points", [character(len=120) :: base, &
             "&sweep start = 1, stop = 2, max_points = 2000000000 /"], inp, &
             [character(len=60) :: "&sweep max_points = 2000000000", "must be <= 100000"])
+        call expect_bad(t, "hbm_unknowns_auto_max", [character(len=120) :: base, &
+            "&hbm harmonics = 1000, samples = 4096, harmonics_tol = 0.01 /"], inp, &
+            [character(len=60) :: "&hbm max_harmonics = 0 (automatic", "16001 unknowns"])
+        ! the unknowns count only for the methods that run the weighted residual
+        call write_lines(scratch//"/euler_big_h.nml", [character(len=120) :: base(1:2), &
+            "&friction contact_dof = 1, 2, mu = 0.3, 0.3, normal_load = 1, 1 /", &
+            "&hbm harmonics = 4096, samples = 16384 /", "&run method = 'euler' /"])
+        call read_case(scratch//"/euler_big_h.nml", c, error)
+        call check_error(t, error, "&hbm harmonics unused by method euler: not limited", .false.)
         ! at the limit: accepted
         call write_lines(scratch//"/limit_samples.nml", [character(len=120) :: base, &
             "&hbm harmonics = 4096, samples = 1048576 /", &

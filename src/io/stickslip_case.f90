@@ -225,14 +225,38 @@ contains
         type(error_type), allocatable, intent(out) :: error
         integer(int64) :: per_sample, nc
         integer :: h
+        character(len=:), allocatable :: what
         nc = case%model%ncontact()
         per_sample = 2_int64*case%model%ndof + 3_int64*nc + 1
-        h = max(case%hbm%harmonics, case%checks%max_harmonics)
-        if (nc > 0 .and. (2_int64*h + 1)*nc > hbm_max_unknowns) then
-            call group_error(nml, error, "&hbm harmonics = "//itoa(case%hbm%harmonics)// &
-                             max_text(case%checks%max_harmonics, case%hbm%harmonics)// &
-                             ": (2 H + 1) x "//itoa(int(nc))//" contacts = "// &
-                             itoa(int((2_int64*h + 1)*nc))//" unknowns, at most "// &
+        ! the highest H the method's weighted-residual solves reach
+        h = -1
+        select case (case%method)
+        case ('hbm', 'all', 'sweep', 'reference')
+            if (case%method /= 'reference' .or. case%reference%start /= 'euler') then
+                h = case%hbm%harmonics
+                what = "&hbm harmonics = "//itoa(h)
+                if (case%method == 'hbm' .and. case%checks%harmonics_tol > 0.0_dp) then
+                    ! the harmonics_tol loop climbs to max_harmonics (0: 8 x harmonics)
+                    h = case%checks%max_harmonics
+                    what = "&hbm max_harmonics = "//itoa(h)
+                    if (h == 0) then
+                        h = int(min(8_int64*case%hbm%harmonics, int(huge(1), int64)))
+                        what = "&hbm max_harmonics = 0 (automatic: 8 x harmonics = "// &
+                               itoa(h)//")"
+                    end if
+                end if
+            end if
+        case ('study')
+            h = maxval([0, case%study%harmonics])
+            what = "&study harmonics up to "//itoa(h)
+        case ('robustness')
+            h = maxval([0, case%robustness%harmonics])
+            what = "&robustness harmonics up to "//itoa(h)
+        end select
+        if (h >= 0 .and. nc > 0 .and. (2_int64*h + 1)*nc > hbm_max_unknowns) then
+            call group_error(nml, error, what//": (2 H + 1) x "//itoa(int(nc))// &
+                             " contacts = "//itoa(int(min((2_int64*h + 1)*nc, &
+                             int(huge(1), int64))))//" unknowns, at most "// &
                              itoa(hbm_max_unknowns)//" (the Jacobian is dense)")
             return
         end if
@@ -265,13 +289,6 @@ contains
                              "2**27 (1 GiB); at most "//itoa(int(max_sample_values/per_sample))// &
                              " for this model")
         end subroutine sample_limit
-
-        function max_text(mh, h) result(s)
-            integer, intent(in) :: mh, h
-            character(len=:), allocatable :: s
-            s = ""
-            if (mh > h) s = ", max_harmonics = "//itoa(mh)
-        end function max_text
     end subroutine check_sizes
 
     !> Write `case` as namelist text that read_case reads back (full precision), to `unit`.

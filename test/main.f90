@@ -14,6 +14,16 @@ program tester
     use test_sweep_files, only: run_sweep_file_tests
     use test_truncation, only: run_truncation_tests
     use test_namelist, only: run_namelist_tests
+    use test_openmp, only: run_openmp_tests
+    use test_version_info, only: run_version_info_tests
+    use test_friction, only: run_friction_tests
+    use test_fft, only: run_fft_tests
+    use test_expm, only: run_expm_tests
+    use test_lapack, only: run_lapack_tests
+    use test_compare, only: run_compare_tests
+    use test_diagnostics, only: run_diagnostics_tests
+    use test_error, only: run_error_tests
+    use test_minpack, only: run_minpack_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -37,6 +47,16 @@ program tester
     if (selected("sweep_files")) call run_sweep_file_tests(t)
     if (selected("truncation")) call run_truncation_tests(t)
     if (selected("namelist")) call run_namelist_tests(t)
+    if (selected("openmp")) call run_openmp_tests(t)
+    if (selected("version_info")) call run_version_info_tests(t)
+    if (selected("friction")) call run_friction_tests(t)
+    if (selected("fft")) call run_fft_tests(t)
+    if (selected("expm")) call run_expm_tests(t)
+    if (selected("lapack")) call run_lapack_tests(t)
+    if (selected("compare")) call run_compare_tests(t)
+    if (selected("diagnostics")) call run_diagnostics_tests(t)
+    if (selected("error")) call run_error_tests(t)
+    if (selected("minpack")) call run_minpack_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

@@ -17,7 +17,7 @@ module test_continuation
         undamped_resonance_notes
     use stickslip_checks, only: sampling_notes
     use testing, only: test_counter_t, check, check_close, check_error
-    use test_hbm, only: seed_model
+    use fixtures, only: seed_model, damped_seed
     implicit none
     private
     public :: run_continuation_tests, damped_seed
@@ -371,11 +371,4 @@ contains
         call run_sweep(m, ho, ro, so, res, error)
         call check_error(t, error, "bad sweep: empty range", .true.)
     end subroutine test_bad_sweep
-
-    !> The seed system with light Rayleigh damping C = 0.02 M + 0.02 K.
-    function damped_seed() result(m)
-        type(model_t) :: m
-        m = seed_model()
-        m%damping = 0.02_dp*m%mass + 0.02_dp*m%stiffness
-    end function damped_seed
 end module test_continuation

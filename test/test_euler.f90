@@ -9,7 +9,7 @@ module test_euler
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler, contact_forces
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
-    use test_hbm, only: seed_model
+    use fixtures, only: seed_model, one_dof_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -96,19 +96,8 @@ contains
         complex(dp) :: x
         real(dp) :: err(3)
         integer :: i, k
-        m%ndof = 1
-        m%mass = reshape([1.0_dp], [1, 1])
-        m%stiffness = reshape([1.0_dp], [1, 1])
-        m%damping = reshape([0.3_dp], [1, 1])
-        m%omega = 1.3_dp
-        m%force_dof = [1]
-        m%force_harmonic = [1]
-        m%force_amplitude = [1.0_dp]
-        m%force_phase = [0.0_dp]
-        m%contact_dof = [1]
-        m%contact_dof2 = [0]
-        m%mu = [0.0_dp]
-        m%normal_load = [1.0_dp]
+        m = one_dof_model(mass=1.0_dp, stiffness=1.0_dp, damping=0.3_dp, omega=1.3_dp, &
+                          force=1.0_dp, mu=0.0_dp, normal_load=1.0_dp)
         x = 1.0_dp/cmplx(1.0_dp - m%omega**2, 0.3_dp*m%omega, dp)
         do i = 1, 3
             o%steps_per_period = 200*2**(i - 1)

@@ -13,7 +13,7 @@ module test_exact_reference
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference
     use stickslip_flow, only: flow_t, new_flow, event_stick, event_slip
-    use test_hbm, only: seed_model, chain_model
+    use fixtures, only: seed_model, chain_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private

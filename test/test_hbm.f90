@@ -10,9 +10,12 @@ module test_hbm
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_friction, only: psi
     use testing, only: test_counter_t, check, check_close, check_error
+    use fixtures, only: seed_model, chain_model
     implicit none
     private
-    public :: run_hbm_tests, seed_model, chain_model
+    public :: run_hbm_tests
+    ! the fixtures moved to test/fixtures.f90; re-exported for suites not yet converted
+    public :: seed_model, chain_model
 
 contains
 
@@ -27,52 +30,6 @@ contains
         call test_chain(t)
         call test_singular(t)
     end subroutine run_hbm_tests
-
-    !> The seed case of DESIGN.md: 2 DOF, mu = 0.45, N = 1, f = 10, omega = 4.5.
-    function seed_model() result(m)
-        type(model_t) :: m
-        m%ndof = 2
-        m%mass = reshape([1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp], [2, 2])
-        m%stiffness = reshape([2.0_dp, -1.0_dp, -1.0_dp, 1.0_dp], [2, 2])
-        m%damping = 0.0_dp*m%mass
-        m%omega = 4.5_dp
-        m%force_dof = [1]
-        m%force_harmonic = [1]
-        m%force_amplitude = [10.0_dp]
-        m%force_phase = [0.0_dp]
-        m%contact_dof = [2]
-        m%contact_dof2 = [0]
-        m%mu = [0.45_dp]
-        m%normal_load = [1.0_dp]
-    end function seed_model
-
-    function chain_model() result(m)
-        type(model_t) :: m
-        integer :: i
-        m%ndof = 4
-        allocate (m%mass(4, 4), m%stiffness(4, 4))
-        m%mass = 0.0_dp
-        m%stiffness = 0.0_dp
-        do i = 1, 4
-            m%mass(i, i) = 1.0_dp + 0.25_dp*(i - 1)
-            m%stiffness(i, i) = 2.0_dp
-            if (i < 4) then
-                m%stiffness(i, i + 1) = -1.0_dp
-                m%stiffness(i + 1, i) = -1.0_dp
-            end if
-        end do
-        m%stiffness(4, 4) = 1.0_dp
-        m%damping = 0.02_dp*m%stiffness + 0.01_dp*m%mass
-        m%omega = 0.5_dp
-        m%force_dof = [1, 3]
-        m%force_harmonic = [1, 3]
-        m%force_amplitude = [2.0_dp, 2.0_dp/3.0_dp]
-        m%force_phase = [0.0_dp, 0.7_dp]
-        m%contact_dof = [2, 4]
-        m%contact_dof2 = [0, 3]
-        m%mu = [0.3_dp, 0.5_dp]
-        m%normal_load = [1.5_dp, 1.0_dp]
-    end function chain_model
 
     !> Analytic Jacobian against central finite differences at points in full slip, full
     !> stick and mixed states, for one and for two contacts.

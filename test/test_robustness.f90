@@ -15,7 +15,7 @@ module test_robustness
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         validate_robustness_options, default_robustness_options, robustness_samples
     use stickslip_output, only: make_directory, write_robustness_csv
-    use test_hbm, only: seed_model, chain_model
+    use fixtures, only: seed_model, chain_model, one_dof_model, enter_project_root
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -27,6 +27,7 @@ contains
 
     subroutine run_robustness_tests(t)
         type(test_counter_t), intent(inout) :: t
+        call enter_project_root()  ! its scratch path is relative to the root
         call test_rho_closed_forms(t)
         call test_rho_options(t)
         call test_rho_units(t)
@@ -51,19 +52,8 @@ contains
         call check_close(t, automatic_rho(m), rho_fraction*mob(1), "rho: fraction of mobility", &
                          rtol=1.0e-14_dp)
         ! one DOF: Omega / (k + Omega^2 m), finite at the resonance Omega^2 = k / m
-        one%ndof = 1
-        one%mass = reshape([2.0_dp], [1, 1])
-        one%stiffness = reshape([8.0_dp], [1, 1])
-        one%damping = reshape([0.0_dp], [1, 1])
-        one%omega = 2.0_dp
-        one%force_dof = [1]
-        one%force_harmonic = [1]
-        one%force_amplitude = [1.0_dp]
-        one%force_phase = [0.0_dp]
-        one%contact_dof = [1]
-        one%contact_dof2 = [0]
-        one%mu = [0.3_dp]
-        one%normal_load = [1.0_dp]
+        one = one_dof_model(mass=2.0_dp, stiffness=8.0_dp, damping=0.0_dp, omega=2.0_dp, &
+                            force=1.0_dp, mu=0.3_dp, normal_load=1.0_dp)
         call check_close(t, automatic_rho(one), rho_fraction*2.0_dp/(8.0_dp + 4.0_dp*2.0_dp), &
                          "rho: one DOF at resonance 1/(2 sqrt(k m))", rtol=1.0e-14_dp)
         ! the largest forcing term sets the frequency: harmonic 3 dominates

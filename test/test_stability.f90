@@ -14,7 +14,7 @@ module test_stability
     use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
     use stickslip_stability, only: floquet_t, floquet_multipliers, periodic_stability, &
         verify_periodicity
-    use test_hbm, only: seed_model
+    use fixtures, only: seed_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private

@@ -10,6 +10,7 @@ module test_sweep_files
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
     use stickslip_output, only: make_directory
     use test_case, only: cli, write_lines, scratch
+    use fixtures, only: enter_project_root
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -35,6 +36,7 @@ contains
 
     subroutine run_sweep_file_tests(t)
         type(test_counter_t), intent(inout) :: t
+        call enter_project_root()
         call test_cli_sweep(t)
         call test_resume(t)
         call test_bad_sweep_input(t)

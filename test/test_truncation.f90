@@ -11,7 +11,7 @@ module test_truncation
         sample_reference
     use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance, &
         coarse_harmonics
-    use test_hbm, only: seed_model
+    use fixtures, only: seed_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private

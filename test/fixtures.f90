@@ -1,0 +1,260 @@
+!> Shared test fixtures: the models the suites solve (the seed case, its damped variant, the
+!> 4-DOF chain, a 1-DOF oscillator) and paths that do not depend on the working directory
+!> (the project root found from the working directory or the executable's path; files of the
+!> project tree such as examples/*.nml; the scratch directory build/test-scratch), so
+!> `cd /tmp && <build>/test/tester` runs the suites as `fpm test` does.
+module fixtures
+    use, intrinsic :: iso_fortran_env, only: error_unit
+    use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char, c_size_t, c_ptr, &
+        c_associated
+    use stickslip_kinds, only: dp
+    use stickslip_model, only: model_t
+    implicit none
+    private
+    public :: seed_model, damped_seed, chain_model, one_dof_model
+    public :: scratch_dir, project_path, project_root, enter_project_root
+
+    !> Whether enter_project_root changed the working directory.
+    logical, save :: entered = .false.
+    !> The project root, once looked for ('' when not found).
+    character(len=:), allocatable, save :: root_cache
+
+    interface
+        function c_mkdir(path, mode) bind(c, name='mkdir') result(stat)
+            import :: c_int, c_char
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int), value :: mode
+            integer(c_int) :: stat
+        end function c_mkdir
+        function c_chdir(path) bind(c, name='chdir') result(stat)
+            import :: c_int, c_char
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int) :: stat
+        end function c_chdir
+        function c_getcwd(buf, size) bind(c, name='getcwd') result(p)
+            import :: c_char, c_size_t, c_ptr
+            character(kind=c_char), intent(out) :: buf(*)
+            integer(c_size_t), value :: size
+            type(c_ptr) :: p
+        end function c_getcwd
+    end interface
+
+contains
+
+    !> The seed case of DESIGN.md (examples/seed.nml): 2 DOF, M = I, K = [2 -1; -1 1],
+    !> undamped, force 10 cos(4.5 t) on DOF 1, one contact DOF 2 to ground with mu = 0.45,
+    !> N = 1.
+    function seed_model() result(m)
+        type(model_t) :: m
+        m%ndof = 2
+        m%mass = reshape([1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp], [2, 2])
+        m%stiffness = reshape([2.0_dp, -1.0_dp, -1.0_dp, 1.0_dp], [2, 2])
+        m%damping = 0.0_dp*m%mass
+        m%omega = 4.5_dp
+        m%force_dof = [1]
+        m%force_harmonic = [1]
+        m%force_amplitude = [10.0_dp]
+        m%force_phase = [0.0_dp]
+        m%contact_dof = [2]
+        m%contact_dof2 = [0]
+        m%mu = [0.45_dp]
+        m%normal_load = [1.0_dp]
+    end function seed_model
+
+    !> The seed system with light Rayleigh damping C = 0.02 M + 0.02 K.
+    function damped_seed() result(m)
+        type(model_t) :: m
+        m = seed_model()
+        m%damping = 0.02_dp*m%mass + 0.02_dp*m%stiffness
+    end function damped_seed
+
+    !> A 4-DOF chain with masses 1, 1.25, 1.5, 1.75, Rayleigh damping 0.01 M + 0.02 K, forcing
+    !> on harmonics 1 and 3 at omega = 0.5, a ground contact (DOF 2) and a relative one
+    !> (DOF 4 on DOF 3).
+    function chain_model() result(m)
+        type(model_t) :: m
+        integer :: i
+        m%ndof = 4
+        allocate (m%mass(4, 4), m%stiffness(4, 4))
+        m%mass = 0.0_dp
+        m%stiffness = 0.0_dp
+        do i = 1, 4
+            m%mass(i, i) = 1.0_dp + 0.25_dp*(i - 1)
+            m%stiffness(i, i) = 2.0_dp
+            if (i < 4) then
+                m%stiffness(i, i + 1) = -1.0_dp
+                m%stiffness(i + 1, i) = -1.0_dp
+            end if
+        end do
+        m%stiffness(4, 4) = 1.0_dp
+        m%damping = 0.02_dp*m%stiffness + 0.01_dp*m%mass
+        m%omega = 0.5_dp
+        m%force_dof = [1, 3]
+        m%force_harmonic = [1, 3]
+        m%force_amplitude = [2.0_dp, 2.0_dp/3.0_dp]
+        m%force_phase = [0.0_dp, 0.7_dp]
+        m%contact_dof = [2, 4]
+        m%contact_dof2 = [0, 3]
+        m%mu = [0.3_dp, 0.5_dp]
+        m%normal_load = [1.5_dp, 1.0_dp]
+    end function chain_model
+
+    !> A 1-DOF oscillator m x'' + c x' + k x = force cos(omega t) + r with one contact to the
+    !> ground (friction limit mu * normal_load).
+    function one_dof_model(mass, stiffness, damping, omega, force, mu, normal_load) result(m)
+        !> Mass m [kg], stiffness k [N/m], damping c [N s/m].
+        real(dp), intent(in) :: mass, stiffness, damping
+        !> Forcing frequency [rad/s] and amplitude [N].
+        real(dp), intent(in) :: omega, force
+        !> Friction coefficient and normal load [N] of the contact.
+        real(dp), intent(in) :: mu, normal_load
+        type(model_t) :: m
+        m%ndof = 1
+        m%mass = reshape([mass], [1, 1])
+        m%stiffness = reshape([stiffness], [1, 1])
+        m%damping = reshape([damping], [1, 1])
+        m%omega = omega
+        m%force_dof = [1]
+        m%force_harmonic = [1]
+        m%force_amplitude = [force]
+        m%force_phase = [0.0_dp]
+        m%contact_dof = [1]
+        m%contact_dof2 = [0]
+        m%mu = [mu]
+        m%normal_load = [normal_load]
+    end function one_dof_model
+
+    !> Make the project root the working directory (once; nothing happens when the root is
+    !> not found). Suites that write under "build/test-scratch" or read "examples/..." call it
+    !> first, so the tester runs the same from any directory (`cd /tmp && .../test/tester`).
+    !> Why not an absolute scratch path: the suites pass paths in constructors such as
+    !> `[character(len=200) :: scratch//"/x.nml"]`, and gfortran 12 corrupts the heap on those
+    !> unless `scratch` is a constant (it sizes the temporary by the element's own length).
+    subroutine enter_project_root()
+        character(len=:), allocatable :: root
+        root = project_root()
+        if (len(root) == 0 .or. entered) return
+        if (c_chdir(root//c_null_char) /= 0) then
+            write (error_unit, '(a)') "fixtures: cannot change directory to "//root
+            return
+        end if
+        entered = .true.
+    end subroutine enter_project_root
+
+    !> The absolute path of the tests' scratch directory, <project root>/build/test-scratch,
+    !> created on first use (a directory shared by the runs of one checkout; do not put it in
+    !> a `[character(len=n) :: ...]` constructor, see enter_project_root).
+    function scratch_dir() result(path)
+        character(len=:), allocatable :: path
+        integer :: k, stat
+        path = project_path("build/test-scratch")
+        do k = 2, len(path)
+            if (path(k:k) == "/") stat = c_mkdir(path(1:k - 1)//c_null_char, int(o'755', c_int))
+        end do
+        stat = c_mkdir(path//c_null_char, int(o'755', c_int))
+        if (.not. is_directory(path)) error stop "fixtures: cannot create the scratch directory"
+    end function scratch_dir
+
+    !> The absolute path of `relative` (e.g. "examples/seed.nml") in the project tree: the
+    !> first folder holding an fpm.toml of name "stickslip", looking up from the test
+    !> executable's folder and then from the working directory. When no such folder is found,
+    !> `relative` is returned unchanged (after a line on stderr).
+    function project_path(relative) result(path)
+        !> A path relative to the project root.
+        character(len=*), intent(in) :: relative
+        character(len=:), allocatable :: path
+        character(len=:), allocatable :: root
+        root = project_root()
+        if (len(root) == 0) then
+            path = relative
+        else
+            path = root//"/"//relative
+        end if
+    end function project_path
+
+    !> The absolute path of the project root ('' when not found; see project_path): looked
+    !> for above the test executable first (the checkout that built it), then above the
+    !> working directory.
+    function project_root() result(root)
+        character(len=:), allocatable :: root
+        character(len=:), allocatable :: cwd, exe
+        character(len=4096) :: arg
+        integer :: n
+        if (.not. allocated(root_cache)) then
+            cwd = current_directory()
+            root_cache = ""
+            call get_command_argument(0, arg, length=n)
+            exe = trim(arg)
+            if (index(exe, "/") > 0) then
+                if (exe(1:1) /= "/") exe = cwd//"/"//exe
+                root_cache = find_root(exe(1:index(exe, "/", back=.true.) - 1))
+            end if
+            if (len(root_cache) == 0) root_cache = find_root(cwd)
+            if (len(root_cache) == 0) write (error_unit, '(a)') &
+                "fixtures: no fpm.toml of stickslip above the executable nor above "//cwd
+        end if
+        root = root_cache
+    end function project_root
+
+    !> The first of `start` and its parents that holds stickslip's fpm.toml ('' if none).
+    function find_root(start) result(root)
+        character(len=*), intent(in) :: start
+        character(len=:), allocatable :: root
+        character(len=:), allocatable :: dir
+        integer :: k
+        dir = start
+        do while (len(dir) > 1 .and. dir(len(dir):len(dir)) == "/")
+            dir = dir(1:len(dir) - 1)
+        end do
+        do
+            if (is_stickslip_manifest(dir//"/fpm.toml")) then
+                root = dir
+                return
+            end if
+            k = index(dir, "/", back=.true.)
+            if (k <= 1) exit
+            dir = dir(1:k - 1)
+        end do
+        root = ""
+    end function find_root
+
+    !> Whether `path` is an fpm.toml with the line name = "stickslip".
+    logical function is_stickslip_manifest(path)
+        character(len=*), intent(in) :: path
+        character(len=512) :: line
+        integer :: u, stat
+        is_stickslip_manifest = .false.
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            line = adjustl(line)
+            if (line(1:4) /= "name") cycle
+            line = adjustl(line(5:))
+            if (line(1:1) /= "=") cycle
+            line = adjustl(line(2:))
+            is_stickslip_manifest = line == '"stickslip"' .or. line == "'stickslip'"
+            exit
+        end do
+        close (u)
+    end function is_stickslip_manifest
+
+    !> The working directory (absolute), from getcwd.
+    function current_directory() result(cwd)
+        character(len=:), allocatable :: cwd
+        character(kind=c_char) :: buf(4096)
+        integer :: i
+        cwd = ""
+        if (.not. c_associated(c_getcwd(buf, int(size(buf), c_size_t)))) return
+        do i = 1, size(buf)
+            if (buf(i) == c_null_char) exit
+            cwd = cwd//buf(i)
+        end do
+    end function current_directory
+
+    logical function is_directory(path)
+        character(len=*), intent(in) :: path
+        inquire (file=path//"/.", exist=is_directory)
+    end function is_directory
+end module fixtures

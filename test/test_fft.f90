@@ -1,0 +1,119 @@
+!> stickslip_fft against a naive DFT (the definition, summed directly) for even, odd, prime
+!> and power-of-two lengths: forward, inverse, the unnormalized round trip, a shared plan
+!> used for several arrays, destroy and re-init, and the refused length.
+module test_fft
+    use stickslip_kinds, only: dp, two_pi
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_fft, only: fft_plan_t
+    use testing, only: test_counter_t, check, check_close, check_error
+    implicit none
+    private
+    public :: run_fft_tests
+
+contains
+
+    subroutine run_fft_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        integer :: k
+        integer, parameter :: lengths(6) = [1, 2, 7, 16, 31, 100]
+        do k = 1, size(lengths)
+            call test_length(t, lengths(k))
+        end do
+        call test_plan_reuse(t)
+        call test_bad_length(t)
+    end subroutine run_fft_tests
+
+    !> Forward and inverse of random data of length nt against the naive sums.
+    subroutine test_length(t, nt)
+        type(test_counter_t), intent(inout) :: t
+        integer, intent(in) :: nt
+        type(fft_plan_t) :: p
+        type(error_type), allocatable :: error
+        real(dp) :: x(nt), x0(nt), y(nt), yre(nt)
+        complex(dp) :: c(nt/2 + 1), ref(nt/2 + 1), full(nt), cin(nt/2 + 1)
+        real(dp) :: ur(nt/2 + 1), ui(nt/2 + 1)
+        character(len=16) :: tag
+        integer :: j, k
+        write (tag, '("nt = ",i0)') nt
+        call p%init(nt, error)
+        call check_error(t, error, "fft: init "//trim(tag), .false.)
+        if (allocated(error)) return
+        call random_number(x)
+        x = x - 0.5_dp
+        x0 = x
+        call p%forward(x, c)
+        do j = 0, nt/2
+            ref(j + 1) = sum([(x0(k + 1)*exp(cmplx(0.0_dp, -two_pi*real(mod(j*k, nt), dp) &
+                                                   /real(nt, dp), dp)), k=0, nt - 1)])
+        end do
+        call check_close(t, [real(c), aimag(c)], [real(ref), aimag(ref)], &
+                         "fft: forward = naive DFT, "//trim(tag), rtol=0.0_dp, atol=1.0e-13_dp*nt)
+        call check(t, all(x == x0), "fft: forward leaves its input, "//trim(tag))
+        ! inverse of a Hermitian half spectrum (imaginary parts of c_0 and c_{nt/2} ignored)
+        call random_number(ur)
+        call random_number(ui)
+        cin = cmplx(ur - 0.5_dp, ui - 0.5_dp, dp)
+        cin(1) = cmplx(real(cin(1)), 0.0_dp, dp)
+        if (mod(nt, 2) == 0) cin(nt/2 + 1) = cmplx(real(cin(nt/2 + 1)), 0.0_dp, dp)
+        full(1:nt/2 + 1) = cin
+        do j = nt/2 + 2, nt
+            full(j) = conjg(cin(nt - j + 2))
+        end do
+        do k = 0, nt - 1
+            yre(k + 1) = real(sum([(full(j + 1)*exp(cmplx(0.0_dp, two_pi*real(mod(j*k, nt), dp) &
+                                                        /real(nt, dp), dp)), j=0, nt - 1)]))
+        end do
+        call p%inverse(cin, y)
+        call check_close(t, y, yre, "fft: inverse = naive inverse DFT, "//trim(tag), rtol=0.0_dp, &
+                         atol=1.0e-13_dp*nt)
+        ! round trip: inverse(forward(x)) = nt x
+        call p%forward(x, c)
+        call p%inverse(c, y)
+        call check_close(t, y/real(nt, dp), x0, "fft: round trip gives nt x, "//trim(tag), &
+                         rtol=0.0_dp, atol=1.0e-14_dp*nt)
+        call p%destroy()
+        call check(t, p%nt == 0, "fft: destroy resets the length, "//trim(tag))
+    end subroutine test_length
+
+    !> One plan, several arrays (the new-array interface), and a plan re-initialized to
+    !> another length.
+    subroutine test_plan_reuse(t)
+        type(test_counter_t), intent(inout) :: t
+        type(fft_plan_t) :: p
+        type(error_type), allocatable :: error
+        real(dp) :: a(12), b(12), c5(5)
+        complex(dp) :: ca(7), cb(7), cc(3)
+        integer :: k
+        call p%init(12, error)
+        call check_error(t, error, "fft: init 12", .false.)
+        if (allocated(error)) return
+        a = [(real(k, dp), k=1, 12)]
+        b = 2.0_dp*a
+        call p%forward(a, ca)
+        call p%forward(b, cb)
+        call check_close(t, [real(cb), aimag(cb)], 2.0_dp*[real(ca), aimag(ca)], &
+                         "fft: one plan, two arrays (linearity)", rtol=0.0_dp, atol=1.0e-12_dp)
+        call check_close(t, real(ca(1)), 78.0_dp, "fft: c_0 is the sum", rtol=1.0e-15_dp)
+        call p%init(5, error)
+        call check_error(t, error, "fft: re-init to length 5", .false.)
+        if (allocated(error)) return
+        call check(t, p%nt == 5, "fft: re-init sets the new length")
+        c5 = 1.0_dp
+        call p%forward(c5, cc)
+        call check_close(t, [real(cc), aimag(cc)], [5.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp], &
+                         "fft: constant of length 5 -> (5, 0, 0)", rtol=0.0_dp, atol=1.0e-14_dp)
+        call p%destroy()
+        call p%destroy()
+        call check(t, .true., "fft: destroy twice is harmless")
+    end subroutine test_plan_reuse
+
+    subroutine test_bad_length(t)
+        type(test_counter_t), intent(inout) :: t
+        type(fft_plan_t) :: p
+        type(error_type), allocatable :: error
+        call p%init(0, error)
+        call check_error(t, error, "fft: length 0 refused", .true., [character(len=8) :: ">= 1"])
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
+                                         "fft: length 0 is an input error")
+    end subroutine test_bad_length
+end module test_fft

@@ -9,7 +9,8 @@ module test_sweep_files
     use stickslip_run, only: run_sweep_case
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
     use stickslip_output, only: make_directory
-    use test_case, only: cli, write_lines, scratch
+    use test_case, only: write_lines, scratch
+    use test_cli, only: cli
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private

@@ -1,0 +1,458 @@
+!> Tests of the command line (app/stickslip_cli.inc, run in-process as test_app_cli) and of
+!> the result files end to end: the examples, usage errors and exit codes, every method's
+!> files, headers and summary keys; warnings and distrust on standard error (exit 2);
+!> progress lines; result files of an earlier run removed; the directory lock; unique
+!> temporaries; a damaged sweep checkpoint; gnuplot started without a shell.
+module test_cli
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_case, only: case_t, read_case
+    use test_app_cli, only: string_t, run_cli
+    use stickslip_files, only: make_directory
+    use test_case, only: write_lines, scratch
+    use testing, only: test_counter_t, check, check_close, check_error
+    implicit none
+    private
+    public :: run_cli_tests, cli, summary_value, count_lines
+
+    character(len=*), parameter :: good_system = &
+        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /"
+    character(len=*), parameter :: good_forcing = "&forcing omega = 4.5, force_dof = 1, " // &
+        "force_amplitude = 10.0 /"
+    character(len=*), parameter :: good_friction = "&friction contact_dof = 2, mu = 0.45, " // &
+        "normal_load = 1.0 /"
+
+contains
+
+    subroutine run_cli_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        type(error_type), allocatable :: error
+        call make_directory(scratch, error)
+        call check_error(t, error, "cli: scratch directory", .false.)
+        if (allocated(error)) return
+        call test_cli_examples(t)
+        call test_methods_cli(t)
+    end subroutine run_cli_tests
+
+    !> Run the CLI in-process; return its exit code and what it wrote to each unit.
+    subroutine cli(args, code, out, err)
+        character(len=*), intent(in) :: args(:)
+        integer, intent(out) :: code
+        character(len=:), allocatable, intent(out) :: out, err
+        type(string_t), allocatable :: a(:)
+        integer :: i, uo, ue
+        allocate (a(size(args)))
+        do i = 1, size(args)
+            a(i)%s = trim(args(i))
+        end do
+        if (size(args) == 1) then
+            if (len_trim(args(1)) == 0) deallocate (a)
+            if (.not. allocated(a)) allocate (a(0))
+        end if
+        open (newunit=uo, status='scratch', action='readwrite')
+        open (newunit=ue, status='scratch', action='readwrite')
+        code = run_cli(a, uo, ue)
+        out = slurp(uo)
+        err = slurp(ue)
+        close (uo)
+        close (ue)
+    end subroutine cli
+
+    function slurp(u) result(text)
+        integer, intent(in) :: u
+        character(len=:), allocatable :: text
+        character(len=1000) :: line
+        integer :: stat
+        text = ""
+        rewind (u)
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            text = text//trim(line)//new_line('a')
+        end do
+    end function slurp
+
+    !> A copy of an example with its output directory moved to the scratch area.
+    function scratch_copy(example) result(path)
+        character(len=*), intent(in) :: example
+        character(len=:), allocatable :: path
+        integer :: ui, uo, stat, k
+        character(len=1000) :: line
+        path = scratch//"/"//example//".nml"
+        open (newunit=ui, file="examples/"//example//".nml", status='old', action='read')
+        open (newunit=uo, file=path, status='replace', action='write')
+        do
+            read (ui, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            k = index(line, "&output")
+            if (k > 0) line = "&output directory = '"//scratch//"/out_"//example//"' /"
+            write (uo, '(a)') trim(line)
+        end do
+        close (ui)
+        close (uo)
+    end function scratch_copy
+
+    subroutine test_cli_examples(t)
+        type(test_counter_t), intent(inout) :: t
+        integer :: code, i, nrows, u, stat
+        character(len=:), allocatable :: out, err
+        character(len=200) :: path, dir
+        character(len=20), parameter :: examples(5) = [character(len=20) :: "seed", "mirrored", &
+                                                        "chain4", "seed_euler", "many_sticks"]
+        character(len=20) :: samples_file
+        character(len=4000) :: line
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        logical :: exists
+
+        do i = 1, size(examples)
+            path = scratch_copy(trim(examples(i)))
+            dir = scratch//"/out_"//trim(examples(i))
+            call cli([character(len=200) :: path], code, out, err)
+            call check(t, code == 0, "cli example "//trim(examples(i))//": exit 0", err)
+            samples_file = merge("euler.csv", "hbm.csv  ", examples(i) == "seed_euler")
+            call check(t, index(out, "converged") > 0 .or. index(out, "periodic after") > 0, &
+                       "cli example "//trim(examples(i))//": summary printed")
+            open (newunit=u, file=trim(dir)//"/"//trim(samples_file), status='old', &
+                  action='read', iostat=stat)
+            call check(t, stat == 0, "cli example "//trim(examples(i))//": "// &
+                       trim(samples_file)//" written")
+            if (stat /= 0) cycle
+            read (u, '(a)') line
+            call read_case(trim(path), c, error)
+            call check(t, trim(line) == expected_header(c%model%ndof, c%model%ncontact()), &
+                       "cli example "//trim(examples(i))//": hbm.csv header", trim(line))
+            nrows = 0
+            do
+                read (u, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                nrows = nrows + 1
+            end do
+            close (u)
+            if (examples(i) == "seed_euler") then
+                call check(t, nrows == c%euler%steps_per_period, "cli example "// &
+                           trim(examples(i))//": one row per step of the last period")
+                call check(t, summary_value(trim(dir)//"/summary.nml", "periodic") == "T", &
+                           "cli example "//trim(examples(i))//": summary says periodic")
+                cycle
+            end if
+            call check(t, nrows == c%hbm%samples, "cli example "//trim(examples(i))// &
+                       ": one row per sample")
+            inquire (file=trim(dir)//"/coefficients.csv", exist=exists)
+            call check(t, exists, "cli example "//trim(examples(i))//": coefficients.csv written")
+            inquire (file=trim(dir)//"/hbm.csv.tmp", exist=exists)
+            call check(t, .not. exists, "cli example "//trim(examples(i))//": no temporary left")
+            ! the summary is itself a case file holding the effective case
+            call read_case(trim(dir)//"/summary.nml", c, error)
+            call check_error(t, error, "cli example "//trim(examples(i))// &
+                             ": summary.nml reads back as the case", .false.)
+            call check(t, summary_value(trim(dir)//"/summary.nml", "converged") == "T", &
+                       "cli example "//trim(examples(i))//": summary says converged")
+        end do
+
+        call cli([character(len=200) :: "--help"], code, out, err)
+        call check(t, code == 0 .and. index(out, "usage") > 0, "cli --help")
+        call cli([character(len=200) :: "--bogus", "x.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "unknown option '--bogus'") > 0, &
+                   "cli unknown option: exit 1", err)
+        call cli([character(len=200) :: ""], code, out, err)
+        call check(t, code == 1, "cli no case file: exit 1")
+        call cli([character(len=200) :: scratch//"/no_such.nml"], code, out, err)
+        call check(t, code == 3 .and. index(err, "no_such.nml") > 0, "cli missing file: exit 3", err)
+        call write_lines(scratch//"/cli_negative_mu.nml", [character(len=120) :: good_system, &
+            good_forcing, "&friction contact_dof = 2, mu = -0.2, normal_load = 1.0 /"])
+        call cli([character(len=200) :: scratch//"/cli_negative_mu.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "&friction mu(1)") > 0 .and. &
+                   count_lines(err) == 1, "cli bad input: exit 1, one line naming the variable", err)
+        ! a forcing harmonic outside the basis: rejected, naming the file
+        call write_lines(scratch//"/bad_harmonic.nml", [character(len=120) :: good_system, &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 1.0, force_harmonic = 2 /", &
+            good_friction, "&hbm harmonics = 9, odd_only = .true., samples = 64 /", &
+            "&output directory = '"//scratch//"/out_bad' /"])
+        call cli([character(len=200) :: scratch//"/bad_harmonic.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "bad_harmonic.nml: &forcing force_harmonic(1)") &
+                   > 0, "cli forcing harmonic outside the basis: exit 1", err)
+        ! an undamped resonance: numerical failure, exit 2, no result files
+        call write_lines(scratch//"/resonance.nml", [character(len=120) :: good_system, &
+            "&forcing omega = 0.6180339887498949, force_dof = 1, force_amplitude = 1.0 /", &
+            good_friction, "&hbm harmonics = 5, samples = 64 /", &
+            "&output directory = '"//scratch//"/out_resonance' /"])
+        call cli([character(len=200) :: scratch//"/resonance.nml"], code, out, err)
+        call check(t, code == 2 .and. index(err, "singular") > 0, "cli undamped resonance: exit 2", &
+                   err)
+        inquire (file=scratch//"/out_resonance/hbm.csv", exist=exists)
+        call check(t, .not. exists, "cli undamped resonance: no result written")
+        ! a solve that cannot converge in the evaluations allowed: exit 2, summary only
+        call write_lines(scratch//"/starved.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 30, samples = 256, maxfev = 3, "// &
+            "start = 'direct' /", "&output directory = '"//scratch//"/out_starved' /"])
+        call cli([character(len=200) :: scratch//"/starved.nml"], code, out, err)
+        call check(t, code == 2 .and. index(err, "not converged") > 0, &
+                   "cli non-converged: exit 2 with diagnosis", err)
+        inquire (file=scratch//"/out_starved/hbm.csv", exist=exists)
+        call check(t, .not. exists, "cli non-converged: no hbm.csv")
+        call check(t, summary_value(scratch//"/out_starved/summary.nml", "converged") == "F", &
+                   "cli non-converged: summary says converged = F")
+    end subroutine test_cli_examples
+
+    !> &run method = 'reference', 'all' and 'study' end to end: the files, their rows and
+    !> headers, the summary fields, and the differences recomputed from the CSV files.
+    subroutine test_methods_cli(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_methods"
+        character(len=120) :: base(4)
+        character(len=:), allocatable :: out, err, v
+        integer :: code, nrows, nev, u, stat, k
+        real(dp), allocatable :: eu(:, :), rf(:, :)
+        real(dp) :: summary_err(5), e1, amp
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        logical :: ok
+        character(len=400) :: line
+        character(len=16) :: kind
+        character(len=24), parameter :: cpu_keys(3) = [character(len=24) :: "hbm_cpu_seconds", &
+                                                       "euler_cpu_seconds", "reference_cpu_seconds"]
+
+        base = [character(len=120) :: good_system, good_forcing, good_friction, &
+                "&hbm harmonics = 20, samples = 256 /"]
+        ! all three methods; the reference sampled on the Euler grid so that the CSV files
+        ! give the Euler-vs-reference difference independently of the comparison code
+        call write_lines(scratch//"/all.nml", [character(len=120) :: base, &
+            "&run method = 'all' /", "&euler steps_per_period = 400 /", &
+            "&reference samples = 400 /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/all.nml"], code, out, err)
+        call check(t, code == 0, "method all: exit 0", err)
+        call check(t, index(out, "euler vs reference") > 0 .and. &
+                   index(out, "hbm vs reference") > 0, "method all: differences printed", out)
+        call check(t, csv_rows(dir//"/hbm.csv") == 256, "method all: hbm.csv rows")
+        call check(t, csv_rows(dir//"/euler.csv") == 400, "method all: euler.csv rows")
+        call check(t, csv_rows(dir//"/reference.csv") == 400, "method all: reference.csv rows")
+        call check(t, first_line(dir//"/reference.csv") == expected_header(2, 1), &
+                   "method all: reference.csv header")
+        call check(t, first_line(dir//"/events.csv") == "t,contact,kind,direction,force,velocity", &
+                   "method all: events.csv header")
+        ! events: at least one stick and one slip per period, kinds from the documented set
+        nev = 0
+        ok = .true.
+        open (newunit=u, file=dir//"/events.csv", status='old', action='read', iostat=stat)
+        if (stat == 0) then
+            read (u, '(a)') line
+            do
+                read (u, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                nev = nev + 1
+                kind = line(index(line, ",1,") + 3:)
+                kind = kind(1:index(kind, ",") - 1)
+                ok = ok .and. any(kind == [character(len=16) :: "stick", "slip", "reversal", &
+                                           "graze"])
+            end do
+            close (u)
+        end if
+        call check(t, nev >= 2 .and. ok, "method all: events.csv holds valid events")
+        v = summary_value(dir//"/summary.nml", "method")
+        call check(t, v == "'all'", "method all: summary method", v)
+        do k = 1, 3
+            v = summary_value(dir//"/summary.nml", trim(cpu_keys(k)))
+            read (v, *, iostat=stat) e1
+            call check(t, stat == 0 .and. e1 > 0.0_dp, "method all: "//trim(cpu_keys(k)), v)
+        end do
+        call check(t, summary_value(dir//"/summary.nml", "grid") == "400", "method all: grid")
+        call check(t, summary_value(dir//"/summary.nml", "quantities") == &
+                   "'x1', 'x2', 'v1', 'v2', 'r1'", "method all: quantities")
+        v = summary_value(dir//"/summary.nml", "euler_vs_reference_max")
+        read (v, *, iostat=stat) summary_err
+        call check(t, stat == 0, "method all: euler_vs_reference_max has 5 values", v)
+        ! the x1 difference recomputed from euler.csv and reference.csv
+        eu = read_csv(dir//"/euler.csv", 400, 6)
+        rf = read_csv(dir//"/reference.csv", 400, 6)
+        if (size(eu, 1) == 400 .and. size(rf, 1) == 400) then
+            call check_close(t, maxval(abs(rf(:, 1) - eu(:, 1))), 0.0_dp, &
+                             "method all: euler.csv and reference.csv on the same instants", &
+                             atol=1.0e-12_dp)
+            amp = maxval(abs(rf(:, 2)))
+            e1 = maxval(abs(eu(:, 2) - rf(:, 2)))/amp
+            call check_close(t, summary_err(1), e1, "method all: x1 difference from the CSVs", &
+                             rtol=1.0e-9_dp)
+            ! first order at 400 steps: a visible but small difference
+            call check(t, e1 > 1.0e-4_dp .and. e1 < 0.2_dp, "method all: Euler error plausible")
+        else
+            call check(t, .false., "method all: CSV files readable")
+        end if
+        v = summary_value(dir//"/summary.nml", "hbm_vs_reference_rms")
+        call check(t, len(v) > 0, "method all: hbm_vs_reference_rms present")
+        v = summary_value(dir//"/summary.nml", "hbm_vs_euler_max")
+        call check(t, len(v) > 0, "method all: hbm_vs_euler_max present")
+        call read_case(dir//"/summary.nml", c, error)
+        call check_error(t, error, "method all: summary.nml reads back as the case", .false.)
+        if (.not. allocated(error)) call check(t, c%method == 'all' .and. &
+                                               c%reference%samples == 400, &
+                                               "method all: effective case echoed")
+
+        ! the reference alone
+        call write_lines(scratch//"/ref.nml", [character(len=120) :: base, &
+            "&run method = 'reference' /", "&reference samples = 300 /", &
+            "&output directory = '"//scratch//"/out_ref' /"])
+        call cli([character(len=200) :: scratch//"/ref.nml"], code, out, err)
+        call check(t, code == 0, "method reference: exit 0", err)
+        call check(t, csv_rows(scratch//"/out_ref/reference.csv") == 300, &
+                   "method reference: reference.csv rows")
+        call check(t, summary_value(scratch//"/out_ref/summary.nml", "converged") == "T", &
+                   "method reference: summary converged")
+        v = summary_value(scratch//"/out_ref/summary.nml", "energy_balance_error")
+        read (v, *, iostat=stat) e1
+        call check(t, stat == 0 .and. e1 < 1.0e-9_dp, "method reference: energy balance", v)
+
+        ! a small study
+        call write_lines(scratch//"/study.nml", [character(len=120) :: base, &
+            "&run method = 'study' /", "&study harmonics = 5, 20, samples = 0, " // &
+            "steps_per_period = 200, 400, repeats = 1 /", &
+            "&output directory = '"//scratch//"/out_study' /"])
+        call cli([character(len=200) :: scratch//"/study.nml"], code, out, err)
+        call check(t, code == 0, "method study: exit 0", err)
+        call check(t, csv_rows(scratch//"/out_study/study.csv") == 4, "method study: 4 rows")
+        call check(t, first_line(scratch//"/out_study/study.csv") == &
+                   "method,parameter,samples,converged,cpu_seconds,repeats,iterations,"// &
+                   "err_x,err_v,err_r,rms_x,rms_v,rms_r,err_x1,err_x2,err_v1,err_v2,err_r1", &
+                   "method study: study.csv header")
+        call check(t, summary_value(scratch//"/out_study/summary.nml", "rows") == "4", &
+                   "method study: summary rows")
+        block
+            real(dp) :: ex(4)
+            character(len=8) :: m(4)
+            integer :: p(4), i
+            open (newunit=u, file=scratch//"/out_study/study.csv", status='old', &
+                  action='read', iostat=stat)
+            if (stat /= 0) return
+            read (u, '(a)') line
+            do i = 1, 4
+                read (u, '(a)') line
+                call split_row(line, m(i), p(i), ex(i))
+            end do
+            close (u)
+            call check(t, all(m == [character(len=8) :: "hbm", "hbm", "euler", "euler"]) .and. &
+                       all(p == [5, 20, 200, 400]), "method study: row order and parameters")
+            call check(t, ex(2) < ex(1), "method study: more harmonics, smaller error")
+            call check(t, ex(4)/ex(3) > 0.4_dp .and. ex(4)/ex(3) < 0.6_dp, &
+                       "method study: Euler error halves with the step (first order)")
+        end block
+    end subroutine test_methods_cli
+
+    !> method, parameter and err_x (the 8th field) of a study.csv row.
+    subroutine split_row(line, method, parameter, err_x)
+        character(len=*), intent(in) :: line
+        character(len=*), intent(out) :: method
+        integer, intent(out) :: parameter
+        real(dp), intent(out) :: err_x
+        character(len=64) :: f(8)
+        integer :: i, k, start
+        start = 1
+        do i = 1, 8
+            k = index(line(start:), ",")
+            f(i) = line(start:start + k - 2)
+            start = start + k
+        end do
+        method = f(1)
+        read (f(2), *) parameter
+        read (f(8), *) err_x
+    end subroutine split_row
+
+    !> Data rows of a CSV file (-1 if it cannot be opened).
+    integer function csv_rows(path)
+        character(len=*), intent(in) :: path
+        integer :: u, stat
+        character(len=10) :: line
+        csv_rows = -1
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        csv_rows = 0
+        read (u, '(a)', iostat=stat) line
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            csv_rows = csv_rows + 1
+        end do
+        close (u)
+    end function csv_rows
+
+    !> The first line of a file ('' if it cannot be read).
+    function first_line(path) result(line)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: line
+        character(len=1000) :: buf
+        integer :: u, stat
+        line = ""
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat) buf
+        if (stat == 0) line = trim(buf)
+        close (u)
+    end function first_line
+
+    !> The numeric rows of a CSV file with a header: rows x cols (0 rows on failure).
+    function read_csv(path, rows, cols) result(a)
+        character(len=*), intent(in) :: path
+        integer, intent(in) :: rows, cols
+        real(dp), allocatable :: a(:, :)
+        integer :: u, stat, k
+        allocate (a(rows, cols))
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat == 0) read (u, '(a)', iostat=stat)
+        do k = 1, rows
+            if (stat /= 0) exit
+            read (u, *, iostat=stat) a(k, :)
+        end do
+        if (stat /= 0) deallocate (a)
+        if (stat /= 0) allocate (a(0, cols))
+        close (u)
+    end function read_csv
+
+    function expected_header(n, nc) result(h)
+        integer, intent(in) :: n, nc
+        character(len=:), allocatable :: h
+        integer :: i
+        character(len=12) :: b
+        h = "t"
+        do i = 1, n
+            write (b, '(i0)') i
+            h = h//",x"//trim(b)
+        end do
+        do i = 1, n
+            write (b, '(i0)') i
+            h = h//",v"//trim(b)
+        end do
+        do i = 1, nc
+            write (b, '(i0)') i
+            h = h//",r"//trim(b)
+        end do
+    end function expected_header
+
+    integer function count_lines(s)
+        character(len=*), intent(in) :: s
+        integer :: i
+        count_lines = 0
+        do i = 1, len(s)
+            if (s(i:i) == new_line('a')) count_lines = count_lines + 1
+        end do
+    end function count_lines
+
+    !> The value of `key` in a summary.nml (text after "key = "), '' if absent.
+    function summary_value(path, key) result(v)
+        character(len=*), intent(in) :: path, key
+        character(len=:), allocatable :: v
+        character(len=1000) :: line
+        integer :: u, stat, k
+        v = ""
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            k = index(line, " "//key//" = ")
+            if (k > 0) then
+                v = trim(adjustl(line(k + len(key) + 4:)))
+                exit
+            end if
+        end do
+        close (u)
+    end function summary_value
+end module test_cli

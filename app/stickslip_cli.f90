@@ -3,8 +3,490 @@
 !> them in-process. Part of the program (app/), not of the library: it turns errors and
 !> findings into exit codes and stderr lines, prints progress, and draws the pictures
 !> (stickslip_gnuplot, the only code that starts a process).
-!> (The code is in stickslip_cli.inc, shared with the tests: see there.)
 module stickslip_cli
-    use stickslip_driver, only: run_method
-    include 'stickslip_cli.inc'
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
+    use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
+    use stickslip_progress, only: progress_t
+    use stickslip_case, only: case_t, read_case
+    use stickslip_solution, only: hbm_solution_t
+    use stickslip_driver, only: run_result_t, run_method
+    use stickslip_robustness, only: robustness_row_t
+    use stickslip_sweep, only: sweep_result_t
+    use stickslip_checks, only: hbm_checks_t, sampling_notes
+    use stickslip_euler, only: euler_result_t
+    use stickslip_reference, only: reference_result_t
+    use stickslip_side_by_side, only: side_by_side_t
+    use stickslip_study, only: study_result_t
+    use stickslip_compare, only: comparison_t
+    use stickslip_flow, only: event_name
+    use stickslip_summary, only: energy_balance_error, reference_balance_error
+    use stickslip_gnuplot, only: run_gnuplot, rename_pictures
+    implicit none
+    private
+    public :: string_t, cli_options_t, parse_args, run_cli, report_run, stickslip_version
+
+    !> Version of stickslip.
+    character(len=*), parameter :: stickslip_version = "0.1.0"
+
+    !> A string, for arrays of arguments of different lengths.
+    type :: string_t
+        character(len=:), allocatable :: s
+    end type string_t
+
+    !> What the command line asked for.
+    type :: cli_options_t
+        !> Case file path.
+        character(len=:), allocatable :: case_path
+        !> No summary on standard output.
+        logical :: quiet = .false.
+        !> Print usage and exit.
+        logical :: help = .false.
+        !> Print the version and exit.
+        logical :: version = .false.
+    end type cli_options_t
+
+    character(len=*), parameter :: usage = &
+        "usage: stickslip CASE.nml [--quiet] [--help] [--version]"//new_line('a')// &
+        "  Periodic response of a structure with Coulomb friction contacts by the"//new_line('a')// &
+        "  weighted-residual (harmonic balance) method, implicit Euler or the exact"//new_line('a')// &
+        "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all',"// &
+        new_line('a')//"  'study', 'sweep' or 'robustness'). Results go to &output directory:"// &
+        new_line('a')//"  hbm.csv, coefficients.csv, euler.csv, reference.csv, events.csv,"// &
+        new_line('a')//"  study.csv, frc.csv (+ frc.gp, frc.png), robustness.csv (+ maps),"// &
+        new_line('a')//"  summary.nml. Warnings, errors and progress go to standard error;"// &
+        new_line('a')//"  --quiet: no summary and no progress."// &
+        new_line('a')// &
+        "  Exit codes: 0 ok (also with warnings), 1 usage or input error, 2 numerical"// &
+        new_line('a')//"  failure or an answer that cannot be trusted, 3 I/O error (or the"// &
+        new_line('a')//"  directory is being written by another run)."
+
+
+
+contains
+
+    !> Parse the arguments. Errors (stat input): an unknown option, no case file, more than
+    !> one case file.
+    subroutine parse_args(args, opts, error)
+        !> The arguments (without the program name).
+        type(string_t), intent(in) :: args(:)
+        !> What they ask for.
+        type(cli_options_t), intent(out) :: opts
+        !> Set on a usage error.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: i
+        do i = 1, size(args)
+            select case (args(i)%s)
+            case ("--quiet", "-q")
+                opts%quiet = .true.
+            case ("--help", "-h")
+                opts%help = .true.
+            case ("--version")
+                opts%version = .true.
+            case default
+                if (len(args(i)%s) > 0) then
+                    if (args(i)%s(1:1) == "-") then
+                        call fatal_error(error, "unknown option '"//args(i)%s//"'"// &
+                                         new_line('a')//usage, stickslip_stat%input)
+                        return
+                    end if
+                end if
+                if (allocated(opts%case_path)) then
+                    call fatal_error(error, "one case file at a time (got '"//opts%case_path// &
+                                     "' and '"//args(i)%s//"')"//new_line('a')//usage, &
+                                     stickslip_stat%input)
+                    return
+                end if
+                opts%case_path = args(i)%s
+            end select
+        end do
+        if (.not. (opts%help .or. opts%version .or. allocated(opts%case_path))) then
+            call fatal_error(error, "no case file given"//new_line('a')//usage, &
+                             stickslip_stat%input)
+        end if
+    end subroutine parse_args
+
+    !> Everything the program does: parse, read the case, run its method (stickslip_driver),
+    !> draw the pictures, print a short summary on `out_unit` (unless --quiet), and on
+    !> `err_unit` one line per warning (`stickslip: warning: ...`), the distrust of the
+    !> answer (`stickslip: error: the answer cannot be trusted: ...`), errors, and the
+    !> progress of a long sweep, study or robustness study (unless --quiet). Returns the exit
+    !> code: 0 ok (warnings included), 1 usage or input error, 2 numerical failure (not
+    !> converged, singular dynamic stiffness) or an answer that cannot be trusted (its files
+    !> are written), 3 I/O error (including a directory another run is writing).
+    integer function run_cli(args, out_unit, err_unit, progress_interval) result(code)
+        !> The arguments (without the program name).
+        type(string_t), intent(in) :: args(:)
+        !> Unit for the human summary.
+        integer, intent(in) :: out_unit
+        !> Unit for warnings, errors and progress.
+        integer, intent(in) :: err_unit
+        !> Seconds before the first progress line and between two (default 2 and 1 s).
+        real(dp), intent(in), optional :: progress_interval
+        type(cli_options_t) :: opts
+        type(error_type), allocatable :: error
+        type(case_t) :: case
+        type(run_result_t) :: result
+        type(progress_t) :: progress
+
+        code = 0
+        call parse_args(args, opts, error)
+        if (.not. allocated(error)) then
+            if (opts%help) then
+                write (out_unit, '(a)') usage
+                return
+            end if
+            if (opts%version) then
+                write (out_unit, '(a)') "stickslip "//stickslip_version
+                return
+            end if
+            call read_case(opts%case_path, case, error)
+        end if
+        if (allocated(error)) then
+            write (err_unit, '(a)') "stickslip: error: "//error%message
+            code = exit_code_of(error%stat)
+            return
+        end if
+        if (.not. opts%quiet) progress%unit = err_unit
+        if (present(progress_interval)) then
+            progress%delay = progress_interval
+            progress%interval = progress_interval
+        end if
+        progress%label = trim(case%method)
+        call progress%begin()
+        call run_method(case, result, error, progress)
+        code = report_run(case, result, error, opts%quiet, out_unit, err_unit)
+    end function run_cli
+
+    !> After the method of `case` ran (run_method): draw its pictures, write one line on
+    !> `err_unit` per warning and per distrust of the answer, then the error if any (and
+    !> where its summary is), or else (unless `quiet`) the human summary on `out_unit`.
+    !> Returns the exit code: that of the error; else 2 when a finding says the answer
+    !> cannot be trusted; else 0.
+    integer function report_run(case, result, error, quiet, out_unit, err_unit) result(code)
+        !> The case that ran.
+        type(case_t), intent(in) :: case
+        !> What its method produced.
+        type(run_result_t), intent(in) :: result
+        !> The error of the run, if any.
+        type(error_type), allocatable, intent(in) :: error
+        !> No human summary.
+        logical, intent(in) :: quiet
+        !> Unit for the human summary.
+        integer, intent(in) :: out_unit
+        !> Unit for warnings and errors.
+        integer, intent(in) :: err_unit
+        code = 0
+        call draw_pictures(case, result, error, err_unit)
+        call report_findings(result%diagnostics, err_unit, code)
+        if (allocated(error)) then
+            write (err_unit, '(a)') "stickslip: error: "//error%message
+            code = exit_code_of(error%stat)
+            if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
+                result%summary_written) write (err_unit, '(a)') &
+                "stickslip: the summary was written to "//case%directory//"/summary.nml"
+            return
+        end if
+        if (.not. quiet) then
+            select case (result%method)
+            case ('euler')
+                call print_euler_summary(out_unit, case, result%euler)
+            case ('reference')
+                call print_reference_summary(out_unit, case, result%reference)
+            case ('all')
+                call print_side_by_side_summary(out_unit, case, result%side_by_side)
+            case ('study')
+                call print_study_summary(out_unit, case, result%study)
+            case ('sweep')
+                call print_sweep_summary(out_unit, case, result%sweep)
+            case ('robustness')
+                call print_robustness_summary(out_unit, case, result%robustness)
+            case default
+                call print_summary(out_unit, case, result%hbm, result%checks)
+            end select
+            call print_notes(out_unit, result)
+        end if
+    end function report_run
+
+    !> One line on `u` per warning (`stickslip: warning: <message>`) and per finding that
+    !> the answer cannot be trusted (`stickslip: error: the answer cannot be trusted:
+    !> <message>`, exit code 2).
+    subroutine report_findings(found, u, code)
+        type(diagnostics_t), intent(in) :: found
+        integer, intent(in) :: u
+        integer, intent(inout) :: code
+        integer :: k
+        if (.not. allocated(found%items)) return
+        do k = 1, size(found%items)
+            if (found%items(k)%level == level_warning) write (u, '(a)') &
+                "stickslip: warning: "//found%items(k)%message
+        end do
+        do k = 1, size(found%items)
+            if (found%items(k)%level >= level_untrusted) then
+                write (u, '(a)') "stickslip: error: the answer cannot be trusted: "// &
+                    found%items(k)%message
+                code = 2
+            end if
+        end do
+    end subroutine report_findings
+
+    !> The notes among the findings that the method's summary has not printed already.
+    subroutine print_notes(u, result)
+        integer, intent(in) :: u
+        type(run_result_t), intent(in) :: result
+        character(len=:), allocatable :: printed
+        integer :: k
+        if (.not. allocated(result%diagnostics%items)) return
+        printed = ""
+        if (allocated(result%checks%notes)) printed = printed//result%checks%notes
+        if (allocated(result%sweep%notes)) printed = printed//result%sweep%notes
+        do k = 1, size(result%diagnostics%items)
+            associate (item => result%diagnostics%items(k))
+                if (item%level /= level_note) cycle
+                if (len(item%message) == 0) cycle
+                if (index(printed, item%message) > 0) cycle
+                write (u, '(a)') "  note: "//item%message
+            end associate
+        end do
+    end subroutine print_notes
+
+    !> Draw the pictures whose scripts the run wrote: frc.png of a sweep (&sweep plot, more
+    !> than one point, also of a curve that stopped early) and the robustness maps.
+    subroutine draw_pictures(case, result, error, err_unit)
+        type(case_t), intent(in) :: case
+        type(run_result_t), intent(in) :: result
+        type(error_type), allocatable, intent(in) :: error
+        integer, intent(in) :: err_unit
+        select case (result%method)
+        case ('sweep')
+            if (.not. (case%sweep%plot .and. result%sweep%npoints > 1)) return
+            if (allocated(error)) then
+                if (error%stat /= stickslip_stat%numerical) return
+            end if
+            call draw(case%directory, "frc.gp", [character(len=20) :: "frc.png"], err_unit)
+        case ('robustness')
+            if (allocated(error)) return
+            call draw(case%directory, "robustness.gp", &
+                      [character(len=20) :: "robustness_cold.png", "robustness_warm.png"], &
+                      err_unit)
+        end select
+    end subroutine draw_pictures
+
+    !> Run gnuplot on `script` in `directory` (no shell: stickslip_gnuplot), its PNGs
+    !> written under the names `pngs` + '.tmp' and renamed when complete. Without gnuplot,
+    !> or when it fails, one warning: the results are complete without pictures.
+    subroutine draw(directory, script, pngs, err_unit)
+        character(len=*), intent(in) :: directory, script, pngs(:)
+        integer, intent(in) :: err_unit
+        integer :: status
+        status = run_gnuplot(directory, script)
+        if (status == 0) then
+            call rename_pictures(directory, pngs)
+        else
+            write (err_unit, '(a)') "stickslip: warning: pictures not drawn (gnuplot "// &
+                "not found or it failed); draw them later with: cd "//directory// &
+                " && gnuplot "//script
+        end if
+    end subroutine draw
+
+    subroutine print_summary(u, case, sol, checks)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(hbm_solution_t), intent(in) :: sol
+        type(hbm_checks_t), intent(in) :: checks
+        integer :: j
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,es9.2,a,i0,a,i0,a,i0,a,f0.3,a)') "  converged: residual ", sol%fnorm, &
+            " (hybrj info ", sol%info, ", ", sol%nfev, " evaluations, ", sol%njev, &
+            " Jacobians) in ", 1.0e3_dp*sol%seconds, " ms"
+        write (u, '(a,i0,a,a,a,i0,a,g0.4)') "  basis: harmonics ", sol%harmonics, " (", &
+            trim(merge("odd only", "all     ", sol%odd_only)), "), samples ", sol%samples, &
+            ", rho ", sol%rho
+        do j = 1, size(sol%stick_fraction)
+            write (u, '(a,i0,a,f0.1,a,i0,a,g0.4,a,g0.4,a)', advance='no') "  contact ", j, &
+                ": sticks ", 100*sol%stick_fraction(j), "% of the period in ", &
+                sol%stick_phases(j), " phase(s); max |r| ", maxval(abs(sol%r(:, j))), &
+                " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+            if (sol%offset_undetermined(j)) write (u, '(a)', advance='no') &
+                "; stuck all period: mean force set to the admissible value closest to 0"
+            write (u, '(a)') ""
+        end do
+        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+            sol%work_forcing, ", friction ", sol%diss_friction, ", damping ", sol%diss_damping, &
+            " (balance error ", energy_balance_error(sol), ")"
+        if (checks%truncation%available) write (u, '(a,es9.2,a,i0,a)') &
+            "  truncation error estimate ", checks%truncation%estimate, " (relative; vs H = ", &
+            checks%truncation%coarse_harmonics, " and the oversampled Coulomb defect)"
+        if (checks%truncation%tolerance > 0.0_dp) write (u, '(a,es9.2,a)') &
+            "  harmonics_tol ", checks%truncation%tolerance, &
+            trim(merge(" met                                  ", &
+                       " NOT met: max_harmonics reached       ", checks%truncation%met))
+        if (checks%stability) write (u, '(a)') "  stability: "//checks%floquet%diagnosis
+        if (allocated(checks%notes)) then
+            if (len(checks%notes) > 0) write (u, '(a)') "  note: "//checks%notes
+        end if
+        if (allocated(checks%defect)) then
+            if (size(checks%defect) > 0) write (u, '(a,i0,a,es9.2)') &
+                "  periodicity defect of the exact flow after ", size(checks%defect), &
+                " period(s): ", checks%defect(size(checks%defect))
+        end if
+        write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, summary.nml}"
+    end subroutine print_summary
+
+    subroutine print_euler_summary(u, case, res)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(euler_result_t), intent(in) :: res
+        integer :: j
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: periodic after ", &
+            res%periods, " periods of ", case%euler%steps_per_period, " steps (defect ", &
+            res%defect, ") in ", 1.0e3_dp*res%seconds, " ms"
+        do j = 1, size(res%r, 2)
+            write (u, '(a,i0,a,g0.4,a,g0.4,a)') "  contact ", j, ": max |r| ", &
+                maxval(abs(res%r(:, j))), " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+        end do
+        write (u, '(a)') "  wrote "//case%directory//"/{euler.csv, summary.nml}"
+    end subroutine print_euler_summary
+
+    subroutine print_reference_summary(u, case, ref)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(reference_result_t), intent(in) :: ref
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        call print_reference_lines(u, case, ref)
+        write (u, '(a)') "  wrote "//case%directory//"/{reference.csv, events.csv, summary.nml}"
+    end subroutine print_reference_summary
+
+    subroutine print_reference_lines(u, case, ref)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(reference_result_t), intent(in) :: ref
+        integer :: j, k
+        write (u, '(a,es9.2,a,i0,a,i0,a,a,a,f0.3,a,f0.3,a)') "  exact reference: periodic "// &
+            "(defect ", ref%defect, ", ", ref%nfev, " period maps, ", ref%njev, &
+            " monodromies) from the ", ref%start, " start in ", 1.0e3_dp*ref%seconds, &
+            " ms CPU (start ", 1.0e3_dp*ref%start_seconds, " ms)"
+        do j = 1, size(ref%stick_fraction)
+            write (u, '(a,i0,a,f0.1,a,i0,a)', advance='no') "  contact ", j, ": sticks ", &
+                100*ref%stick_fraction(j), "% of the period in ", ref%stick_phases(j), &
+                " phase(s); events"
+            do k = 1, ref%nevent
+                if (ref%event_contact(k) == j) write (u, '(a,a,a,f0.5)', advance='no') " ", &
+                    trim(event_name(ref%event_kind(k))), " t=", ref%event_t(k)
+            end do
+            write (u, '(a,g0.4,a)') " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+        end do
+        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+            ref%work_forcing, ", friction ", ref%diss_friction, ", damping ", ref%diss_damping, &
+            " (balance error ", reference_balance_error(ref), ")"
+    end subroutine print_reference_lines
+
+    subroutine print_side_by_side_summary(u, case, sbs)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(side_by_side_t), intent(in) :: sbs
+        integer :: k
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  weighted residual: H = ", &
+            sbs%hbm%harmonics, ", ", sbs%hbm%nfev, " evaluations, residual ", sbs%hbm%fnorm, &
+            ", ", 1.0e3_dp*sbs%hbm_seconds, " ms CPU"
+        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: ", &
+            case%euler%steps_per_period, " steps/period, periodic after ", sbs%euler%periods, &
+            " periods (defect ", sbs%euler%defect, "), ", 1.0e3_dp*sbs%euler_seconds, " ms CPU"
+        call print_reference_lines(u, case, sbs%reference)
+        write (u, '(a,i0,a)') "  differences on the common grid (", sbs%grid, &
+            " points per period), relative to each quantity's amplitude, worst DOF/contact:"
+        write (u, '(a)') "                            max x     max v     max r     rms x"// &
+            "     rms v     rms r"
+        do k = 1, size(sbs%comparisons)
+            call print_comparison(u, sbs%comparisons(k))
+        end do
+        write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, euler.csv, "// &
+            "reference.csv, events.csv, summary.nml}"
+    end subroutine print_side_by_side_summary
+
+    subroutine print_comparison(u, cmp)
+        integer, intent(in) :: u
+        type(comparison_t), intent(in) :: cmp
+        character(len=26) :: label
+        label = "    "//cmp%method//" vs "//cmp%against
+        write (u, '(a,6es10.2)') label, cmp%worst('x'), cmp%worst('v'), cmp%worst('r'), &
+            cmp%worst('x', .true.), cmp%worst('v', .true.), cmp%worst('r', .true.)
+    end subroutine print_comparison
+
+    subroutine print_study_summary(u, case, study)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(study_result_t), intent(in) :: study
+        integer :: k
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        call print_reference_lines(u, case, study%reference)
+        write (u, '(a)') "  work-precision study, errors relative to the reference amplitude:"
+        write (u, '(a)') "    method  parameter  samples  conv   cpu [s]     max x     max v"// &
+            "     max r"
+        do k = 1, size(study%rows)
+            associate (row => study%rows(k))
+                if (allocated(row%cmp%max_error)) then
+                    write (u, '(4x,a6,i11,i9,a6,es10.2,3es10.2)') trim(row%method), &
+                        row%parameter, row%samples, merge("   yes", "    no", row%converged), &
+                        row%cpu_seconds, row%cmp%worst('x'), row%cmp%worst('v'), &
+                        row%cmp%worst('r')
+                else
+                    write (u, '(4x,a6,i11,i9,a6,es10.2,a)') trim(row%method), row%parameter, &
+                        row%samples, merge("   yes", "    no", row%converged), &
+                        row%cpu_seconds, "  (no solution)"
+                end if
+            end associate
+        end do
+        if (study%skipped > 0) write (u, '(a,i0,a)') "  skipped ", study%skipped, &
+            " (harmonics, samples) pair(s) with samples < 2 H + 1 or a forcing harmonic > H"
+        write (u, '(a)') "  wrote "//case%directory//"/{study.csv, reference.csv, events.csv, "// &
+            "summary.nml}"
+    end subroutine print_study_summary
+
+    subroutine print_sweep_summary(u, case, res)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(sweep_result_t), intent(in) :: res
+        integer :: n
+        n = res%npoints
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,g0.6,a,g0.6,a)') "  forced-response curve in "// &
+            trim(case%sweep%parameter)//": ", n, " points from ", res%points(1)%parameter, &
+            " to ", res%points(n)%parameter, merge(" (complete)  ", " (incomplete)", res%complete)
+        if (res%resumed_points > 0) write (u, '(a,i0,a)') "  resumed from a checkpoint with ", &
+            res%resumed_points, " points"
+        write (u, '(a,i0,a,i0,a,i0)') "  folds passed ", res%folds, ", unstable points ", &
+            count(res%points(1:n)%stable == 0), ", stability unknown ", &
+            count(res%points(1:n)%stable == -1)
+        write (u, '(a,f0.3,a,f0.3,a)') "  CPU ", res%seconds, " s (stability ", &
+            res%stability_seconds, " s)"
+        if (len(sampling_notes(case%hbm%samples, case%hbm%harmonics)) > 0) write (u, '(a)') &
+            "  note: "//sampling_notes(case%hbm%samples, case%hbm%harmonics)
+        if (allocated(res%notes)) then
+            if (len(res%notes) > 0) write (u, '(a)') "  note: "//res%notes
+        end if
+        write (u, '(a)') "  wrote "//case%directory//"/{frc.csv, frc.gp, summary.nml}"
+    end subroutine print_sweep_summary
+
+    subroutine print_robustness_summary(u, case, rows)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(robustness_row_t), intent(in) :: rows(:)
+        character(len=8), parameter :: methods(3) = [character(len=8) :: 'hbm-cold', &
+                                                     'hbm-warm', 'euler']
+        integer :: k, n
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a)') "  robustness study: ", size(rows), " runs"
+        do k = 1, 3
+            n = count(rows%method == methods(k))
+            if (n == 0) cycle
+            write (u, '(4x,a8,a,i0,a,i0,a,f0.1,a)') methods(k), ": ", &
+                count(rows%method == methods(k) .and. rows%success), " of ", n, &
+                " succeeded (", 100.0_dp*count(rows%method == methods(k) .and. rows%success)/n, &
+                "%)"
+        end do
+        write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, summary.nml}"
+    end subroutine print_robustness_summary
 end module stickslip_cli

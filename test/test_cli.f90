@@ -7,8 +7,13 @@ module test_cli
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
     use stickslip_case, only: case_t, read_case
-    use test_app_cli, only: string_t, run_cli
-    use stickslip_files, only: make_directory
+    use stickslip_cli, only: string_t, run_cli, report_run
+    use stickslip_files, only: make_directory, open_temporary, close_and_rename, lock_name, &
+        process_id, process_alive, directory_lock_t, acquire_lock, release_lock
+    use stickslip_diagnostics, only: level_note, level_warning, level_untrusted
+    use stickslip_driver, only: run_result_t, run_method
+    use stickslip_progress, only: progress_t
+    use stickslip_summary, only: write_summary
     use test_case, only: write_lines, scratch
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
@@ -21,6 +26,14 @@ module test_cli
         "force_amplitude = 10.0 /"
     character(len=*), parameter :: good_friction = "&friction contact_dof = 2, mu = 0.45, " // &
         "normal_load = 1.0 /"
+    !> A small forced-response curve.
+    character(len=*), parameter :: sweep_lines(6) = [character(len=120) :: &
+        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1, damping = 0.06,-0.02,-0.02,0.04 /", &
+        "&forcing omega = 2.0, force_dof = 1, force_amplitude = 10.0 /", &
+        "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
+        "&hbm harmonics = 10, rho = 0.2, samples = 64 /", &
+        "&run method = 'sweep' /", &
+        "&sweep parameter = 'omega', start = 2.0, stop = 3.0, step = 0.1, max_step = 0.1 /"]
 
 contains
 
@@ -32,13 +45,340 @@ contains
         if (allocated(error)) return
         call test_cli_examples(t)
         call test_methods_cli(t)
+        call test_stale_results(t)
+        call test_lock(t)
+        call test_unique_temporaries(t)
+        call test_findings(t)
+        call test_progress(t)
+        call test_odd_directory(t)
     end subroutine run_cli_tests
 
+    !> A second run into the same directory leaves only its own result files: a run that
+    !> fails (summary only) removes the first run's hbm.csv and coefficients.csv; a run of
+    !> another method removes the files of the first method; other files and a sweep
+    !> checkpoint are never touched.
+    subroutine test_stale_results(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_stale"
+        character(len=:), allocatable :: out, err
+        integer :: code
+        call write_lines(scratch//"/stale_good.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 10, samples = 128 /", &
+            "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/stale_good.nml"], code, out, err)
+        call check(t, code == 0 .and. exists(dir//"/hbm.csv") .and. &
+                   exists(dir//"/coefficients.csv"), "stale: first run writes hbm.csv", err)
+        call write_lines(dir//"/notes.txt", [character(len=20) :: "mine"])
+        call write_lines(dir//"/frc.checkpoint", [character(len=20) :: "not mine"])
+        call write_lines(dir//"/euler.csv", [character(len=20) :: "t,x1"])
+        ! a second run that does not converge: only its summary is left
+        call write_lines(scratch//"/stale_starved.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 30, samples = 256, maxfev = 3, "// &
+            "start = 'direct' /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/stale_starved.nml"], code, out, err)
+        call check(t, code == 2, "stale: the second run fails (exit 2)", err)
+        call check(t, .not. exists(dir//"/hbm.csv") .and. .not. exists(dir//"/coefficients.csv") &
+                   .and. .not. exists(dir//"/euler.csv"), &
+                   "stale: the first run's results are removed")
+        call check(t, summary_value(dir//"/summary.nml", "converged") == "F", &
+                   "stale: the summary is the failed run's")
+        call check(t, exists(dir//"/notes.txt") .and. exists(dir//"/frc.checkpoint"), &
+                   "stale: other files and the checkpoint are kept")
+        ! a run of another method: the hbm files go, euler.csv comes
+        call cli([character(len=200) :: scratch//"/stale_good.nml"], code, out, err)
+        call write_lines(scratch//"/stale_euler.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&run method = 'euler' /", &
+            "&euler steps_per_period = 200 /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/stale_euler.nml"], code, out, err)
+        call check(t, code == 0 .and. exists(dir//"/euler.csv") .and. &
+                   .not. exists(dir//"/hbm.csv") .and. .not. exists(dir//"/coefficients.csv"), &
+                   "stale: another method's results replace the first", err)
+        call check(t, .not. exists(dir//"/"//lock_name), "stale: no lock left")
+        ! an input error leaves the directory as it was
+        call write_lines(scratch//"/stale_bad.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&run method = 'euler' /", &
+            "&euler steps_per_period = -3 /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/stale_bad.nml"], code, out, err)
+        call check(t, code == 1 .and. exists(dir//"/euler.csv"), &
+                   "stale: an input error touches nothing", err)
+    end subroutine test_stale_results
+
+    !> The directory lock: a run is refused (exit 3, the message names the directory and the
+    !> pid) while a live process holds the lock, and leaves it in place; a lock whose process
+    !> is gone is taken over; the lock is removed at the end of a run, also a failed one.
+    subroutine test_lock(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_lock"
+        character(len=:), allocatable :: out, err
+        character(len=24) :: pid
+        integer :: code
+        type(directory_lock_t) :: lock, other
+        type(error_type), allocatable :: error
+        call check(t, process_alive(process_id()), "lock: this process is alive")
+        call check(t, .not. process_alive(999999999) .and. .not. process_alive(0) .and. &
+                   .not. process_alive(-1), "lock: no process 999999999, 0 or -1")
+        call make_directory(dir, error)
+        write (pid, '(i0)') process_id()
+        call write_lines(scratch//"/lock.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 10, samples = 128 /", &
+            "&output directory = '"//dir//"' /"])
+        call write_lines(dir//"/"//lock_name, [pid])
+        call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
+        call check(t, code == 3 .and. index(err, "directory "//dir//" is being written by "// &
+                   "another stickslip run (pid "//trim(pid)//")") > 0, &
+                   "lock: a held directory is refused with exit 3", err)
+        call check(t, .not. exists(dir//"/hbm.csv") .and. exists(dir//"/"//lock_name), &
+                   "lock: the refused run writes nothing and keeps the lock")
+        call write_lines(dir//"/"//lock_name, [character(len=24) :: "999999999"])
+        call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
+        call check(t, code == 0 .and. exists(dir//"/hbm.csv"), "lock: a stale lock is taken over", &
+                   err)
+        call check(t, .not. exists(dir//"/"//lock_name), "lock: removed at the end")
+        call write_lines(dir//"/"//lock_name, [character(len=24) :: "garbage"])
+        call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
+        call check(t, code == 0, "lock: a damaged lock is taken over", err)
+        ! a failed run removes its lock too
+        call write_lines(scratch//"/lock_starved.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 30, samples = 256, maxfev = 3, "// &
+            "start = 'direct' /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/lock_starved.nml"], code, out, err)
+        call check(t, code == 2 .and. .not. exists(dir//"/"//lock_name), &
+                   "lock: removed after a failed run", err)
+        ! in-process: a second taker is refused while the first holds it
+        call acquire_lock(lock, dir, error)
+        call check_error(t, error, "lock: acquired", .false.)
+        call acquire_lock(other, dir, error)
+        call check_error(t, error, "lock: a second taker is refused", .true., &
+                         [character(len=40) :: "is being written by another"])
+        call check(t, error%stat == stickslip_stat%io, "lock: refusal is an I/O error (exit 3)")
+        call release_lock(other)
+        call check(t, exists(dir//"/"//lock_name), "lock: releasing a lock not held does nothing")
+        call release_lock(lock)
+        call check(t, .not. exists(dir//"/"//lock_name), "lock: released")
+    end subroutine test_lock
+
+    !> Temporaries have unique names (two open at once for one file; a leftover of the
+    !> first candidate name is skipped) and the last one renamed wins; none is left.
+    subroutine test_unique_temporaries(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_temporaries"
+        integer :: u1, u2, stat
+        character(len=1000) :: n1, n2, line
+        type(error_type), allocatable :: error
+        call make_directory(dir, error)
+        call write_lines(dir//"/a.csv."//itoa_(process_id())//".1.tmp", &
+                         [character(len=20) :: "leftover"])
+        call open_temporary(dir, "a.csv", u1, error)
+        call check_error(t, error, "temporaries: first opened", .false.)
+        call open_temporary(dir, "a.csv", u2, error)
+        call check_error(t, error, "temporaries: second opened", .false.)
+        if (allocated(error)) return
+        inquire (unit=u1, name=n1)
+        inquire (unit=u2, name=n2)
+        call check(t, n1 /= n2 .and. index(n1, ".1.tmp") == 0 .and. index(n2, ".1.tmp") == 0, &
+                   "temporaries: unique names, the leftover skipped", trim(n1)//" "//trim(n2))
+        write (u1, '(a)') "first"
+        write (u2, '(a)') "second"
+        call close_and_rename(dir, "a.csv", u1, 0, "", error)
+        call close_and_rename(dir, "a.csv", u2, 0, "", error)
+        call check_error(t, error, "temporaries: renamed", .false.)
+        open (newunit=u1, file=dir//"/a.csv", status='old', action='read', iostat=stat)
+        line = ""
+        if (stat == 0) read (u1, '(a)', iostat=stat) line
+        if (stat == 0) close (u1)
+        call check(t, line == "second", "temporaries: the last renamed wins", trim(line))
+        call check(t, .not. exists(trim(n1)) .and. .not. exists(trim(n2)), &
+                   "temporaries: none left")
+    end subroutine test_unique_temporaries
+
+    !> Findings of a run: a warning is one `stickslip: warning:` line on stderr (exit 0), a
+    !> distrust is `stickslip: error: the answer cannot be trusted:` and exit 2, the result
+    !> still printed; summary.nml says trusted = T/F and lists the keys.
+    subroutine test_findings(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_findings"
+        type(case_t) :: c
+        type(run_result_t) :: res
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: out, err, v
+        integer :: code
+        call write_lines(scratch//"/findings.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 10, samples = 128 /", &
+            "&output directory = '"//dir//"' /"])
+        call read_case(scratch//"/findings.nml", c, error)
+        call check_error(t, error, "findings: case read", .false.)
+        if (allocated(error)) return
+        call run_method(c, res, error)
+        call check_error(t, error, "findings: run", .false.)
+        if (allocated(error)) return
+        call check(t, res%method == 'hbm' .and. res%hbm%converged, "findings: hbm ran")
+        call check(t, summary_value(dir//"/summary.nml", "trusted") == "T" .and. &
+                   summary_value(dir//"/summary.nml", "warnings") == "''", &
+                   "findings: summary trusted = T, warnings = ''", &
+                   summary_value(dir//"/summary.nml", "warnings"))
+        call res%diagnostics%add(level_note, 'sampling', 'a note for people')
+        call res%diagnostics%add(level_warning, 'energy_balance', 'energy balance off by 5%')
+        call report(code, out, err)
+        call check(t, code == 0, "findings: a warning keeps exit 0")
+        call check(t, err == "stickslip: warning: energy balance off by 5%"//new_line('a'), &
+                   "findings: one warning line on stderr", err)
+        call check(t, index(out, "  note: a note for people") > 0 .and. &
+                   index(err, "note") == 0, "findings: notes on stdout", out)
+        call res%diagnostics%add(level_untrusted, 'no_solution', 'no bounded periodic solution')
+        call report(code, out, err)
+        call check(t, code == 2, "findings: distrust gives exit 2")
+        call check(t, index(err, "stickslip: error: the answer cannot be trusted: no "// &
+                   "bounded periodic solution") > 0 .and. count_lines(err) == 2, &
+                   "findings: the distrust line on stderr", err)
+        call check(t, index(out, "converged") > 0, "findings: the result is still printed")
+        ! the summary of such a result
+        call write_summary(dir, c, res%hbm, error, res%checks, res%diagnostics)
+        call check_error(t, error, "findings: summary written", .false.)
+        call check(t, summary_value(dir//"/summary.nml", "trusted") == "F", &
+                   "findings: summary trusted = F")
+        v = summary_value(dir//"/summary.nml", "warnings")
+        call check(t, v == "'energy_balance', 'no_solution'", "findings: summary warnings", v)
+        v = summary_value(dir//"/summary.nml", "warning_energy_balance")
+        call check(t, v == "'energy balance off by 5%'", "findings: warning_<key>", v)
+        v = summary_value(dir//"/summary.nml", "untrusted_no_solution")
+        call check(t, v == "'no bounded periodic solution'", "findings: untrusted_<key>", v)
+        call read_case(dir//"/summary.nml", c, error)
+        call check_error(t, error, "findings: the summary still reads back as the case", .false.)
+    contains
+        subroutine report(code, out, err)
+            integer, intent(out) :: code
+            character(len=:), allocatable, intent(out) :: out, err
+            integer :: uo, ue
+            type(error_type), allocatable :: none
+            open (newunit=uo, status='scratch', action='readwrite')
+            open (newunit=ue, status='scratch', action='readwrite')
+            code = report_run(c, res, none, .false., uo, ue)
+            out = slurp(uo)
+            err = slurp(ue)
+            close (uo)
+            close (ue)
+        end subroutine report
+    end subroutine test_findings
+
+    !> Progress: nothing before `delay`, then at most one line per `interval`; the CLI prints
+    !> progress lines of a sweep on stderr (zero interval here), none with --quiet.
+    subroutine test_progress(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_progress"
+        type(progress_t) :: p
+        integer :: u, k, code
+        character(len=:), allocatable :: text, out, err
+        open (newunit=u, status='scratch', action='readwrite')
+        p%unit = u
+        p%label = 'sweep'
+        p%delay = 0.0_dp
+        p%interval = 0.0_dp
+        call p%begin()
+        do k = 1, 3
+            call p%report(k, 3, "omega = 2")
+        end do
+        text = slurp(u)
+        call check(t, p%lines == 3 .and. count_lines(text) == 3 .and. &
+                   index(text, "stickslip: sweep 2/3 points, omega = 2, ") > 0 .and. &
+                   index(text, " s"//new_line('a')) > 0, "progress: one line per report", text)
+        close (u)
+        open (newunit=u, status='scratch', action='readwrite')
+        p = progress_t(unit=u, interval=1000.0_dp, delay=0.0_dp)
+        call p%begin()
+        do k = 1, 50
+            call p%report(k, 0, "x")
+        end do
+        call check(t, p%lines == 1, "progress: at most one line per interval")
+        p = progress_t(unit=u)
+        call p%begin()
+        do k = 1, 50
+            call p%report(k, 0, "x")
+        end do
+        call check(t, p%lines == 0, "progress: a short run prints nothing")
+        p = progress_t(interval=0.0_dp, delay=0.0_dp)
+        call p%report(1, 1, "x")
+        call check(t, p%lines == 0, "progress: off by default (unit -1)")
+        close (u)
+        call write_lines(scratch//"/progress.nml", [character(len=120) :: sweep_lines, &
+            "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/progress.nml"], code, out, err, &
+                 progress_interval=0.0_dp)
+        call check(t, code == 0 .and. count_substring(err, "stickslip: sweep ") >= 3 .and. &
+                   index(err, " points, omega = ") > 0, "progress: the CLI's sweep lines", err)
+        call cli([character(len=200) :: "--quiet", scratch//"/progress.nml"], code, out, err, &
+                 progress_interval=0.0_dp)
+        call check(t, code == 0 .and. index(err, "stickslip: sweep") == 0, &
+                   "progress: none with --quiet", err)
+    end subroutine test_progress
+
+    !> The output directory of the shell-injection report: no command runs (no PWNED file
+    !> anywhere), the files and (when gnuplot exists) the pictures are in that directory.
+    subroutine test_odd_directory(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/q'; touch PWNED; echo '"
+        character(len=:), allocatable :: out, err
+        integer :: code
+        logical :: drawn
+        call write_lines(scratch//"/odd_sweep.nml", [character(len=160) :: sweep_lines, &
+            '&output directory = "'//dir//'" /'])
+        call cli([character(len=200) :: scratch//"/odd_sweep.nml"], code, out, err)
+        call check(t, code == 0 .and. exists(dir//"/frc.csv"), "odd directory: sweep written", err)
+        drawn = index(err, "pictures not drawn") == 0
+        if (drawn) then
+            call check(t, exists(dir//"/frc.png") .and. .not. exists(dir//"/frc.png.tmp"), &
+                       "odd directory: frc.png drawn there")
+        else
+            call check(t, count_substring(err, "stickslip: warning: pictures not drawn") == 1, &
+                       "odd directory: one warning without gnuplot", err)
+        end if
+        call write_lines(scratch//"/odd_robustness.nml", [character(len=160) :: &
+            sweep_lines(1:4), "&run method = 'robustness' /", &
+            "&robustness omegas = 2.0, 4.5, mus = 0.45, harmonics = 5, rhos = 0.2, "// &
+            "steps_per_period = 200 /", '&output directory = "'//dir//'" /'])
+        call cli([character(len=200) :: scratch//"/odd_robustness.nml"], code, out, err)
+        call check(t, code == 0 .and. exists(dir//"/robustness.csv") .and. &
+                   .not. exists(dir//"/frc.csv"), "odd directory: robustness written", err)
+        if (drawn) call check(t, exists(dir//"/robustness_cold.png") .and. &
+                              exists(dir//"/robustness_warm.png"), &
+                              "odd directory: the maps drawn there", err)
+        call check(t, .not. (exists("PWNED") .or. exists(scratch//"/PWNED") .or. &
+                   exists(dir//"/PWNED") .or. exists("build/PWNED")), &
+                   "odd directory: no command ran (no PWNED)")
+    end subroutine test_odd_directory
+
+    logical function exists(path)
+        character(len=*), intent(in) :: path
+        inquire (file=path, exist=exists)
+    end function exists
+
+    integer function count_substring(s, sub) result(n)
+        character(len=*), intent(in) :: s, sub
+        integer :: k, start
+        n = 0
+        start = 1
+        do
+            k = index(s(start:), sub)
+            if (k == 0) exit
+            n = n + 1
+            start = start + k + len(sub) - 1
+            if (start > len(s)) exit
+        end do
+    end function count_substring
+
+    function itoa_(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: b
+        write (b, '(i0)') i
+        s = trim(b)
+    end function itoa_
+
     !> Run the CLI in-process; return its exit code and what it wrote to each unit.
-    subroutine cli(args, code, out, err)
+    subroutine cli(args, code, out, err, progress_interval)
         character(len=*), intent(in) :: args(:)
         integer, intent(out) :: code
         character(len=:), allocatable, intent(out) :: out, err
+        real(dp), intent(in), optional :: progress_interval
         type(string_t), allocatable :: a(:)
         integer :: i, uo, ue
         allocate (a(size(args)))
@@ -51,7 +391,7 @@ contains
         end if
         open (newunit=uo, status='scratch', action='readwrite')
         open (newunit=ue, status='scratch', action='readwrite')
-        code = run_cli(a, uo, ue)
+        code = run_cli(a, uo, ue, progress_interval)
         out = slurp(uo)
         err = slurp(ue)
         close (uo)

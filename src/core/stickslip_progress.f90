@@ -12,7 +12,7 @@ module stickslip_progress
 
     !> Where and how often progress is printed.
     type :: progress_t
-        !> Unit of the progress lines (-1: off).
+        !> Unit of the progress lines (-1: off; units from open(newunit=) are negative too).
         integer :: unit = -1
         !> What progresses, e.g. 'sweep' (the word after 'stickslip: ').
         character(len=:), allocatable :: label
@@ -59,7 +59,7 @@ contains
         integer(int64) :: now, rate
         real(dp) :: elapsed
         character(len=32) :: count, seconds
-        if (self%unit < 0) return
+        if (self%unit == -1) return
         call system_clock(now, rate)
         if (self%start < 0) self%start = now
         elapsed = real(now - self%start, dp)/real(max(rate, 1_int64), dp)

@@ -5,8 +5,9 @@
 !> that read or built a case.
 !> Every run of a case holds the lock of its output directory (stickslip_files) from before
 !> it computes until its files are written, and leaves in the directory only the result
-!> files of its own summary: the results of an earlier run that this run does not write are
-!> removed (not the checkpoint of a sweep, nor any other file). An input error leaves the
+!> files of its own summary: before it writes, the results of an earlier run that this run
+!> does not write are removed, and so is the earlier summary.nml, written last (not the
+!> checkpoint of a sweep, nor any other file). An input error leaves the
 !> directory's files untouched. The findings (diagnostics) of the methods are gathered into
 !> the summary (trusted, warnings) and into run_result_t for the caller to report.
 module stickslip_driver
@@ -214,17 +215,19 @@ contains
         type(hbm_checks_t), intent(out) :: ch
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
+        logical :: wanted
         call solve_and_check(case%model, case%hbm, case%checks, case%reference, sol, ch, error)
-        if (.not. output_wanted(case, error)) return
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
         if (sol%converged) then
             call remove_stale_results(case%directory, [character(len=24) :: "hbm.csv", &
-                                      "coefficients.csv", "summary.nml"])
+                                      "coefficients.csv"])
             call write_hbm_csv(case%directory, sol, error)
             if (allocated(error)) return
             call write_coefficients_csv(case%directory, sol, error)
             if (allocated(error)) return
         else
-            call remove_stale_results(case%directory, [character(len=24) :: "summary.nml"])
+            call remove_stale_results(case%directory, [character(len=24) ::])
         end if
         call write_summary(case%directory, case, sol, io_error, ch, hbm_findings(sol, ch))
         if (allocated(io_error)) then
@@ -259,15 +262,16 @@ contains
         type(euler_result_t), intent(out) :: res
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
+        logical :: wanted
         call integrate_euler(case%model, case%euler, res, error)
-        if (.not. output_wanted(case, error)) return
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
         if (res%periodic) then
-            call remove_stale_results(case%directory, [character(len=24) :: "euler.csv", &
-                                      "summary.nml"])
+            call remove_stale_results(case%directory, [character(len=24) :: "euler.csv"])
             call write_samples_csv(case%directory, "euler.csv", res%t, res%x, res%v, res%r, error)
             if (allocated(error)) return
         else
-            call remove_stale_results(case%directory, [character(len=24) :: "summary.nml"])
+            call remove_stale_results(case%directory, [character(len=24) ::])
         end if
         call write_euler_summary(case%directory, case, res, io_error)
         if (allocated(io_error)) then
@@ -301,17 +305,19 @@ contains
         type(reference_result_t), intent(out) :: res
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
+        logical :: wanted
         ! H2: solve_reference_from_starts
         call solve_reference(case%model, case%reference, res, error, hbm_opts=case%hbm, &
                              euler_opts=case%euler)
-        if (.not. output_wanted(case, error)) return
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
         if (res%converged) then
             call remove_stale_results(case%directory, [character(len=24) :: "reference.csv", &
-                                      "events.csv", "summary.nml"])
+                                      "events.csv"])
             call write_reference_files(case, res, error)
             if (allocated(error)) return
         else
-            call remove_stale_results(case%directory, [character(len=24) :: "summary.nml"])
+            call remove_stale_results(case%directory, [character(len=24) ::])
         end if
         call write_reference_summary(case%directory, case, res, io_error)
         if (allocated(io_error)) then
@@ -348,9 +354,11 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         character(len=24), allocatable :: files(:)
+        logical :: wanted
         call solve_side_by_side(case%model, case%hbm, case%euler, case%reference, res, error)
-        if (.not. output_wanted(case, error)) return
-        files = [character(len=24) :: "summary.nml"]
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
+        files = [character(len=24) ::]
         if (res%hbm%converged) files = [character(len=24) :: files, "hbm.csv", "coefficients.csv"]
         if (res%euler%periodic) files = [character(len=24) :: files, "euler.csv"]
         if (res%reference%converged) files = [character(len=24) :: files, "reference.csv", &
@@ -421,13 +429,13 @@ contains
                 return
             end if
             ! the reference failed: its report is still worth a summary
-            call remove_stale_results(case%directory, [character(len=24) :: "summary.nml"])
+            call remove_stale_results(case%directory, [character(len=24) ::])
             call write_study_summary(case%directory, case, res, io_error, study_findings(res))
             if (allocated(io_error)) call move_alloc(io_error, error)
             return
         end if
         call remove_stale_results(case%directory, [character(len=24) :: "study.csv", &
-                                  "reference.csv", "events.csv", "summary.nml"])
+                                  "reference.csv", "events.csv"])
         call write_study_csv(case%directory, res, case%model%ndof, case%model%ncontact(), error)
         if (allocated(error)) return
         call write_reference_files(case, res%reference, error)
@@ -468,6 +476,7 @@ contains
         type(checkpoint_writer_t) :: writer
         type(sweep_result_t) :: saved
         logical :: found
+        logical :: wanted
 
         writer%directory = case%directory
         writer%fingerprint = case_fingerprint(case)
@@ -484,9 +493,9 @@ contains
             call run_sweep(case%model, case%hbm, case%reference, case%sweep, res, error, &
                            observer=writer, progress=progress)
         end if
-        if (.not. output_wanted(case, error)) return
-        call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp", &
-                                  "summary.nml"])
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
+        call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
         call write_frc_csv(case%directory, res, error)
         if (allocated(error)) return
         call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
@@ -528,13 +537,15 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(progress_t), intent(inout), optional :: progress
         type(robustness_options_t) :: opts
+        logical :: wanted
         opts = case%robustness
         if (.not. allocated(opts%omegas)) opts = default_robustness_options()
         call run_robustness(case%model, case%hbm, case%euler, case%reference, opts, rows, &
                             error, progress)
-        if (.not. output_wanted(case, error)) return
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
         call remove_stale_results(case%directory, [character(len=24) :: "robustness.csv", &
-                                  "robustness.gp", "summary.nml"])
+                                  "robustness.gp"])
         call write_robustness_csv(case%directory, rows, error)
         if (allocated(error)) return
         call write_robustness_plot_script(case%directory, opts, error)
@@ -572,14 +583,15 @@ contains
     !> leaves the directory as it was; any other error (the method failed without a result
     !> to write) removes the results of an earlier run, which would otherwise pass for this
     !> run's.
-    logical function output_wanted(case, error) result(wanted)
+    subroutine after_method(case, error, wanted)
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(in) :: error
+        logical, intent(out) :: wanted
         wanted = .not. allocated(error)
         if (wanted) return
         if (error%stat /= stickslip_stat%input) &
             call remove_stale_results(case%directory, [character(len=24) ::])
-    end function output_wanted
+    end subroutine after_method
 
     !> Name the case file in an input error.
     subroutine name_case_file(case, error)

@@ -74,7 +74,7 @@ contains
             write (count, '(i0)') done
         end if
         write (seconds, '(f0.1)') elapsed
-        if (seconds(1:1) == '.') seconds = '0'//seconds
+        if (seconds(1:1) == '.') seconds = '0'//seconds(1:len(seconds) - 1)
         if (allocated(self%label)) then
             write (self%unit, '(a)') "stickslip: "//self%label//" "//trim(count)// &
                 " points, "//text//", "//trim(seconds)//" s"

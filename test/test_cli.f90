@@ -130,9 +130,14 @@ contains
         call check(t, .not. exists(dir//"/hbm.csv") .and. exists(dir//"/"//lock_name), &
                    "lock: the refused run writes nothing and keeps the lock")
         call write_lines(dir//"/"//lock_name, [character(len=24) :: "999999999"])
+        call write_lines(dir//"/hbm.csv.999999999.1.tmp", [character(len=24) :: "t,x1"])
+        call write_lines(dir//"/frc.checkpoint.999999999.1.tmp", [character(len=24) :: "x"])
         call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
         call check(t, code == 0 .and. exists(dir//"/hbm.csv"), "lock: a stale lock is taken over", &
                    err)
+        call check(t, .not. exists(dir//"/hbm.csv.999999999.1.tmp") .and. &
+                   .not. exists(dir//"/frc.checkpoint.999999999.1.tmp"), &
+                   "lock: the killed run's temporaries removed")
         call check(t, .not. exists(dir//"/"//lock_name), "lock: removed at the end")
         call write_lines(dir//"/"//lock_name, [character(len=24) :: "garbage"])
         call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)

@@ -225,6 +225,7 @@ contains
     !> the lock name, which fails when the lock exists). A lock whose process is gone (a
     !> killed run) is taken over. Error (stat io) "directory X is being written by another
     !> stickslip run (pid N)" when a live process holds it, or when it cannot be created.
+    !> Taking over a stale lock also removes the temporaries its run left.
     subroutine acquire_lock(lock, dir, error)
         !> The lock, held on return without error.
         type(directory_lock_t), intent(inout) :: lock
@@ -251,7 +252,9 @@ contains
             owner = lock_owner(lock%path)
             if (owner == -2) cycle
             if (process_alive(owner)) exit
-            ! a stale lock (its process is gone, or the file is damaged): take it over
+            ! a stale lock (its process is gone, or the file is damaged): take it over, with
+            ! the temporaries the killed run left
+            if (owner > 0) call remove_temporaries(dir, owner)
             call remove_file(lock%path)
         end do
         stat = c_unlink(trim(temporary)//c_null_char)
@@ -265,6 +268,22 @@ contains
                              stickslip_stat%io)
         end if
     end subroutine acquire_lock
+
+    !> Remove the temporaries that a run with process id `pid` (killed) left in `dir`: the
+    !> first names open_temporary tries for every result file, the checkpoint and the lock.
+    subroutine remove_temporaries(dir, pid)
+        character(len=*), intent(in) :: dir
+        integer, intent(in) :: pid
+        integer :: k, n
+        do n = 1, 3
+            do k = 1, size(result_file_names)
+                call remove_file(dir//'/'//trim(result_file_names(k))//'.'//itoa(pid)//'.'// &
+                                 itoa(n)//'.tmp')
+            end do
+            call remove_file(dir//'/frc.checkpoint.'//itoa(pid)//'.'//itoa(n)//'.tmp')
+            call remove_file(dir//'/'//lock_name//'.'//itoa(pid)//'.'//itoa(n)//'.tmp')
+        end do
+    end subroutine remove_temporaries
 
     !> Process id held by the lock file: -2 when the file does not exist, -1 when it cannot
     !> be read as a process id.

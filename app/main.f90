@@ -1,8 +1,9 @@
-!> The stickslip command: `stickslip case.nml [--quiet] [--help] [--version]`.
-!> Gathers the arguments, runs them (stickslip_cli) and exits with the code it returns.
+!> The stickslip command: `stickslip CASE.nml [--quiet] [--help] [--version]`.
+!> Gathers the arguments, runs them (stickslip_cli, in app/cli) and exits with the code it
+!> returns.
 program main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
-    use stickslip, only: string_t, run_cli
+    use stickslip_cli, only: string_t, run_cli
     implicit none
     type(string_t), allocatable :: args(:)
     integer :: i, n, code

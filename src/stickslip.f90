@@ -32,7 +32,6 @@ module stickslip
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
     use stickslip_study, only: study_options_t, study_row_t, study_result_t, run_study, &
         default_study_options
-    use stickslip_cli, only: string_t, run_cli, stickslip_version
     use stickslip_version_info, only: stickslip_thread_safe
     implicit none
     private
@@ -51,7 +50,6 @@ module stickslip
               write_study_csv, write_study_summary, reference_balance_error
     public :: make_directory, write_hbm_csv, write_coefficients_csv, write_summary, &
               energy_balance_error, write_samples_csv, write_euler_summary
-    public :: string_t, run_cli, stickslip_version
     public :: stickslip_thread_safe
     public :: run_sweep_case, write_frc_csv, write_sweep_summary, write_frc_plot_script
     public :: parametric_system_t, continuation_options_t, continuation_state_t, &

@@ -24,6 +24,7 @@ program tester
     use test_diagnostics, only: run_diagnostics_tests
     use test_error, only: run_error_tests
     use test_minpack, only: run_minpack_tests
+    use test_cli, only: run_cli_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -57,6 +58,7 @@ program tester
     if (selected("diagnostics")) call run_diagnostics_tests(t)
     if (selected("error")) call run_error_tests(t)
     if (selected("minpack")) call run_minpack_tests(t)
+    if (selected("cli")) call run_cli_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

@@ -9,7 +9,8 @@ module test_sweep_files
     use stickslip_run, only: run_sweep_case
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
     use stickslip_output, only: make_directory
-    use test_case, only: cli, write_lines, scratch
+    use test_case, only: write_lines, scratch
+    use test_cli, only: cli
     use fixtures, only: enter_project_root
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
@@ -39,6 +40,7 @@ contains
         call enter_project_root()
         call test_cli_sweep(t)
         call test_resume(t)
+        call test_damaged_checkpoint(t)
         call test_bad_sweep_input(t)
         call test_cli_robustness(t)
     end subroutine run_sweep_file_tests
@@ -196,6 +198,93 @@ contains
         if (.not. allocated(error)) call check(t, resumed%resumed_points == 0, &
                                                "resume: no points taken from the checkpoint")
     end subroutine test_resume
+
+    !> A checkpoint whose counts were damaged (huge, negative, not the case's, a truncated
+    !> file, garbage) is refused with a message (stat input, exit 1) before anything is
+    !> allocated: no crash; resume = .false. still starts afresh.
+    subroutine test_damaged_checkpoint(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/sweep_damaged"
+        type(case_t) :: c
+        type(killed_writer_t) :: killer
+        type(sweep_result_t) :: cut, resumed
+        type(error_type), allocatable :: error
+        character(len=4000), allocatable :: saved(:)
+        character(len=4000) :: line
+        character(len=24) :: fields(9)
+        integer :: u, stat, n, k
+        character(len=*), parameter :: names(7) = [character(len=24) :: "huge unknowns", &
+            "huge points", "negative points", "other ndof", "negative count", "truncated", &
+            "garbage counts"]
+        call write_lines(dir//".nml", [lines_common, "&output directory = '"//dir//"' /"])
+        call read_case(dir//".nml", c, error)
+        if (allocated(error)) return
+        call make_directory(dir, error)
+        killer%directory = dir
+        killer%fingerprint = case_fingerprint(c)
+        killer%stop_after = 3
+        killer%interval = 0.0_dp
+        call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
+        ! the checkpoint's lines
+        allocate (saved(0))
+        open (newunit=u, file=dir//"/"//checkpoint_name, status='old', action='read', &
+              iostat=stat)
+        call check(t, stat == 0, "damaged checkpoint: written by the killed run")
+        if (stat /= 0) return
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            saved = [character(len=4000) :: saved, line]
+        end do
+        close (u)
+        n = size(saved)
+        read (saved(3), *) fields
+        do k = 1, size(names)
+            line = saved(3)
+            select case (k)
+            case (1)
+                line = "2147483647 "//join(fields(2:))
+            case (2)
+                line = join(fields(1:3))//" 999999999 "//join(fields(5:))
+            case (3)
+                line = join(fields(1:3))//" -5 "//join(fields(5:))
+            case (4)
+                line = join(fields(1:1))//" 7 "//join(fields(3:))
+            case (5)
+                line = join(fields(1:5))//" -1 "//join(fields(7:))
+            case (7)
+                line = "x y z"
+            end select
+            if (k == 6) then
+                call write_lines(dir//"/"//checkpoint_name, saved(1:n - 1))
+            else
+                call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:2), line, saved(4:n)])
+            end if
+            call run_sweep_case(c, resumed, error)
+            call check_error(t, error, "damaged checkpoint refused: "//trim(names(k)), .true., &
+                             [character(len=40) :: "frc.checkpoint: a damaged checkpoint", &
+                              "delete it"])
+            if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
+                                             "damaged checkpoint: input error (exit 1): "// &
+                                             trim(names(k)))
+        end do
+        ! the intact file still resumes
+        call write_lines(dir//"/"//checkpoint_name, saved)
+        call run_sweep_case(c, resumed, error)
+        call check_error(t, error, "damaged checkpoint: the intact one resumes", .false.)
+        if (.not. allocated(error)) call check(t, resumed%resumed_points == 3, &
+                                               "damaged checkpoint: 3 points resumed")
+    contains
+        function join(f) result(s)
+            character(len=*), intent(in) :: f(:)
+            character(len=:), allocatable :: s
+            integer :: i
+            s = ""
+            do i = 1, size(f)
+                s = s//" "//trim(f(i))
+            end do
+        end function join
+    end subroutine test_damaged_checkpoint
 
     !> Bad &sweep input: a message naming the file, &sweep and the variable; exit code 1.
     subroutine test_bad_sweep_input(t)

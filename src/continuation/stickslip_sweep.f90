@@ -30,6 +30,7 @@ module stickslip_sweep
     use stickslip_reference, only: reference_options_t
     use stickslip_stability, only: floquet_t, periodic_stability
     use stickslip_truncation, only: truncation_t, estimate_truncation
+    use stickslip_progress, only: progress_t
     implicit none
     private
     public :: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, run_sweep
@@ -270,7 +271,7 @@ contains
     !> res%complete = .false. and res%diagnosis. Errors: stat input (invalid model or
     !> options, a resume of another size), stat numerical (no solution at the start, NaN),
     !> the observer's errors.
-    subroutine run_sweep(model, hbm, ref, opts, res, error, observer, resume)
+    subroutine run_sweep(model, hbm, ref, opts, res, error, observer, resume, progress)
         !> The model at the case's values (the parameter is overwritten along the curve).
         type(model_t), intent(in) :: model
         !> Weighted-residual options of every point.
@@ -287,6 +288,8 @@ contains
         class(sweep_observer_t), intent(inout), optional :: observer
         !> A saved curve to continue.
         type(sweep_result_t), intent(in), optional :: resume
+        !> Progress hook: told after every point (points so far, the parameter).
+        type(progress_t), intent(inout), optional :: progress
         type(friction_family_t), target :: fam
         type(continuation_options_t) :: co
         type(continuation_report_t) :: rep
@@ -495,6 +498,11 @@ contains
             res%seconds = res%seconds + (c1 - c0)
             c0 = c1
             if (present(observer)) call observer%observe(res, error)
+            if (present(progress)) then
+                write (buf, '(g0.6)') res%state%lambda
+                call progress%report(res%npoints, 0, trim(opts%parameter)//" = "// &
+                                     trim(adjustl(buf)))
+            end if
         end subroutine add_point
     end subroutine run_sweep
 

@@ -1,16 +1,19 @@
-!> The checkpoint of a sweep: `<directory>/frc.checkpoint`, rewritten (atomically) after every
-!> point of a forced-response curve, so that a batch job cut off by its wall-time limit resumes
-!> where it stopped when it is run again on the same case. The file holds a fingerprint of the
-!> case (model, &hbm, &sweep range and steps, &reference): a checkpoint of another case is
-!> refused, never silently continued. Text, full double precision.
+!> The checkpoint of a sweep: `<directory>/frc.checkpoint`, rewritten (atomically) after the
+!> first point of a forced-response curve and then at most once a second, so that a batch
+!> job cut off by its wall-time limit resumes where it stopped when it is run again on the
+!> same case. The file holds a fingerprint of the case (model, &hbm, &sweep range and steps,
+!> &reference): a checkpoint of another case is refused, never silently continued, and so is
+!> a damaged one (every count is checked before anything is allocated). Text, full double
+!> precision.
 module stickslip_checkpoint
     use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_case, only: case_t, write_case
     use stickslip_continuation, only: continuation_state_t
     use stickslip_sweep, only: sweep_result_t, sweep_observer_t, frc_point_t
-    use stickslip_output, only: open_temporary, close_and_rename, real_fmt
+    use stickslip_files, only: open_temporary, close_and_rename, remove_file
+    use stickslip_csv, only: real_fmt
     implicit none
     private
     public :: checkpoint_writer_t, case_fingerprint, read_checkpoint, remove_checkpoint
@@ -121,28 +124,36 @@ contains
         call close_and_rename(self%directory, checkpoint_name, u, stat, msg, error)
     end subroutine write_checkpoint
 
-    !> Read <directory>/frc.checkpoint into `res` when it exists (found = .true.). Errors:
-    !> stat input when it belongs to another case (fingerprint) or is not a checkpoint,
-    !> stat io when it cannot be read.
-    subroutine read_checkpoint(directory, fingerprint, res, found, error)
+    !> Read <directory>/frc.checkpoint into `res` when it exists (found = .true.). Every
+    !> count in the file is checked before anything is allocated: the numbers of DOFs and
+    !> contacts against the case, the other counts against their bounds and against the
+    !> size of the file (each value takes at least two characters). Errors: stat input when
+    !> it belongs to another case (fingerprint), is not a checkpoint or is damaged (a count
+    !> out of bounds, an unreadable value: "delete it"), stat io when it cannot be opened.
+    subroutine read_checkpoint(directory, fingerprint, ndof, ncontact, res, found, error)
         !> Output directory.
         character(len=*), intent(in) :: directory
         !> Fingerprint of the case being run.
         character(len=*), intent(in) :: fingerprint
+        !> Degrees of freedom of the case's model.
+        integer, intent(in) :: ndof
+        !> Contacts of the case's model.
+        integer, intent(in) :: ncontact
         !> The saved curve.
         type(sweep_result_t), intent(out) :: res
         !> A checkpoint was there.
         logical, intent(out) :: found
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        character(len=:), allocatable :: path
+        character(len=:), allocatable :: path, problem
         character(len=128) :: line
         character(len=512) :: msg
         character(len=12) :: status
-        integer :: u, stat, n, ndof, nc, k
+        integer :: u, stat, n, nd, nc, k, npoints
+        integer(int64) :: bytes
         type(frc_point_t) :: p
         path = directory//'/'//checkpoint_name
-        inquire (file=path, exist=found)
+        inquire (file=path, exist=found, size=bytes)
         if (.not. found) return
         open (newunit=u, file=path, status='old', action='read', iostat=stat, iomsg=msg)
         if (stat /= 0) then
@@ -165,19 +176,44 @@ contains
                              stickslip_stat%input)
             return
         end if
+        if (bytes < 0) bytes = huge(1_int64)
+        problem = ""
         associate (st => res%state)
-            read (u, *, iostat=stat, iomsg=msg) n, ndof, nc, res%npoints, st%reason, &
+            read (u, *, iostat=stat, iomsg=msg) n, nd, nc, npoints, st%reason, &
                 st%points, st%failures, st%rejected, res%folds
-            if (stat == 0) read (u, *, iostat=stat, iomsg=msg) st%lambda, st%tl, st%ds, &
-                st%arclength, res%seconds, res%stability_seconds
-            if (stat == 0) then
-                allocate (st%y(n), st%ty(n))
-                read (u, *, iostat=stat, iomsg=msg) st%y
+            if (stat /= 0) then
+                problem = "its counts cannot be read"
+            else if (nd /= ndof .or. nc /= ncontact) then
+                problem = "its numbers of DOFs and contacts ("//itoa(nd)//", "//itoa(nc)// &
+                          ") are not the case's ("//itoa(ndof)//", "//itoa(ncontact)//")"
+            else if (n < 1 .or. 2_int64*n > bytes) then
+                problem = "its number of unknowns ("//itoa(n)//") is out of bounds"
+            else if (npoints < 1 .or. 2_int64*npoints*(13 + nd + 2*nc) > bytes) then
+                problem = "its number of points ("//itoa(npoints)//") is out of bounds"
+            else if (min(st%points, st%failures, st%rejected, res%folds) < 0) then
+                problem = "a negative count"
             end if
-            if (stat == 0) read (u, *, iostat=stat, iomsg=msg) st%ty
+            if (len(problem) == 0) then
+                res%npoints = npoints
+                read (u, *, iostat=stat, iomsg=msg) st%lambda, st%tl, st%ds, &
+                    st%arclength, res%seconds, res%stability_seconds
+                if (stat == 0) then
+                    allocate (st%y(n), st%ty(n))
+                    read (u, *, iostat=stat, iomsg=msg) st%y
+                end if
+                if (stat == 0) read (u, *, iostat=stat, iomsg=msg) st%ty
+            end if
         end associate
-        if (stat == 0) allocate (res%points(max(1, res%npoints)))
-        allocate (p%amplitude(ndof), p%rmax(nc), p%stick(nc))
+        if (len(problem) > 0) then
+            close (u)
+            res%npoints = 0
+            call fatal_error(error, path//": a damaged checkpoint ("//problem// &
+                             "): delete it, or set &sweep resume = .false.", &
+                             stickslip_stat%input)
+            return
+        end if
+        if (stat == 0) allocate (res%points(res%npoints))
+        allocate (p%amplitude(nd), p%rmax(nc), p%stick(nc))
         do k = 1, res%npoints
             if (stat /= 0) exit
             read (u, *, iostat=stat, iomsg=msg) status, p%harmonics, p%nfev, p%stable
@@ -188,19 +224,18 @@ contains
             res%points(k) = p
         end do
         close (u)
-        if (stat /= 0) call fatal_error(error, path//": unreadable checkpoint ("// &
-                                        trim(msg)//"): delete it", stickslip_stat%io)
+        if (stat /= 0) then
+            res%npoints = 0
+            call fatal_error(error, path//": a damaged checkpoint (unreadable: "// &
+                             trim(msg)//"): delete it, or set &sweep resume = .false.", &
+                             stickslip_stat%input)
+        end if
     end subroutine read_checkpoint
 
     !> Delete <directory>/frc.checkpoint if present (the curve is finished).
     subroutine remove_checkpoint(directory)
         !> Output directory.
         character(len=*), intent(in) :: directory
-        integer :: u, stat
-        logical :: exists
-        inquire (file=directory//'/'//checkpoint_name, exist=exists)
-        if (.not. exists) return
-        open (newunit=u, file=directory//'/'//checkpoint_name, status='old', iostat=stat)
-        if (stat == 0) close (u, status='delete', iostat=stat)
+        call remove_file(directory//'/'//checkpoint_name)
     end subroutine remove_checkpoint
 end module stickslip_checkpoint

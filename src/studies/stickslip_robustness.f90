@@ -23,6 +23,7 @@ module stickslip_robustness
         sample_reference, validate_reference_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_rho, only: automatic_rho
+    use stickslip_progress, only: progress_t
     implicit none
     private
     public :: robustness_options_t, robustness_row_t, run_robustness
@@ -221,7 +222,8 @@ contains
     !> ordered by mu, then Euler before the weighted residual, then H, samples, rho, omega.
     !> Failures of runs and references are rows (converged = F, diagnosis). Errors: stat input
     !> (invalid model or options).
-    subroutine run_robustness(model, hbm_opts, euler_opts, ref_opts, opts, rows, error)
+    subroutine run_robustness(model, hbm_opts, euler_opts, ref_opts, opts, rows, error, &
+                              progress)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Weighted-residual options (harmonics, samples and rho are replaced).
@@ -236,6 +238,8 @@ contains
         type(robustness_row_t), allocatable, intent(out) :: rows(:)
         !> Set on invalid input.
         type(error_type), allocatable, intent(out) :: error
+        !> Progress hook: told after every run (rows so far of all, omega and mu).
+        type(progress_t), intent(inout), optional :: progress
         type(model_t) :: m
         type(hbm_options_t) :: ho
         type(euler_options_t) :: eo
@@ -456,6 +460,10 @@ contains
                 row%diagnosis = join(row%diagnosis, trim(buf))
             end if
             if (.not. pr%ok) row%diagnosis = join(row%diagnosis, pr%diagnosis)
+            if (present(progress)) then
+                write (buf, '(a,g0.4,a,g0.4)') "omega = ", row%omega, ", mu = ", row%mu
+                call progress%report(irow, nrow, trim(buf))
+            end if
         end subroutine judge
     end subroutine run_robustness
 

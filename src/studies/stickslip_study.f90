@@ -16,6 +16,7 @@ module stickslip_study
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference, validate_reference_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
+    use stickslip_progress, only: progress_t
     implicit none
     private
     public :: study_options_t, study_row_t, study_result_t, run_study, validate_study_options
@@ -141,7 +142,7 @@ contains
     !> Euler run (the options `euler` with the steps from `opts`). A run that does not
     !> converge is a row with converged = F. Errors: stat input (invalid model or options);
     !> stat numerical (no reference: its diagnosis).
-    subroutine run_study(model, hbm, euler, ref_opts, opts, res, error)
+    subroutine run_study(model, hbm, euler, ref_opts, opts, res, error, progress)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Weighted-residual options (H and samples are replaced).
@@ -156,6 +157,8 @@ contains
         type(study_result_t), intent(out) :: res
         !> Set on invalid input or when the reference cannot be computed.
         type(error_type), allocatable, intent(out) :: error
+        !> Progress hook: told after every run (runs so far of the grid, the run).
+        type(progress_t), intent(inout), optional :: progress
         type(hbm_options_t) :: ho
         type(euler_options_t) :: eo
         type(study_row_t) :: row
@@ -210,6 +213,9 @@ contains
                 call hbm_row(ho, row, error)
                 if (allocated(error)) return
                 res%rows = [res%rows, row]
+                if (present(progress)) call progress%report(size(res%rows) + res%skipped, &
+                    size(opts%harmonics)*size(opts%samples) + size(opts%steps_per_period), &
+                    "hbm H = "//itoa(ho%harmonics)//", samples = "//itoa(ns))
             end do
         end do
 
@@ -220,6 +226,9 @@ contains
             call euler_row(eo, row, error)
             if (allocated(error)) return
             res%rows = [res%rows, row]
+            if (present(progress)) call progress%report(size(res%rows) + res%skipped, &
+                size(opts%harmonics)*size(opts%samples) + size(opts%steps_per_period), &
+                "euler steps_per_period = "//itoa(eo%steps_per_period))
         end do
 
     contains

@@ -1,13 +1,17 @@
-!> The command line: `stickslip case.nml [--quiet] [--help] [--version]`. Parsing and the
+!> The command line: `stickslip CASE.nml [--quiet] [--help] [--version]`. Parsing and the
 !> whole run take the arguments as an array and write to units the caller gives, so tests run
-!> them in-process and the library never writes to standard output behind its host's back.
+!> them in-process. Part of the program (app/), not of the library: it turns errors and
+!> findings into exit codes and stderr lines, prints progress, and draws the pictures
+!> (stickslip_gnuplot, the only code that starts a process).
 module stickslip_cli
     use stickslip_kinds, only: dp
+    use stickslip_version_info, only: stickslip_version
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
+    use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
+    use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t, read_case
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_run, only: run_case, run_euler_case, run_reference_case, &
-        run_side_by_side_case, run_study_case, run_sweep_case, run_robustness_case
+    use stickslip_driver, only: run_result_t, run_method
     use stickslip_robustness, only: robustness_row_t
     use stickslip_sweep, only: sweep_result_t
     use stickslip_checks, only: hbm_checks_t, sampling_notes
@@ -17,13 +21,12 @@ module stickslip_cli
     use stickslip_study, only: study_result_t
     use stickslip_compare, only: comparison_t
     use stickslip_flow, only: event_name
-    use stickslip_output, only: energy_balance_error, reference_balance_error
+    use stickslip_summary, only: energy_balance_error, reference_balance_error
+    use stickslip_gnuplot, only: run_gnuplot, rename_pictures
     implicit none
     private
-    public :: string_t, cli_options_t, parse_args, run_cli, stickslip_version
+    public :: string_t, cli_options_t, parse_args, run_cli, report_run
 
-    !> Version of stickslip.
-    character(len=*), parameter :: stickslip_version = "0.1.0"
 
     !> A string, for arrays of arguments of different lengths.
     type :: string_t
@@ -50,9 +53,14 @@ module stickslip_cli
         new_line('a')//"  'study', 'sweep' or 'robustness'). Results go to &output directory:"// &
         new_line('a')//"  hbm.csv, coefficients.csv, euler.csv, reference.csv, events.csv,"// &
         new_line('a')//"  study.csv, frc.csv (+ frc.gp, frc.png), robustness.csv (+ maps),"// &
-        new_line('a')//"  summary.nml."// &
+        new_line('a')//"  summary.nml. Warnings, errors and progress go to standard error;"// &
+        new_line('a')//"  --quiet: no summary and no progress."// &
         new_line('a')// &
-        "  Exit codes: 0 ok, 1 usage or input error, 2 numerical failure, 3 I/O error."
+        "  Exit codes: 0 ok (also with warnings), 1 usage or input error, 2 numerical"// &
+        new_line('a')//"  failure or an answer that cannot be trusted, 3 I/O error (or the"// &
+        new_line('a')//"  directory is being written by another run)."
+
+
 
 contains
 
@@ -97,29 +105,28 @@ contains
         end if
     end subroutine parse_args
 
-    !> Everything the program does: parse, read the case, solve, write the results, print a
-    !> short summary on `out_unit` (unless --quiet) and errors as one message on `err_unit`.
-    !> Returns the exit code: 0 ok, 1 usage or input error, 2 numerical failure (not
-    !> converged, singular dynamic stiffness), 3 I/O error.
-    integer function run_cli(args, out_unit, err_unit) result(code)
+    !> Everything the program does: parse, read the case, run its method (stickslip_driver),
+    !> draw the pictures, print a short summary on `out_unit` (unless --quiet), and on
+    !> `err_unit` one line per warning (`stickslip: warning: ...`), the distrust of the
+    !> answer (`stickslip: error: the answer cannot be trusted: ...`), errors, and the
+    !> progress of a long sweep, study or robustness study (unless --quiet). Returns the exit
+    !> code: 0 ok (warnings included), 1 usage or input error, 2 numerical failure (not
+    !> converged, singular dynamic stiffness) or an answer that cannot be trusted (its files
+    !> are written), 3 I/O error (including a directory another run is writing).
+    integer function run_cli(args, out_unit, err_unit, progress_interval) result(code)
         !> The arguments (without the program name).
         type(string_t), intent(in) :: args(:)
         !> Unit for the human summary.
         integer, intent(in) :: out_unit
-        !> Unit for error messages.
+        !> Unit for warnings, errors and progress.
         integer, intent(in) :: err_unit
+        !> Seconds before the first progress line and between two (default 2 and 1 s).
+        real(dp), intent(in), optional :: progress_interval
         type(cli_options_t) :: opts
         type(error_type), allocatable :: error
         type(case_t) :: case
-        type(hbm_solution_t) :: sol
-        type(euler_result_t) :: res
-        type(reference_result_t) :: ref
-        type(side_by_side_t) :: sbs
-        type(study_result_t) :: study
-        type(sweep_result_t) :: sweep
-        type(hbm_checks_t) :: checks
-        type(robustness_row_t), allocatable :: rows(:)
-        logical :: summary_written
+        type(run_result_t) :: result
+        type(progress_t) :: progress
 
         code = 0
         call parse_args(args, opts, error)
@@ -134,64 +141,152 @@ contains
             end if
             call read_case(opts%case_path, case, error)
         end if
-        if (.not. allocated(error)) then
-            select case (case%method)
-            case ('euler')
-                call run_euler_case(case, res, error)
-            case ('reference')
-                call run_reference_case(case, ref, error)
-            case ('all')
-                call run_side_by_side_case(case, sbs, error)
-            case ('study')
-                call run_study_case(case, study, error)
-            case ('sweep')
-                call run_sweep_case(case, sweep, error)
-                ! a curve that stopped early (stat numerical) was written too: draw it
-                if (case%sweep%plot .and. sweep%npoints > 1) then
-                    if (.not. allocated(error)) then
-                        call draw(case, "frc.gp", ["frc.png"], err_unit)
-                    else if (error%stat == stickslip_stat%numerical) then
-                        call draw(case, "frc.gp", ["frc.png"], err_unit)
-                    end if
-                end if
-            case ('robustness')
-                call run_robustness_case(case, rows, error)
-                if (.not. allocated(error)) call draw(case, "robustness.gp", &
-                    [character(len=20) :: "robustness_cold.png", "robustness_warm.png"], err_unit)
-            case default
-                call run_case(case, sol, error, checks)
-            end select
-        end if
         if (allocated(error)) then
             write (err_unit, '(a)') "stickslip: error: "//error%message
             code = exit_code_of(error%stat)
-            summary_written = allocated(sol%diagnosis) .or. allocated(res%diagnosis) .or. &
-                              allocated(ref%diagnosis) .or. allocated(sbs%diagnosis) .or. &
-                              allocated(study%reference%diagnosis) .or. sweep%npoints > 0
+            return
+        end if
+        if (.not. opts%quiet) progress%unit = err_unit
+        if (present(progress_interval)) then
+            progress%delay = progress_interval
+            progress%interval = progress_interval
+        end if
+        progress%label = trim(case%method)
+        call progress%begin()
+        call run_method(case, result, error, progress)
+        code = report_run(case, result, error, opts%quiet, out_unit, err_unit)
+    end function run_cli
+
+    !> After the method of `case` ran (run_method): draw its pictures, write one line on
+    !> `err_unit` per warning and per distrust of the answer, then the error if any (and
+    !> where its summary is), or else (unless `quiet`) the human summary on `out_unit`.
+    !> Returns the exit code: that of the error; else 2 when a finding says the answer
+    !> cannot be trusted; else 0.
+    integer function report_run(case, result, error, quiet, out_unit, err_unit) result(code)
+        !> The case that ran.
+        type(case_t), intent(in) :: case
+        !> What its method produced.
+        type(run_result_t), intent(in) :: result
+        !> The error of the run, if any.
+        type(error_type), allocatable, intent(in) :: error
+        !> No human summary.
+        logical, intent(in) :: quiet
+        !> Unit for the human summary.
+        integer, intent(in) :: out_unit
+        !> Unit for warnings and errors.
+        integer, intent(in) :: err_unit
+        code = 0
+        call draw_pictures(case, result, error, err_unit)
+        call report_findings(result%diagnostics, err_unit, code)
+        if (allocated(error)) then
+            write (err_unit, '(a)') "stickslip: error: "//error%message
+            code = exit_code_of(error%stat)
             if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
-                summary_written) write (err_unit, '(a)') &
+                result%summary_written) write (err_unit, '(a)') &
                 "stickslip: the summary was written to "//case%directory//"/summary.nml"
             return
         end if
-        if (.not. opts%quiet) then
-            select case (case%method)
+        if (.not. quiet) then
+            select case (result%method)
             case ('euler')
-                call print_euler_summary(out_unit, case, res)
+                call print_euler_summary(out_unit, case, result%euler)
             case ('reference')
-                call print_reference_summary(out_unit, case, ref)
+                call print_reference_summary(out_unit, case, result%reference)
             case ('all')
-                call print_side_by_side_summary(out_unit, case, sbs)
+                call print_side_by_side_summary(out_unit, case, result%side_by_side)
             case ('study')
-                call print_study_summary(out_unit, case, study)
+                call print_study_summary(out_unit, case, result%study)
             case ('sweep')
-                call print_sweep_summary(out_unit, case, sweep)
+                call print_sweep_summary(out_unit, case, result%sweep)
             case ('robustness')
-                call print_robustness_summary(out_unit, case, rows)
+                call print_robustness_summary(out_unit, case, result%robustness)
             case default
-                call print_summary(out_unit, case, sol, checks)
+                call print_summary(out_unit, case, result%hbm, result%checks)
             end select
+            call print_notes(out_unit, result)
         end if
-    end function run_cli
+    end function report_run
+
+    !> One line on `u` per warning (`stickslip: warning: <message>`) and per finding that
+    !> the answer cannot be trusted (`stickslip: error: the answer cannot be trusted:
+    !> <message>`, exit code 2).
+    subroutine report_findings(found, u, code)
+        type(diagnostics_t), intent(in) :: found
+        integer, intent(in) :: u
+        integer, intent(inout) :: code
+        integer :: k
+        if (.not. allocated(found%items)) return
+        do k = 1, size(found%items)
+            if (found%items(k)%level == level_warning) write (u, '(a)') &
+                "stickslip: warning: "//found%items(k)%message
+        end do
+        do k = 1, size(found%items)
+            if (found%items(k)%level >= level_untrusted) then
+                write (u, '(a)') "stickslip: error: the answer cannot be trusted: "// &
+                    found%items(k)%message
+                code = 2
+            end if
+        end do
+    end subroutine report_findings
+
+    !> The notes among the findings that the method's summary has not printed already.
+    subroutine print_notes(u, result)
+        integer, intent(in) :: u
+        type(run_result_t), intent(in) :: result
+        character(len=:), allocatable :: printed
+        integer :: k
+        if (.not. allocated(result%diagnostics%items)) return
+        printed = ""
+        if (allocated(result%checks%notes)) printed = printed//result%checks%notes
+        if (allocated(result%sweep%notes)) printed = printed//result%sweep%notes
+        do k = 1, size(result%diagnostics%items)
+            associate (item => result%diagnostics%items(k))
+                if (item%level /= level_note) cycle
+                if (len(item%message) == 0) cycle
+                if (index(printed, item%message) > 0) cycle
+                write (u, '(a)') "  note: "//item%message
+            end associate
+        end do
+    end subroutine print_notes
+
+    !> Draw the pictures whose scripts the run wrote: frc.png of a sweep (&sweep plot, more
+    !> than one point, also of a curve that stopped early) and the robustness maps.
+    subroutine draw_pictures(case, result, error, err_unit)
+        type(case_t), intent(in) :: case
+        type(run_result_t), intent(in) :: result
+        type(error_type), allocatable, intent(in) :: error
+        integer, intent(in) :: err_unit
+        select case (result%method)
+        case ('sweep')
+            if (.not. (case%sweep%plot .and. result%sweep%npoints > 1)) return
+            if (allocated(error)) then
+                if (error%stat /= stickslip_stat%numerical) return
+            end if
+            call draw(case%directory, "frc.gp", [character(len=20) :: "frc.png"], err_unit)
+        case ('robustness')
+            if (allocated(error)) return
+            call draw(case%directory, "robustness.gp", &
+                      [character(len=20) :: "robustness_cold.png", "robustness_warm.png"], &
+                      err_unit)
+        end select
+    end subroutine draw_pictures
+
+    !> Run gnuplot on `script` in `directory` (no shell: stickslip_gnuplot), its PNGs
+    !> written under the names `pngs` + '.tmp' and renamed when complete. Without gnuplot,
+    !> or when it fails, one warning: the results are complete without pictures.
+    subroutine draw(directory, script, pngs, err_unit)
+        character(len=*), intent(in) :: directory, script, pngs(:)
+        integer, intent(in) :: err_unit
+        integer :: status
+        status = run_gnuplot(directory, script)
+        if (status == 0) then
+            call rename_pictures(directory, pngs)
+        else
+            write (err_unit, '(a)') "stickslip: warning: pictures not drawn (gnuplot "// &
+                "not found or it failed); draw them later with: cd "//directory// &
+                " && gnuplot "//script
+        end if
+    end subroutine draw
 
     subroutine print_summary(u, case, sol, checks)
         integer, intent(in) :: u
@@ -348,31 +443,6 @@ contains
         write (u, '(a)') "  wrote "//case%directory//"/{study.csv, reference.csv, events.csv, "// &
             "summary.nml}"
     end subroutine print_study_summary
-
-    !> Run the gnuplot `script` in the output directory, its PNGs `pngs` written under
-    !> temporary names (the script's variable suffix = '.tmp') and renamed. Without gnuplot,
-    !> or when it fails, one warning on err_unit: the results are complete without pictures.
-    subroutine draw(case, script, pngs, err_unit)
-        type(case_t), intent(in) :: case
-        character(len=*), intent(in) :: script, pngs(:)
-        integer, intent(in) :: err_unit
-        integer :: stat, cstat, k
-        character(len=256) :: cmsg
-        character(len=:), allocatable :: command
-        stat = 1
-        cstat = 0
-        cmsg = ''
-        command = "cd '"//case%directory//"' && gnuplot -e ""suffix='.tmp'"" "//script// &
-                  " >/dev/null 2>&1"
-        do k = 1, size(pngs)
-            command = command//" && { [ ! -f "//trim(pngs(k))//".tmp ] || mv -f "// &
-                      trim(pngs(k))//".tmp "//trim(pngs(k))//"; }"
-        end do
-        call execute_command_line(command, exitstat=stat, cmdstat=cstat, cmdmsg=cmsg)
-        if (cstat /= 0 .or. stat /= 0) write (err_unit, '(a)') "stickslip: warning: "// &
-            "pictures not drawn (is gnuplot installed?); draw them later with: cd "// &
-            case%directory//" && gnuplot "//script
-    end subroutine draw
 
     subroutine print_sweep_summary(u, case, res)
         integer, intent(in) :: u

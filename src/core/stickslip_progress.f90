@@ -1,0 +1,88 @@
+!> Progress of a long run (a sweep, a study, a robustness study): a hook the host passes
+!> to the loop, which calls `report` after each point. Nothing is printed unless the host
+!> gives a unit; then one line `stickslip: <what> <done>/<total> ..., <elapsed> s` on it once
+!> `delay` seconds of wall time have passed since `start`, and at most once per `interval`
+!> seconds. The library never prints behind its host's back: off by default (unit -1).
+module stickslip_progress
+    use, intrinsic :: iso_fortran_env, only: int64
+    use stickslip_kinds, only: dp
+    implicit none
+    private
+    public :: progress_t
+
+    !> Where and how often progress is printed.
+    type :: progress_t
+        !> Unit of the progress lines (-1: off; units from open(newunit=) are negative too).
+        integer :: unit = -1
+        !> What progresses, e.g. 'sweep' (the word after 'stickslip: ').
+        character(len=:), allocatable :: label
+        !> Wall time before the first line [s] (short runs print nothing).
+        real(dp) :: delay = 2.0_dp
+        !> Shortest wall time between two lines [s].
+        real(dp) :: interval = 1.0_dp
+        !> system_clock count at the start (-1: set by the first report).
+        integer(int64) :: start = -1
+        !> system_clock count of the last line (-1: none yet).
+        integer(int64) :: last = -1
+        !> Lines printed.
+        integer :: lines = 0
+    contains
+        !> Start the clock now.
+        procedure :: begin => progress_begin
+        !> A point is done: print a line when it is time.
+        procedure :: report => progress_report
+    end type progress_t
+
+contains
+
+    !> Start the clock of `self` now (elapsed times are counted from here).
+    subroutine progress_begin(self)
+        !> The progress.
+        class(progress_t), intent(inout) :: self
+        call system_clock(self%start)
+        self%last = -1
+    end subroutine progress_begin
+
+    !> `done` of `total` points are done (total <= 0: unknown); `text` describes the last
+    !> one (e.g. 'omega = 2.35'). Prints `stickslip: <label> <done>/<total> points, <text>,
+    !> <elapsed> s` when the unit is on, `delay` seconds have passed since the start and
+    !> `interval` seconds since the last line.
+    subroutine progress_report(self, done, total, text)
+        !> The progress.
+        class(progress_t), intent(inout) :: self
+        !> Points done.
+        integer, intent(in) :: done
+        !> Points in all (<= 0 when not known in advance).
+        integer, intent(in) :: total
+        !> The last point, for a person.
+        character(len=*), intent(in) :: text
+        integer(int64) :: now, rate
+        real(dp) :: elapsed
+        character(len=32) :: count, seconds
+        if (self%unit == -1) return
+        call system_clock(now, rate)
+        if (self%start < 0) self%start = now
+        elapsed = real(now - self%start, dp)/real(max(rate, 1_int64), dp)
+        if (elapsed < self%delay) return
+        if (self%last >= 0) then
+            if (real(now - self%last, dp) < self%interval*real(rate, dp)) return
+        end if
+        self%last = now
+        if (total > 0) then
+            write (count, '(i0,"/",i0)') done, total
+        else
+            write (count, '(i0)') done
+        end if
+        write (seconds, '(f0.1)') elapsed
+        if (seconds(1:1) == '.') seconds = '0'//seconds(1:len(seconds) - 1)
+        if (allocated(self%label)) then
+            write (self%unit, '(a)') "stickslip: "//self%label//" "//trim(count)// &
+                " points, "//text//", "//trim(seconds)//" s"
+        else
+            write (self%unit, '(a)') "stickslip: progress "//trim(count)//" points, "// &
+                text//", "//trim(seconds)//" s"
+        end if
+        flush (self%unit)
+        self%lines = self%lines + 1
+    end subroutine progress_report
+end module stickslip_progress

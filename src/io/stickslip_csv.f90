@@ -1,0 +1,315 @@
+!> The CSV result files: hbm.csv, euler.csv and reference.csv (one period of samples, the
+!> format of hbm.csv), coefficients.csv (Fourier coefficients of x and r), events.csv (the
+!> reference's events), study.csv (the work-precision study), frc.csv (a forced-response
+!> curve) and robustness.csv (the robustness study). Each file is written under a unique
+!> temporary name and renamed when complete (stickslip_files). Columns are contracts
+!> (README, "Outputs"). Knows nothing of how the results are computed.
+module stickslip_csv
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, itoa
+    use stickslip_solution, only: hbm_solution_t
+    use stickslip_reference, only: reference_result_t
+    use stickslip_flow, only: event_name
+    use stickslip_compare, only: quantity_names
+    use stickslip_study, only: study_result_t
+    use stickslip_sweep, only: sweep_result_t
+    use stickslip_robustness, only: robustness_row_t
+    use stickslip_case, only: ltoa
+    use stickslip_files, only: open_temporary, close_and_rename
+    implicit none
+    private
+    public :: write_hbm_csv, write_samples_csv, write_coefficients_csv, write_events_csv
+    public :: write_study_csv, write_frc_csv, write_robustness_csv, real_fmt
+
+    !> Edit descriptor of every real in the result files: full double precision.
+    character(len=*), parameter :: real_fmt = 'es25.17e3'
+
+contains
+
+    !> Write `dir`/hbm.csv: header t,x1..xN,v1..vN,r1..rC and one row per sample
+    !> t_k = k T / nt, full double precision. Needs the solution's samples. Error: stat io.
+    subroutine write_hbm_csv(dir, sol, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> A solution with samples.
+        type(hbm_solution_t), intent(in) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error)
+    end subroutine write_hbm_csv
+
+    !> Write `dir`/`name`: header t,x1..xN,v1..vN,r1..rC and one row per instant, full
+    !> double precision (the format of hbm.csv, also used for euler.csv). Error: stat io.
+    subroutine write_samples_csv(dir, name, t, x, v, r, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> File name.
+        character(len=*), intent(in) :: name
+        !> Instants [s].
+        real(dp), intent(in) :: t(:)
+        !> Displacements, instants x N [m].
+        real(dp), intent(in) :: x(:, :)
+        !> Velocities, instants x N [m/s].
+        real(dp), intent(in) :: v(:, :)
+        !> Friction forces, instants x n_c [N].
+        real(dp), intent(in) :: r(:, :)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, n, nc, stat
+        character(len=512) :: msg
+        character(len=:), allocatable :: header
+        character(len=80) :: fmt
+
+        n = size(x, 2)
+        nc = size(r, 2)
+        header = "t"
+        do i = 1, n
+            header = header//",x"//itoa(i)
+        end do
+        do i = 1, n
+            header = header//",v"//itoa(i)
+        end do
+        do i = 1, nc
+            header = header//",r"//itoa(i)
+        end do
+        write (fmt, '(a,i0,a)') '(', 1 + 2*n + nc, '(' // real_fmt // ',:,","))'
+        call open_temporary(dir, name, u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, size(t)
+            if (stat /= 0) exit
+            write (u, fmt, iostat=stat, iomsg=msg) t(k), x(k, :), v(k, :), r(k, :)
+        end do
+        call close_and_rename(dir, name, u, stat, msg, error)
+    end subroutine write_samples_csv
+
+    !> Write `dir`/coefficients.csv: header harmonic,kind,x1..xN,r1..rC and one row per basis
+    !> function, kind c0 (constant), cos or sin; u(t) = c0 + sum a cos(h omega t) + b sin(...).
+    subroutine write_coefficients_csv(dir, sol, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The solution.
+        type(hbm_solution_t), intent(in) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, n, nc, stat
+        character(len=512) :: msg
+        character(len=:), allocatable :: header, kind
+        character(len=80) :: fmt
+
+        n = size(sol%xcoef, 2)
+        nc = size(sol%rcoef, 2)
+        header = "harmonic,kind"
+        do i = 1, n
+            header = header//",x"//itoa(i)
+        end do
+        do i = 1, nc
+            header = header//",r"//itoa(i)
+        end do
+        write (fmt, '(a,i0,a)') '(i0,",",a,",",', n + nc, '(' // real_fmt // ',:,","))'
+        call open_temporary(dir, "coefficients.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, sol%nb
+            if (stat /= 0) exit
+            if (sol%harmonic(k) == 0) then
+                kind = "c0"
+            else if (k > 1 .and. sol%harmonic(max(k - 1, 1)) == sol%harmonic(k)) then
+                kind = "sin"
+            else
+                kind = "cos"
+            end if
+            write (u, fmt, iostat=stat, iomsg=msg) sol%harmonic(k), kind, sol%xcoef(k, :), &
+                sol%rcoef(k, :)
+        end do
+        call close_and_rename(dir, "coefficients.csv", u, stat, msg, error)
+    end subroutine write_coefficients_csv
+
+    !> Write `dir`/events.csv: header t,contact,kind,direction,force,velocity and one row per
+    !> event of the reference in one period, sorted by time in [0, T): kind is stick, slip,
+    !> reversal or graze, direction the slip direction after the event (0 stuck, +1, -1),
+    !> force [N] and slip velocity [m/s] at the event. Error: stat io.
+    subroutine write_events_csv(dir, ref, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> A reference solution.
+        type(reference_result_t), intent(in) :: ref
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, stat
+        character(len=512) :: msg
+        character(len=*), parameter :: fmt = '(' // real_fmt // ',",",i0,",",a,",",i0,",",' // &
+                                              real_fmt // ',",",' // real_fmt // ')'
+        call open_temporary(dir, "events.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) "t,contact,kind,direction,force,velocity"
+        do k = 1, ref%nevent
+            if (stat /= 0) exit
+            write (u, fmt, iostat=stat, iomsg=msg) ref%event_t(k), ref%event_contact(k), &
+                event_name(ref%event_kind(k)), ref%event_direction(k), ref%event_force(k), &
+                ref%event_velocity(k)
+        end do
+        call close_and_rename(dir, "events.csv", u, stat, msg, error)
+    end subroutine write_events_csv
+
+    !> Write `dir`/study.csv: header method,parameter,samples,converged,cpu_seconds,repeats,
+    !> iterations,err_x,err_v,err_r,rms_x,rms_v,rms_r, then err_<q> for every quantity q
+    !> (x1..xN, v1..vN, r1..); one row per run. err_* are max errors relative to the
+    !> reference amplitude of each quantity (err_x: the worst DOF), rms_* the RMS ones;
+    !> NaN when the run produced no solution. Error: stat io.
+    subroutine write_study_csv(dir, study, n, nc, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The study.
+        type(study_result_t), intent(in) :: study
+        !> Degrees of freedom and contacts of the model.
+        integer, intent(in) :: n, nc
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, stat
+        character(len=512) :: msg
+        character(len=12), allocatable :: names(:)
+        character(len=:), allocatable :: header
+        character(len=80) :: fmt
+        real(dp), allocatable :: e(:)
+        real(dp) :: nan
+        nan = ieee_value(1.0_dp, ieee_quiet_nan)
+        names = quantity_names(n, nc)
+        header = "method,parameter,samples,converged,cpu_seconds,repeats,iterations," // &
+                 "err_x,err_v,err_r,rms_x,rms_v,rms_r"
+        do i = 1, size(names)
+            header = header//",err_"//trim(names(i))
+        end do
+        write (fmt, '(a,i0,a)') '(a,",",i0,",",i0,",",a,",",' // real_fmt // &
+            ',",",i0,",",i0,",",', 6 + size(names), '(' // real_fmt // ',:,","))'
+        call open_temporary(dir, "study.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, size(study%rows)
+            if (stat /= 0) exit
+            associate (row => study%rows(k))
+                if (allocated(row%cmp%max_error)) then
+                    e = [row%cmp%worst('x'), row%cmp%worst('v'), row%cmp%worst('r'), &
+                         row%cmp%worst('x', .true.), row%cmp%worst('v', .true.), &
+                         row%cmp%worst('r', .true.), row%cmp%max_error]
+                else
+                    e = [(nan, i=1, 6 + size(names))]
+                end if
+                write (u, fmt, iostat=stat, iomsg=msg) trim(row%method), row%parameter, &
+                    row%samples, ltoa(row%converged), row%cpu_seconds, row%repeats, &
+                    row%iterations, e
+            end associate
+        end do
+        call close_and_rename(dir, "study.csv", u, stat, msg, error)
+    end subroutine write_study_csv
+
+    !> Write `dir`/frc.csv, one row per point of the forced-response curve: parameter,
+    !> amp_1..amp_N (max_t |x_k| [m]), dissipation (energy dissipated per period, friction +
+    !> viscous [J]), rmax_1..rmax_C (max_t |r_j| [N]), stick_1..stick_C (stick fraction),
+    !> harmonics, residual (||F|| / fscale), status, floquet_max (largest Floquet
+    !> multiplier modulus, NaN when not computed), stable (1 stable, 0 unstable, -1 unknown),
+    !> truncation (relative harmonic truncation error estimate, NaN when not computed), then
+    !> arclength, diss_friction, diss_damping [J], nfev. Error: stat io.
+    subroutine write_frc_csv(dir, res, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The curve.
+        type(sweep_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, k, i, stat, n, nc
+        character(len=512) :: msg
+        character(len=:), allocatable :: header
+        character(len=160) :: fmt
+        stat = 0
+        msg = ''
+        n = 0
+        nc = 0
+        if (res%npoints > 0) then
+            n = size(res%points(1)%amplitude)
+            nc = size(res%points(1)%rmax)
+        end if
+        header = "parameter"
+        do i = 1, n
+            header = header//",amp_"//itoa(i)
+        end do
+        header = header//",dissipation"
+        do i = 1, nc
+            header = header//",rmax_"//itoa(i)
+        end do
+        do i = 1, nc
+            header = header//",stick_"//itoa(i)
+        end do
+        header = header//",harmonics,residual,status,floquet_max,stable,truncation,"// &
+                 "arclength,diss_friction,diss_damping,nfev"
+        write (fmt, '(a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // ',","),i0,",",' // &
+            real_fmt // ',",",a,",",' // real_fmt // ',",",i0,",",4(' // real_fmt // &
+            ',","),i0)'
+        call open_temporary(dir, "frc.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, res%npoints
+            if (stat /= 0) exit
+            associate (p => res%points(k))
+                write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude, p%dissipation, &
+                    p%rmax, p%stick, p%harmonics, p%residual, trim(p%status), p%floquet_max, &
+                    p%stable, p%truncation, p%arclength, p%diss_friction, p%diss_damping, p%nfev
+            end associate
+        end do
+        call close_and_rename(dir, "frc.csv", u, stat, msg, error)
+    end subroutine write_frc_csv
+
+    !> Write `dir`/robustness.csv: header
+    !> method,omega,mu,harmonics,rho,rho_auto,samples,converged,success,iterations,
+    !> cpu_seconds,err_amplitude,diagnosis and one row per run (logicals T/F; success:
+    !> converged and, against the reference, err_amplitude <= wrong_tol; rho NaN for 'euler';
+    !> err_amplitude NaN when unknown; diagnosis quoted, empty for a success). Written under
+    !> a temporary name and renamed when complete. Error: stat io.
+    subroutine write_robustness_csv(dir, rows, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The runs.
+        type(robustness_row_t), intent(in) :: rows(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=*), parameter :: fmt = '(a,",",' // real_fmt // ',",",' // real_fmt // &
+            ',",",i0,",",' // real_fmt // ',",",a,",",i0,",",a,",",a,",",i0,",",' // real_fmt // &
+            ',",",' // real_fmt // ',",",a)'
+        integer :: u, k, stat
+        character(len=512) :: msg
+        call open_temporary(dir, "robustness.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) "method,omega,mu,harmonics,rho,rho_auto,"// &
+            "samples,converged,success,iterations,cpu_seconds,err_amplitude,diagnosis"
+        do k = 1, size(rows)
+            if (stat /= 0) exit
+            associate (row => rows(k))
+                write (u, fmt, iostat=stat, iomsg=msg) trim(row%method), row%omega, row%mu, &
+                    row%harmonics, row%rho, merge("T", "F", row%rho_auto), row%samples, &
+                    merge("T", "F", row%converged), merge("T", "F", row%success), &
+                    row%iterations, row%cpu_seconds, &
+                    row%err_amplitude, csv_quote(row%diagnosis)
+            end associate
+        end do
+        call close_and_rename(dir, "robustness.csv", u, stat, msg, error)
+    end subroutine write_robustness_csv
+
+    !> A CSV field in double quotes, inner double quotes doubled (RFC 4180).
+    pure function csv_quote(s) result(t)
+        character(len=:), allocatable, intent(in) :: s
+        character(len=:), allocatable :: t
+        integer :: i
+        t = '"'
+        if (allocated(s)) then
+            do i = 1, len(s)
+                if (s(i:i) == '"') then
+                    t = t//'""'
+                else
+                    t = t//s(i:i)
+                end if
+            end do
+        end if
+        t = t//'"'
+    end function csv_quote
+end module stickslip_csv

@@ -1,0 +1,314 @@
+!> Files of an output directory: creating it (mkdir -p), atomic writes (a temporary with a
+!> unique name, created exclusively, then renamed over the final name, so a reader sees the
+!> complete old file or the complete new one, and two runs never share a temporary), removing
+!> the result files of an earlier run that the current run does not write, and the directory
+!> lock `.stickslip.lock` that refuses a directory another run is writing.
+!> Knows the result file names, nothing of their contents. Talks to the C library (mkdir,
+!> rename, link, unlink, getpid, kill, getpgid) through bind(C); never starts a process.
+module stickslip_files
+    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    implicit none
+    private
+    public :: make_directory, open_temporary, close_and_rename, remove_file
+    public :: result_file_names, remove_stale_results
+    public :: directory_lock_t, acquire_lock, release_lock, lock_name, process_id, &
+              process_alive
+
+    !> File name of the directory lock.
+    character(len=*), parameter :: lock_name = ".stickslip.lock"
+
+    !> Every result file stickslip writes into an output directory (README, "Outputs"):
+    !> the files that a run removes when it does not write them itself. Never the case
+    !> file, the sweep checkpoint or anything else.
+    character(len=*), parameter :: result_file_names(14) = [character(len=24) :: &
+        "hbm.csv", "coefficients.csv", "euler.csv", "reference.csv", "events.csv", &
+        "study.csv", "frc.csv", "frc.gp", "frc.png", "robustness.csv", "robustness.gp", &
+        "robustness_cold.png", "robustness_warm.png", "summary.nml"]
+
+    !> The lock of an output directory, held from acquire_lock to release_lock.
+    type :: directory_lock_t
+        !> Path of the lock file (unallocated: not held).
+        character(len=:), allocatable :: path
+        !> Whether this run holds it.
+        logical :: held = .false.
+    end type directory_lock_t
+
+    interface
+        function c_mkdir(path, mode) bind(c, name='mkdir') result(stat)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int), value :: mode
+            integer(c_int) :: stat
+        end function c_mkdir
+
+        function c_rename(old, new) bind(c, name='rename') result(stat)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: old(*), new(*)
+            integer(c_int) :: stat
+        end function c_rename
+
+        function c_link(old, new) bind(c, name='link') result(stat)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: old(*), new(*)
+            integer(c_int) :: stat
+        end function c_link
+
+        function c_unlink(path) bind(c, name='unlink') result(stat)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int) :: stat
+        end function c_unlink
+
+        function c_getpid() bind(c, name='getpid') result(pid)
+            import :: c_int
+            integer(c_int) :: pid
+        end function c_getpid
+
+        function c_kill(pid, sig) bind(c, name='kill') result(stat)
+            import :: c_int
+            integer(c_int), value :: pid, sig
+            integer(c_int) :: stat
+        end function c_kill
+
+        function c_getpgid(pid) bind(c, name='getpgid') result(pgid)
+            import :: c_int
+            integer(c_int), value :: pid
+            integer(c_int) :: pgid
+        end function c_getpgid
+    end interface
+
+    !> Tries at unique temporary names before giving up.
+    integer, parameter :: max_tries = 10000
+
+contains
+
+    !> Create directory `path` and its missing parents (like mkdir -p). Error (stat io) when
+    !> a component cannot be created.
+    subroutine make_directory(path, error)
+        !> Directory path.
+        character(len=*), intent(in) :: path
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: k, stat
+        do k = 1, len(path)
+            if (k < len(path) .and. path(k:k) /= '/') cycle
+            if (k == 1 .and. path(1:1) == '/') cycle
+            if (path(k:k) == '/') then
+                if (is_directory(path(1:k - 1))) cycle
+                stat = c_mkdir(path(1:k - 1)//c_null_char, int(o'755', c_int))
+            else
+                if (is_directory(path)) cycle
+                stat = c_mkdir(path//c_null_char, int(o'755', c_int))
+            end if
+        end do
+        if (.not. is_directory(path)) call fatal_error(error, path// &
+            ": cannot create the output directory", stickslip_stat%io)
+    end subroutine make_directory
+
+    logical function is_directory(path)
+        character(len=*), intent(in) :: path
+        inquire (file=path//'/.', exist=is_directory)
+    end function is_directory
+
+    !> The process id of this program.
+    integer function process_id() result(pid)
+        pid = int(c_getpid())
+    end function process_id
+
+    !> Whether a process with id `pid` exists (kill(pid, 0) succeeds, or getpgid finds it
+    !> when it belongs to another user). False for pid <= 0.
+    logical function process_alive(pid) result(alive)
+        !> A process id.
+        integer, intent(in) :: pid
+        alive = .false.
+        if (pid <= 0) return
+        alive = c_kill(int(pid, c_int), 0_c_int) == 0
+        if (.not. alive) alive = c_getpgid(int(pid, c_int)) >= 0
+    end function process_alive
+
+    !> Open a new temporary file for `dir/name` for writing: `dir/name.<pid>.<n>.tmp`,
+    !> created exclusively (O_CREAT|O_EXCL) with the first free n, so that two runs (or two
+    !> writers in one run) never write the same temporary. Finish with close_and_rename.
+    !> Error: stat io.
+    subroutine open_temporary(dir, name, unit, error)
+        !> Directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> Final file name.
+        character(len=*), intent(in) :: name
+        !> The unit opened.
+        integer, intent(out) :: unit
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: stat, k
+        character(len=512) :: msg
+        character(len=:), allocatable :: stem
+        logical :: exists
+        stem = dir//'/'//name//'.'//itoa(process_id())//'.'
+        do k = 1, max_tries
+            open (newunit=unit, file=stem//itoa(k)//'.tmp', status='new', action='write', &
+                  iostat=stat, iomsg=msg)
+            if (stat == 0) return
+            inquire (file=stem//itoa(k)//'.tmp', exist=exists)
+            if (.not. exists) exit
+        end do
+        call fatal_error(error, dir//'/'//name//": cannot open a temporary file for writing: "// &
+                         trim(msg), stickslip_stat%io)
+    end subroutine open_temporary
+
+    !> Close `unit` (opened by open_temporary) and rename its temporary to `dir/name`; when
+    !> stat_write /= 0 (a write failed) delete the temporary instead. Error: stat io.
+    subroutine close_and_rename(dir, name, unit, stat_write, msg_write, error)
+        !> Directory.
+        character(len=*), intent(in) :: dir
+        !> Final file name.
+        character(len=*), intent(in) :: name
+        !> The unit of the temporary.
+        integer, intent(in) :: unit
+        !> iostat of the writes (0: all written).
+        integer, intent(in) :: stat_write
+        !> iomsg of the failed write.
+        character(len=*), intent(in) :: msg_write
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: stat
+        character(len=512) :: msg
+        character(len=4096) :: temporary
+        if (stat_write /= 0) then
+            close (unit, status='delete', iostat=stat)
+            call fatal_error(error, dir//'/'//name//": write failed: "//trim(msg_write), &
+                             stickslip_stat%io)
+            return
+        end if
+        inquire (unit=unit, name=temporary)
+        close (unit, iostat=stat, iomsg=msg)
+        if (stat /= 0) then
+            call fatal_error(error, dir//'/'//name//": close failed: "//trim(msg), &
+                             stickslip_stat%io)
+            return
+        end if
+        if (c_rename(trim(temporary)//c_null_char, dir//'/'//name//c_null_char) /= 0) then
+            stat = c_unlink(trim(temporary)//c_null_char)
+            call fatal_error(error, dir//'/'//name//": cannot rename the temporary file", &
+                             stickslip_stat%io)
+        end if
+    end subroutine close_and_rename
+
+    !> Delete file `path` if it exists (nothing happens otherwise).
+    subroutine remove_file(path)
+        !> The file.
+        character(len=*), intent(in) :: path
+        integer :: stat
+        stat = c_unlink(path//c_null_char)
+    end subroutine remove_file
+
+    !> Remove from `dir` every result file of result_file_names (and the temporaries of
+    !> pictures) that is not in `keep`: the files of an earlier run that would otherwise
+    !> lie beside this run's summary. Other files, and frc.checkpoint, are never touched.
+    subroutine remove_stale_results(dir, keep)
+        !> Output directory.
+        character(len=*), intent(in) :: dir
+        !> The result files this run writes.
+        character(len=*), intent(in) :: keep(:)
+        integer :: k
+        do k = 1, size(result_file_names)
+            if (any(keep == result_file_names(k))) cycle
+            call remove_file(dir//'/'//trim(result_file_names(k)))
+        end do
+        call remove_file(dir//'/frc.png.tmp')
+        call remove_file(dir//'/robustness_cold.png.tmp')
+        call remove_file(dir//'/robustness_warm.png.tmp')
+    end subroutine remove_stale_results
+
+    !> Take the lock of output directory `dir` (which must exist): create `dir/.stickslip.lock`
+    !> holding this process id, atomically (written under a unique name, then hard-linked to
+    !> the lock name, which fails when the lock exists). A lock whose process is gone (a
+    !> killed run) is taken over. Error (stat io) "directory X is being written by another
+    !> stickslip run (pid N)" when a live process holds it, or when it cannot be created.
+    !> Taking over a stale lock also removes the temporaries its run left.
+    subroutine acquire_lock(lock, dir, error)
+        !> The lock, held on return without error.
+        type(directory_lock_t), intent(inout) :: lock
+        !> Output directory.
+        character(len=*), intent(in) :: dir
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, attempt, owner
+        character(len=512) :: msg
+        character(len=4096) :: temporary
+        lock%path = dir//'/'//lock_name
+        lock%held = .false.
+        owner = -1
+        call open_temporary(dir, lock_name, u, error)
+        if (allocated(error)) return
+        write (u, '(i0)', iostat=stat, iomsg=msg) process_id()
+        inquire (unit=u, name=temporary)
+        close (u, iostat=stat)
+        do attempt = 1, 3
+            if (c_link(trim(temporary)//c_null_char, lock%path//c_null_char) == 0) then
+                lock%held = .true.
+                exit
+            end if
+            owner = lock_owner(lock%path)
+            if (owner == -2) cycle
+            if (process_alive(owner)) exit
+            ! a stale lock (its process is gone, or the file is damaged): take it over, with
+            ! the temporaries the killed run left
+            if (owner > 0) call remove_temporaries(dir, owner)
+            call remove_file(lock%path)
+        end do
+        stat = c_unlink(trim(temporary)//c_null_char)
+        if (lock%held) return
+        if (owner > 0) then
+            call fatal_error(error, "directory "//dir//" is being written by another "// &
+                             "stickslip run (pid "//itoa(owner)//"); if no such run is "// &
+                             "going on, delete "//lock%path, stickslip_stat%io)
+        else
+            call fatal_error(error, lock%path//": cannot create the directory lock", &
+                             stickslip_stat%io)
+        end if
+    end subroutine acquire_lock
+
+    !> Remove the temporaries that a run with process id `pid` (killed) left in `dir`: the
+    !> first names open_temporary tries for every result file, the checkpoint and the lock.
+    subroutine remove_temporaries(dir, pid)
+        character(len=*), intent(in) :: dir
+        integer, intent(in) :: pid
+        integer :: k, n
+        do n = 1, 3
+            do k = 1, size(result_file_names)
+                call remove_file(dir//'/'//trim(result_file_names(k))//'.'//itoa(pid)//'.'// &
+                                 itoa(n)//'.tmp')
+            end do
+            call remove_file(dir//'/frc.checkpoint.'//itoa(pid)//'.'//itoa(n)//'.tmp')
+            call remove_file(dir//'/'//lock_name//'.'//itoa(pid)//'.'//itoa(n)//'.tmp')
+        end do
+    end subroutine remove_temporaries
+
+    !> Process id held by the lock file: -2 when the file does not exist, -1 when it cannot
+    !> be read as a process id.
+    integer function lock_owner(path) result(pid)
+        character(len=*), intent(in) :: path
+        integer :: u, stat
+        logical :: exists
+        pid = -2
+        inquire (file=path, exist=exists)
+        if (.not. exists) return
+        pid = -1
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, *, iostat=stat) pid
+        if (stat /= 0) pid = -1
+        close (u)
+    end function lock_owner
+
+    !> Give the lock back: remove the lock file when this run holds it. Safe to call when
+    !> the lock is not held.
+    subroutine release_lock(lock)
+        !> The lock.
+        type(directory_lock_t), intent(inout) :: lock
+        if (.not. lock%held) return
+        if (lock_owner(lock%path) == process_id()) call remove_file(lock%path)
+        lock%held = .false.
+    end subroutine release_lock
+end module stickslip_files

@@ -1,0 +1,541 @@
+!> summary.nml, one writer per method: a namelist group &summary (one `key = value` per
+!> line: the method, whether the answer can be trusted, the keys of its warnings, the
+!> convergence report and the checks), for several methods groups &summary_<method>, then
+!> the effective case as namelist groups (read_case reads the file back as a case). Keys are
+!> contracts (README, "Outputs"). Written under a unique temporary name and renamed.
+module stickslip_summary
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, itoa
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
+    use stickslip_solution, only: hbm_solution_t
+    use stickslip_euler, only: euler_result_t
+    use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist
+    use stickslip_reference, only: reference_result_t
+    use stickslip_compare, only: comparison_t, quantity_names
+    use stickslip_side_by_side, only: side_by_side_t
+    use stickslip_study, only: study_result_t
+    use stickslip_sweep, only: sweep_result_t
+    use stickslip_checks, only: hbm_checks_t
+    use stickslip_robustness, only: robustness_row_t
+    use stickslip_files, only: open_temporary, close_and_rename
+    implicit none
+    private
+    public :: write_summary, write_euler_summary, write_reference_summary
+    public :: write_side_by_side_summary, write_study_summary, write_sweep_summary
+    public :: write_robustness_summary
+    public :: energy_balance_error, reference_balance_error
+
+contains
+
+    !> Relative energy balance error over one period: |work_forcing - diss_friction -
+    !> diss_damping| / max(|work_forcing|, 1e-6 work_gross): relative to the net work, or to
+    !> the gross work integral |f . v| dt when the net work is ~0 (a contact stuck all
+    !> period, undamped: nothing dissipates, and the balance is 0 = 0 to roundoff).
+    pure real(dp) function energy_balance_error(sol) result(e)
+        !> The solution.
+        type(hbm_solution_t), intent(in) :: sol
+        e = abs(sol%work_forcing - sol%diss_friction - sol%diss_damping)/ &
+            max(abs(sol%work_forcing), 1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
+    end function energy_balance_error
+
+    !> Relative energy balance error of the reference over one period:
+    !> |work_forcing - diss_friction - diss_damping| / max(|work_forcing|, tiny).
+    pure real(dp) function reference_balance_error(ref) result(e)
+        !> A reference solution.
+        type(reference_result_t), intent(in) :: ref
+        e = abs(ref%work_forcing - ref%diss_friction - ref%diss_damping)/ &
+            max(abs(ref%work_forcing), 1.0e-6_dp*ref%work_gross, tiny(1.0_dp))
+    end function reference_balance_error
+
+    !> Write `dir`/summary.nml: a namelist group &summary (one `key = value` per line) with
+    !> the convergence report and diagnostics, followed by the effective case as namelist
+    !> groups (read_case reads the file back as a case).
+    subroutine write_summary(dir, case, sol, error, checks, diagnostics)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case solved.
+        type(case_t), intent(in) :: case
+        !> The solution (converged or not).
+        type(hbm_solution_t), intent(in) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Truncation estimate, stability and periodicity defect of the solution.
+        type(hbm_checks_t), intent(in), optional :: checks
+        !> The findings to report (keys trusted, warnings, warning_<key>, untrusted_<key>);
+        !> default: the result's own diagnostics.
+        type(diagnostics_t), intent(in), optional :: diagnostics
+        type(diagnostics_t) :: found
+        integer :: u, stat
+        character(len=512) :: msg
+
+        if (present(diagnostics)) then
+            found = diagnostics
+        else
+            found = sol%diagnostics
+            if (present(checks)) call found%extend(checks%diagnostics)
+        end if
+        call begin_summary(dir, "hbm", found, u, stat, msg, error)
+        if (allocated(error)) return
+        call put_hbm_keys(u, sol, stat, msg)
+        if (present(checks)) call put_check_keys(u, checks, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_summary
+
+    !> The keys of the checks of a solution (README, "summary.nml").
+    subroutine put_check_keys(u, checks, stat, msg)
+        integer, intent(in) :: u
+        type(hbm_checks_t), intent(in) :: checks
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        associate (e => checks%truncation)
+            if (e%available) then
+                call put(u, "  truncation_estimate = "//rtoa(e%estimate), stat, msg)
+                call put(u, "  truncation_psi_rms = "//rtoa(e%psi_rms), stat, msg)
+                call put(u, "  truncation_coarse_harmonics = "//itoa(e%coarse_harmonics), &
+                         stat, msg)
+                if (allocated(e%displacement_change_rel)) call put(u, &
+                    "  truncation_displacement_change = "//rlist(e%displacement_change_rel), &
+                    stat, msg)
+                call put(u, "  truncation_dissipation_change = "// &
+                         rtoa(e%dissipation_change_rel), stat, msg)
+            end if
+            if (e%tolerance > 0.0_dp) then
+                call put(u, "  harmonics_tol_met = "//ltoa(e%met), stat, msg)
+                if (allocated(e%history_harmonics)) then
+                    call put(u, "  harmonics_tried = "//ilist(e%history_harmonics), stat, msg)
+                    call put(u, "  estimates_tried = "//rlist(e%history_estimate), stat, msg)
+                end if
+            end if
+        end associate
+        if (checks%stability) then
+            associate (f => checks%floquet)
+                call put(u, "  stability = '"//f%verdict//"'", stat, msg)
+                call put(u, "  stable = "//ltoa(f%stable), stat, msg)
+                if (f%verdict /= 'unknown') then
+                    call put(u, "  floquet_max = "//rtoa(f%max_modulus), stat, msg)
+                    call put(u, "  floquet_multipliers_re = "//rlist(real(f%multipliers, dp)), &
+                             stat, msg)
+                    call put(u, "  floquet_multipliers_im = "//rlist(aimag(f%multipliers)), &
+                             stat, msg)
+                end if
+                if (allocated(f%diagnosis)) call put(u, "  stability_diagnosis = '"// &
+                                                     quote(f%diagnosis)//"'", stat, msg)
+            end associate
+        end if
+        if (allocated(checks%defect)) then
+            if (size(checks%defect) > 0) then
+                call put(u, "  periodicity_defect = "//rlist(checks%defect), stat, msg)
+            end if
+        end if
+        if (allocated(checks%notes)) call put(u, "  notes = '"//quote(checks%notes)//"'", &
+                                              stat, msg)
+    end subroutine put_check_keys
+
+    !> Write `dir`/summary.nml for a time integration: a group &summary (method = 'euler',
+    !> periodic, periods, defect, seconds, max_sweeps, diagnosis), then the effective case.
+    subroutine write_euler_summary(dir, case, res, error, diagnostics)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case integrated.
+        type(case_t), intent(in) :: case
+        !> The integration result.
+        type(euler_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The findings to report (keys trusted, warnings, warning_<key>, untrusted_<key>);
+        !> default: the result's own diagnostics.
+        type(diagnostics_t), intent(in), optional :: diagnostics
+        type(diagnostics_t) :: found
+        integer :: u, stat
+        character(len=512) :: msg
+        if (present(diagnostics)) then
+            found = diagnostics
+        else
+            found = res%diagnostics
+        end if
+        call begin_summary(dir, "euler", found, u, stat, msg, error)
+        if (allocated(error)) return
+        call put_euler_keys(u, case, res, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_euler_summary
+
+    !> The keys of a weighted-residual solution (README, "summary.nml").
+    subroutine put_hbm_keys(u, sol, stat, msg)
+        integer, intent(in) :: u
+        type(hbm_solution_t), intent(in) :: sol
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        integer :: nc
+        nc = 0
+        if (allocated(sol%stick_fraction)) nc = size(sol%stick_fraction)
+        call put(u, "  converged = "//ltoa(sol%converged), stat, msg)
+        call put(u, "  info = "//itoa(sol%info), stat, msg)
+        call put(u, "  nfev = "//itoa(sol%nfev), stat, msg)
+        call put(u, "  njev = "//itoa(sol%njev), stat, msg)
+        call put(u, "  hybrj_calls = "//itoa(sol%hybrj_calls), stat, msg)
+        call put(u, "  fnorm = "//rtoa(sol%fnorm), stat, msg)
+        call put(u, "  fscale = "//rtoa(sol%fscale), stat, msg)
+        call put(u, "  solve_seconds = "//rtoa(sol%seconds), stat, msg)
+        call put(u, "  harmonics = "//itoa(sol%harmonics), stat, msg)
+        call put(u, "  odd_only = "//ltoa(sol%odd_only), stat, msg)
+        call put(u, "  samples = "//itoa(sol%samples), stat, msg)
+        call put(u, "  rho = "//rtoa(sol%rho), stat, msg)
+        call put(u, "  ncontact = "//itoa(nc), stat, msg)
+        if (nc > 0) then
+            call put(u, "  stick_fraction = "//rlist(sol%stick_fraction), stat, msg)
+            call put(u, "  stick_phases = "//ilist(sol%stick_phases), stat, msg)
+            call put(u, "  offset_undetermined = "//llist(sol%offset_undetermined), stat, msg)
+        end if
+        call put(u, "  work_forcing = "//rtoa(sol%work_forcing), stat, msg)
+        call put(u, "  work_gross = "//rtoa(sol%work_gross), stat, msg)
+        call put(u, "  diss_friction = "//rtoa(sol%diss_friction), stat, msg)
+        call put(u, "  diss_damping = "//rtoa(sol%diss_damping), stat, msg)
+        call put(u, "  diss_coulomb = "//rtoa(sol%diss_coulomb), stat, msg)
+        call put(u, "  energy_balance_error = "//rtoa(energy_balance_error(sol)), stat, msg)
+        call put(u, "  diagnosis = '"//quote(sol%diagnosis)//"'", stat, msg)
+    end subroutine put_hbm_keys
+
+    !> The keys of an implicit Euler integration.
+    subroutine put_euler_keys(u, case, res, stat, msg)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(euler_result_t), intent(in) :: res
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        call put(u, "  periodic = "//ltoa(res%periodic), stat, msg)
+        call put(u, "  periods = "//itoa(res%periods), stat, msg)
+        call put(u, "  defect = "//rtoa(res%defect), stat, msg)
+        call put(u, "  euler_seconds = "//rtoa(res%seconds), stat, msg)
+        call put(u, "  steps_per_period = "//itoa(case%euler%steps_per_period), stat, msg)
+        call put(u, "  max_sweeps = "//itoa(res%max_sweeps), stat, msg)
+        call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+    end subroutine put_euler_keys
+
+    !> The keys of a reference solution.
+    subroutine put_reference_keys(u, ref, stat, msg)
+        integer, intent(in) :: u
+        type(reference_result_t), intent(in) :: ref
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        integer :: nc
+        nc = 0
+        if (allocated(ref%stick_fraction)) nc = size(ref%stick_fraction)
+        call put(u, "  converged = "//ltoa(ref%converged), stat, msg)
+        call put(u, "  defect = "//rtoa(ref%defect), stat, msg)
+        call put(u, "  nfev = "//itoa(ref%nfev), stat, msg)
+        call put(u, "  njev = "//itoa(ref%njev), stat, msg)
+        call put(u, "  start = '"//ref%start//"'", stat, msg)
+        call put(u, "  shooting_seconds = "//rtoa(ref%seconds), stat, msg)
+        call put(u, "  start_seconds = "//rtoa(ref%start_seconds), stat, msg)
+        call put(u, "  t_section = "//rtoa(ref%t_section), stat, msg)
+        call put(u, "  ncontact = "//itoa(nc), stat, msg)
+        if (nc > 0) then
+            call put(u, "  stick_fraction = "//rlist(ref%stick_fraction), stat, msg)
+            call put(u, "  stick_phases = "//ilist(ref%stick_phases), stat, msg)
+        end if
+        call put(u, "  nevent = "//itoa(ref%nevent), stat, msg)
+        call put(u, "  work_forcing = "//rtoa(ref%work_forcing), stat, msg)
+        call put(u, "  diss_friction = "//rtoa(ref%diss_friction), stat, msg)
+        call put(u, "  diss_damping = "//rtoa(ref%diss_damping), stat, msg)
+        call put(u, "  energy_balance_error = "//rtoa(reference_balance_error(ref)), stat, msg)
+        call put(u, "  diagnosis = '"//quote(ref%diagnosis)//"'", stat, msg)
+    end subroutine put_reference_keys
+
+    !> Write `dir`/summary.nml for the reference: a group &summary (method = 'reference',
+    !> converged, defect, nfev, njev, start, shooting_seconds, start_seconds, t_section,
+    !> ncontact, stick_fraction, stick_phases, nevent, energies, diagnosis), then the case.
+    subroutine write_reference_summary(dir, case, ref, error, diagnostics)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case solved.
+        type(case_t), intent(in) :: case
+        !> The reference (converged or not).
+        type(reference_result_t), intent(in) :: ref
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The findings to report (keys trusted, warnings, warning_<key>, untrusted_<key>);
+        !> default: the result's own diagnostics.
+        type(diagnostics_t), intent(in), optional :: diagnostics
+        type(diagnostics_t) :: found
+        integer :: u, stat
+        character(len=512) :: msg
+        if (present(diagnostics)) then
+            found = diagnostics
+        else
+            found = ref%diagnostics
+        end if
+        call begin_summary(dir, "reference", found, u, stat, msg, error)
+        if (allocated(error)) return
+        call put_reference_keys(u, ref, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_reference_summary
+
+    !> The keys of the differences: for each comparison `<method>_vs_<against>_max` and
+    !> `_rms`, one value per quantity in the order of `quantities`.
+    subroutine put_comparison_keys(u, cmp, stat, msg)
+        integer, intent(in) :: u
+        type(comparison_t), intent(in) :: cmp
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        call put(u, "  "//cmp%method//"_vs_"//cmp%against//"_max = "//rlist(cmp%max_error), &
+                 stat, msg)
+        call put(u, "  "//cmp%method//"_vs_"//cmp%against//"_rms = "//rlist(cmp%rms_error), &
+                 stat, msg)
+    end subroutine put_comparison_keys
+
+    !> Write `dir`/summary.nml for the three methods side by side: a group &summary
+    !> (method = 'all', the CPU seconds of each method, the common grid, the quantity names
+    !> and the relative max and RMS differences per quantity), then the groups
+    !> &summary_hbm, &summary_euler and &summary_reference with each method's own keys,
+    !> then the effective case.
+    subroutine write_side_by_side_summary(dir, case, res, error, diagnostics)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case solved.
+        type(case_t), intent(in) :: case
+        !> The three solutions.
+        type(side_by_side_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The findings to report (keys trusted, warnings, warning_<key>, untrusted_<key>);
+        !> default: the result's own diagnostics.
+        type(diagnostics_t), intent(in), optional :: diagnostics
+        type(diagnostics_t) :: found
+        integer :: u, stat, k
+        character(len=512) :: msg
+        character(len=12), allocatable :: names(:)
+        character(len=:), allocatable :: line
+        if (present(diagnostics)) then
+            found = diagnostics
+        else
+            found = res%diagnostics
+        end if
+        call begin_summary(dir, "all", found, u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  hbm_cpu_seconds = "//rtoa(res%hbm_seconds), stat, msg)
+        call put(u, "  euler_cpu_seconds = "//rtoa(res%euler_seconds), stat, msg)
+        call put(u, "  reference_cpu_seconds = "//rtoa(res%reference_seconds), stat, msg)
+        call put(u, "  grid = "//itoa(res%grid), stat, msg)
+        names = quantity_names(case%model%ndof, case%model%ncontact())
+        line = "  quantities = "
+        do k = 1, size(names)
+            line = line//"'"//trim(names(k))//"'"
+            if (k < size(names)) line = line//", "
+        end do
+        call put(u, line, stat, msg)
+        do k = 1, size(res%comparisons)
+            call put_comparison_keys(u, res%comparisons(k), stat, msg)
+        end do
+        call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_hbm", stat, msg)
+        call put_hbm_keys(u, res%hbm, stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_euler", stat, msg)
+        call put_euler_keys(u, case, res%euler, stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_reference", stat, msg)
+        call put_reference_keys(u, res%reference, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_side_by_side_summary
+
+    !> Write `dir`/summary.nml for a study: a group &summary (method = 'study', rows,
+    !> skipped, reference_cpu_seconds), the group &summary_reference, then the case.
+    subroutine write_study_summary(dir, case, study, error, diagnostics)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case studied.
+        type(case_t), intent(in) :: case
+        !> The study.
+        type(study_result_t), intent(in) :: study
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The findings to report (keys trusted, warnings, warning_<key>, untrusted_<key>);
+        !> default: the result's own diagnostics.
+        type(diagnostics_t), intent(in), optional :: diagnostics
+        type(diagnostics_t) :: found
+        integer :: u, stat, nrow
+        character(len=512) :: msg
+        nrow = 0
+        if (allocated(study%rows)) nrow = size(study%rows)
+        if (present(diagnostics)) then
+            found = diagnostics
+        else
+            found = study%diagnostics
+        end if
+        call begin_summary(dir, "study", found, u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  rows = "//itoa(nrow), stat, msg)
+        call put(u, "  skipped = "//itoa(study%skipped), stat, msg)
+        call put(u, "  reference_cpu_seconds = "//rtoa(study%reference_seconds), stat, msg)
+        call put(u, "/", stat, msg)
+        call put(u, "&summary_reference", stat, msg)
+        call put_reference_keys(u, study%reference, stat, msg)
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_study_summary
+
+    !> Write `dir`/summary.nml for a sweep: &summary (method = 'sweep', complete, points,
+    !> the parameter's range covered, folds, unstable points, CPU seconds, diagnosis), then
+    !> the effective case. Error: stat io.
+    subroutine write_sweep_summary(dir, case, res, error, diagnostics)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case.
+        type(case_t), intent(in) :: case
+        !> The curve.
+        type(sweep_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The findings to report (keys trusted, warnings, warning_<key>, untrusted_<key>);
+        !> default: the result's own diagnostics.
+        type(diagnostics_t), intent(in), optional :: diagnostics
+        type(diagnostics_t) :: found
+        integer :: u, stat
+        character(len=512) :: msg
+        if (present(diagnostics)) then
+            found = diagnostics
+        else
+            found = res%diagnostics
+        end if
+        call begin_summary(dir, "sweep", found, u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  complete = "//ltoa(res%complete), stat, msg)
+        call put(u, "  points = "//itoa(res%npoints), stat, msg)
+        call put(u, "  resumed_points = "//itoa(res%resumed_points), stat, msg)
+        if (res%npoints > 0) then
+            call put(u, "  parameter_first = "//rtoa(res%points(1)%parameter), stat, msg)
+            call put(u, "  parameter_last = "//rtoa(res%points(res%npoints)%parameter), &
+                     stat, msg)
+            call put(u, "  parameter_min = "//rtoa(minval(res%points(1:res%npoints)%parameter)), &
+                     stat, msg)
+            call put(u, "  parameter_max = "//rtoa(maxval(res%points(1:res%npoints)%parameter)), &
+                     stat, msg)
+            call put(u, "  unstable_points = "//itoa(count(res%points(1:res%npoints)%stable == 0)), &
+                     stat, msg)
+            call put(u, "  unknown_stability_points = "// &
+                     itoa(count(res%points(1:res%npoints)%stable == -1)), stat, msg)
+            call put(u, "  max_residual = "//rtoa(maxval(res%points(1:res%npoints)%residual)), &
+                     stat, msg)
+        end if
+        call put(u, "  folds = "//itoa(res%folds), stat, msg)
+        call put(u, "  rejected_steps = "//itoa(res%state%rejected), stat, msg)
+        call put(u, "  cpu_seconds = "//rtoa(res%seconds), stat, msg)
+        call put(u, "  stability_cpu_seconds = "//rtoa(res%stability_seconds), stat, msg)
+        if (allocated(res%diagnosis)) then
+            call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        end if
+        if (allocated(res%notes)) then
+            call put(u, "  notes = '"//quote(res%notes)//"'", stat, msg)
+        end if
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_sweep_summary
+
+    !> Write `dir`/summary.nml for a robustness study: &summary (method = 'robustness', rows,
+    !> then per method runs_<m> and successes_<m>, m = hbm_cold, hbm_warm, euler), then the
+    !> effective case. Error: stat io.
+    subroutine write_robustness_summary(dir, case, rows, error, diagnostics)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case.
+        type(case_t), intent(in) :: case
+        !> The runs.
+        type(robustness_row_t), intent(in) :: rows(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The findings to report (keys trusted, warnings, warning_<key>, untrusted_<key>);
+        !> default: the result's own diagnostics.
+        type(diagnostics_t), intent(in), optional :: diagnostics
+        type(diagnostics_t) :: found
+        character(len=8), parameter :: methods(3) = [character(len=8) :: 'hbm-cold', &
+                                                     'hbm-warm', 'euler']
+        character(len=8), parameter :: keys(3) = [character(len=8) :: 'hbm_cold', &
+                                                  'hbm_warm', 'euler']
+        integer :: u, stat, k
+        character(len=512) :: msg
+        if (present(diagnostics)) found = diagnostics
+        call begin_summary(dir, "robustness", found, u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "  rows = "//itoa(size(rows)), stat, msg)
+        do k = 1, 3
+            call put(u, "  runs_"//trim(keys(k))//" = "//itoa(count(rows%method == methods(k))), &
+                     stat, msg)
+            call put(u, "  successes_"//trim(keys(k))//" = "// &
+                     itoa(count(rows%method == methods(k) .and. rows%success)), stat, msg)
+        end do
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_robustness_summary
+
+    !> Open the temporary summary.nml and write its first lines: the method, then
+    !> `trusted` (F when a finding is level_untrusted), `warnings` (the keys of the warning
+    !> and untrusted findings, '' when none) and one `warning_<key>` or `untrusted_<key>`
+    !> line with the message of each.
+    subroutine begin_summary(dir, method, found, u, stat, msg, error)
+        character(len=*), intent(in) :: dir, method
+        type(diagnostics_t), intent(in) :: found
+        integer, intent(out) :: u, stat
+        character(len=*), intent(out) :: msg
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: keys
+        integer :: k
+        stat = 0
+        msg = ""
+        call open_temporary(dir, "summary.nml", u, error)
+        if (allocated(error)) return
+        call put(u, "! stickslip summary: the group &summary (and for several methods "// &
+                 "&summary_<method>), then the effective case (&system ... &study)", stat, msg)
+        call put(u, "&summary", stat, msg)
+        call put(u, "  method = '"//method//"'", stat, msg)
+        call put(u, "  trusted = "//ltoa(found%worst() < level_untrusted), stat, msg)
+        keys = ""
+        if (allocated(found%items)) then
+            do k = 1, size(found%items)
+                if (found%items(k)%level < level_warning) cycle
+                if (len(keys) > 0) keys = keys//", "
+                keys = keys//"'"//found%items(k)%key//"'"
+            end do
+        end if
+        if (len(keys) == 0) keys = "''"
+        call put(u, "  warnings = "//keys, stat, msg)
+        if (allocated(found%items)) then
+            do k = 1, size(found%items)
+                associate (item => found%items(k))
+                    if (item%level == level_warning) then
+                        call put(u, "  warning_"//item%key//" = '"//quote(item%message)//"'", &
+                                 stat, msg)
+                    else if (item%level >= level_untrusted) then
+                        call put(u, "  untrusted_"//item%key//" = '"//quote(item%message)// &
+                                 "'", stat, msg)
+                    end if
+                end associate
+            end do
+        end if
+    end subroutine begin_summary
+
+    !> Close the group &summary, echo the effective case, close and rename summary.nml.
+    subroutine end_summary(dir, case, u, stat, msg, error)
+        character(len=*), intent(in) :: dir
+        type(case_t), intent(in) :: case
+        integer, intent(in) :: u
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        type(error_type), allocatable, intent(out) :: error
+        call put(u, "/", stat, msg)
+        if (stat == 0) call write_case(u, case, stat, msg)
+        call close_and_rename(dir, "summary.nml", u, stat, msg, error)
+    end subroutine end_summary
+
+    !> Double the single quotes of a string for a namelist character value.
+    pure function quote(s) result(t)
+        character(len=*), intent(in) :: s
+        character(len=:), allocatable :: t
+        integer :: i
+        t = ""
+        do i = 1, len(s)
+            if (s(i:i) == "'") then
+                t = t//"''"
+            else
+                t = t//s(i:i)
+            end if
+        end do
+    end function quote
+end module stickslip_summary

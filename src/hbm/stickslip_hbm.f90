@@ -403,11 +403,8 @@ contains
             return
         end if
         ! count the stick runs the basis resolves (a run may now wrap around the end)
-        if (s(1)) then
-            do while (s(1))
-                s = cshift(s, 1)
-            end do
-        end if
+        ! (one rotation to the first slip sample: linear in nt)
+        if (s(1)) s = cshift(s, findloc(s, .false., 1) - 1)
         k = 1
         do while (k <= nt)
             len = run_length(k)

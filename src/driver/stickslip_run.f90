@@ -12,7 +12,8 @@ module stickslip_run
         write_reference_summary, write_side_by_side_summary, write_study_csv, &
         write_study_summary
     use stickslip_euler, only: euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_result_t, solve_reference
+    use stickslip_reference, only: reference_result_t
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
     use stickslip_study, only: study_options_t, study_result_t, run_study, default_study_options
     use stickslip_sweep, only: sweep_result_t, run_sweep
@@ -107,8 +108,8 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
-        call solve_reference(case%model, case%reference, res, error, hbm_opts=case%hbm, &
-                             euler_opts=case%euler)
+        call solve_reference_from_starts(case%model, case%reference, res, error, &
+                                         hbm_opts=case%hbm, euler_opts=case%euler)
         call prepare_output(case, error)
         if (allocated(error)) return
         if (res%converged) then

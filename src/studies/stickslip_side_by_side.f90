@@ -9,8 +9,8 @@ module stickslip_side_by_side
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     implicit none
     private
@@ -75,8 +75,9 @@ contains
         res%euler_seconds = c1 - c0
         if (allocated(error)) return
 
-        call solve_reference(model, ref, res%reference, error, hbm_opts=ho, euler_opts=euler, &
-                             hbm_start=res%hbm, euler_start=res%euler)
+        call solve_reference_from_starts(model, ref, res%reference, error, hbm_opts=ho, &
+                                         euler_opts=euler, hbm_start=res%hbm, &
+                                         euler_start=res%euler)
         res%reference_seconds = res%reference%seconds + res%reference%start_seconds
         if (allocated(error)) return
 

@@ -11,8 +11,9 @@ module stickslip_study
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference, validate_reference_options
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
+        validate_reference_options
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     implicit none
     private
@@ -153,8 +154,8 @@ contains
         if (allocated(error)) return
 
         call cpu_time(c0)
-        call solve_reference(model, ref_opts, res%reference, error, hbm_opts=hbm, &
-                             euler_opts=euler)
+        call solve_reference_from_starts(model, ref_opts, res%reference, error, hbm_opts=hbm, &
+                                         euler_opts=euler)
         call cpu_time(c1)
         res%reference_seconds = c1 - c0
         if (allocated(error)) return

@@ -13,10 +13,10 @@ module stickslip_hbm
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
-    use stickslip_rho, only: automatic_rho
+    use stickslip_rho, only: automatic_rho, rho_fraction
     implicit none
     private
-    public :: solve_periodic, validate_options
+    public :: solve_periodic, validate_options, convergence_scale
 
     !> hybrj calls per stage: the first plus restarts from the last iterate.
     integer, parameter :: max_calls_per_stage = 4
@@ -117,13 +117,7 @@ contains
             vzero(1:ncopy, :) = r_start
             y = reshape(vzero, [prob%n])
         end if
-        block
-            real(dp) :: rzero(nb, nc), vfree(nb, nc)
-            rzero = 0.0_dp
-            call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
-            sol%fscale = norm2(vfree)
-        end block
-        if (nc > 0) sol%fscale = max(sol%fscale, o%rho*maxval(prob%limit))
+        sol%fscale = convergence_scale(model, prob)
         target_norm = opts%tol*sol%fscale
 
         if (nc == 0) then
@@ -168,6 +162,36 @@ contains
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine solve_periodic
+
+    !> The residual scale of the convergence test ||F||_2 <= tol * fscale [m/s]:
+    !>     fscale = min(||V0||_2, rho * Rs),  Rs = max(min(max_j mu_j N_j, Rstop), 1e-6 Rstop),
+    !> V0 the contact velocity coefficients without friction forces, Rstop = ||V0||_2 / m
+    !> the force that stops that motion (m the geometric mean of the resonance-free contact
+    !> mobilities, stickslip_rho). F holds velocities where a sample sticks (Psi = v) and
+    !> rho times force errors where it slips (Psi = rho (r -/+ mu N)): the smaller of the
+    !> two scales judges both kinds of rows, so neither a huge rho mu N (a large mu, rho or
+    !> normal load) nor a tiny one can let the zero start pass. Invariant under a change of
+    !> units (M, C, K, forces scaled together) with the automatic rho; with a fixed rho far
+    !> from the contact mobility the test is stricter (the solve may then not converge, it
+    !> cannot return an unconverged answer as converged). 0 when V0 = 0 (only F = 0 passes:
+    !> the zero start is then exact) or when there are no contacts.
+    function convergence_scale(model, prob) result(fscale)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        !> Its projected friction equations.
+        type(hb_problem_t), intent(in) :: prob
+        real(dp) :: fscale
+        real(dp) :: rzero(prob%basis%nb, prob%nc), vfree(prob%basis%nb, prob%nc)
+        real(dp) :: vnorm, rstop, rs
+        fscale = 0.0_dp
+        if (prob%nc == 0) return
+        rzero = 0.0_dp
+        call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
+        vnorm = norm2(vfree)
+        rstop = vnorm*rho_fraction/automatic_rho(model)
+        rs = max(min(maxval(prob%limit), rstop), 1.0e-6_dp*rstop)
+        fscale = min(vnorm, prob%rho*rs)
+    end function convergence_scale
 
     !> One solve on a fixed basis: hybrj, then restarts from the last iterate while it
     !> stops short of the target without exhausting its evaluations.

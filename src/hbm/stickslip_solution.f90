@@ -53,8 +53,9 @@ module stickslip_solution
         integer :: hybrj_calls = 0
         !> Final residual norm ||F||_2 of the projected friction equations [m/s].
         real(dp) :: fnorm = huge(1.0_dp)
-        !> Residual scale: max(||V0||_2, rho * max_j mu_j N_j), V0 the contact velocities
-        !> of the structure without friction forces [m/s].
+        !> Residual scale: min(||V0||_2, rho Rs), V0 the contact velocities of the structure
+        !> without friction forces, Rs the force scale min(max_j mu_j N_j, the force that
+        !> stops V0) (stickslip_hbm, convergence_scale) [m/s].
         real(dp) :: fscale = 0.0_dp
         !> Weight rho of Psi used: hbm_options_t%rho, or the automatic choice when that
         !> is 0 [m/(N s)].

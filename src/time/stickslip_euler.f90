@@ -16,7 +16,7 @@ module stickslip_euler
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
-    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_diagnostics, only: diagnostics_t, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
     use stickslip_lapack, only: dgetrf, dgetrs
@@ -205,6 +205,8 @@ contains
         else if (res%periodic) then
             res%diagnosis = ""
         end if
+        if (.not. res%periodic) call res%diagnostics%add(level_untrusted, "not_periodic", &
+                                                         res%diagnosis)
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler

@@ -13,6 +13,7 @@ program tester
     use test_continuation, only: run_continuation_tests
     use test_sweep_files, only: run_sweep_file_tests
     use test_truncation, only: run_truncation_tests
+    use test_trust, only: run_trust_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -35,6 +36,7 @@ program tester
     if (selected("continuation")) call run_continuation_tests(t)
     if (selected("sweep_files")) call run_sweep_file_tests(t)
     if (selected("truncation")) call run_truncation_tests(t)
+    if (selected("trust")) call run_trust_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

@@ -439,7 +439,7 @@ contains
         if (.not. sol%converged) &
             call sol%diagnostics%add(level_untrusted, "not_converged", sol%diagnosis)
         if (prob%nc > 0 .and. rho_out_of_band(model, opts%rho)) then
-            write (buf, '(a,es9.2,a,es9.2,a,es8.1,a,es8.1,a)') "rho = ", opts%rho, &
+            write (buf, '(a,es10.2e3,a,es10.2e3,a,es8.1,a,es8.1,a)') "rho = ", opts%rho, &
                 " is ", rho_ratio(model, opts%rho), " times the contact mobility (outside ", &
                 rho_ratio_min, " .. ", rho_ratio_max, "): the friction equality cannot "// &
                 "resolve the forces; use &hbm rho = 0 (automatic)"
@@ -462,7 +462,7 @@ contains
                     "relative to the work per period)")
         call graded("coulomb_dissipation", sol%coulomb_check, dissipation_warning, &
                     dissipation_untrusted, "friction dissipation differs from Coulomb's "// &
-                    "(mu N |v| where the contacts slip) by a share")
+                    "(mu N |v| where the contacts slip), relative difference")
         call graded("coulomb_law", sol%max_force_ratio - 1.0_dp, force_excess_warning, &
                     force_excess_untrusted, "friction force exceeds mu N (max |r| / mu N "// &
                     "- 1, beyond the Gibbs overshoot of a truncated series)")
@@ -474,11 +474,11 @@ contains
             real(dp), intent(in) :: value, warn, untrusted
             character(len=300) :: text
             if (.not. (value <= untrusted)) then
-                write (text, '(a,es9.2,a,es9.2)') "weighted residual: "//what//" ", value, &
+                write (text, '(a,es10.2e3,a,es9.2)') "weighted residual: "//what//" ", value, &
                     " > ", untrusted
                 call sol%diagnostics%add(level_untrusted, key, trim(text))
             else if (value > warn) then
-                write (text, '(a,es9.2,a,es9.2)') "weighted residual: "//what//" ", value, &
+                write (text, '(a,es10.2e3,a,es9.2)') "weighted residual: "//what//" ", value, &
                     " > ", warn
                 call sol%diagnostics%add(level_warning, key, trim(text))
             end if

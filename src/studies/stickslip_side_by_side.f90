@@ -15,7 +15,8 @@ module stickslip_side_by_side
     use stickslip_checks, only: sampling_diagnostics
     implicit none
     private
-    public :: side_by_side_t, solve_side_by_side, disagree_warning, disagree_untrusted
+    public :: side_by_side_t, solve_side_by_side, disagreement, disagree_warning, &
+        disagree_untrusted
 
     !> Displacement difference of a method against the reference (relative to the
     !> amplitude) above which 'all' warns / is untrusted (disagreement). On the examples

@@ -4,7 +4,7 @@
 !> undamped structure, and every check turning into a diagnostics item when it fails.
 module test_trust
     use stickslip_kinds, only: dp, two_pi
-    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_error, only: error_type, stickslip_stat, itoa
     use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
@@ -15,6 +15,7 @@ module test_trust
     use stickslip_checks, only: check_options_t, hbm_checks_t, solve_and_check
     use stickslip_compare, only: comparison_t
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side, disagreement
+    use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
     use test_hbm, only: seed_model, chain_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
@@ -35,7 +36,47 @@ contains
         call test_odd_samples(t)
         call test_sound_cases_quiet(t)
         call test_disagreement(t)
+        call test_sweep_tally(t)
     end subroutine run_trust_tests
+
+    !> A sweep counts the points whose checks fail: at H = 5 (64 samples) the seed case's
+    !> truncation estimate is far above 10%, so the curve carries 'points_truncation'.
+    subroutine test_sweep_tally(t)
+        type(test_counter_t), intent(inout) :: t
+        type(hbm_options_t) :: ho
+        type(reference_options_t) :: ro
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(model_t) :: m
+        type(error_type), allocatable :: error
+        integer :: k, bad
+        m = seed_model()
+        m%damping = 0.02_dp*m%mass + 0.02_dp*m%stiffness
+        ho%harmonics = 5
+        ho%samples = 64
+        ho%rho = 0.2_dp
+        so%parameter = 'omega'
+        so%start = 4.0_dp
+        so%stop = 4.5_dp
+        so%max_points = 8
+        so%stability = .false.
+        so%truncation = .true.
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "sweep tally: no error", .false.)
+        if (allocated(error)) return
+        bad = 0
+        do k = 1, res%npoints
+            if (res%points(k)%truncation > 0.1_dp) bad = bad + 1
+        end do
+        call check(t, bad > 0, "sweep tally: coarse points exist")
+        call check(t, res%diagnostics%has("points_truncation") .and. &
+                   res%diagnostics%worst() >= level_warning, &
+                   "sweep tally: 'points_truncation'", keys(res%diagnostics))
+        if (allocated(res%diagnostics%items)) &
+            call check(t, index(res%diagnostics%items(1)%message, itoa(bad)//" of "// &
+                       itoa(res%npoints)) == 1, "sweep tally: the count of points", &
+                       res%diagnostics%items(1)%message)
+    end subroutine test_sweep_tally
 
     !> A 20-DOF clamped-free chain ("beam") with one contact to the ground at its tip.
     function beam_model() result(m)

@@ -28,12 +28,14 @@ module stickslip_hbm
     !> Thresholds of the checks of a solution (check_solution; README, "Where each method
     !> fails"). Energy balance error: exact for the truncated series up to roundoff.
     real(dp), parameter, public :: energy_warning = 1.0e-6_dp, energy_untrusted = 1.0e-2_dp
-    !> |friction - Coulomb dissipation| / dissipation: ~1% on the examples (the truncated
-    !> force is not exactly -mu N sign(v) near the events).
+    !> |friction - Coulomb dissipation| / (the larger of Coulomb's and the whole dissipation
+    !> per period): ~1% on the examples (the truncated force is not exactly -mu N sign(v)
+    !> near the events).
     real(dp), parameter, public :: dissipation_warning = 0.1_dp, dissipation_untrusted = 0.5_dp
     !> max |r| / mu N - 1: the Gibbs overshoot of the truncated force at the stick-slip
-    !> events is 2.6-5% on the seed case (stickslip_rho).
-    real(dp), parameter, public :: force_excess_warning = 0.2_dp, force_excess_untrusted = 1.0_dp
+    !> events is 2.6-5% on the seed case (stickslip_rho), up to 9% of a jump of 2 mu N
+    !> (18%) at a reversal; 20% is reached on the damped 4-DOF chain at omega = 0.27.
+    real(dp), parameter, public :: force_excess_warning = 0.5_dp, force_excess_untrusted = 1.0_dp
     !> Band of rho / contact mobility in which the friction equality keeps its digits.
     real(dp), parameter, public :: rho_ratio_min = 1.0e-6_dp, rho_ratio_max = 1.0e6_dp
 
@@ -400,8 +402,8 @@ contains
         end do
 
         sol%coulomb_check = abs(coulomb_slip - sol%diss_friction)/ &
-                            max(coulomb_slip, abs(sol%diss_friction), 1.0e-6_dp*sol%work_gross, &
-                                tiny(1.0_dp))
+                            max(coulomb_slip, abs(sol%diss_friction) + abs(sol%diss_damping), &
+                                1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
         sol%max_force_ratio = max_force_ratio
 
         if (opts%want_samples) then

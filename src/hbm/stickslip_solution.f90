@@ -101,9 +101,9 @@ module stickslip_solution
         !> diss_friction for an exact solution of Coulomb's law.
         real(dp) :: diss_coulomb = 0.0_dp
         !> Relative mismatch of the friction dissipation and Coulomb's, |D_C - diss_friction|
-        !> / max(D_C, |diss_friction|, 1e-6 work_gross), D_C = integral of mu N |v| where
-        !> the contacts slip and |r v| where they stick (dimensionless; ~1% for a sound
-        !> solution, O(1) when the force and velocity do not obey Coulomb's law).
+        !> / max(D_C, |diss_friction| + |diss_damping|, 1e-6 work_gross), D_C = integral of
+        !> mu N |v| where the contacts slip and |r v| where they stick (dimensionless; ~1%
+        !> for a sound solution, O(1) when the force and velocity do not obey Coulomb's law).
         real(dp) :: coulomb_check = 0.0_dp
         !> Largest max_t |r_j(t)| / (mu_j N_j) over the contacts with mu_j N_j > 0
         !> (dimensionless; slightly above 1 from the Gibbs overshoot of the truncated force).

@@ -159,6 +159,9 @@ contains
         call cpu_time(c1)
         res%reference_seconds = c1 - c0
         if (allocated(error)) return
+        ! the judge's own checks (the runs' errors are the study's measurements, not
+        ! findings: a work-precision study runs coarse settings on purpose)
+        call res%diagnostics%extend(res%reference%diagnostics, "reference_")
         if (.not. res%reference%converged) then
             call fatal_error(error, "the study needs the exact reference, which did not "// &
                              "converge: "//res%reference%diagnosis, stickslip_stat%numerical)

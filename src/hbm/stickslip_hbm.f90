@@ -3,8 +3,9 @@
 !>
 !> Flow: validate -> condense the linear dynamics on the contacts -> solve the projected
 !> friction equations for the friction-force coefficients with hybrj (exact generalized
-!> Jacobian; a ladder of warm starts from fewer harmonics when a cold start stalls) ->
-!> settle an undetermined mean force -> recover every DOF -> energy balance and samples.
+!> Jacobian; a ladder of warm starts from fewer harmonics when a cold start stalls;
+!> convergence judged by convergence_scale) -> settle an undetermined mean force -> recover
+!> every DOF -> energy balance and samples -> the checks as diagnostics (check_solution).
 module stickslip_hbm
     use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp, two_pi
@@ -78,8 +79,11 @@ contains
     !> hbm_solution_t%rcoef for the same basis; a start from fewer harmonics is embedded).
     !> opts%rho = 0 selects the automatic weight (stickslip_rho); sol%rho is the one used.
     !> A non-converged solve is an outcome: sol%converged = .false. and sol%diagnosis says
-    !> why. Errors: stat input (invalid model or options), stat numerical (singular dynamic
-    !> stiffness, NaN in the residual).
+    !> why. The checks of the answer go to sol%diagnostics (not_converged, rho_out_of_range,
+    !> near_resonance, energy_balance, coulomb_dissipation, coulomb_law; README, "Where each
+    !> method fails"). Errors: stat input (invalid model or options), stat numerical
+    !> (singular dynamic stiffness: "undamped resonance at harmonic h ...", NaN in the
+    !> residual).
     subroutine solve_periodic(model, opts, sol, error, r_start)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model

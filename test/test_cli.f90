@@ -210,7 +210,7 @@ contains
         character(len=:), allocatable :: out, err, v
         integer :: code
         call write_lines(scratch//"/findings.nml", [character(len=120) :: good_system, &
-            good_forcing, good_friction, "&hbm harmonics = 10, samples = 128 /", &
+            good_forcing, good_friction, "&hbm harmonics = 30, samples = 256 /", &
             "&output directory = '"//dir//"' /"])
         call read_case(scratch//"/findings.nml", c, error)
         call check_error(t, error, "findings: case read", .false.)

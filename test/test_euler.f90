@@ -6,7 +6,8 @@ module test_euler
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t
-    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler, contact_forces
+    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
+    use stickslip_contact_solve, only: contact_forces
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use fixtures, only: seed_model, one_dof_model

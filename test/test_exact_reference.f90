@@ -10,8 +10,8 @@ module test_exact_reference
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_flow, only: flow_t, new_flow, event_stick, event_slip
     use fixtures, only: seed_model, chain_model
     use testing, only: test_counter_t, check, check_close, check_error
@@ -49,7 +49,7 @@ contains
         type(error_type), allocatable :: error
         real(dp) :: balance
         o%samples = 512
-        call solve_reference(m, o, res, error)
+        call solve_reference_from_starts(m, o, res, error)
         call check_error(t, error, "reference "//name//": no error", .false.)
         if (allocated(error)) return
         call check(t, res%converged .and. res%defect <= o%tol, "reference "//name// &
@@ -246,7 +246,7 @@ contains
         ! F = [10, 0]: x = Z^-1 F
         xc = [z(2, 2)*10.0_dp, -z(2, 1)*10.0_dp]/det
         o%samples = 64
-        call solve_reference(m, o, res, error)
+        call solve_reference_from_starts(m, o, res, error)
         call check_error(t, error, "reference mu = 0: no error", .false.)
         if (allocated(error)) return
         errmax = 0.0_dp
@@ -275,7 +275,7 @@ contains
         m%mu = [100.0_dp]
         xc = 10.0_dp/(2.0_dp - m%omega**2 + (0.0_dp, 1.0_dp)*m%omega*m%damping(1, 1))
         o%samples = 64
-        call solve_reference(m, o, res, error)
+        call solve_reference_from_starts(m, o, res, error)
         call check_error(t, error, "reference stuck: no error", .false.)
         if (allocated(error)) return
         call check(t, res%converged, "reference stuck: converged", res%diagnosis)
@@ -299,14 +299,14 @@ contains
         type(reference_result_t) :: res
         type(error_type), allocatable :: error
         o%samples = 0
-        call solve_reference(seed_model(), o, res, error)
+        call solve_reference_from_starts(seed_model(), o, res, error)
         call check_error(t, error, "reference samples = 0 rejected", .true., &
                          [character(len=20) :: "&reference samples"])
         if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
                                          "reference bad options: stat input")
         o = reference_options_t()
         o%start = 'cold'
-        call solve_reference(seed_model(), o, res, error)
+        call solve_reference_from_starts(seed_model(), o, res, error)
         call check_error(t, error, "reference start = 'cold' rejected", .true., &
                          [character(len=20) :: "&reference start"])
     end subroutine test_bad_options

@@ -7,8 +7,8 @@ module test_truncation
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
-    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance, &
         coarse_harmonics
     use fixtures, only: seed_model
@@ -71,7 +71,7 @@ contains
 
         m = seed_model()
         ro%samples = 512
-        call solve_reference(m, ro, ref, error)
+        call solve_reference_from_starts(m, ro, ref, error)
         call check_error(t, error, "truncation: seed reference", .false.)
         if (allocated(error)) return
         call check(t, ref%converged, "truncation: seed reference converged", ref%diagnosis)

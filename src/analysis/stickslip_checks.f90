@@ -5,7 +5,7 @@
 !> writer reports it.
 module stickslip_checks
     use stickslip_kinds, only: dp
-    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
@@ -17,12 +17,16 @@ module stickslip_checks
     implicit none
     private
     public :: check_options_t, validate_check_options, hbm_checks_t, solve_and_check, &
-        sampling_notes
+        sampling_notes, sampling_diagnostics
 
     !> A truncation estimate above this makes the stick-phase count a lower bound (the
     !> 8 phases of examples/many_sticks.nml, six shorter than T/20, appear as 2 at H = 10
     !> and 20 (estimates 0.21, 0.13), 6 at H = 30 .. 100 (0.13 .. 0.023), 8 from H = 160).
     real(dp), parameter :: coarse_estimate = 0.05_dp
+    !> Truncation estimates above these give a warning / make the solution untrusted
+    !> (diagnostics key 'truncation'; the estimate is within a factor 0.5 to 5 of the true
+    !> error on the seed case, stickslip_truncation).
+    real(dp), parameter, public :: truncation_warning = 0.1_dp, truncation_untrusted = 0.5_dp
 
     !> What to check about a weighted-residual solution (the &hbm variables harmonics_tol,
     !> max_harmonics, stability, verify_periods of a case file).
@@ -109,6 +113,7 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         integer :: hmax
+        character(len=300) :: buf
         checks%notes = ""
         if (copts%harmonics_tol > 0.0_dp) then
             hmax = copts%max_harmonics
@@ -125,12 +130,27 @@ contains
             end if
         end if
         checks%notes = sampling_notes(sol%samples, sol%harmonics)
+        call sampling_diagnostics(sol%samples, checks%diagnostics)
         if (.not. sol%converged) return
         if (checks%truncation%available .and. checks%truncation%estimate > coarse_estimate) then
             if (len(checks%notes) > 0) checks%notes = checks%notes//"; "
             checks%notes = checks%notes//"truncation estimate above 5%: stick phases "// &
                 "shorter than a period of the highest harmonic (T/H) are not resolved, so "// &
                 "stick_phases is a lower bound; raise harmonics or set harmonics_tol"
+        end if
+        if (checks%truncation%available) then
+            if (checks%truncation%estimate > truncation_untrusted) then
+                write (buf, '(a,es9.2,a,f4.2,a)') "truncation error estimate ", &
+                    checks%truncation%estimate, " > ", truncation_untrusted, ": the harmonics "// &
+                    "do not resolve the response; raise harmonics (and samples) or set "// &
+                    "harmonics_tol"
+                call checks%diagnostics%add(level_untrusted, "truncation", trim(buf))
+            else if (checks%truncation%estimate > truncation_warning) then
+                write (buf, '(a,es9.2,a,f4.2,a)') "truncation error estimate ", &
+                    checks%truncation%estimate, " > ", truncation_warning, ": raise "// &
+                    "harmonics or set harmonics_tol"
+                call checks%diagnostics%add(level_warning, "truncation", trim(buf))
+            end if
         end if
         if (copts%stability) then
             checks%stability = .true.
@@ -142,6 +162,28 @@ contains
             if (allocated(error)) return
         end if
     end subroutine solve_and_check
+
+    !> The sampling check as a diagnostics item: an odd number of samples is a warning
+    !> (key 'odd_samples', prefixed with `prefix` when given): the mean friction force of a
+    !> sticking contact is then biased (seed case, H = 15 with 31 samples: x2 off by 590%).
+    pure subroutine sampling_diagnostics(samples, diag, prefix)
+        !> Quadrature samples per period.
+        integer, intent(in) :: samples
+        !> The findings, appended to.
+        type(diagnostics_t), intent(inout) :: diag
+        !> Prefix of the key.
+        character(len=*), intent(in), optional :: prefix
+        character(len=300) :: buf
+        if (mod(samples, 2) == 0) return
+        write (buf, '(a,i0,a)') "samples = ", samples, " is odd: the mean friction "// &
+            "force of a sticking contact is biased and its stuck position drifts (off by "// &
+            "up to 590% on the seed case); use an even count, e.g. a power of two"
+        if (present(prefix)) then
+            call diag%add(level_warning, prefix//"odd_samples", trim(buf))
+        else
+            call diag%add(level_warning, "odd_samples", trim(buf))
+        end if
+    end subroutine sampling_diagnostics
 
     !> Warnings about a quadrature of `samples` points per period for `harmonics` harmonics
     !> ('' when none). An odd count loses the half-period symmetry of the grid (t_k + T/2 is

@@ -14,7 +14,7 @@
 module stickslip_sweep
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
@@ -31,6 +31,7 @@ module stickslip_sweep
     use stickslip_stability, only: floquet_t, periodic_stability
     use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_progress, only: progress_t
+    use stickslip_checks, only: truncation_warning, truncation_untrusted
     implicit none
     private
     public :: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, run_sweep
@@ -111,6 +112,19 @@ module stickslip_sweep
         !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
         type(diagnostics_t) :: diagnostics
     end type sweep_result_t
+
+    !> Which checks the points of a curve failed: per diagnostics key, how many points, the
+    !> worst level and the parameter of the first (sweep_result_t%diagnostics gets one
+    !> item per key, 'points_<key>').
+    type :: point_tally_t
+        character(len=48), allocatable :: key(:)
+        integer, allocatable :: count(:), level(:)
+        real(dp), allocatable :: first(:)
+        integer :: points = 0
+    contains
+        procedure :: add_point => tally_add_point
+        procedure :: report => tally_report
+    end type point_tally_t
 
     !> Called after every point; a checkpoint writer extends it.
     type, abstract :: sweep_observer_t
@@ -300,6 +314,8 @@ contains
         character(len=40) :: buf
         type(model_t) :: m0
         real(dp), allocatable :: amplitude0(:)
+        type(point_tally_t) :: tally
+        integer :: k
 
         call cpu_time(c0)
         call validate_model(model, error)
@@ -374,6 +390,11 @@ contains
                 res%folds = resume%folds
                 res%seconds = resume%seconds
                 res%stability_seconds = resume%stability_seconds
+                ! the checks of resumed points: only their truncation estimate was kept
+                do k = 1, res%npoints
+                    call tally%add_point(diagnostics_t(), res%points(k)%truncation, &
+                                         res%points(k)%parameter)
+                end do
             end if
         end if
 
@@ -425,6 +446,7 @@ contains
         else
             res%notes = ""
         end if
+        call tally%report(opts%parameter, res%diagnostics)
         if (.not. allocated(res%diagnosis)) res%diagnosis = ""
         if (.not. res%complete) then
             if (len(res%diagnosis) > 0) then
@@ -476,6 +498,7 @@ contains
                 if (allocated(error)) return
                 if (est%available) pt%truncation = est%estimate
             end if
+            call tally%add_point(ps%diagnostics, pt%truncation, pt%parameter)
             if (opts%stability) then
                 call cpu_time(s0)
                 call periodic_stability(m, ps, ref, fl, error)
@@ -505,6 +528,71 @@ contains
             end if
         end subroutine add_point
     end subroutine run_sweep
+
+    !> Count the failed checks of one point: its solution's diagnostics (warnings and
+    !> distrust) and its truncation estimate (stickslip_checks thresholds; NaN: not
+    !> computed).
+    subroutine tally_add_point(self, diag, truncation, parameter)
+        class(point_tally_t), intent(inout) :: self
+        type(diagnostics_t), intent(in) :: diag
+        real(dp), intent(in) :: truncation, parameter
+        integer :: k
+        if (.not. allocated(self%key)) allocate (self%key(0), self%count(0), self%level(0), &
+                                                 self%first(0))
+        self%points = self%points + 1
+        if (allocated(diag%items)) then
+            do k = 1, size(diag%items)
+                if (diag%items(k)%level >= level_warning) &
+                    call count_key(diag%items(k)%key, diag%items(k)%level)
+            end do
+        end if
+        if (ieee_is_finite(truncation)) then
+            if (truncation > truncation_untrusted) then
+                call count_key("truncation", level_untrusted)
+            else if (truncation > truncation_warning) then
+                call count_key("truncation", level_warning)
+            end if
+        end if
+
+    contains
+
+        subroutine count_key(key, level)
+            character(len=*), intent(in) :: key
+            integer, intent(in) :: level
+            integer :: i
+            i = findloc(self%key, key, 1)
+            if (i == 0) then
+                self%key = [character(len=48) :: self%key, key]
+                self%count = [self%count, 0]
+                self%level = [self%level, level]
+                self%first = [self%first, parameter]
+                i = size(self%key)
+            end if
+            self%count(i) = self%count(i) + 1
+            self%level(i) = max(self%level(i), level)
+        end subroutine count_key
+    end subroutine tally_add_point
+
+    !> One diagnostics item per failed check, key 'points_<key>': a warning naming how many
+    !> points failed it and where the first one is (the curve is usable elsewhere); untrusted
+    !> when every point of the curve failed a check at level untrusted.
+    subroutine tally_report(self, parameter, diag)
+        class(point_tally_t), intent(in) :: self
+        character(len=*), intent(in) :: parameter
+        type(diagnostics_t), intent(inout) :: diag
+        integer :: i, level
+        character(len=300) :: buf
+        if (.not. allocated(self%key)) return
+        do i = 1, size(self%key)
+            level = level_warning
+            if (self%level(i) == level_untrusted .and. self%count(i) == self%points) &
+                level = level_untrusted
+            write (buf, '(i0,a,i0,a,es12.5,a)') self%count(i), " of ", self%points, &
+                " points failed the check '"//trim(self%key(i))//"' (the first at "// &
+                trim(parameter)//" = ", self%first(i), "): see the points' columns"
+            call diag%add(level, "points_"//trim(self%key(i)), trim(buf))
+        end do
+    end subroutine tally_report
 
     !> Build the friction equations of `model` as a family in `parameter` ('omega',
     !> 'force_amplitude', 'mu' or 'normal_load'), set at `p`, on the basis of `hbm` with the

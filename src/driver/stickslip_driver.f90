@@ -18,7 +18,8 @@ module stickslip_driver
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t, solve_and_check
     use stickslip_euler, only: euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_result_t, solve_reference
+    use stickslip_reference, only: reference_result_t
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
     use stickslip_study, only: study_options_t, study_result_t, run_study, default_study_options
     use stickslip_sweep, only: sweep_result_t, run_sweep
@@ -306,8 +307,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         logical :: wanted
-        ! H2: solve_reference_from_starts
-        call solve_reference(case%model, case%reference, res, error, hbm_opts=case%hbm, &
+        call solve_reference_from_starts(case%model, case%reference, res, error, hbm_opts=case%hbm, &
                              euler_opts=case%euler)
         call after_method(case, error, wanted)
         if (.not. wanted) return

@@ -33,7 +33,7 @@ module stickslip_flow
     use stickslip_model, only: model_t, contact_velocity_direction
     use stickslip_lapack, only: dpotrf, dpotrs
     use stickslip_expm, only: expm
-    use stickslip_euler, only: contact_forces
+    use stickslip_contact_solve, only: contact_forces
     implicit none
     private
     public :: flow_t, new_flow, orbit_t

@@ -4,27 +4,35 @@
 !>
 !> The periodic orbit is found by shooting on the period map, z(t0 + T) = z(t0) for the
 !> state z = [x; v], with MINPACK hybrj and the exact Jacobian of the map (the monodromy
-!> matrix with the saltation matrices at the events; stickslip_flow). The start is a sound
-!> approximation of the orbit: the weighted-residual solution, or the implicit Euler one when
-!> that fails. The section time t0 is taken where the contacts slip fastest in the start
-!> solution, so that the shooting state is away from the stick-slip switching surfaces.
+!> matrix with the saltation matrices at the events; stickslip_flow). The start is given by
+!> the caller as samples of an approximate periodic orbit (solve_reference knows none of the
+!> methods it judges; stickslip_reference_start computes a weighted-residual or implicit
+!> Euler start and calls it). The section time t0 is taken where the contacts slip fastest
+!> in the start, so that the shooting state is away from the stick-slip switching surfaces.
 module stickslip_reference
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
-    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_flow, only: flow_t, new_flow, orbit_t
     use stickslip_lapack, only: dpotrf, dpotrs
-    use stickslip_solution, only: hbm_options_t, hbm_solution_t
-    use stickslip_hbm, only: solve_periodic
-    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
     implicit none
     private
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference
-    public :: validate_reference_options
+    public :: validate_reference_options, reference_energy_error
+    public :: energy_warning, energy_untrusted, coulomb_margin
+
+    !> Energy balance error of a converged orbit above which a warning is given: the flow
+    !> is exact up to root finding and roundoff (~1e-12 measured on the examples).
+    real(dp), parameter :: energy_warning = 1.0e-6_dp
+    !> Energy balance error above which the orbit cannot be trusted.
+    real(dp), parameter :: energy_untrusted = 1.0e-2_dp
+    !> Relative margin of Coulomb's law |r| <= (1 + margin) mu N at the samples (the stuck
+    !> force is solved to 1e-15; the margin is roundoff, not a truncation allowance).
+    real(dp), parameter :: coulomb_margin = 1.0e-6_dp
 
     !> Options of the exact reference (&reference).
     type :: reference_options_t
@@ -40,7 +48,8 @@ module stickslip_reference
         !> Period-map evaluations allowed per shooting attempt.
         integer :: maxfev = 200
         !> Start of the shooting: 'auto' (the weighted residual, then implicit Euler if the
-        !> shooting from it fails), 'hbm' or 'euler'.
+        !> shooting from it fails), 'hbm' or 'euler'. Used by solve_reference_from_starts
+        !> (stickslip_reference_start); solve_reference takes its start as an argument.
         character(len=8) :: start = 'auto'
     end type reference_options_t
 
@@ -52,7 +61,8 @@ module stickslip_reference
         real(dp) :: defect = huge(1.0_dp)
         !> Period-map evaluations and Jacobians (monodromy matrices), all attempts.
         integer :: nfev = 0, njev = 0
-        !> CPU seconds of the shooting and sampling, and of computing the start.
+        !> CPU seconds of the shooting and sampling, and of computing the start (the latter
+        !> filled by solve_reference_from_starts).
         real(dp) :: seconds = 0.0_dp, start_seconds = 0.0_dp
         !> The start used: 'hbm' or 'euler' ('' when none could be made).
         character(len=:), allocatable :: start
@@ -138,116 +148,104 @@ contains
         call fatal_error(error, trim(buf), stickslip_stat%input)
     end subroutine validate_reference_options
 
-    !> The exact periodic solution of `model`. The start comes from `hbm_start` /
-    !> `euler_start` when given (solutions already computed), else it is computed with
-    !> `hbm_opts` / `euler_opts` (defaults otherwise). Not converging is an outcome
-    !> (res%converged = F and res%diagnosis). Errors: stat input (invalid model or
-    !> options); stat numerical (dependent stuck contact directions, a start that cannot be
-    !> computed at all, e.g. a singular dynamic stiffness).
-    subroutine solve_reference(model, opts, res, error, hbm_opts, euler_opts, hbm_start, &
-                               euler_start)
+    !> The exact periodic solution of `model`, shot from an approximate periodic orbit: the
+    !> samples x_start, v_start of one period at t_k = k T / ns, k = 0..ns-1 (ns x N [m],
+    !> [m/s]; e.g. a weighted-residual or implicit Euler solution). The section time is
+    !> taken where the contacts slip fastest in the start, the scales of x and v from its
+    !> amplitudes. opts%start is not used here (it is the strategy of
+    !> stickslip_reference_start, solve_reference_from_starts). Not converging is an outcome
+    !> (res%converged = F and res%diagnosis, with a diagnostics item 'not_converged'); the
+    !> checks of a converged orbit (energy balance, Coulomb's law) go to res%diagnostics.
+    !> Errors: stat input (invalid model or options, start samples of the wrong shape or not
+    !> finite); stat numerical (dependent stuck contact directions).
+    subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Reference options.
         type(reference_options_t), intent(in) :: opts
+        !> Displacements of the start over one period, ns x N [m].
+        real(dp), intent(in) :: x_start(:, :)
+        !> Velocities of the start over one period, ns x N [m/s].
+        real(dp), intent(in) :: v_start(:, :)
         !> The reference solution.
         type(reference_result_t), intent(out) :: res
         !> Set on invalid input or numerical breakdown.
         type(error_type), allocatable, intent(out) :: error
-        !> Options of the weighted-residual start.
-        type(hbm_options_t), intent(in), optional :: hbm_opts
-        !> Options of the implicit Euler start.
-        type(euler_options_t), intent(in), optional :: euler_opts
-        !> A weighted-residual solution to start from (with samples).
-        type(hbm_solution_t), intent(in), optional :: hbm_start
-        !> An implicit Euler solution to start from.
-        type(euler_result_t), intent(in), optional :: euler_start
-        type(hbm_options_t) :: ho
-        type(hbm_solution_t) :: hs
-        type(euler_options_t) :: eo
-        type(euler_result_t) :: es
-        type(error_type), allocatable :: start_error
-        character(len=:), allocatable :: notes
-        real(dp) :: c0, c1
-        integer :: attempt
+        !> Name of the start, reported in res%start and the diagnosis (default 'given').
+        character(len=*), intent(in), optional :: start_name
+        character(len=:), allocatable :: name
 
         call validate_model(model, error)
         if (allocated(error)) return
         call validate_reference_options(opts, error)
         if (allocated(error)) return
-        res%start = ""
-        notes = ""
-        do attempt = 1, 2
-            if (attempt == 1 .and. opts%start == 'euler') cycle
-            if (attempt == 2 .and. opts%start == 'hbm') exit
-            call cpu_time(c0)
-            if (attempt == 1) then
-                if (present(hbm_start)) then
-                    if (hbm_start%converged .and. allocated(hbm_start%x)) then
-                        call cpu_time(c1)
-                        call shoot("hbm", hbm_start%x, hbm_start%v)
-                        if (allocated(error) .or. res%converged) return
-                        cycle
-                    end if
-                end if
-                if (present(hbm_opts)) ho = hbm_opts
-                ho%want_samples = .true.
-                ho%harmonics = max(ho%harmonics, maxval([0, model%force_harmonic]))
-                if (ho%samples < 2*ho%harmonics + 1) ho%samples = 4*ho%harmonics
-                call solve_periodic(model, ho, hs, start_error)
-                call cpu_time(c1)
-                res%start_seconds = res%start_seconds + (c1 - c0)
-                if (allocated(start_error)) then
-                    notes = notes//" The weighted-residual start failed: "//start_error%message//"."
-                    deallocate (start_error)
-                    cycle
-                end if
-                if (.not. hs%converged) then
-                    notes = notes//" The weighted-residual start did not converge."
-                    cycle
-                end if
-                call shoot("hbm", hs%x, hs%v)
-            else
-                if (present(euler_start)) then
-                    if (euler_start%periodic .and. allocated(euler_start%x)) then
-                        call shoot("euler", euler_start%x, euler_start%v)
-                        if (allocated(error) .or. res%converged) return
-                        cycle
-                    end if
-                end if
-                if (present(euler_opts)) eo = euler_opts
-                call integrate_euler(model, eo, es, start_error)
-                call cpu_time(c1)
-                res%start_seconds = res%start_seconds + (c1 - c0)
-                if (allocated(start_error)) then
-                    notes = notes//" The implicit Euler start failed: "//start_error%message//"."
-                    deallocate (start_error)
-                    cycle
-                end if
-                if (.not. es%periodic) then
-                    notes = notes//" The implicit Euler start reached no periodic state."
-                    cycle
-                end if
-                call shoot("euler", es%x, es%v)
-            end if
-            if (allocated(error) .or. res%converged) return
-        end do
-        if (.not. allocated(res%diagnosis)) then
-            res%diagnosis = "no start for the shooting could be computed."//notes
-            if (len(notes) > 0) res%diagnosis = res%diagnosis(1:len(res%diagnosis) - 1)
-        else
-            res%diagnosis = res%diagnosis//notes
+        name = "given"
+        if (present(start_name)) name = start_name
+        if (size(x_start, 1) < 1 .or. size(x_start, 2) /= model%ndof .or. &
+            any(shape(v_start) /= shape(x_start))) then
+            call fatal_error(error, "solve_reference: x_start and v_start must both be "// &
+                             "ns x N (ns >= 1 samples of one period, N = ndof)", &
+                             stickslip_stat%input)
+            return
         end if
-
-    contains
-
-        !> Shoot from the sampled approximation (xs, vs) of one period; on success fill res.
-        subroutine shoot(name, xs, vs)
-            character(len=*), intent(in) :: name
-            real(dp), intent(in) :: xs(:, :), vs(:, :)
-            call shoot_from(model, opts, name, xs, vs, res, error)
-        end subroutine shoot
+        if (.not. (all(ieee_is_finite(x_start)) .and. all(ieee_is_finite(v_start)))) then
+            call fatal_error(error, "solve_reference: the start ("//name//") is not finite", &
+                             stickslip_stat%input)
+            return
+        end if
+        res%start = name
+        call shoot_from(model, opts, name, x_start, v_start, res, error)
+        if (allocated(error)) return
+        if (res%converged) then
+            call check_reference(model, res)
+        else
+            call res%diagnostics%add(level_untrusted, "not_converged", res%diagnosis)
+        end if
     end subroutine solve_reference
+
+    !> Checks of a converged reference orbit, as diagnostics items (README, "Where each
+    !> method fails"): the energy balance over one period and Coulomb's law |r| <= mu N at
+    !> the samples.
+    subroutine check_reference(model, res)
+        type(model_t), intent(in) :: model
+        type(reference_result_t), intent(inout) :: res
+        real(dp) :: e, excess, limit
+        integer :: j
+        character(len=300) :: buf
+        e = reference_energy_error(res)
+        if (e > energy_untrusted) then
+            write (buf, '(a,es9.2,a,es9.2,a)') "reference: energy balance error ", e, &
+                " > ", energy_untrusted, " of the work per period: the orbit is not a "// &
+                "solution of the model"
+            call res%diagnostics%add(level_untrusted, "energy_balance", trim(buf))
+        else if (e > energy_warning) then
+            write (buf, '(a,es9.2,a,es9.2,a)') "reference: energy balance error ", e, &
+                " > ", energy_warning, " of the work per period"
+            call res%diagnostics%add(level_warning, "energy_balance", trim(buf))
+        end if
+        if (.not. allocated(res%r)) return
+        do j = 1, size(res%r, 2)
+            limit = model%mu(j)*model%normal_load(j)
+            excess = maxval(abs(res%r(:, j))) - limit
+            if (excess > coulomb_margin*max(limit, tiny(1.0_dp))) then
+                write (buf, '(a,i0,a,es11.4,a,es11.4,a)') "reference: contact ", j, &
+                    " breaks Coulomb's law: max |r| = ", maxval(abs(res%r(:, j))), &
+                    " > mu N = ", limit, " [N]"
+                call res%diagnostics%add(level_untrusted, "coulomb_law", trim(buf))
+                exit
+            end if
+        end do
+    end subroutine check_reference
+
+    !> Relative energy balance error of a reference orbit over one period:
+    !> |work_forcing - diss_friction - diss_damping| / max(|work_forcing|, 1e-6 work_gross,
+    !> tiny) (dimensionless; the gross work is the scale when the net work is ~0).
+    pure real(dp) function reference_energy_error(res) result(e)
+        !> A reference solution.
+        type(reference_result_t), intent(in) :: res
+        e = abs(res%work_forcing - res%diss_friction - res%diss_damping)/ &
+            max(abs(res%work_forcing), 1.0e-6_dp*res%work_gross, tiny(1.0_dp))
+    end function reference_energy_error
 
     !> One shooting attempt from samples xs, vs (t_k = k T / size(xs, 1)) of an approximate
     !> periodic solution, then the recording pass, the events and the samples.

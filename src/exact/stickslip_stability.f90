@@ -234,8 +234,8 @@ contains
 
     !> Floquet stability of the weighted-residual periodic solution `sol` of `model` (a
     !> converged hbm_solution_t with samples): the exact orbit is shot from it
-    !> (solve_reference with hbm_start = sol and start = 'hbm' whatever opts%start says: an
-    !> implicit Euler start would find an attractor, possibly another orbit), and the
+    !> (solve_reference from the samples of sol whatever opts%start says: an implicit Euler
+    !> start would find an attractor, possibly another orbit), and the
     !> multipliers of its monodromy matrix (reference_result_t%monodromy) are classified as
     !> in floquet_multipliers with `tol`. Outcomes, not errors: sol not converged, the
     !> shooting not converging, or converging to an orbit farther than max_orbit_distance
@@ -259,7 +259,6 @@ contains
         type(reference_result_t), intent(out), optional :: ref
         !> Half-width of the marginal band about |mu| = 1 (default 1e-6).
         real(dp), intent(in), optional :: tol
-        type(reference_options_t) :: o
         type(reference_result_t) :: res
         real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
         real(dp) :: c0, c1, ampx, ampv, distance, ftol
@@ -279,9 +278,7 @@ contains
                          "solution to assess")
             return
         end if
-        o = opts
-        o%start = 'hbm'
-        call solve_reference(model, o, res, error, hbm_start=sol)
+        call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm')
         if (allocated(error)) then
             error%message = "periodic_stability: "//error%message
             return

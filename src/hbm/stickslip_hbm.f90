@@ -3,20 +3,23 @@
 !>
 !> Flow: validate -> condense the linear dynamics on the contacts -> solve the projected
 !> friction equations for the friction-force coefficients with hybrj (exact generalized
-!> Jacobian; a ladder of warm starts from fewer harmonics when a cold start stalls) ->
-!> settle an undetermined mean force -> recover every DOF -> energy balance and samples.
+!> Jacobian; a ladder of warm starts from fewer harmonics when a cold start stalls;
+!> convergence judged by convergence_scale) -> settle an undetermined mean force -> recover
+!> every DOF -> energy balance and samples -> the checks as diagnostics (check_solution).
 module stickslip_hbm
     use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_diagnostics, only: level_warning, level_untrusted
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
+    use stickslip_dynamics, only: near_singular_threshold
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
-    use stickslip_rho, only: automatic_rho
+    use stickslip_rho, only: automatic_rho, rho_fraction
     implicit none
     private
-    public :: solve_periodic, validate_options
+    public :: solve_periodic, validate_options, convergence_scale
     public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns
 
     !> Largest harmonics H accepted by validate_options (the basis has 2 H + 1 terms).
@@ -32,6 +35,20 @@ module stickslip_hbm
     integer, parameter :: max_calls_per_stage = 4
     !> Lowest harmonic of the warm-start ladder.
     integer, parameter :: ladder_first = 3
+
+    !> Thresholds of the checks of a solution (check_solution; README, "Where each method
+    !> fails"). Energy balance error: exact for the truncated series up to roundoff.
+    real(dp), parameter, public :: energy_warning = 1.0e-6_dp, energy_untrusted = 1.0e-2_dp
+    !> |friction - Coulomb dissipation| / (the larger of Coulomb's and the whole dissipation
+    !> per period): ~1% on the examples (the truncated force is not exactly -mu N sign(v)
+    !> near the events).
+    real(dp), parameter, public :: dissipation_warning = 0.1_dp, dissipation_untrusted = 0.5_dp
+    !> max |r| / mu N - 1: the Gibbs overshoot of the truncated force at the stick-slip
+    !> events is 2.6-5% on the seed case (stickslip_rho), up to 9% of a jump of 2 mu N
+    !> (18%) at a reversal; 20% is reached on the damped 4-DOF chain at omega = 0.27.
+    real(dp), parameter, public :: force_excess_warning = 0.5_dp, force_excess_untrusted = 1.0_dp
+    !> Band of rho / contact mobility in which the friction equality keeps its digits.
+    real(dp), parameter, public :: rho_ratio_min = 1.0e-6_dp, rho_ratio_max = 1.0e6_dp
 
 contains
 
@@ -78,8 +95,11 @@ contains
     !> hbm_solution_t%rcoef for the same basis; a start from fewer harmonics is embedded).
     !> opts%rho = 0 selects the automatic weight (stickslip_rho); sol%rho is the one used.
     !> A non-converged solve is an outcome: sol%converged = .false. and sol%diagnosis says
-    !> why. Errors: stat input (invalid model or options), stat numerical (singular dynamic
-    !> stiffness, NaN in the residual).
+    !> why. The checks of the answer go to sol%diagnostics (not_converged, rho_out_of_range,
+    !> near_resonance, energy_balance, coulomb_dissipation, coulomb_law; README, "Where each
+    !> method fails"). Errors: stat input (invalid model or options), stat numerical
+    !> (singular dynamic stiffness: "undamped resonance at harmonic h ...", NaN in the
+    !> residual).
     subroutine solve_periodic(model, opts, sol, error, r_start)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
@@ -133,13 +153,7 @@ contains
             vzero(1:ncopy, :) = r_start
             y = reshape(vzero, [prob%n])
         end if
-        block
-            real(dp) :: rzero(nb, nc), vfree(nb, nc)
-            rzero = 0.0_dp
-            call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
-            sol%fscale = norm2(vfree)
-        end block
-        if (nc > 0) sol%fscale = max(sol%fscale, o%rho*maxval(prob%limit))
+        sol%fscale = convergence_scale(model, prob)
         target_norm = opts%tol*sol%fscale
 
         if (nc == 0) then
@@ -159,6 +173,10 @@ contains
                 end if
             end select
             if (allocated(error)) then
+                if (error%stat == stickslip_stat%numerical .and. rho_out_of_band(model, o%rho)) &
+                    error%message = error%message//" (rho = "//rtoa(o%rho)// &
+                    " is far from the contact mobility "//rtoa(o%rho/rho_ratio(model, o%rho))// &
+                    " m/(N s): use &hbm rho = 0, the automatic choice)"
                 call prob%destroy()
                 return
             end if
@@ -180,10 +198,41 @@ contains
         end if
 
         call finish_solution(model, opts, prob, y, sol)
+        call check_solution(model, o, prob, sol)
         call prob%destroy()
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine solve_periodic
+
+    !> The residual scale of the convergence test ||F||_2 <= tol * fscale [m/s]:
+    !>     fscale = min(||V0||_2, rho * Rs),  Rs = max(min(max_j mu_j N_j, Rstop), 1e-6 Rstop),
+    !> V0 the contact velocity coefficients without friction forces, Rstop = ||V0||_2 / m
+    !> the force that stops that motion (m the geometric mean of the resonance-free contact
+    !> mobilities, stickslip_rho). F holds velocities where a sample sticks (Psi = v) and
+    !> rho times force errors where it slips (Psi = rho (r -/+ mu N)): the smaller of the
+    !> two scales judges both kinds of rows, so neither a huge rho mu N (a large mu, rho or
+    !> normal load) nor a tiny one can let the zero start pass. Invariant under a change of
+    !> units (M, C, K, forces scaled together) with the automatic rho; with a fixed rho far
+    !> from the contact mobility the test is stricter (the solve may then not converge, it
+    !> cannot return an unconverged answer as converged). 0 when V0 = 0 (only F = 0 passes:
+    !> the zero start is then exact) or when there are no contacts.
+    function convergence_scale(model, prob) result(fscale)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        !> Its projected friction equations.
+        type(hb_problem_t), intent(in) :: prob
+        real(dp) :: fscale
+        real(dp) :: rzero(prob%basis%nb, prob%nc), vfree(prob%basis%nb, prob%nc)
+        real(dp) :: vnorm, rstop, rs
+        fscale = 0.0_dp
+        if (prob%nc == 0) return
+        rzero = 0.0_dp
+        call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
+        vnorm = norm2(vfree)
+        rstop = vnorm*rho_fraction/automatic_rho(model)
+        rs = max(min(maxval(prob%limit), rstop), 1.0e-6_dp*rstop)
+        fscale = min(vnorm, prob%rho*rs)
+    end function convergence_scale
 
     !> One solve on a fixed basis: hybrj, then restarts from the last iterate while it
     !> stops short of the target without exhausting its evaluations.
@@ -274,8 +323,9 @@ contains
         real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:)
         complex(dp), allocatable :: cw(:)
         integer :: nb, nc, nt, n, j, i, k, p, q, i0
-        real(dp) :: period, lo, hi, shift
+        real(dp) :: period, lo, hi, shift, coulomb_slip, max_force_ratio
 
+        max_force_ratio = 0.0_dp
         nb = prob%basis%nb
         nc = prob%nc
         nt = prob%basis%nt
@@ -351,9 +401,17 @@ contains
         end block
         sol%diss_friction = 0.0_dp
         sol%diss_coulomb = 0.0_dp
+        coulomb_slip = 0.0_dp
         do j = 1, nc
             sol%diss_friction = sol%diss_friction - inner(sol%rcoef(:, j), vc(:, j))
             sol%diss_coulomb = sol%diss_coulomb + prob%limit(j)*period*sum(abs(vs(:, j)))/nt
+            ! what Coulomb's law dissipates: mu N |v| where the contact slips, |r v| (<= mu
+            ! N |v|, ~0) where it sticks (a stuck contact's roundoff slip times a huge mu N
+            ! is no dissipation)
+            coulomb_slip = coulomb_slip + period*sum(merge(abs(rs(:, j)*vs(:, j)), &
+                prob%limit(j)*abs(vs(:, j)), ss(:, j) > 0.5_dp))/nt
+            if (prob%limit(j) > 0.0_dp) max_force_ratio = max(max_force_ratio, &
+                                                              maxval(abs(rs(:, j)))/prob%limit(j))
         end do
         sol%diss_damping = 0.0_dp
         do q = 1, n
@@ -362,6 +420,11 @@ contains
                     model%damping(p, q)*inner(sol%vcoef(:, p), sol%vcoef(:, q))
             end do
         end do
+
+        sol%coulomb_check = abs(coulomb_slip - sol%diss_friction)/ &
+                            max(coulomb_slip, abs(sol%diss_friction) + abs(sol%diss_damping), &
+                                1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
+        sol%max_force_ratio = max_force_ratio
 
         if (opts%want_samples) then
             allocate (sol%t(nt), sol%x(nt, n), sol%v(nt, n), work(nt), cw(nt/2 + 1))
@@ -383,6 +446,93 @@ contains
             if (i0 > 0) inner = inner + 0.5_dp*period*a(i0)*b(i0)
         end function inner
     end subroutine finish_solution
+
+    !> The checks of a solution as diagnostics items (README, "Where each method fails"):
+    !> not_converged; rho_out_of_range (rho / contact mobility outside [rho_ratio_min,
+    !> rho_ratio_max]: the friction equality loses its digits); near_resonance (Z_h nearly
+    !> singular); and, once converged, energy_balance, coulomb_dissipation and coulomb_law.
+    subroutine check_solution(model, opts, prob, sol)
+        type(model_t), intent(in) :: model
+        type(hbm_options_t), intent(in) :: opts
+        type(hb_problem_t), intent(in) :: prob
+        type(hbm_solution_t), intent(inout) :: sol
+        real(dp) :: e
+        character(len=400) :: buf
+        if (.not. sol%converged) &
+            call sol%diagnostics%add(level_untrusted, "not_converged", sol%diagnosis)
+        if (prob%nc > 0 .and. rho_out_of_band(model, opts%rho)) then
+            write (buf, '(a,es10.2e3,a,es10.2e3,a,es8.1,a,es8.1,a)') "rho = ", opts%rho, &
+                " is ", rho_ratio(model, opts%rho), " times the contact mobility (outside ", &
+                rho_ratio_min, " .. ", rho_ratio_max, "): the friction equality cannot "// &
+                "resolve the forces; use &hbm rho = 0 (automatic)"
+            call sol%diagnostics%add(level_untrusted, "rho_out_of_range", trim(buf))
+        end if
+        if (prob%dyn%relative_conditioning < near_singular_threshold) then
+            write (buf, '(a,i0,a,g0.6,a,es9.2,a,es8.1,a)') "near an undamped resonance at "// &
+                "harmonic h = ", prob%dyn%worst_harmonic, " (h omega = ", &
+                prob%dyn%worst_harmonic*model%omega, " rad/s): the dynamic stiffness is "// &
+                "nearly singular (relative conditioning ", prob%dyn%relative_conditioning, &
+                " < ", near_singular_threshold, "), the response hangs on the last digits "// &
+                "of omega, M and K; add damping or move omega"
+            call sol%diagnostics%add(level_untrusted, "near_resonance", trim(buf))
+        end if
+        if (.not. sol%converged .or. prob%nc == 0) return
+        e = abs(sol%work_forcing - sol%diss_friction - sol%diss_damping)/ &
+            max(abs(sol%work_forcing), 1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
+        call graded("energy_balance", e, energy_warning, energy_untrusted, &
+                    "energy balance error (forcing work - friction - viscous dissipation, "// &
+                    "relative to the work per period)")
+        call graded("coulomb_dissipation", sol%coulomb_check, dissipation_warning, &
+                    dissipation_untrusted, "friction dissipation differs from Coulomb's "// &
+                    "(mu N |v| where the contacts slip), relative difference")
+        call graded("coulomb_law", sol%max_force_ratio - 1.0_dp, force_excess_warning, &
+                    force_excess_untrusted, "friction force exceeds mu N (max |r| / mu N "// &
+                    "- 1, beyond the Gibbs overshoot of a truncated series)")
+
+    contains
+
+        subroutine graded(key, value, warn, untrusted, what)
+            character(len=*), intent(in) :: key, what
+            real(dp), intent(in) :: value, warn, untrusted
+            character(len=300) :: text
+            if (.not. (value <= untrusted)) then
+                write (text, '(a,es10.2e3,a,es9.2)') "weighted residual: "//what//" ", value, &
+                    " > ", untrusted
+                call sol%diagnostics%add(level_untrusted, key, trim(text))
+            else if (value > warn) then
+                write (text, '(a,es10.2e3,a,es9.2)') "weighted residual: "//what//" ", value, &
+                    " > ", warn
+                call sol%diagnostics%add(level_warning, key, trim(text))
+            end if
+        end subroutine graded
+    end subroutine check_solution
+
+    !> rho / (the geometric mean of the resonance-free contact mobilities) (dimensionless).
+    real(dp) function rho_ratio(model, rho)
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: rho
+        rho_ratio = rho*rho_fraction/automatic_rho(model)
+    end function rho_ratio
+
+    !> rho is outside [rho_ratio_min, rho_ratio_max] times the contact mobility.
+    logical function rho_out_of_band(model, rho)
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: rho
+        real(dp) :: q
+        rho_out_of_band = .false.
+        if (model%ncontact() == 0) return
+        q = rho_ratio(model, rho)
+        rho_out_of_band = .not. (q >= rho_ratio_min .and. q <= rho_ratio_max)
+    end function rho_out_of_band
+
+    !> A real as short text.
+    function rtoa(x) result(text)
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: text
+        character(len=24) :: buf
+        write (buf, '(es12.3e3)') x
+        text = trim(adjustl(buf))
+    end function rtoa
 
     !> Number of stick phases in one period of the cyclic stick indicator `stick`, counted at
     !> the resolution of the basis: slip gaps and stick phases shorter than `minlen` samples
@@ -419,11 +569,8 @@ contains
             return
         end if
         ! count the stick runs the basis resolves (a run may now wrap around the end)
-        if (s(1)) then
-            do while (s(1))
-                s = cshift(s, 1)
-            end do
-        end if
+        ! (one rotation to the first slip sample: linear in nt)
+        if (s(1)) s = cshift(s, findloc(s, .false., 1) - 1)
         k = 1
         do while (k <= nt)
             len = run_length(k)

@@ -53,8 +53,9 @@ module stickslip_solution
         integer :: hybrj_calls = 0
         !> Final residual norm ||F||_2 of the projected friction equations [m/s].
         real(dp) :: fnorm = huge(1.0_dp)
-        !> Residual scale: max(||V0||_2, rho * max_j mu_j N_j), V0 the contact velocities
-        !> of the structure without friction forces [m/s].
+        !> Residual scale: min(||V0||_2, rho Rs), V0 the contact velocities of the structure
+        !> without friction forces, Rs the force scale min(max_j mu_j N_j, the force that
+        !> stops V0) (stickslip_hbm, convergence_scale) [m/s].
         real(dp) :: fscale = 0.0_dp
         !> Weight rho of Psi used: hbm_options_t%rho, or the automatic choice when that
         !> is 0 [m/(N s)].
@@ -99,6 +100,14 @@ module stickslip_solution
         !> Coulomb dissipation over one period, integral mu N |W^T v| dt [J]; equals
         !> diss_friction for an exact solution of Coulomb's law.
         real(dp) :: diss_coulomb = 0.0_dp
+        !> Relative mismatch of the friction dissipation and Coulomb's, |D_C - diss_friction|
+        !> / max(D_C, |diss_friction| + |diss_damping|, 1e-6 work_gross), D_C = integral of
+        !> mu N |v| where the contacts slip and |r v| where they stick (dimensionless; ~1%
+        !> for a sound solution, O(1) when the force and velocity do not obey Coulomb's law).
+        real(dp) :: coulomb_check = 0.0_dp
+        !> Largest max_t |r_j(t)| / (mu_j N_j) over the contacts with mu_j N_j > 0
+        !> (dimensionless; slightly above 1 from the Gibbs overshoot of the truncated force).
+        real(dp) :: max_force_ratio = 0.0_dp
         !> Energy dissipated by viscous damping over one period, integral v^T C v dt [J].
         real(dp) :: diss_damping = 0.0_dp
         !> Sample instants t_k = k T / nt [s] (when samples were asked for).

@@ -42,21 +42,36 @@ module stickslip_dynamics
         !> d G_h / d omega, n_c x n_c x nharm (only when built with_omega_derivative)
         !> [m/N].
         complex(dp), allocatable :: dg(:, :, :)
+        !> Smallest relative conditioning over the harmonics of the basis (the constant
+        !> included): 1 / (||Z_h^-1||_1 s_h), s_h = ||K||_1 + (h omega)^2 ||M||_1 +
+        !> h omega ||C||_1, i.e. about the smallest singular value of Z_h over the scale of
+        !> its terms (dimensionless; unlike rcond it sees the resonance of a 1 x 1 Z_h,
+        !> whose rcond is always 1). Below singular_threshold new_dynamics fails.
+        real(dp) :: relative_conditioning = huge(1.0_dp)
+        !> Harmonic where relative_conditioning is reached (-1 before new_dynamics).
+        integer :: worst_harmonic = -1
     contains
         procedure :: contact_velocity
         procedure :: contact_velocity_derivative
         procedure :: displacement
     end type dynamics_t
 
-    !> Dynamic stiffness whose reciprocal condition number is below this is called singular.
-    real(dp), parameter :: rcond_min = 1.0e-13_dp
+    !> Z_h is called singular when its relative conditioning (see relative_conditioning in
+    !> dynamics_t) is below this: the smallest singular value is then at the roundoff level
+    !> of the matrix's own scale ||K|| + (h omega)^2 ||M|| + h omega ||C||.
+    real(dp), parameter, public :: singular_threshold = 1.0e-13_dp
+    !> Z_h is called nearly singular (a resonance of the undamped structure within about
+    !> this relative distance) below this: the response then hangs on the last digits of
+    !> omega, M and K (stickslip_hbm reports it as untrusted, key 'near_resonance').
+    real(dp), parameter, public :: near_singular_threshold = 1.0e-6_dp
 
 contains
 
     !> Factorize the dynamic stiffness at every harmonic of `basis` and condense onto the
     !> contacts. Errors: stat input if a forcing term's harmonic is not in the basis;
     !> stat numerical if Z_h is singular (a natural frequency of the undamped structure at
-    !> h omega) or K is singular while the basis holds the constant.
+    !> h omega: "undamped resonance at harmonic h ..."; relative test, see
+    !> singular_threshold) or K is singular while the basis holds the constant.
     !> With `with_omega_derivative`, also d V0_h / d omega and d G_h / d omega (for the
     !> continuation in omega): with X = Z_h^{-1} [F_h, W] and dZ_h/domega = -2 h^2 omega M
     !> + i h C, d(i h omega W^T X)/domega = i h W^T X - i h omega W^T Z_h^{-1} (dZ_h/domega) X.
@@ -76,7 +91,7 @@ contains
         logical :: deriv
         real(dp), allocatable :: rwork(:)
         integer, allocatable :: ipiv(:)
-        real(dp) :: anorm, rcond, w(model%ndof)
+        real(dp) :: anorm, rcond, w(model%ndof), knorm, mnorm, cnorm, zscale, rel
         complex(dp) :: ihw
         character(len=300) :: buf
         logical :: placed
@@ -110,6 +125,9 @@ contains
         if (deriv) allocate (self%dv0(nc, basis%nharm), self%dg(nc, nc, basis%nharm), &
                              drhs(n, nc + 1))
 
+        knorm = maxval(sum(abs(model%stiffness), dim=1))
+        mnorm = maxval(sum(abs(model%mass), dim=1))
+        cnorm = maxval(sum(abs(model%damping), dim=1))
         do ih = 0, basis%nharm
             if (ih == 0) then
                 if (.not. basis%has_zero) cycle
@@ -129,17 +147,24 @@ contains
             if (info == 0) then
                 call zgecon('1', n, z, n, anorm, rcond, work, rwork, info)
             end if
-            if (.not. (rcond >= rcond_min)) then
+            ! relative to the scale of the terms, not to ||Z_h|| (rcond of a 1 x 1 is 1)
+            zscale = knorm + (h*model%omega)**2*mnorm + h*model%omega*cnorm
+            rel = 0.0_dp
+            if (zscale > 0.0_dp) rel = rcond*anorm/zscale
+            if (rel < self%relative_conditioning) then
+                self%relative_conditioning = rel
+                self%worst_harmonic = h
+            end if
+            if (.not. (rcond >= singular_threshold .and. rel >= singular_threshold)) then
                 if (h == 0) then
                     write (buf, '(a,es9.2,a)') "the stiffness matrix K is singular (rcond = ", &
                         rcond, "): the static (zeroth-harmonic) response is undetermined; "// &
                         "restrain the rigid-body motion or set &hbm odd_only = .true."
                 else
-                    write (buf, '(a,i0,a,g0.6,a,es9.2,a)') "the dynamic stiffness "// &
-                        "K - (h omega)^2 M + i h omega C is singular at harmonic h = ", h, &
-                        " (h omega = ", h*model%omega, " rad/s, rcond = ", rcond, &
-                        "): a natural frequency of the undamped structure; "// &
-                        "the response is unbounded. Add damping or move omega"
+                    write (buf, '(a,i0,a,g0.6,a,es9.2,a)') "undamped resonance at harmonic h = ", &
+                        h, " (h omega = ", h*model%omega, " rad/s): the dynamic stiffness "// &
+                        "K - (h omega)^2 M + i h omega C is singular (relative conditioning ", &
+                        rel, "): the linear response is unbounded. Add damping or move omega"
                 end if
                 call fatal_error(error, trim(buf), stickslip_stat%numerical)
                 return

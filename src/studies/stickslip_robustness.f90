@@ -19,8 +19,9 @@ module stickslip_robustness
     use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
     use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference, validate_reference_options
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
+        validate_reference_options
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_rho, only: automatic_rho
     use stickslip_progress, only: progress_t
@@ -327,8 +328,8 @@ contains
             type(error_type), allocatable, intent(out) :: error
             type(reference_result_t) :: ref
             integer :: j
-            call solve_reference(m, ref_opts, ref, error, hbm_opts=hbm_opts, &
-                                 euler_opts=euler_opts)
+            call solve_reference_from_starts(m, ref_opts, ref, error, hbm_opts=hbm_opts, &
+                                             euler_opts=euler_opts)
             if (allocated(error)) then
                 if (error%stat /= stickslip_stat%numerical) return
                 pr%diagnosis = "no reference: "//error%message

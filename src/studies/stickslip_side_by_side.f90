@@ -3,18 +3,25 @@
 !> on a common time grid (&run method = 'all').
 module stickslip_side_by_side
     use stickslip_kinds, only: dp
-    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
+    use stickslip_checks, only: sampling_diagnostics
     implicit none
     private
-    public :: side_by_side_t, solve_side_by_side
+    public :: side_by_side_t, solve_side_by_side, disagreement, disagree_warning, &
+        disagree_untrusted
+
+    !> Displacement difference of a method against the reference (relative to the
+    !> amplitude) above which 'all' warns / is untrusted (disagreement). On the examples
+    !> the weighted residual and implicit Euler stay within 0.07 of the reference.
+    real(dp), parameter :: disagree_warning = 0.1_dp, disagree_untrusted = 0.5_dp
 
     !> The three solutions, their CPU times and their differences.
     type :: side_by_side_t
@@ -75,8 +82,9 @@ contains
         res%euler_seconds = c1 - c0
         if (allocated(error)) return
 
-        call solve_reference(model, ref, res%reference, error, hbm_opts=ho, euler_opts=euler, &
-                             hbm_start=res%hbm, euler_start=res%euler)
+        call solve_reference_from_starts(model, ref, res%reference, error, hbm_opts=ho, &
+                                         euler_opts=euler, hbm_start=res%hbm, &
+                                         euler_start=res%euler)
         res%reference_seconds = res%reference%seconds + res%reference%start_seconds
         if (allocated(error)) return
 
@@ -120,6 +128,13 @@ contains
             res%comparisons = [res%comparisons, cmp]
         end if
 
+        ! every method's findings, then whether they agree
+        call res%diagnostics%extend(res%hbm%diagnostics, "hbm_")
+        call sampling_diagnostics(ho%samples, res%diagnostics, "hbm_")
+        call res%diagnostics%extend(res%euler%diagnostics, "euler_")
+        call res%diagnostics%extend(res%reference%diagnostics, "reference_")
+        call disagreement(res%comparisons, ref_ok, res%diagnostics)
+
     contains
 
         subroutine add(text)
@@ -131,4 +146,60 @@ contains
             end if
         end subroutine add
     end subroutine solve_side_by_side
+
+    !> Diagnostics items for methods that disagree, from the comparisons (README, "Where
+    !> each method fails"): the largest displacement difference of a method against the
+    !> reference, relative to each DOF's amplitude (floored at 1e-3 of the largest
+    !> amplitude: a DOF nearly at rest does not count alone), above disagree_warning gives
+    !> a warning, above disagree_untrusted makes the run untrusted (keys 'hbm_disagrees',
+    !> 'euler_disagrees'). Without a converged reference, the weighted residual against
+    !> implicit Euler is judged the same way (key 'methods_disagree').
+    subroutine disagreement(comparisons, ref_ok, diag)
+        !> The comparisons of solve_side_by_side.
+        type(comparison_t), intent(in) :: comparisons(:)
+        !> The reference converged.
+        logical, intent(in) :: ref_ok
+        !> The findings, appended to.
+        type(diagnostics_t), intent(inout) :: diag
+        integer :: k
+        real(dp) :: e
+        character(len=300) :: buf
+        character(len=:), allocatable :: key
+        do k = 1, size(comparisons)
+            associate (c => comparisons(k))
+                if (c%against == 'reference') then
+                    key = c%method//"_disagrees"
+                else if (.not. ref_ok) then
+                    key = "methods_disagree"
+                else
+                    cycle
+                end if
+                e = displacement_difference(c)
+                write (buf, '(a,es9.2,a)') c%method//" and "//c%against//" differ by ", e, &
+                    " of the displacement amplitude"
+                if (.not. (e <= disagree_untrusted)) then
+                    call diag%add(level_untrusted, key, trim(buf)//": at least one of them "// &
+                                  "is wrong")
+                else if (e > disagree_warning) then
+                    call diag%add(level_warning, key, trim(buf))
+                end if
+            end associate
+        end do
+    end subroutine disagreement
+
+    !> max over the DOFs p of max_t |x_p - x_p,against| / max(A_p, 1e-3 max_q A_q)
+    !> (dimensionless), A_p the amplitude of x_p in the solution compared against.
+    pure real(dp) function displacement_difference(c) result(e)
+        type(comparison_t), intent(in) :: c
+        real(dp) :: amax
+        integer :: p
+        e = 0.0_dp
+        if (c%n < 1 .or. .not. allocated(c%max_error)) return
+        amax = maxval(c%amplitude(1:c%n))
+        do p = 1, c%n
+            e = max(e, c%max_error(p)*c%amplitude(p)/max(c%amplitude(p), 1.0e-3_dp*amax, &
+                                                         tiny(1.0_dp)))
+        end do
+        if (amax == 0.0_dp) e = maxval(c%max_error(1:c%n))
+    end function displacement_difference
 end module stickslip_side_by_side

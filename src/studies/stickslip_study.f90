@@ -13,8 +13,9 @@ module stickslip_study
     use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
     use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference, validate_reference_options
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
+        validate_reference_options
+    use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_progress, only: progress_t
     implicit none
@@ -176,11 +177,14 @@ contains
         if (allocated(error)) return
 
         call cpu_time(c0)
-        call solve_reference(model, ref_opts, res%reference, error, hbm_opts=hbm, &
-                             euler_opts=euler)
+        call solve_reference_from_starts(model, ref_opts, res%reference, error, hbm_opts=hbm, &
+                                         euler_opts=euler)
         call cpu_time(c1)
         res%reference_seconds = c1 - c0
         if (allocated(error)) return
+        ! the judge's own checks (the runs' errors are the study's measurements, not
+        ! findings: a work-precision study runs coarse settings on purpose)
+        call res%diagnostics%extend(res%reference%diagnostics, "reference_")
         if (.not. res%reference%converged) then
             call fatal_error(error, "the study needs the exact reference, which did not "// &
                              "converge: "//res%reference%diagnosis, stickslip_stat%numerical)

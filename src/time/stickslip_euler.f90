@@ -10,18 +10,20 @@
 !> The friction forces solve min 1/2 r^T D r + u_free^T r over the box |r_j| <= mu_j N_j (its
 !> optimality conditions are Coulomb's law): closed form for one contact, projected
 !> Gauss-Seidel for several (it converges when D is symmetric positive definite, i.e. for
-!> symmetric C and K). The step is first order: errors are O(h). No allocation in the step loop.
+!> symmetric C and K; stickslip_contact_solve). The step is first order: errors are O(h). No
+!> allocation in the step loop.
 module stickslip_euler
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
-    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_diagnostics, only: diagnostics_t, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
     use stickslip_lapack, only: dgetrf, dgetrs
+    use stickslip_contact_solve, only: contact_forces
     implicit none
     private
-    public :: euler_options_t, euler_result_t, integrate_euler, contact_forces
+    public :: euler_options_t, euler_result_t, integrate_euler
     public :: validate_euler_options, euler_max_steps_per_period, euler_max_total_steps
 
     !> Largest steps_per_period accepted by validate_euler_options (the last period is kept:
@@ -238,49 +240,9 @@ contains
         else if (res%periodic) then
             res%diagnosis = ""
         end if
+        if (.not. res%periodic) call res%diagnostics%add(level_untrusted, "not_periodic", &
+                                                         res%diagnosis)
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler
-
-    !> Friction forces r of one step: the minimizer of 1/2 r^T D r + u_free^T r over the box
-    !> |r_j| <= limit_j, i.e. Coulomb's law between r and u = u_free + D r. Closed form for
-    !> one contact; projected Gauss-Seidel from the given r for several (converges for D
-    !> symmetric positive definite), stopped when no force changes by more than
-    !> tol * max(limit) in a sweep or after max_sweeps sweeps.
-    pure subroutine contact_forces(d, ufree, limit, r, tol, max_sweeps, sweeps)
-        !> Delassus matrix h W^T S^{-1} W, n_c x n_c [m/(N s)].
-        real(dp), intent(in) :: d(:, :)
-        !> Slip velocities without friction [m/s].
-        real(dp), intent(in) :: ufree(:)
-        !> Friction limits mu N [N].
-        real(dp), intent(in) :: limit(:)
-        !> Friction forces: start on entry, solution on exit [N].
-        real(dp), intent(inout) :: r(:)
-        !> Relative tolerance of the sweeps.
-        real(dp), intent(in) :: tol
-        !> Sweeps at most.
-        integer, intent(in) :: max_sweeps
-        !> Sweeps done (0 for one contact).
-        integer, intent(out) :: sweeps
-        integer :: j, nc
-        real(dp) :: change, rnew, scale
-        nc = size(r)
-        sweeps = 0
-        if (nc == 1) then
-            r(1) = max(-limit(1), min(limit(1), -ufree(1)/d(1, 1)))
-            return
-        end if
-        scale = max(maxval(limit), tiny(1.0_dp))
-        do sweeps = 1, max_sweeps
-            change = 0.0_dp
-            do j = 1, nc
-                rnew = r(j) - (ufree(j) + dot_product(d(j, :), r))/d(j, j)
-                rnew = max(-limit(j), min(limit(j), rnew))
-                change = max(change, abs(rnew - r(j)))
-                r(j) = rnew
-            end do
-            if (change <= tol*scale) exit
-        end do
-        sweeps = min(sweeps, max_sweeps)
-    end subroutine contact_forces
 end module stickslip_euler

@@ -14,7 +14,8 @@ program bench_robustness
     use stickslip_error, only: error_type
     use stickslip_case, only: case_t, read_case
     use stickslip_study, only: median
-    use stickslip_output, only: make_directory, write_robustness_csv
+    use stickslip_files, only: make_directory
+    use stickslip_csv, only: write_robustness_csv
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         default_robustness_options
     implicit none

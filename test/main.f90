@@ -25,6 +25,7 @@ program tester
     use test_error, only: run_error_tests
     use test_minpack, only: run_minpack_tests
     use test_cli, only: run_cli_tests
+    use test_api, only: run_api_tests
     use test_trust, only: run_trust_tests
     implicit none
     type(test_counter_t) :: t
@@ -60,6 +61,7 @@ program tester
     if (selected("error")) call run_error_tests(t)
     if (selected("minpack")) call run_minpack_tests(t)
     if (selected("cli")) call run_cli_tests(t)
+    if (selected("api")) call run_api_tests(t)
     if (selected("trust")) call run_trust_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"

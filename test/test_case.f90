@@ -5,7 +5,7 @@ module test_case
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
     use stickslip_case, only: case_t, read_case, write_case
-    use stickslip_output, only: make_directory
+    use stickslip_files, only: make_directory
     use testing, only: test_counter_t, check, check_close, check_error
     use fixtures, only: enter_project_root, project_path
     implicit none

@@ -14,7 +14,8 @@ module test_robustness
     use stickslip_rho, only: automatic_rho, contact_mobility, rho_fraction
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         validate_robustness_options, default_robustness_options, robustness_samples
-    use stickslip_output, only: make_directory, write_robustness_csv
+    use stickslip_files, only: make_directory
+    use stickslip_csv, only: write_robustness_csv
     use fixtures, only: seed_model, chain_model, one_dof_model, enter_project_root
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none

@@ -6,9 +6,9 @@ module test_sweep_files
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_case, only: case_t, read_case
     use stickslip_sweep, only: sweep_result_t, run_sweep
-    use stickslip_run, only: run_sweep_case
+    use stickslip_driver, only: run_sweep_case
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
-    use stickslip_output, only: make_directory
+    use stickslip_files, only: make_directory
     use test_case, only: write_lines, scratch
     use test_cli, only: cli
     use fixtures, only: enter_project_root

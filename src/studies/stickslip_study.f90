@@ -2,7 +2,7 @@
 !> harmonic counts (and quadrature sample counts) and by implicit Euler over a list of steps
 !> per period, each run's error measured against the exact event-driven reference and its
 !> CPU time measured (median of repeats for fast runs). Plain computation: the rows are
-!> written by stickslip_output.
+!> written by stickslip_csv and stickslip_summary.
 module stickslip_study
     use stickslip_kinds, only: dp
     use stickslip_diagnostics, only: diagnostics_t

@@ -1,5 +1,5 @@
 !> The stickslip command: `stickslip CASE.nml [--quiet] [--help] [--version]`.
-!> Gathers the arguments, runs them (stickslip_cli, in app/cli) and exits with the code it
+!> Gathers the arguments, runs them (stickslip_cli, in app/) and exits with the code it
 !> returns.
 program main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit

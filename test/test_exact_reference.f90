@@ -292,7 +292,7 @@ contains
         call check_close(t, res%stick_fraction(1), 1.0_dp, "reference stuck: stuck all period")
     end subroutine test_stuck_limit
 
-    !> Invalid options are input errors naming the &reference variable.
+    !> Invalid options are input errors naming the options argument (opts%...).
     subroutine test_bad_options(t)
         type(test_counter_t), intent(inout) :: t
         type(reference_options_t) :: o
@@ -301,13 +301,13 @@ contains
         o%samples = 0
         call solve_reference_from_starts(seed_model(), o, res, error)
         call check_error(t, error, "reference samples = 0 rejected", .true., &
-                         [character(len=20) :: "&reference samples"])
+                         [character(len=20) :: "opts%samples"])
         if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
                                          "reference bad options: stat input")
         o = reference_options_t()
         o%start = 'cold'
         call solve_reference_from_starts(seed_model(), o, res, error)
         call check_error(t, error, "reference start = 'cold' rejected", .true., &
-                         [character(len=20) :: "&reference start"])
+                         [character(len=20) :: "opts%start"])
     end subroutine test_bad_options
 end module test_exact_reference

@@ -103,13 +103,13 @@ contains
         o%rho = -0.1_dp
         call validate_options(o, error)
         call check_error(t, error, "rho < 0 rejected", .true., &
-                         [character(len=20) :: "&hbm rho", ">= 0", "automatic"])
+                         [character(len=20) :: "opts%rho", ">= 0", "automatic"])
         o%rho = ieee_value(1.0_dp, ieee_quiet_nan)
         call validate_options(o, error)
-        call check_error(t, error, "rho NaN rejected", .true., [character(len=20) :: "&hbm rho"])
+        call check_error(t, error, "rho NaN rejected", .true., [character(len=20) :: "opts%rho"])
         o%rho = ieee_value(1.0_dp, ieee_positive_inf)
         call validate_options(o, error)
-        call check_error(t, error, "rho Inf rejected", .true., [character(len=20) :: "&hbm rho"])
+        call check_error(t, error, "rho Inf rejected", .true., [character(len=20) :: "opts%rho"])
         m = seed_model()
         o = hbm_options_t()
         o%harmonics = 10
@@ -207,7 +207,7 @@ contains
         r%rhos = [0.2_dp, -1.0_dp]
         call validate_robustness_options(r, error)
         call check_error(t, error, "robustness: negative rho rejected", .true., &
-                         [character(len=20) :: "&robustness rhos"])
+                         [character(len=20) :: "opts%rhos"])
         r = default_robustness_options()
         r%samples = [16]
         call validate_robustness_options(r, error)

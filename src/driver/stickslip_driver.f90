@@ -15,6 +15,7 @@ module stickslip_driver
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t
+    use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t, solve_and_check
     use stickslip_euler, only: euler_result_t, integrate_euler
@@ -207,7 +208,8 @@ contains
         call hbm_run(case, sol, ch, error)
         call release_lock(lock)
         if (present(checks)) checks = ch
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['opts ', 'copts', 'ref  '], &
+                            ['hbm      ', 'hbm      ', 'reference'])
     end subroutine run_case
 
     subroutine hbm_run(case, sol, ch, error)
@@ -255,7 +257,7 @@ contains
         if (allocated(error)) return
         call euler_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['opts'], ['euler'])
     end subroutine run_euler_case
 
     subroutine euler_run(case, res, error)
@@ -298,7 +300,8 @@ contains
         if (allocated(error)) return
         call reference_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['opts      ', 'hbm_opts  ', 'euler_opts'], &
+                            ['reference', 'hbm      ', 'euler    '])
     end subroutine run_reference_case
 
     subroutine reference_run(case, res, error)
@@ -345,7 +348,8 @@ contains
         if (allocated(error)) return
         call side_by_side_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['hbm  ', 'euler', 'ref  '], &
+                            ['hbm      ', 'euler    ', 'reference'])
     end subroutine run_side_by_side_case
 
     subroutine side_by_side_run(case, res, error)
@@ -407,7 +411,8 @@ contains
         if (allocated(error)) return
         call study_run(case, res, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['hbm     ', 'euler   ', 'ref_opts', 'opts    '], &
+                            ['hbm      ', 'euler    ', 'reference', 'study    '])
     end subroutine run_study_case
 
     subroutine study_run(case, res, error, progress)
@@ -465,7 +470,8 @@ contains
         if (allocated(error)) return
         call sweep_run(case, res, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['hbm ', 'ref ', 'opts'], &
+                            ['hbm      ', 'reference', 'sweep    '])
     end subroutine run_sweep_case
 
     subroutine sweep_run(case, res, error, progress)
@@ -528,7 +534,8 @@ contains
         if (allocated(error)) return
         call robustness_run(case, rows, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['hbm_opts  ', 'euler_opts', 'ref_opts  ', 'opts      '], &
+                            ['hbm       ', 'euler     ', 'reference ', 'robustness'])
     end subroutine run_robustness_case
 
     subroutine robustness_run(case, rows, error, progress)
@@ -593,11 +600,18 @@ contains
             call remove_stale_results(case%directory, [character(len=24) ::])
     end subroutine after_method
 
-    !> Name the case file in an input error.
-    subroutine name_case_file(case, error)
+    !> Put an error of the library in the words of the case: the arguments of the method
+    !> called (`arguments`, e.g. 'opts') become the case-file group and variable (`groups`,
+    !> e.g. 'hbm'; model components map to &system, &forcing, &friction), and an input error
+    !> names the case file.
+    subroutine name_case_file(case, error, arguments, groups)
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(inout) :: error
+        character(len=*), intent(in), optional :: arguments(:)
+        character(len=*), intent(in), optional :: groups(:)
         if (.not. allocated(error)) return
+        if (present(arguments) .and. present(groups)) &
+            error%message = case_message(error%message, arguments, groups)
         if (error%stat /= stickslip_stat%input .or. .not. allocated(case%path)) return
         if (len(case%path) == 0) return
         if (index(error%message, case%path//": ") == 1) return

@@ -114,7 +114,8 @@ module stickslip_reference
 
 contains
 
-    !> Check reference options. Errors (stat input) name the &reference variable.
+    !> Check reference options. Errors (stat input) name the
+    !> component ("opts%samples = 0: must be >= 1").
     subroutine validate_reference_options(opts, error)
         !> Options to check.
         type(reference_options_t), intent(in) :: opts
@@ -126,22 +127,22 @@ contains
         integer, parameter :: reference_max_bracket_steps = 10**5
         character(len=200) :: buf
         if (opts%samples < 1) then
-            write (buf, '(a,i0,a)') "&reference samples = ", opts%samples, ": must be >= 1"
+            write (buf, '(a,i0,a)') "opts%samples = ", opts%samples, ": must be >= 1"
         else if (opts%samples > reference_max_samples) then
-            write (buf, '(a,i0,a,i0)') "&reference samples = ", opts%samples, &
+            write (buf, '(a,i0,a,i0)') "opts%samples = ", opts%samples, &
                 ": must be <= ", reference_max_samples
         else if (opts%bracket_steps < 8) then
-            write (buf, '(a,i0,a)') "&reference bracket_steps = ", opts%bracket_steps, &
+            write (buf, '(a,i0,a)') "opts%bracket_steps = ", opts%bracket_steps, &
                 ": must be >= 8"
         else if (opts%bracket_steps > reference_max_bracket_steps) then
-            write (buf, '(a,i0,a,i0)') "&reference bracket_steps = ", opts%bracket_steps, &
+            write (buf, '(a,i0,a,i0)') "opts%bracket_steps = ", opts%bracket_steps, &
                 ": must be <= ", reference_max_bracket_steps
         else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&reference tol = ", opts%tol, ": must be in (0, 1)"
+            write (buf, '(a,g0.6,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
         else if (opts%maxfev < 1) then
-            write (buf, '(a,i0,a)') "&reference maxfev = ", opts%maxfev, ": must be >= 1"
+            write (buf, '(a,i0,a)') "opts%maxfev = ", opts%maxfev, ": must be >= 1"
         else if (opts%start /= 'auto' .and. opts%start /= 'hbm' .and. opts%start /= 'euler') then
-            buf = "&reference start = '"//trim(opts%start)//"': must be 'auto', 'hbm' or 'euler'"
+            buf = "opts%start = '"//trim(opts%start)//"': must be 'auto', 'hbm' or 'euler'"
         else
             return
         end if

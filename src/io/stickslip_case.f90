@@ -21,7 +21,8 @@ module stickslip_case
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         read_friction_group, max_dof, max_terms, group_error
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
-        read_run_group, read_output_group, prefix_path
+        read_run_group, read_output_group
+    use stickslip_case_messages, only: to_case_message
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group
     implicit none
     private
@@ -101,7 +102,7 @@ contains
         if (allocated(error)) return
         call validate_model(case%model, error)
         if (allocated(error)) then
-            call prefix_path(nml, error)
+            call to_case_message(error, nml%path, [character(len=1) ::], [character(len=1) ::])
             return
         end if
 

@@ -13,10 +13,11 @@ module stickslip_case_solvers
     use stickslip_namelist, only: nml_file_t
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string
     use stickslip_case_model, only: group_error
+    use stickslip_case_messages, only: to_case_message
     implicit none
     private
     public :: read_hbm_group, read_euler_group, read_reference_group, read_run_group
-    public :: read_output_group, known_methods, prefix_path
+    public :: read_output_group, known_methods
 
     !> Methods of &run method.
     character(len=10), parameter :: known_methods(7) = [character(len=10) :: 'hbm', 'euler', &
@@ -71,11 +72,12 @@ contains
         if (allocated(error)) return
         call validate_options(hbm_opts, error)
         if (allocated(error)) then
-            call prefix_path(nml, error)
+            call to_case_message(error, nml%path, ['opts'], ['hbm '])
             return
         end if
         call validate_check_options(check_opts, hbm_opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['copts', 'opts '], &
+                                                   ['hbm', 'hbm'])
     end subroutine read_hbm_group
 
     !> Read &euler (optional): steps_per_period, max_periods, tol; validate.
@@ -97,7 +99,7 @@ contains
         call get_real(nml, g, "tol", opts%tol, error)
         if (allocated(error)) return
         call validate_euler_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['euler'])
     end subroutine read_euler_group
 
     !> Read &reference (optional): samples, bracket_steps, tol, maxfev, start; validate.
@@ -131,7 +133,7 @@ contains
         end if
         opts%start = trim(start)
         call validate_reference_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['reference'])
     end subroutine read_reference_group
 
     !> Read &run (optional): method, one of known_methods. `given` tells whether the file
@@ -178,13 +180,4 @@ contains
         end if
         directory = trim(directory)
     end subroutine read_output_group
-
-    !> Prefix a library validator's message with the case file path.
-    subroutine prefix_path(nml, error)
-        !> The parsed case file.
-        type(nml_file_t), intent(in) :: nml
-        !> The error to prefix.
-        type(error_type), intent(inout) :: error
-        error%message = nml%path//": "//error%message
-    end subroutine prefix_path
 end module stickslip_case_solvers

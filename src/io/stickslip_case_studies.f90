@@ -14,7 +14,7 @@ module stickslip_case_studies
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string, &
         get_integers, get_reals
     use stickslip_case_model, only: group_error, max_terms
-    use stickslip_case_solvers, only: prefix_path
+    use stickslip_case_messages, only: to_case_message
     implicit none
     private
     public :: read_study_group, read_sweep_group, read_robustness_group
@@ -55,7 +55,7 @@ contains
         call get_real(nml, g, "repeat_below", opts%repeat_below, error)
         if (allocated(error)) return
         call validate_study_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['study'])
     end subroutine read_study_group
 
     !> Read &sweep (optional; `given` tells whether it is present): parameter, start and stop
@@ -124,7 +124,7 @@ contains
         call get_logical(nml, g, "plot", opts%plot, error)
         if (allocated(error)) return
         call validate_sweep_options(model, opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['sweep'])
     end subroutine read_sweep_group
 
     !> Read &robustness (optional): lists omegas, mus, rhos, harmonics, samples,
@@ -171,7 +171,7 @@ contains
         call get_real(nml, g, "wrong_tol", opts%wrong_tol, error)
         if (allocated(error)) return
         call validate_robustness_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['robustness'])
     end subroutine read_robustness_group
 
     !> The list, or an empty one for the single value 0 ("no runs of that method").

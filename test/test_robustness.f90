@@ -10,7 +10,7 @@ module test_robustness
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
     use stickslip_euler, only: euler_options_t
-    use stickslip_reference, only: reference_options_t
+    use stickslip_reference_start, only: reference_start_options_t
     use stickslip_rho, only: automatic_rho, contact_mobility, rho_fraction
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         validate_robustness_options, default_robustness_options, robustness_samples
@@ -232,7 +232,7 @@ contains
         type(error_type), allocatable :: error
         type(hbm_options_t) :: ho
         type(euler_options_t) :: eo
-        type(reference_options_t) :: ro
+        type(reference_start_options_t) :: ro
         integer :: k, u, nline, stat
         character(len=400) :: line
         logical :: ok

@@ -56,10 +56,6 @@ module stickslip_sweep
         logical :: stability = .true.
         !> Harmonic truncation error estimate of every point (stickslip_truncation).
         logical :: truncation = .true.
-        !> Resume from the checkpoint of an interrupted run of the same case.
-        logical :: resume = .true.
-        !> Draw frc.png with gnuplot (CLI only).
-        logical :: plot = .true.
     end type sweep_options_t
 
     !> One point of a forced-response curve.

@@ -219,7 +219,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         logical :: wanted
-        call solve_and_check(case%model, case%hbm, case%checks, case%reference, sol, ch, error)
+        call solve_and_check(case%model, case%hbm, case%checks, case%reference%reference_options_t, &
+                             sol, ch, error)
         call after_method(case, error, wanted)
         if (.not. wanted) return
         if (sol%converged) then
@@ -493,10 +494,12 @@ contains
             if (allocated(error)) return
         end if
         if (found) then
-            call run_sweep(case%model, case%hbm, case%reference, case%sweep, res, error, &
+            call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                           case%sweep%sweep_options_t, res, error, &
                            observer=writer, resume=saved, progress=progress)
         else
-            call run_sweep(case%model, case%hbm, case%reference, case%sweep, res, error, &
+            call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                           case%sweep%sweep_options_t, res, error, &
                            observer=writer, progress=progress)
         end if
         call after_method(case, error, wanted)

@@ -47,10 +47,6 @@ module stickslip_reference
         real(dp) :: tol = 1.0e-11_dp
         !> Period-map evaluations allowed per shooting attempt.
         integer :: maxfev = 200
-        !> Start of the shooting: 'auto' (the weighted residual, then implicit Euler if the
-        !> shooting from it fails), 'hbm' or 'euler'. Used by solve_reference_from_starts
-        !> (stickslip_reference_start); solve_reference takes its start as an argument.
-        character(len=8) :: start = 'auto'
     end type reference_options_t
 
     !> The reference solution: its report, its events, its energy balance and samples.
@@ -141,8 +137,6 @@ contains
             write (buf, '(a,g0.6,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
         else if (opts%maxfev < 1) then
             write (buf, '(a,i0,a)') "opts%maxfev = ", opts%maxfev, ": must be >= 1"
-        else if (opts%start /= 'auto' .and. opts%start /= 'hbm' .and. opts%start /= 'euler') then
-            buf = "opts%start = '"//trim(opts%start)//"': must be 'auto', 'hbm' or 'euler'"
         else
             return
         end if
@@ -153,7 +147,7 @@ contains
     !> samples x_start, v_start of one period at t_k = k T / ns, k = 0..ns-1 (ns x N [m],
     !> [m/s]; e.g. a weighted-residual or implicit Euler solution). The section time is
     !> taken where the contacts slip fastest in the start, the scales of x and v from its
-    !> amplitudes. opts%start is not used here (it is the strategy of
+    !> amplitudes (the start strategy, reference_start_options_t%start, is that of
     !> stickslip_reference_start, solve_reference_from_starts). Not converging is an outcome
     !> (res%converged = F and res%diagnosis, with a diagnostics item 'not_converged'); the
     !> checks of a converged orbit (energy balance, Coulomb's law) go to res%diagnostics.

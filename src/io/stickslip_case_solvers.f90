@@ -9,7 +9,8 @@ module stickslip_case_solvers
     use stickslip_hbm, only: validate_options
     use stickslip_checks, only: check_options_t, validate_check_options
     use stickslip_euler, only: euler_options_t, validate_euler_options
-    use stickslip_reference, only: reference_options_t, validate_reference_options
+    use stickslip_reference_start, only: reference_start_options_t, &
+        validate_reference_start_options
     use stickslip_namelist, only: nml_file_t
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string
     use stickslip_case_model, only: group_error
@@ -106,8 +107,8 @@ contains
     subroutine read_reference_group(nml, opts, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
-        !> Reference options (defaults for absent variables).
-        type(reference_options_t), intent(out) :: opts
+        !> Reference options and start strategy (defaults for absent variables).
+        type(reference_start_options_t), intent(out) :: opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: start
@@ -132,7 +133,7 @@ contains
             return
         end if
         opts%start = trim(start)
-        call validate_reference_options(opts, error)
+        call validate_reference_start_options(opts, error)
         if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['reference'])
     end subroutine read_reference_group
 

@@ -18,6 +18,16 @@ module stickslip_case_studies
     implicit none
     private
     public :: read_study_group, read_sweep_group, read_robustness_group
+    public :: sweep_run_options_t
+
+    !> The &sweep group of a case: the options of run_sweep and what the run of a case does
+    !> around it (the checkpoint, the picture), which run_sweep does not use.
+    type, extends(sweep_options_t) :: sweep_run_options_t
+        !> Resume from the checkpoint of an interrupted run of the same case (the driver).
+        logical :: resume = .true.
+        !> Draw frc.png with gnuplot (the command-line program).
+        logical :: plot = .true.
+    end type sweep_run_options_t
 
 contains
 
@@ -66,8 +76,8 @@ contains
         type(nml_file_t), intent(in) :: nml
         !> The model swept (for the checks of the parameter).
         type(model_t), intent(in) :: model
-        !> Sweep options (defaults for absent variables).
-        type(sweep_options_t), intent(out) :: opts
+        !> Sweep options with resume and plot (defaults for absent variables).
+        type(sweep_run_options_t), intent(out) :: opts
         !> The group is present.
         logical, intent(out) :: given
         !> Set on the first problem found.
@@ -123,7 +133,7 @@ contains
         if (allocated(error)) return
         call get_logical(nml, g, "plot", opts%plot, error)
         if (allocated(error)) return
-        call validate_sweep_options(model, opts, error)
+        call validate_sweep_options(model, opts%sweep_options_t, error)
         if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['sweep'])
     end subroutine read_sweep_group
 

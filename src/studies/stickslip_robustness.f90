@@ -19,9 +19,9 @@ module stickslip_robustness
     use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
     use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
-        validate_reference_options
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference, only: reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t, &
+        validate_reference_start_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_rho, only: automatic_rho
     use stickslip_progress, only: progress_t
@@ -233,7 +233,7 @@ contains
         !> Time-stepping options (steps_per_period is replaced).
         type(euler_options_t), intent(in) :: euler_opts
         !> Options of the reference.
-        type(reference_options_t), intent(in) :: ref_opts
+        type(reference_start_options_t), intent(in) :: ref_opts
         !> Robustness options.
         type(robustness_options_t), intent(in) :: opts
         !> The runs.
@@ -256,7 +256,7 @@ contains
         if (allocated(error)) return
         call validate_robustness_options(opts, error)
         if (allocated(error)) return
-        call validate_reference_options(ref_opts, error)
+        call validate_reference_start_options(ref_opts, error)
         if (allocated(error)) return
         call validate_options(hbm_opts, error)
         if (allocated(error)) return

@@ -13,9 +13,9 @@ module stickslip_study
     use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
     use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
-        validate_reference_options
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference, only: reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t, &
+        validate_reference_start_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_progress, only: progress_t
     implicit none
@@ -152,7 +152,7 @@ contains
         !> Time-stepping options (steps_per_period is replaced).
         type(euler_options_t), intent(in) :: euler
         !> Options of the reference.
-        type(reference_options_t), intent(in) :: ref_opts
+        type(reference_start_options_t), intent(in) :: ref_opts
         !> Study options.
         type(study_options_t), intent(in) :: opts
         !> The study.
@@ -172,7 +172,7 @@ contains
         if (allocated(error)) return
         call validate_study_options(opts, error)
         if (allocated(error)) return
-        call validate_reference_options(ref_opts, error)
+        call validate_reference_start_options(ref_opts, error)
         if (allocated(error)) return
         call validate_options(hbm, error)
         if (allocated(error)) return

@@ -8,7 +8,10 @@ module test_case_messages
     use stickslip_solution, only: hbm_options_t
     use stickslip_hbm, only: validate_options
     use stickslip_sweep, only: sweep_options_t, validate_sweep_options
-    use stickslip_case, only: case_t, read_case
+    use stickslip_reference, only: reference_options_t, validate_reference_options
+    use stickslip_reference_start, only: reference_start_options_t, &
+        validate_reference_start_options
+    use stickslip_case, only: case_t, read_case, sweep_run_options_t
     use stickslip_case_messages, only: case_message, model_group
     use stickslip_files, only: make_directory
     use testing, only: test_counter_t, check, check_error
@@ -38,6 +41,7 @@ contains
         call test_host_and_case_model(t)
         call test_host_and_case_options(t)
         call test_host_and_case_sweep(t)
+        call test_moved_options(t)
     end subroutine run_case_messages_tests
 
     subroutine expect(t, got, want, name)
@@ -179,6 +183,48 @@ contains
         call check_error(t, error, "case sweep: step < 0 rejected", .true., &
                          [character(len=80) :: path//": &sweep step, min_step, max_step: must"])
     end subroutine test_host_and_case_sweep
+
+    !> The start strategy lives in reference_start_options_t, resume and plot in
+    !> sweep_run_options_t; the case file still reads and checks them under their names.
+    subroutine test_moved_options(t)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_start_options_t) :: rs
+        type(reference_options_t) :: ro
+        type(sweep_run_options_t) :: sw
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        character(len=*), parameter :: path = scratch//"/messages_moved.nml"
+        call check(t, rs%start == 'auto' .and. sw%resume .and. sw%plot, &
+                   "moved options: defaults auto, resume, plot")
+        rs%start = 'cold'
+        call validate_reference_start_options(rs, error)
+        call check_error(t, error, "host start = 'cold' rejected", .true., &
+                         [character(len=40) :: "opts%start = 'cold'", "'euler'"])
+        ro = rs%reference_options_t
+        call validate_reference_options(ro, error)
+        call check_error(t, error, "the options of solve_reference know no start", .false.)
+        rs%start = 'euler'
+        rs%samples = 0
+        call validate_reference_start_options(rs, error)
+        call check_error(t, error, "host start: the base options still checked", .true., &
+                         [character(len=40) :: "opts%samples = 0"])
+        call write_lines(path, [character(len=120) :: good_system, good_forcing, good_friction, &
+                                "&reference start = 'euler', samples = 64 /", &
+                                "&sweep start = 4.0, stop = 5.0, resume = .false., plot = .false. /", &
+                                "&output directory = 'out' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "moved options: case read", .false.)
+        if (.not. allocated(error)) call check(t, c%reference%start == 'euler' .and. &
+                                               c%reference%samples == 64 .and. &
+                                               .not. c%sweep%resume .and. .not. c%sweep%plot &
+                                               .and. c%sweep%stop == 5.0_dp, &
+                                               "moved options: read from &reference, &sweep")
+        call write_lines(path, [character(len=120) :: good_system, good_forcing, good_friction, &
+                                "&reference samples = 0 /", "&output directory = 'out' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "case: &reference samples = 0 rejected", .true., &
+                         [character(len=60) :: path//": &reference samples = 0: must be >= 1"])
+    end subroutine test_moved_options
 
     subroutine write_lines(path, lines)
         character(len=*), intent(in) :: path

@@ -398,12 +398,12 @@ contains
         else if (size(opts%yscale) == n) then
             b%ys = opts%yscale
         else
-            call fatal_error(error, "continuation: yscale must have 1 or n entries", &
+            call fatal_error(error, "opts%yscale: must have 1 or n entries", &
                              stickslip_stat%input)
             return
         end if
         if (any(.not. (b%ys > 0.0_dp))) then
-            call fatal_error(error, "continuation: yscale must be > 0", stickslip_stat%input)
+            call fatal_error(error, "opts%yscale: must be > 0", stickslip_stat%input)
             return
         end if
         b%ps = abs(opts%stop - opts%start)

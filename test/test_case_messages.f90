@@ -11,6 +11,7 @@ module test_case_messages
     use stickslip_reference, only: reference_options_t, validate_reference_options
     use stickslip_reference_start, only: reference_start_options_t, &
         validate_reference_start_options
+    use stickslip_study, only: study_options_t, default_study_options, validate_study_options
     use stickslip_case, only: case_t, read_case, sweep_run_options_t
     use stickslip_case_messages, only: case_message, model_group
     use stickslip_files, only: make_directory
@@ -42,6 +43,7 @@ contains
         call test_host_and_case_options(t)
         call test_host_and_case_sweep(t)
         call test_moved_options(t)
+        call test_host_and_case_study(t)
     end subroutine run_case_messages_tests
 
     subroutine expect(t, got, want, name)
@@ -225,6 +227,29 @@ contains
         call check_error(t, error, "case: &reference samples = 0 rejected", .true., &
                          [character(len=60) :: path//": &reference samples = 0: must be >= 1"])
     end subroutine test_moved_options
+
+    !> A message that names two arguments: opts%samples of the study and hbm%samples of
+    !> run_study's weighted-residual options, &study samples and &hbm samples in a case file.
+    subroutine test_host_and_case_study(t)
+        type(test_counter_t), intent(inout) :: t
+        type(study_options_t) :: so
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        character(len=*), parameter :: path = scratch//"/messages_study.nml"
+        so = default_study_options()
+        so%samples = [-1]
+        call validate_study_options(so, error)
+        call check_error(t, error, "host study: samples = -1 rejected", .true., &
+                         [character(len=70) :: "opts%samples: every entry must be >= 0 (0: the "// &
+                          "hbm%samples)"])
+        call write_lines(path, [character(len=120) :: good_system, good_forcing, good_friction, &
+                                "&study harmonics = 5, samples = -1 /", &
+                                "&output directory = 'out' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "case study: samples = -1 rejected", .true., &
+                         [character(len=90) :: path//": &study samples: every entry must be "// &
+                          ">= 0 (0: the &hbm samples)"])
+    end subroutine test_host_and_case_study
 
     subroutine write_lines(path, lines)
         character(len=*), intent(in) :: path

@@ -208,8 +208,8 @@ contains
         call hbm_run(case, sol, ch, error)
         call release_lock(lock)
         if (present(checks)) checks = ch
-        call name_case_file(case, error, ['opts ', 'copts', 'ref  '], &
-                            ['hbm      ', 'hbm      ', 'reference'])
+        call name_case_file(case, error, ['opts ', 'copts', 'ref  ', 'basis'], &
+                            ['hbm      ', 'hbm      ', 'reference', 'hbm      '])
     end subroutine run_case
 
     subroutine hbm_run(case, sol, ch, error)
@@ -219,8 +219,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         logical :: wanted
-        call solve_and_check(case%model, case%hbm, case%checks, case%reference%reference_options_t, &
-                             sol, ch, error)
+        call solve_and_check(case%model, case%hbm, case%checks, &
+                             case%reference%reference_options_t, sol, ch, error)
         call after_method(case, error, wanted)
         if (.not. wanted) return
         if (sol%converged) then
@@ -301,8 +301,8 @@ contains
         if (allocated(error)) return
         call reference_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error, ['opts      ', 'hbm_opts  ', 'euler_opts'], &
-                            ['reference', 'hbm      ', 'euler    '])
+        call name_case_file(case, error, ['opts      ', 'hbm_opts  ', 'euler_opts', 'basis     '], &
+                            ['reference', 'hbm      ', 'euler    ', 'hbm      '])
     end subroutine run_reference_case
 
     subroutine reference_run(case, res, error)
@@ -349,8 +349,8 @@ contains
         if (allocated(error)) return
         call side_by_side_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error, ['hbm  ', 'euler', 'ref  '], &
-                            ['hbm      ', 'euler    ', 'reference'])
+        call name_case_file(case, error, ['hbm  ', 'euler', 'ref  ', 'basis'], &
+                            ['hbm      ', 'euler    ', 'reference', 'hbm      '])
     end subroutine run_side_by_side_case
 
     subroutine side_by_side_run(case, res, error)
@@ -412,8 +412,9 @@ contains
         if (allocated(error)) return
         call study_run(case, res, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error, ['hbm     ', 'euler   ', 'ref_opts', 'opts    '], &
-                            ['hbm      ', 'euler    ', 'reference', 'study    '])
+        call name_case_file(case, error, &
+                            ['hbm     ', 'euler   ', 'ref_opts', 'opts    ', 'basis   '], &
+                            ['hbm      ', 'euler    ', 'reference', 'study    ', 'hbm      '])
     end subroutine run_study_case
 
     subroutine study_run(case, res, error, progress)
@@ -471,8 +472,8 @@ contains
         if (allocated(error)) return
         call sweep_run(case, res, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error, ['hbm ', 'ref ', 'opts'], &
-                            ['hbm      ', 'reference', 'sweep    '])
+        call name_case_file(case, error, ['hbm  ', 'ref  ', 'opts ', 'basis'], &
+                            ['hbm      ', 'reference', 'sweep    ', 'hbm      '])
     end subroutine run_sweep_case
 
     subroutine sweep_run(case, res, error, progress)
@@ -537,8 +538,9 @@ contains
         if (allocated(error)) return
         call robustness_run(case, rows, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error, ['hbm_opts  ', 'euler_opts', 'ref_opts  ', 'opts      '], &
-                            ['hbm       ', 'euler     ', 'reference ', 'robustness'])
+        call name_case_file(case, error, &
+                            ['hbm_opts  ', 'euler_opts', 'ref_opts  ', 'opts      ', 'basis     '], &
+                            ['hbm       ', 'euler     ', 'reference ', 'robustness', 'hbm       '])
     end subroutine run_robustness_case
 
     subroutine robustness_run(case, rows, error, progress)
@@ -605,8 +607,9 @@ contains
 
     !> Put an error of the library in the words of the case: the arguments of the method
     !> called (`arguments`, e.g. 'opts') become the case-file group and variable (`groups`,
-    !> e.g. 'hbm'; model components map to &system, &forcing, &friction), and an input error
-    !> names the case file.
+    !> e.g. 'hbm'; model components map to &system, &forcing, &friction; 'basis', the harmonic
+    !> basis a weighted-residual solve builds from its options, maps to &hbm), and an input
+    !> error names the case file.
     subroutine name_case_file(case, error, arguments, groups)
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(inout) :: error

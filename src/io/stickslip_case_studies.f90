@@ -65,7 +65,8 @@ contains
         call get_real(nml, g, "repeat_below", opts%repeat_below, error)
         if (allocated(error)) return
         call validate_study_options(opts, error)
-        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['study'])
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts', 'hbm '], &
+                                                   ['study', 'hbm  '])
     end subroutine read_study_group
 
     !> Read &sweep (optional; `given` tells whether it is present): parameter, start and stop
@@ -181,7 +182,8 @@ contains
         call get_real(nml, g, "wrong_tol", opts%wrong_tol, error)
         if (allocated(error)) return
         call validate_robustness_options(opts, error)
-        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['robustness'])
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts    ', 'hbm_opts'], &
+                                                   ['robustness', 'hbm       '])
     end subroutine read_robustness_group
 
     !> The list, or an empty one for the single value 0 ("no runs of that method").

@@ -111,7 +111,7 @@ contains
             end if
             if (.not. placed) then
                 write (buf, '(a,i0,a,i0,a)') "model%force_harmonic(", i, ") = ", h, &
-                    ": not in the harmonic basis (check the harmonics and odd_only of the basis)"
+                    ": not in the harmonic basis (check basis%harmonics and basis%odd_only)"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if

@@ -115,7 +115,8 @@ contains
     end function default_robustness_options
 
     !> Check robustness options. Errors (stat input) name the
-    !> component ("opts%omegas: every entry must be finite and > 0").
+    !> component ("opts%omegas: every entry must be finite and > 0"); "hbm_opts%samples" in a
+    !> message is the samples of run_robustness's argument `hbm_opts`.
     subroutine validate_robustness_options(opts, error)
         !> Options to check.
         type(robustness_options_t), intent(in) :: opts
@@ -162,7 +163,7 @@ contains
         else if (.not. all(opts%rhos >= 0.0_dp .and. opts%rhos < huge(1.0_dp))) then
             msg = "opts%rhos: every entry must be finite and >= 0 (0: automatic)"
         else if (any(opts%samples < 0)) then
-            msg = "opts%samples: every entry must be >= 0 (0: the weighted-residual samples)"
+            msg = "opts%samples: every entry must be >= 0 (0: the hbm_opts%samples)"
         else if (any(opts%steps_per_period < 2)) then
             msg = "opts%steps_per_period: every entry must be >= 2"
         else if (opts%error_samples < 2 .or. opts%error_samples > max_error_samples) then

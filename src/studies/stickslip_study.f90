@@ -89,7 +89,8 @@ contains
     end function default_study_options
 
     !> Check study options. Errors (stat input) name the component
-    !> ("opts%repeats = 0: must be in 1..1000").
+    !> ("opts%repeats = 0: must be in 1..1000"); "hbm%samples" in a message is the samples
+    !> of run_study's argument `hbm`.
     subroutine validate_study_options(opts, error)
         !> Options to check.
         type(study_options_t), intent(in) :: opts
@@ -109,7 +110,7 @@ contains
         else if (size(opts%harmonics) + size(opts%steps_per_period) == 0) then
             msg = "opts%harmonics, opts%steps_per_period: both empty, nothing to study"
         else if (size(opts%harmonics) > 0 .and. size(opts%samples) == 0) then
-            msg = "opts%samples: empty (give 0 for the weighted-residual samples)"
+            msg = "opts%samples: empty (give 0 for the hbm%samples)"
         else if (max(size(opts%harmonics), size(opts%samples), size(opts%steps_per_period)) &
                  > max_list) then
             msg = "opts%harmonics, opts%samples, opts%steps_per_period: at most "//itoa(max_list)// &
@@ -119,7 +120,7 @@ contains
         else if (any(opts%harmonics > hbm_max_harmonics)) then
             msg = "opts%harmonics: every entry must be <= "//itoa(hbm_max_harmonics)
         else if (any(opts%samples < 0)) then
-            msg = "opts%samples: every entry must be >= 0 (0: the weighted-residual samples)"
+            msg = "opts%samples: every entry must be >= 0 (0: the hbm%samples)"
         else if (any(opts%samples > hbm_max_samples)) then
             msg = "opts%samples: every entry must be <= "//itoa(hbm_max_samples)//" (2**20)"
         else if (any(opts%steps_per_period < 2)) then

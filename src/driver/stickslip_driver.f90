@@ -9,7 +9,10 @@
 !> does not write are removed, and so is the earlier summary.nml, written last (not the
 !> checkpoint of a sweep, nor any other file). An input error leaves the
 !> directory's files untouched. The findings (diagnostics) of the methods are gathered into
-!> the summary (trusted, warnings) and into run_result_t for the caller to report.
+!> the summary (trusted, warnings) and into run_result_t for the caller to report. An error
+!> of a method names the method's arguments ("opts%tol = ...", "model%mu(1) = ..."); the
+!> run_*_case procedures put it in case-file words ("&sweep tol = ...", "&friction mu(1)"),
+!> an input error with the case file's path.
 module stickslip_driver
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_diagnostics, only: diagnostics_t

@@ -1,7 +1,8 @@
 !> Readers of the case-file groups of the solvers and the run: &hbm, &euler, &reference,
 !> &run, &output. Each reads one group of a parsed namelist file into its options type
-!> (defaults where a variable is absent) and validates it with the library's validator, the
-!> message prefixed with the file path.
+!> (defaults where a variable is absent) and validates it with the library's validator, whose
+!> message names the argument ("opts%harmonics = ...") and is put in case-file words with the
+!> file path ("<path>: &hbm harmonics = ...", stickslip_case_messages).
 module stickslip_case_solvers
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa

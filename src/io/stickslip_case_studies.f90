@@ -1,7 +1,10 @@
 !> Readers of the case-file groups of the studies: &study, &sweep, &robustness. Each reads one
 !> group of a parsed namelist file into its options type (defaults where a variable or the
-!> group is absent) and validates it with the library's validator, the message prefixed with
-!> the file path.
+!> group is absent) and validates it with the library's validator, whose message names the
+!> argument ("opts%step, opts%min_step ...") and is put in case-file words with the file path
+!> ("<path>: &sweep step, min_step ...", stickslip_case_messages). &sweep is read into a
+!> sweep_run_options_t: the options of run_sweep plus resume and plot, which only the run of
+!> a case uses.
 module stickslip_case_studies
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type

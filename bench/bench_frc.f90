@@ -55,7 +55,8 @@ contains
         cv%sweep%max_points = 20000
         do r = 1, repeats
             call cpu_time(t0)
-            call run_sweep(cv%model, cv%hbm, cv%reference, cv%sweep, res, error)
+            call run_sweep(cv%model, cv%hbm, cv%reference%reference_options_t, &
+                           cv%sweep%sweep_options_t, res, error)
             call cpu_time(t1)
             if (allocated(error)) then
                 write (output_unit, '(a)') trim(names(variant))//": error: "//error%message

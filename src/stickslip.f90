@@ -25,7 +25,7 @@ module stickslip
     use stickslip_flow, only: event_name
     use stickslip_stability, only: floquet_t, periodic_stability, verify_periodicity
     ! checks of a solution, comparisons
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference_start, only: reference_start_options_t, solve_reference_from_starts
     use stickslip_checks, only: check_options_t, hbm_checks_t, solve_and_check
     use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance
     use stickslip_compare, only: comparison_t, compare_samples
@@ -47,7 +47,7 @@ module stickslip
     public :: hbm_options_t, hbm_solution_t, solve_periodic, validate_options, automatic_rho
     public :: euler_options_t, euler_result_t, integrate_euler
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference, &
-              solve_reference_from_starts, event_name
+              reference_start_options_t, solve_reference_from_starts, event_name
     public :: floquet_t, periodic_stability, verify_periodicity
     public :: check_options_t, hbm_checks_t, solve_and_check
     public :: truncation_t, estimate_truncation, solve_to_tolerance

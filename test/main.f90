@@ -27,6 +27,7 @@ program tester
     use test_cli, only: run_cli_tests
     use test_api, only: run_api_tests
     use test_trust, only: run_trust_tests
+    use test_case_messages, only: run_case_messages_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -62,6 +63,7 @@ program tester
     if (selected("minpack")) call run_minpack_tests(t)
     if (selected("cli")) call run_cli_tests(t)
     if (selected("api")) call run_api_tests(t)
+    if (selected("case_messages")) call run_case_messages_tests(t)
     if (selected("trust")) call run_trust_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"

@@ -3,8 +3,8 @@
 !> of &run method). Checks that the names a host needs are there and agree with each other.
 module test_api
     use stickslip, only: dp, error_type, model_t, hbm_options_t, hbm_solution_t, &
-        solve_periodic, check_options_t, hbm_checks_t, solve_and_check, reference_options_t, &
-        reference_result_t, solve_reference_from_starts, level_warning, level_untrusted, &
+        solve_periodic, check_options_t, hbm_checks_t, solve_and_check, &
+        reference_start_options_t, reference_result_t, solve_reference_from_starts, level_warning, level_untrusted, &
         stickslip_version, stickslip_thread_safe
     use stickslip_io, only: case_t, read_case, run_result_t, run_method, method_names
     use fixtures, only: seed_model, enter_project_root, project_path
@@ -32,7 +32,7 @@ contains
         type(hbm_solution_t) :: sol
         type(check_options_t) :: copts
         type(hbm_checks_t) :: checks
-        type(reference_options_t) :: ropts
+        type(reference_start_options_t) :: ropts
         type(reference_result_t) :: ref
         type(error_type), allocatable :: error
         real(dp) :: amp_hbm, amp_ref
@@ -43,7 +43,7 @@ contains
         call check_error(t, error, "api: solve_periodic", .false.)
         if (allocated(error)) return
         call check(t, sol%converged, "api: seed converged")
-        call solve_and_check(model, opts, copts, ropts, sol, checks, error)
+        call solve_and_check(model, opts, copts, ropts%reference_options_t, sol, checks, error)
         call check_error(t, error, "api: solve_and_check", .false.)
         if (allocated(error)) return
         call check(t, max(sol%diagnostics%worst(), checks%diagnostics%worst()) < level_warning, &

@@ -185,9 +185,9 @@ contains
         type(error_type), allocatable :: error
         call new_basis(b, 30, .false., 60, error)
         call check_error(t, error, "too few samples rejected", .true., &
-                         [character(len=40) :: "&hbm samples", "too few samples"])
+                         [character(len=40) :: "samples = 60", "too few samples"])
         call new_basis(b, -1, .false., 60, error)
         call check_error(t, error, "negative harmonics rejected", .true., &
-                         [character(len=40) :: "&hbm harmonics"])
+                         [character(len=40) :: "harmonics = -1"])
     end subroutine test_bad_sizes
 end module test_basis

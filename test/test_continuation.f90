@@ -344,7 +344,7 @@ contains
         end do
     end subroutine test_sweep_amplitude
 
-    !> Bad sweep options are input errors naming &sweep.
+    !> Bad sweep options are input errors naming the argument opts%...
     subroutine test_bad_sweep(t)
         type(test_counter_t), intent(inout) :: t
         type(model_t) :: m
@@ -359,9 +359,9 @@ contains
         so%stop = 2.0_dp
         call run_sweep(m, ho, ro, so, res, error)
         call check_error(t, error, "bad sweep: unknown parameter", .true.)
-        if (allocated(error)) call check(t, index(error%message, "&sweep parameter") > 0 .and. &
+        if (allocated(error)) call check(t, index(error%message, "opts%parameter") > 0 .and. &
                                          error%stat == stickslip_stat%input, &
-                                         "bad sweep: names &sweep parameter", error%message)
+                                         "bad sweep: names opts%parameter", error%message)
         so%parameter = 'omega'
         so%start = -1.0_dp
         call run_sweep(m, ho, ro, so, res, error)

@@ -11,7 +11,7 @@ module test_exact_reference
     use stickslip_hbm, only: solve_periodic
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
     use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
     use stickslip_flow, only: flow_t, new_flow, event_stick, event_slip
     use fixtures, only: seed_model, chain_model
     use testing, only: test_counter_t, check, check_close, check_error
@@ -45,7 +45,7 @@ contains
         type(model_t), intent(in) :: m
         type(reference_result_t), intent(out) :: res
         character(len=*), intent(in) :: name
-        type(reference_options_t) :: o
+        type(reference_start_options_t) :: o
         type(error_type), allocatable :: error
         real(dp) :: balance
         o%samples = 512
@@ -232,7 +232,7 @@ contains
     subroutine test_linear_limit(t)
         type(test_counter_t), intent(inout) :: t
         type(model_t) :: m
-        type(reference_options_t) :: o
+        type(reference_start_options_t) :: o
         type(reference_result_t) :: res
         type(error_type), allocatable :: error
         complex(dp) :: z(2, 2), det, xc(2)
@@ -264,7 +264,7 @@ contains
     subroutine test_stuck_limit(t)
         type(test_counter_t), intent(inout) :: t
         type(model_t) :: m
-        type(reference_options_t) :: o
+        type(reference_start_options_t) :: o
         type(reference_result_t) :: res
         type(error_type), allocatable :: error
         complex(dp) :: xc
@@ -292,22 +292,22 @@ contains
         call check_close(t, res%stick_fraction(1), 1.0_dp, "reference stuck: stuck all period")
     end subroutine test_stuck_limit
 
-    !> Invalid options are input errors naming the &reference variable.
+    !> Invalid options are input errors naming the options argument (opts%...).
     subroutine test_bad_options(t)
         type(test_counter_t), intent(inout) :: t
-        type(reference_options_t) :: o
+        type(reference_start_options_t) :: o
         type(reference_result_t) :: res
         type(error_type), allocatable :: error
         o%samples = 0
         call solve_reference_from_starts(seed_model(), o, res, error)
         call check_error(t, error, "reference samples = 0 rejected", .true., &
-                         [character(len=20) :: "&reference samples"])
+                         [character(len=20) :: "opts%samples"])
         if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
                                          "reference bad options: stat input")
-        o = reference_options_t()
+        o = reference_start_options_t()
         o%start = 'cold'
         call solve_reference_from_starts(seed_model(), o, res, error)
         call check_error(t, error, "reference start = 'cold' rejected", .true., &
-                         [character(len=20) :: "&reference start"])
+                         [character(len=20) :: "opts%start"])
     end subroutine test_bad_options
 end module test_exact_reference

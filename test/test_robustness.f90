@@ -10,7 +10,7 @@ module test_robustness
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
     use stickslip_euler, only: euler_options_t
-    use stickslip_reference, only: reference_options_t
+    use stickslip_reference_start, only: reference_start_options_t
     use stickslip_rho, only: automatic_rho, contact_mobility, rho_fraction
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         validate_robustness_options, default_robustness_options, robustness_samples
@@ -103,13 +103,13 @@ contains
         o%rho = -0.1_dp
         call validate_options(o, error)
         call check_error(t, error, "rho < 0 rejected", .true., &
-                         [character(len=20) :: "&hbm rho", ">= 0", "automatic"])
+                         [character(len=20) :: "opts%rho", ">= 0", "automatic"])
         o%rho = ieee_value(1.0_dp, ieee_quiet_nan)
         call validate_options(o, error)
-        call check_error(t, error, "rho NaN rejected", .true., [character(len=20) :: "&hbm rho"])
+        call check_error(t, error, "rho NaN rejected", .true., [character(len=20) :: "opts%rho"])
         o%rho = ieee_value(1.0_dp, ieee_positive_inf)
         call validate_options(o, error)
-        call check_error(t, error, "rho Inf rejected", .true., [character(len=20) :: "&hbm rho"])
+        call check_error(t, error, "rho Inf rejected", .true., [character(len=20) :: "opts%rho"])
         m = seed_model()
         o = hbm_options_t()
         o%harmonics = 10
@@ -207,7 +207,7 @@ contains
         r%rhos = [0.2_dp, -1.0_dp]
         call validate_robustness_options(r, error)
         call check_error(t, error, "robustness: negative rho rejected", .true., &
-                         [character(len=20) :: "&robustness rhos"])
+                         [character(len=20) :: "opts%rhos"])
         r = default_robustness_options()
         r%samples = [16]
         call validate_robustness_options(r, error)
@@ -232,7 +232,7 @@ contains
         type(error_type), allocatable :: error
         type(hbm_options_t) :: ho
         type(euler_options_t) :: eo
-        type(reference_options_t) :: ro
+        type(reference_start_options_t) :: ro
         integer :: k, u, nline, stat
         character(len=400) :: line
         logical :: ok

@@ -156,7 +156,8 @@ contains
         call check_error(t, error, "resume: read case", .false.)
         if (allocated(error)) return
         call make_directory(dir, error)
-        call run_sweep(c%model, c%hbm, c%reference, c%sweep, whole, error)
+        call run_sweep(c%model, c%hbm, c%reference%reference_options_t, c%sweep%sweep_options_t, &
+                       whole, error)
         call check_error(t, error, "resume: uninterrupted run", .false.)
         if (allocated(error)) return
         killer%directory = dir
@@ -164,7 +165,8 @@ contains
         killer%stop_after = 4
         ! a checkpoint after every point, so that the kill after point 4 finds 4 saved
         killer%interval = 0.0_dp
-        call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
+        call run_sweep(c%model, c%hbm, c%reference%reference_options_t, c%sweep%sweep_options_t, &
+                       cut, error, observer=killer)
         call check_error(t, error, "resume: the killed run stops", .true.)
         inquire (file=dir//"/"//checkpoint_name, exist=exists)
         call check(t, exists, "resume: the checkpoint survives the kill")
@@ -184,7 +186,8 @@ contains
         ! a checkpoint of another case
         killer%stop_after = 2
         killer%last = -1
-        call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
+        call run_sweep(c%model, c%hbm, c%reference%reference_options_t, c%sweep%sweep_options_t, &
+                       cut, error, observer=killer)
         c2 = c
         c2%model%mu = 0.5_dp
         call run_sweep_case(c2, resumed, error)
@@ -224,7 +227,8 @@ contains
         killer%fingerprint = case_fingerprint(c)
         killer%stop_after = 3
         killer%interval = 0.0_dp
-        call run_sweep(c%model, c%hbm, c%reference, c%sweep, cut, error, observer=killer)
+        call run_sweep(c%model, c%hbm, c%reference%reference_options_t, c%sweep%sweep_options_t, &
+                       cut, error, observer=killer)
         ! the checkpoint's lines
         allocate (saved(0))
         open (newunit=u, file=dir//"/"//checkpoint_name, status='old', action='read', &

@@ -8,7 +8,7 @@ module test_truncation
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
     use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance, &
         coarse_harmonics
     use fixtures, only: seed_model
@@ -57,7 +57,7 @@ contains
         integer, parameter :: hs(5) = [5, 10, 20, 40, 80]
         real(dp), parameter :: tol = 2.0e-2_dp
         type(model_t) :: m
-        type(reference_options_t) :: ro
+        type(reference_start_options_t) :: ro
         type(reference_result_t) :: ref
         type(hbm_options_t) :: o
         type(hbm_solution_t) :: sol
@@ -230,7 +230,7 @@ contains
         o%harmonics = 5
         o%samples = 64
         call solve_to_tolerance(seed_model(), o, 0.0_dp, 20, sol, est, error)
-        call check_error(t, error, "truncation: tol = 0 rejected", .true., ["tolerance"])
+        call check_error(t, error, "truncation: tol = 0 rejected", .true., ["tol = 0"])
         call solve_to_tolerance(seed_model(), o, 1.0e-2_dp, 4, sol, est, error)
         call check_error(t, error, "truncation: max_harmonics < harmonics rejected", .true., &
                          ["max_harmonics"])

@@ -11,7 +11,7 @@ module test_trust
     use stickslip_hbm, only: solve_periodic
     use stickslip_euler, only: euler_options_t
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
     use stickslip_checks, only: check_options_t, hbm_checks_t, solve_and_check
     use stickslip_compare, only: comparison_t
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side, disagreement
@@ -44,7 +44,7 @@ contains
     subroutine test_sweep_tally(t)
         type(test_counter_t), intent(inout) :: t
         type(hbm_options_t) :: ho
-        type(reference_options_t) :: ro
+        type(reference_start_options_t) :: ro
         type(sweep_options_t) :: so
         type(sweep_result_t) :: res
         type(model_t) :: m
@@ -61,7 +61,7 @@ contains
         so%max_points = 8
         so%stability = .false.
         so%truncation = .true.
-        call run_sweep(m, ho, ro, so, res, error)
+        call run_sweep(m, ho, ro%reference_options_t, so, res, error)
         call check_error(t, error, "sweep tally: no error", .false.)
         if (allocated(error)) return
         bad = 0
@@ -113,7 +113,7 @@ contains
     !> crashed with "Attempting to allocate already allocated variable 'res'".
     subroutine test_reference_failed_starts(t)
         type(test_counter_t), intent(inout) :: t
-        type(reference_options_t) :: o
+        type(reference_start_options_t) :: o
         type(reference_result_t) :: res
         type(model_t) :: m
         type(error_type), allocatable :: error
@@ -122,12 +122,12 @@ contains
         call solve_reference_from_starts(seed_model(), o, res, error)
         call outcome("maxfev = 1")
 
-        o = reference_options_t()
+        o = reference_start_options_t()
         o%tol = 1.0e-300_dp
         call solve_reference_from_starts(seed_model(), o, res, error)
         call outcome("tol = 1e-300")
 
-        o = reference_options_t()
+        o = reference_start_options_t()
         m = seed_model()
         m%omega = 1.0e-5_dp
         o%maxfev = 1
@@ -136,7 +136,7 @@ contains
         call check(t, .not. res%converged .eqv. res%diagnostics%has("not_converged"), &
                    "reference omega = 1e-5: not converged <=> diagnosis")
 
-        o = reference_options_t()
+        o = reference_start_options_t()
         o%maxfev = 1
         o%samples = 64
         call solve_reference_from_starts(beam_model(), o, res, error)
@@ -167,14 +167,14 @@ contains
         type(test_counter_t), intent(inout) :: t
         type(hbm_options_t) :: ho
         type(hbm_solution_t) :: sol
-        type(reference_options_t) :: o
+        type(reference_start_options_t) :: o
         type(reference_result_t) :: a, b
         type(error_type), allocatable :: error
         ho%rho = 0.2_dp
         call solve_periodic(seed_model(), ho, sol, error)
         if (allocated(error)) return
         o%samples = 256
-        call solve_reference(seed_model(), o, sol%x, sol%v, a, error, start_name='hbm')
+        call solve_reference(seed_model(), o%reference_options_t, sol%x, sol%v, a, error, start_name='hbm')
         call check_error(t, error, "solve_reference from given samples: no error", .false.)
         if (allocated(error)) return
         call solve_reference_from_starts(seed_model(), o, b, error, hbm_opts=ho)
@@ -187,7 +187,7 @@ contains
                              atol=1.0e-9_dp*maxval(abs(b%x)))
         call check(t, .not. (a%diagnostics%worst() >= level_warning), &
                    "converged reference: energy balance and Coulomb's law pass")
-        call solve_reference(seed_model(), o, sol%x(:, 1:1), sol%v, a, error)
+        call solve_reference(seed_model(), o%reference_options_t, sol%x(:, 1:1), sol%v, a, error)
         call check_error(t, error, "solve_reference: a start of the wrong shape", .true., &
                          [character(len=8) :: "ns x N"])
     end subroutine test_reference_given_start
@@ -285,7 +285,7 @@ contains
         type(hbm_options_t) :: ho
         type(hbm_solution_t) :: sol
         type(euler_options_t) :: eo
-        type(reference_options_t) :: ro
+        type(reference_start_options_t) :: ro
         type(reference_result_t) :: ref
         type(side_by_side_t) :: all
         type(error_type), allocatable :: error
@@ -361,7 +361,7 @@ contains
         type(test_counter_t), intent(inout) :: t
         type(hbm_options_t) :: ho
         type(check_options_t) :: co
-        type(reference_options_t) :: ro
+        type(reference_start_options_t) :: ro
         type(euler_options_t) :: eo
         type(hbm_solution_t) :: sol
         type(hbm_checks_t) :: checks
@@ -370,7 +370,7 @@ contains
         ho%harmonics = 15
         ho%samples = 31
         ho%rho = 0.2_dp
-        call solve_and_check(seed_model(), ho, co, ro, sol, checks, error)
+        call solve_and_check(seed_model(), ho, co, ro%reference_options_t, sol, checks, error)
         call check_error(t, error, "odd samples: no error", .false.)
         if (allocated(error)) return
         call check(t, checks%diagnostics%has("odd_samples"), "odd samples: 'odd_samples'")
@@ -394,14 +394,14 @@ contains
         type(test_counter_t), intent(inout) :: t
         type(hbm_options_t) :: ho
         type(check_options_t) :: co
-        type(reference_options_t) :: ro
+        type(reference_start_options_t) :: ro
         type(euler_options_t) :: eo
         type(hbm_solution_t) :: sol
         type(hbm_checks_t) :: checks
         type(side_by_side_t) :: all
         type(error_type), allocatable :: error
         ho%rho = 0.2_dp
-        call solve_and_check(seed_model(), ho, co, ro, sol, checks, error)
+        call solve_and_check(seed_model(), ho, co, ro%reference_options_t, sol, checks, error)
         if (allocated(error)) return
         call check(t, sol%diagnostics%worst() < level_warning .and. &
                    checks%diagnostics%worst() < level_warning, "seed: no warning", &
@@ -409,7 +409,7 @@ contains
         call check(t, sol%coulomb_check < 0.05_dp .and. sol%max_force_ratio < 1.1_dp, &
                    "seed: Coulomb dissipation and force limit within the margins")
         ho = hbm_options_t()
-        call solve_and_check(chain_model(), ho, co, ro, sol, checks, error)
+        call solve_and_check(chain_model(), ho, co, ro%reference_options_t, sol, checks, error)
         if (allocated(error)) return
         call check(t, sol%diagnostics%worst() < level_warning .and. &
                    checks%diagnostics%worst() < level_warning, "chain: no warning", &

@@ -63,7 +63,7 @@ module stickslip_checks
 contains
 
     !> Check the check options against the solver options `opts`. Errors (stat input) name
-    !> the &hbm variable.
+    !> the component ("copts%max_harmonics = 3: must be 0 (automatic) or >= harmonics = 5").
     subroutine validate_check_options(copts, opts, error)
         !> Check options.
         type(check_options_t), intent(in) :: copts
@@ -75,17 +75,17 @@ contains
         integer, parameter :: max_verify_periods = 1000
         character(len=200) :: buf
         if (.not. (copts%harmonics_tol >= 0.0_dp .and. copts%harmonics_tol < 1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&hbm harmonics_tol = ", copts%harmonics_tol, &
+            write (buf, '(a,g0.6,a)') "copts%harmonics_tol = ", copts%harmonics_tol, &
                 ": must be in [0, 1) (0: keep harmonics)"
         else if (copts%max_harmonics < 0 .or. (copts%max_harmonics > 0 .and. &
                                                 copts%max_harmonics < opts%harmonics)) then
-            write (buf, '(a,i0,a,i0,a)') "&hbm max_harmonics = ", copts%max_harmonics, &
+            write (buf, '(a,i0,a,i0,a)') "copts%max_harmonics = ", copts%max_harmonics, &
                 ": must be 0 (automatic) or >= harmonics = ", opts%harmonics, ""
         else if (copts%max_harmonics > hbm_max_harmonics) then
-            write (buf, '(a,i0,a,i0)') "&hbm max_harmonics = ", copts%max_harmonics, &
+            write (buf, '(a,i0,a,i0)') "copts%max_harmonics = ", copts%max_harmonics, &
                 ": must be <= ", hbm_max_harmonics
         else if (copts%verify_periods < 0 .or. copts%verify_periods > max_verify_periods) then
-            write (buf, '(a,i0,a,i0)') "&hbm verify_periods = ", copts%verify_periods, &
+            write (buf, '(a,i0,a,i0)') "copts%verify_periods = ", copts%verify_periods, &
                 ": must be in 0..", max_verify_periods
         else
             return

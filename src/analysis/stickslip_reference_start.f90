@@ -11,7 +11,7 @@
 module stickslip_reference_start
     use stickslip_kinds, only: dp
     use stickslip_diagnostics, only: level_untrusted
-    use stickslip_error, only: error_type
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -20,9 +20,33 @@ module stickslip_reference_start
         validate_reference_options
     implicit none
     private
+    public :: reference_start_options_t, validate_reference_start_options
     public :: solve_reference_from_starts
 
+    !> Options of the exact reference with its start strategy (&reference): the options of
+    !> solve_reference and the start, which only solve_reference_from_starts uses.
+    type, extends(reference_options_t) :: reference_start_options_t
+        !> Start of the shooting: 'auto' (the weighted residual, then implicit Euler if the
+        !> shooting from it fails), 'hbm' or 'euler'.
+        character(len=8) :: start = 'auto'
+    end type reference_start_options_t
+
 contains
+
+    !> Check reference options and the start strategy. Errors (stat input) name the
+    !> component ("opts%start = 'cold': must be 'auto', 'hbm' or 'euler'", and those of
+    !> validate_reference_options).
+    subroutine validate_reference_start_options(opts, error)
+        !> Options to check.
+        type(reference_start_options_t), intent(in) :: opts
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        call validate_reference_options(opts%reference_options_t, error)
+        if (allocated(error)) return
+        if (opts%start /= 'auto' .and. opts%start /= 'hbm' .and. opts%start /= 'euler') &
+            call fatal_error(error, "opts%start = '"//trim(opts%start)// &
+                             "': must be 'auto', 'hbm' or 'euler'", stickslip_stat%input)
+    end subroutine validate_reference_start_options
 
     !> The exact periodic solution of `model`, shot from the starts opts%start asks for
     !> ('auto': the weighted residual, then implicit Euler; 'hbm'; 'euler'). A start comes
@@ -41,7 +65,7 @@ contains
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Reference options (opts%start chooses the starts).
-        type(reference_options_t), intent(in) :: opts
+        type(reference_start_options_t), intent(in) :: opts
         !> The reference solution.
         type(reference_result_t), intent(out) :: res
         !> Set on invalid input or numerical breakdown.
@@ -67,7 +91,7 @@ contains
 
         call validate_model(model, error)
         if (allocated(error)) return
-        call validate_reference_options(opts, error)
+        call validate_reference_start_options(opts, error)
         if (allocated(error)) return
         notes = ""
         tried = ""
@@ -159,7 +183,8 @@ contains
         subroutine shoot(name, xs, vs)
             character(len=*), intent(in) :: name
             real(dp), intent(in) :: xs(:, :), vs(:, :)
-            call solve_reference(model, opts, xs, vs, trial, error, start_name=name)
+            call solve_reference(model, opts%reference_options_t, xs, vs, trial, error, &
+                                 start_name=name)
             if (allocated(error)) return
             shot = .true.
             nfev = nfev + trial%nfev

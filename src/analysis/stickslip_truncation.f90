@@ -226,7 +226,7 @@ contains
         character(len=200) :: buf
 
         if (.not. (tol > 0.0_dp .and. tol < 1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "truncation tolerance = ", tol, ": must be in (0, 1)"
+            write (buf, '(a,g0.6,a)') "tol = ", tol, ": must be in (0, 1)"
             call fatal_error(error, trim(buf), stickslip_stat%input)
             return
         end if

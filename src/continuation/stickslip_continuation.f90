@@ -131,7 +131,8 @@ module stickslip_continuation
 
 contains
 
-    !> Check continuation options. Errors (stat input) name the &sweep variable.
+    !> Check continuation options. Errors (stat input) name the component
+    !> ("opts%max_points = 1: must be >= 2").
     subroutine validate_continuation_options(opts, error)
         !> Options to check.
         type(continuation_options_t), intent(in) :: opts
@@ -139,21 +140,22 @@ contains
         type(error_type), allocatable, intent(out) :: error
         character(len=200) :: buf
         if (.not. (ieee_is_finite(opts%start) .and. ieee_is_finite(opts%stop))) then
-            buf = "&sweep start, stop: must be finite numbers"
+            buf = "opts%start, opts%stop: must be finite numbers"
         else if (opts%start == opts%stop) then
-            buf = "&sweep start = stop: the range is empty"
+            buf = "opts%start = opts%stop: the range is empty"
         else if (.not. (opts%step > 0.0_dp .and. opts%min_step > 0.0_dp .and. &
                         opts%max_step > 0.0_dp)) then
-            buf = "&sweep step, min_step, max_step: must be > 0"
+            buf = "opts%step, opts%min_step, opts%max_step: must be > 0"
         else if (opts%min_step > opts%step .or. opts%step > opts%max_step) then
-            write (buf, '(a,3(g0.4,a))') "&sweep step: need min_step <= step <= max_step (", &
+            write (buf, '(a,3(g0.4,a))') "opts%step: need opts%min_step <= opts%step <= "// &
+                "opts%max_step (", &
                 opts%min_step, " <= ", opts%step, " <= ", opts%max_step, ")"
         else if (opts%max_points < 2) then
-            write (buf, '(a,i0,a)') "&sweep max_points = ", opts%max_points, ": must be >= 2"
+            write (buf, '(a,i0,a)') "opts%max_points = ", opts%max_points, ": must be >= 2"
         else if (opts%max_failures < 1) then
-            write (buf, '(a,i0,a)') "&sweep max_failures = ", opts%max_failures, ": must be >= 1"
+            write (buf, '(a,i0,a)') "opts%max_failures = ", opts%max_failures, ": must be >= 1"
         else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
-            write (buf, '(a,g0.4,a)') "&sweep tol = ", opts%tol, ": must be in (0, 1)"
+            write (buf, '(a,g0.4,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
         else
             return
         end if
@@ -396,12 +398,12 @@ contains
         else if (size(opts%yscale) == n) then
             b%ys = opts%yscale
         else
-            call fatal_error(error, "continuation: yscale must have 1 or n entries", &
+            call fatal_error(error, "opts%yscale: must have 1 or n entries", &
                              stickslip_stat%input)
             return
         end if
         if (any(.not. (b%ys > 0.0_dp))) then
-            call fatal_error(error, "continuation: yscale must be > 0", stickslip_stat%input)
+            call fatal_error(error, "opts%yscale: must be > 0", stickslip_stat%input)
             return
         end if
         b%ps = abs(opts%stop - opts%start)

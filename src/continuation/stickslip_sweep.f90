@@ -56,10 +56,6 @@ module stickslip_sweep
         logical :: stability = .true.
         !> Harmonic truncation error estimate of every point (stickslip_truncation).
         logical :: truncation = .true.
-        !> Resume from the checkpoint of an interrupted run of the same case.
-        logical :: resume = .true.
-        !> Draw frc.png with gnuplot (CLI only).
-        logical :: plot = .true.
     end type sweep_options_t
 
     !> One point of a forced-response curve.
@@ -166,7 +162,8 @@ module stickslip_sweep
 
 contains
 
-    !> Check sweep options against the model. Errors (stat input) name the &sweep variable.
+    !> Check sweep options against the model. Errors (stat input) name the component
+    !> ("opts%step, opts%min_step, ...: must be >= 0").
     subroutine validate_sweep_options(model, opts, error)
         !> The model swept.
         type(model_t), intent(in) :: model
@@ -181,29 +178,29 @@ contains
         select case (opts%parameter)
         case ('omega')
             if (.not. (min(opts%start, opts%stop) > 0.0_dp)) &
-                buf = "&sweep start, stop: omega must stay > 0"
+                buf = "opts%start, opts%stop: omega must stay > 0"
         case ('mu', 'normal_load')
             if (.not. (min(opts%start, opts%stop) >= 0.0_dp)) &
-                buf = "&sweep start, stop: "//trim(opts%parameter)//" must stay >= 0"
-            if (model%ncontact() == 0) buf = "&sweep parameter = '"//trim(opts%parameter)// &
+                buf = "opts%start, opts%stop: "//trim(opts%parameter)//" must stay >= 0"
+            if (model%ncontact() == 0) buf = "opts%parameter = '"//trim(opts%parameter)// &
                                              "': the model has no contact"
         case ('force_amplitude')
             if (model%nforce() == 0) then
-                buf = "&sweep parameter = 'force_amplitude': the model has no forcing term"
+                buf = "opts%parameter = 'force_amplitude': the model has no forcing term"
             else if (model%force_amplitude(1) == 0.0_dp) then
-                buf = "&sweep parameter = 'force_amplitude': force_amplitude(1) is 0, so the "// &
+                buf = "opts%parameter = 'force_amplitude': force_amplitude(1) is 0, so the "// &
                       "forcing terms cannot be scaled from it"
             end if
         case default
-            buf = "&sweep parameter = '"//trim(opts%parameter)// &
+            buf = "opts%parameter = '"//trim(opts%parameter)// &
                   "': must be 'omega', 'force_amplitude', 'mu' or 'normal_load'"
         end select
         if (len_trim(buf) == 0) then
             if (opts%step < 0.0_dp .or. opts%min_step < 0.0_dp .or. opts%max_step < 0.0_dp) &
-                buf = "&sweep step, min_step, max_step: must be >= 0 (0: automatic)"
+                buf = "opts%step, opts%min_step, opts%max_step: must be >= 0 (0: automatic)"
         end if
         if (len_trim(buf) == 0 .and. opts%max_points > max_points) &
-            write (buf, '(a,i0,a,i0)') "&sweep max_points = ", opts%max_points, &
+            write (buf, '(a,i0,a,i0)') "opts%max_points = ", opts%max_points, &
             ": must be <= ", max_points
         if (len_trim(buf) > 0) then
             call fatal_error(error, trim(buf), stickslip_stat%input)

@@ -9,12 +9,16 @@
 !> does not write are removed, and so is the earlier summary.nml, written last (not the
 !> checkpoint of a sweep, nor any other file). An input error leaves the
 !> directory's files untouched. The findings (diagnostics) of the methods are gathered into
-!> the summary (trusted, warnings) and into run_result_t for the caller to report.
+!> the summary (trusted, warnings) and into run_result_t for the caller to report. An error
+!> of a method names the method's arguments ("opts%tol = ...", "model%mu(1) = ..."); the
+!> run_*_case procedures put it in case-file words ("&sweep tol = ...", "&friction mu(1)"),
+!> an input error with the case file's path.
 module stickslip_driver
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t
+    use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t, solve_and_check
     use stickslip_euler, only: euler_result_t, integrate_euler
@@ -207,7 +211,8 @@ contains
         call hbm_run(case, sol, ch, error)
         call release_lock(lock)
         if (present(checks)) checks = ch
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['opts ', 'copts', 'ref  ', 'basis'], &
+                            ['hbm      ', 'hbm      ', 'reference', 'hbm      '])
     end subroutine run_case
 
     subroutine hbm_run(case, sol, ch, error)
@@ -217,7 +222,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         logical :: wanted
-        call solve_and_check(case%model, case%hbm, case%checks, case%reference, sol, ch, error)
+        call solve_and_check(case%model, case%hbm, case%checks, &
+                             case%reference%reference_options_t, sol, ch, error)
         call after_method(case, error, wanted)
         if (.not. wanted) return
         if (sol%converged) then
@@ -255,7 +261,7 @@ contains
         if (allocated(error)) return
         call euler_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['opts'], ['euler'])
     end subroutine run_euler_case
 
     subroutine euler_run(case, res, error)
@@ -298,7 +304,8 @@ contains
         if (allocated(error)) return
         call reference_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['opts      ', 'hbm_opts  ', 'euler_opts', 'basis     '], &
+                            ['reference', 'hbm      ', 'euler    ', 'hbm      '])
     end subroutine run_reference_case
 
     subroutine reference_run(case, res, error)
@@ -345,7 +352,8 @@ contains
         if (allocated(error)) return
         call side_by_side_run(case, res, error)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['hbm  ', 'euler', 'ref  ', 'basis'], &
+                            ['hbm      ', 'euler    ', 'reference', 'hbm      '])
     end subroutine run_side_by_side_case
 
     subroutine side_by_side_run(case, res, error)
@@ -407,7 +415,9 @@ contains
         if (allocated(error)) return
         call study_run(case, res, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, &
+                            ['hbm     ', 'euler   ', 'ref_opts', 'opts    ', 'basis   '], &
+                            ['hbm      ', 'euler    ', 'reference', 'study    ', 'hbm      '])
     end subroutine run_study_case
 
     subroutine study_run(case, res, error, progress)
@@ -465,7 +475,8 @@ contains
         if (allocated(error)) return
         call sweep_run(case, res, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, ['hbm  ', 'ref  ', 'opts ', 'basis'], &
+                            ['hbm      ', 'reference', 'sweep    ', 'hbm      '])
     end subroutine run_sweep_case
 
     subroutine sweep_run(case, res, error, progress)
@@ -487,10 +498,12 @@ contains
             if (allocated(error)) return
         end if
         if (found) then
-            call run_sweep(case%model, case%hbm, case%reference, case%sweep, res, error, &
+            call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                           case%sweep%sweep_options_t, res, error, &
                            observer=writer, resume=saved, progress=progress)
         else
-            call run_sweep(case%model, case%hbm, case%reference, case%sweep, res, error, &
+            call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                           case%sweep%sweep_options_t, res, error, &
                            observer=writer, progress=progress)
         end if
         call after_method(case, error, wanted)
@@ -528,7 +541,9 @@ contains
         if (allocated(error)) return
         call robustness_run(case, rows, error, progress)
         call release_lock(lock)
-        call name_case_file(case, error)
+        call name_case_file(case, error, &
+                            ['hbm_opts  ', 'euler_opts', 'ref_opts  ', 'opts      ', 'basis     '], &
+                            ['hbm       ', 'euler     ', 'reference ', 'robustness', 'hbm       '])
     end subroutine run_robustness_case
 
     subroutine robustness_run(case, rows, error, progress)
@@ -593,11 +608,19 @@ contains
             call remove_stale_results(case%directory, [character(len=24) ::])
     end subroutine after_method
 
-    !> Name the case file in an input error.
-    subroutine name_case_file(case, error)
+    !> Put an error of the library in the words of the case: the arguments of the method
+    !> called (`arguments`, e.g. 'opts') become the case-file group and variable (`groups`,
+    !> e.g. 'hbm'; model components map to &system, &forcing, &friction; 'basis', the harmonic
+    !> basis a weighted-residual solve builds from its options, maps to &hbm), and an input
+    !> error names the case file.
+    subroutine name_case_file(case, error, arguments, groups)
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(inout) :: error
+        character(len=*), intent(in), optional :: arguments(:)
+        character(len=*), intent(in), optional :: groups(:)
         if (.not. allocated(error)) return
+        if (present(arguments) .and. present(groups)) &
+            error%message = case_message(error%message, arguments, groups)
         if (error%stat /= stickslip_stat%input .or. .not. allocated(case%path)) return
         if (len(case%path) == 0) return
         if (index(error%message, case%path//": ") == 1) return

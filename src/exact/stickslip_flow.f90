@@ -136,7 +136,7 @@ contains
         n = model%ndof
         nc = model%ncontact()
         if (steps < 8) then
-            call fatal_error(error, "&reference bracket_steps: must be >= 8", stickslip_stat%input)
+            call fatal_error(error, "steps: must be >= 8", stickslip_stat%input)
             return
         end if
         if (size(vref) /= nc) then
@@ -165,7 +165,7 @@ contains
         chol = model%mass
         call dpotrf('U', n, chol, n, info)
         if (info /= 0) then
-            call fatal_error(error, "&system mass: not positive definite", stickslip_stat%numerical)
+            call fatal_error(error, "model%mass: not positive definite", stickslip_stat%numerical)
             return
         end if
         self%minv = 0.0_dp

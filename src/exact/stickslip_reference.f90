@@ -47,10 +47,6 @@ module stickslip_reference
         real(dp) :: tol = 1.0e-11_dp
         !> Period-map evaluations allowed per shooting attempt.
         integer :: maxfev = 200
-        !> Start of the shooting: 'auto' (the weighted residual, then implicit Euler if the
-        !> shooting from it fails), 'hbm' or 'euler'. Used by solve_reference_from_starts
-        !> (stickslip_reference_start); solve_reference takes its start as an argument.
-        character(len=8) :: start = 'auto'
     end type reference_options_t
 
     !> The reference solution: its report, its events, its energy balance and samples.
@@ -114,7 +110,8 @@ module stickslip_reference
 
 contains
 
-    !> Check reference options. Errors (stat input) name the &reference variable.
+    !> Check reference options. Errors (stat input) name the
+    !> component ("opts%samples = 0: must be >= 1").
     subroutine validate_reference_options(opts, error)
         !> Options to check.
         type(reference_options_t), intent(in) :: opts
@@ -126,22 +123,20 @@ contains
         integer, parameter :: reference_max_bracket_steps = 10**5
         character(len=200) :: buf
         if (opts%samples < 1) then
-            write (buf, '(a,i0,a)') "&reference samples = ", opts%samples, ": must be >= 1"
+            write (buf, '(a,i0,a)') "opts%samples = ", opts%samples, ": must be >= 1"
         else if (opts%samples > reference_max_samples) then
-            write (buf, '(a,i0,a,i0)') "&reference samples = ", opts%samples, &
+            write (buf, '(a,i0,a,i0)') "opts%samples = ", opts%samples, &
                 ": must be <= ", reference_max_samples
         else if (opts%bracket_steps < 8) then
-            write (buf, '(a,i0,a)') "&reference bracket_steps = ", opts%bracket_steps, &
+            write (buf, '(a,i0,a)') "opts%bracket_steps = ", opts%bracket_steps, &
                 ": must be >= 8"
         else if (opts%bracket_steps > reference_max_bracket_steps) then
-            write (buf, '(a,i0,a,i0)') "&reference bracket_steps = ", opts%bracket_steps, &
+            write (buf, '(a,i0,a,i0)') "opts%bracket_steps = ", opts%bracket_steps, &
                 ": must be <= ", reference_max_bracket_steps
         else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&reference tol = ", opts%tol, ": must be in (0, 1)"
+            write (buf, '(a,g0.6,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
         else if (opts%maxfev < 1) then
-            write (buf, '(a,i0,a)') "&reference maxfev = ", opts%maxfev, ": must be >= 1"
-        else if (opts%start /= 'auto' .and. opts%start /= 'hbm' .and. opts%start /= 'euler') then
-            buf = "&reference start = '"//trim(opts%start)//"': must be 'auto', 'hbm' or 'euler'"
+            write (buf, '(a,i0,a)') "opts%maxfev = ", opts%maxfev, ": must be >= 1"
         else
             return
         end if
@@ -152,7 +147,7 @@ contains
     !> samples x_start, v_start of one period at t_k = k T / ns, k = 0..ns-1 (ns x N [m],
     !> [m/s]; e.g. a weighted-residual or implicit Euler solution). The section time is
     !> taken where the contacts slip fastest in the start, the scales of x and v from its
-    !> amplitudes. opts%start is not used here (it is the strategy of
+    !> amplitudes (the start strategy, reference_start_options_t%start, is that of
     !> stickslip_reference_start, solve_reference_from_starts). Not converging is an outcome
     !> (res%converged = F and res%diagnosis, with a diagnostics item 'not_converged'); the
     !> checks of a converged orbit (energy balance, Coulomb's law) go to res%diagnostics.

@@ -69,7 +69,7 @@ contains
         character(len=100) :: buf
 
         if (.not. (rho > 0.0_dp) .or. rho > huge(rho)) then
-            write (buf, '(a,g0.6,a)') "&hbm rho = ", rho, ": must be finite and > 0"
+            write (buf, '(a,g0.6,a)') "rho = ", rho, ": must be finite and > 0"
             call fatal_error(error, trim(buf), stickslip_stat%input)
             return
         end if

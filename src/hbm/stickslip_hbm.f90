@@ -52,7 +52,8 @@ module stickslip_hbm
 
 contains
 
-    !> Check solver options. Errors (stat input) name the &hbm variable.
+    !> Check solver options. Errors (stat input) name the component
+    !> ("opts%harmonics = 5000: must be <= 4096").
     subroutine validate_options(opts, error)
         !> Options to check.
         type(hbm_options_t), intent(in) :: opts
@@ -60,29 +61,29 @@ contains
         type(error_type), allocatable, intent(out) :: error
         character(len=200) :: buf
         if (opts%harmonics < 0 .or. (opts%odd_only .and. opts%harmonics < 1)) then
-            write (buf, '(a,i0,a)') "&hbm harmonics = ", opts%harmonics, &
+            write (buf, '(a,i0,a)') "opts%harmonics = ", opts%harmonics, &
                 ": must be >= 0 (>= 1 with odd_only)"
         else if (opts%harmonics > hbm_max_harmonics) then
-            write (buf, '(a,i0,a,i0)') "&hbm harmonics = ", opts%harmonics, &
+            write (buf, '(a,i0,a,i0)') "opts%harmonics = ", opts%harmonics, &
                 ": must be <= ", hbm_max_harmonics
         else if (opts%samples > hbm_max_samples) then
-            write (buf, '(a,i0,a,i0,a)') "&hbm samples = ", opts%samples, &
+            write (buf, '(a,i0,a,i0,a)') "opts%samples = ", opts%samples, &
                 ": must be <= ", hbm_max_samples, " (2**20)"
         else if (opts%samples < 2*opts%harmonics + 1) then
-            write (buf, '(a,i0,a,i0,a,i0,a)') "&hbm samples = ", opts%samples, &
+            write (buf, '(a,i0,a,i0,a,i0,a)') "opts%samples = ", opts%samples, &
                 ": too few samples for the harmonics: need samples >= 2*harmonics+1 = ", &
                 2*opts%harmonics + 1, " (harmonics = ", opts%harmonics, ")"
         else if (.not. (opts%rho >= 0.0_dp) .or. opts%rho > huge(1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&hbm rho = ", opts%rho, &
+            write (buf, '(a,g0.6,a)') "opts%rho = ", opts%rho, &
                 ": must be finite and >= 0 (0: automatic)"
         else if (.not. (opts%tol > 0.0_dp) .or. opts%tol >= 1.0_dp) then
-            write (buf, '(a,g0.6,a)') "&hbm tol = ", opts%tol, ": must be in (0, 1)"
+            write (buf, '(a,g0.6,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
         else if (.not. (opts%xtol >= 0.0_dp) .or. opts%xtol >= 1.0_dp) then
-            write (buf, '(a,g0.6,a)') "&hbm xtol = ", opts%xtol, ": must be in [0, 1)"
+            write (buf, '(a,g0.6,a)') "opts%xtol = ", opts%xtol, ": must be in [0, 1)"
         else if (opts%maxfev < 0) then
-            write (buf, '(a,i0,a)') "&hbm maxfev = ", opts%maxfev, ": must be >= 0 (0: automatic)"
+            write (buf, '(a,i0,a)') "opts%maxfev = ", opts%maxfev, ": must be >= 0 (0: automatic)"
         else if (opts%start /= 'auto' .and. opts%start /= 'direct' .and. opts%start /= 'ladder') then
-            write (buf, '(a)') "&hbm start = '"//trim(opts%start)// &
+            write (buf, '(a)') "opts%start = '"//trim(opts%start)// &
                 "': must be 'auto', 'direct' or 'ladder'"
         else
             return

@@ -13,19 +13,21 @@ module stickslip_case
     use stickslip_hbm, only: hbm_max_unknowns
     use stickslip_checks, only: check_options_t
     use stickslip_euler, only: euler_options_t
-    use stickslip_reference, only: reference_options_t
+    use stickslip_reference_start, only: reference_start_options_t
     use stickslip_study, only: study_options_t
-    use stickslip_sweep, only: sweep_options_t
     use stickslip_robustness, only: robustness_options_t
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         read_friction_group, max_dof, max_terms, group_error
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
-        read_run_group, read_output_group, prefix_path
-    use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group
+        read_run_group, read_output_group
+    use stickslip_case_messages, only: to_case_message
+    use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
+        sweep_run_options_t
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms, known_groups
+    public :: sweep_run_options_t
     public :: max_sample_values
     public :: put, rtoa, ltoa, rlist, ilist, llist
 
@@ -54,12 +56,12 @@ module stickslip_case
         type(check_options_t) :: checks
         !> Time-stepping options (&euler).
         type(euler_options_t) :: euler
-        !> Exact reference options (&reference).
-        type(reference_options_t) :: reference
+        !> Exact reference options and start strategy (&reference).
+        type(reference_start_options_t) :: reference
         !> Work-precision study options (&study).
         type(study_options_t) :: study = study_options_t()
-        !> Forced-response curve options (&sweep; used by method 'sweep').
-        type(sweep_options_t) :: sweep
+        !> Forced-response curve options with resume and plot (&sweep; used by method 'sweep').
+        type(sweep_run_options_t) :: sweep
         !> The &sweep group was given.
         logical :: has_sweep = .false.
         !> Robustness study options (&robustness; used by method 'robustness').
@@ -101,7 +103,7 @@ contains
         if (allocated(error)) return
         call validate_model(case%model, error)
         if (allocated(error)) then
-            call prefix_path(nml, error)
+            call to_case_message(error, nml%path, [character(len=1) ::], [character(len=1) ::])
             return
         end if
 

@@ -1,7 +1,8 @@
 !> Readers of the case-file groups of the solvers and the run: &hbm, &euler, &reference,
 !> &run, &output. Each reads one group of a parsed namelist file into its options type
-!> (defaults where a variable is absent) and validates it with the library's validator, the
-!> message prefixed with the file path.
+!> (defaults where a variable is absent) and validates it with the library's validator, whose
+!> message names the argument ("opts%harmonics = ...") and is put in case-file words with the
+!> file path ("<path>: &hbm harmonics = ...", stickslip_case_messages).
 module stickslip_case_solvers
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
@@ -9,14 +10,16 @@ module stickslip_case_solvers
     use stickslip_hbm, only: validate_options
     use stickslip_checks, only: check_options_t, validate_check_options
     use stickslip_euler, only: euler_options_t, validate_euler_options
-    use stickslip_reference, only: reference_options_t, validate_reference_options
+    use stickslip_reference_start, only: reference_start_options_t, &
+        validate_reference_start_options
     use stickslip_namelist, only: nml_file_t
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string
     use stickslip_case_model, only: group_error
+    use stickslip_case_messages, only: to_case_message
     implicit none
     private
     public :: read_hbm_group, read_euler_group, read_reference_group, read_run_group
-    public :: read_output_group, known_methods, prefix_path
+    public :: read_output_group, known_methods
 
     !> Methods of &run method.
     character(len=10), parameter :: known_methods(7) = [character(len=10) :: 'hbm', 'euler', &
@@ -71,11 +74,12 @@ contains
         if (allocated(error)) return
         call validate_options(hbm_opts, error)
         if (allocated(error)) then
-            call prefix_path(nml, error)
+            call to_case_message(error, nml%path, ['opts'], ['hbm '])
             return
         end if
         call validate_check_options(check_opts, hbm_opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['copts', 'opts '], &
+                                                   ['hbm', 'hbm'])
     end subroutine read_hbm_group
 
     !> Read &euler (optional): steps_per_period, max_periods, tol; validate.
@@ -97,15 +101,15 @@ contains
         call get_real(nml, g, "tol", opts%tol, error)
         if (allocated(error)) return
         call validate_euler_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['euler'])
     end subroutine read_euler_group
 
     !> Read &reference (optional): samples, bracket_steps, tol, maxfev, start; validate.
     subroutine read_reference_group(nml, opts, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
-        !> Reference options (defaults for absent variables).
-        type(reference_options_t), intent(out) :: opts
+        !> Reference options and start strategy (defaults for absent variables).
+        type(reference_start_options_t), intent(out) :: opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: start
@@ -130,8 +134,8 @@ contains
             return
         end if
         opts%start = trim(start)
-        call validate_reference_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        call validate_reference_start_options(opts, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['reference'])
     end subroutine read_reference_group
 
     !> Read &run (optional): method, one of known_methods. `given` tells whether the file
@@ -178,13 +182,4 @@ contains
         end if
         directory = trim(directory)
     end subroutine read_output_group
-
-    !> Prefix a library validator's message with the case file path.
-    subroutine prefix_path(nml, error)
-        !> The parsed case file.
-        type(nml_file_t), intent(in) :: nml
-        !> The error to prefix.
-        type(error_type), intent(inout) :: error
-        error%message = nml%path//": "//error%message
-    end subroutine prefix_path
 end module stickslip_case_solvers

@@ -1,7 +1,10 @@
 !> Readers of the case-file groups of the studies: &study, &sweep, &robustness. Each reads one
 !> group of a parsed namelist file into its options type (defaults where a variable or the
-!> group is absent) and validates it with the library's validator, the message prefixed with
-!> the file path.
+!> group is absent) and validates it with the library's validator, whose message names the
+!> argument ("opts%step, opts%min_step ...") and is put in case-file words with the file path
+!> ("<path>: &sweep step, min_step ...", stickslip_case_messages). &sweep is read into a
+!> sweep_run_options_t: the options of run_sweep plus resume and plot, which only the run of
+!> a case uses.
 module stickslip_case_studies
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
@@ -14,10 +17,20 @@ module stickslip_case_studies
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string, &
         get_integers, get_reals
     use stickslip_case_model, only: group_error, max_terms
-    use stickslip_case_solvers, only: prefix_path
+    use stickslip_case_messages, only: to_case_message
     implicit none
     private
     public :: read_study_group, read_sweep_group, read_robustness_group
+    public :: sweep_run_options_t
+
+    !> The &sweep group of a case: the options of run_sweep and what the run of a case does
+    !> around it (the checkpoint, the picture), which run_sweep does not use.
+    type, extends(sweep_options_t) :: sweep_run_options_t
+        !> Resume from the checkpoint of an interrupted run of the same case (the driver).
+        logical :: resume = .true.
+        !> Draw frc.png with gnuplot (the command-line program).
+        logical :: plot = .true.
+    end type sweep_run_options_t
 
 contains
 
@@ -55,7 +68,8 @@ contains
         call get_real(nml, g, "repeat_below", opts%repeat_below, error)
         if (allocated(error)) return
         call validate_study_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts', 'hbm '], &
+                                                   ['study', 'hbm  '])
     end subroutine read_study_group
 
     !> Read &sweep (optional; `given` tells whether it is present): parameter, start and stop
@@ -66,8 +80,8 @@ contains
         type(nml_file_t), intent(in) :: nml
         !> The model swept (for the checks of the parameter).
         type(model_t), intent(in) :: model
-        !> Sweep options (defaults for absent variables).
-        type(sweep_options_t), intent(out) :: opts
+        !> Sweep options with resume and plot (defaults for absent variables).
+        type(sweep_run_options_t), intent(out) :: opts
         !> The group is present.
         logical, intent(out) :: given
         !> Set on the first problem found.
@@ -123,8 +137,8 @@ contains
         if (allocated(error)) return
         call get_logical(nml, g, "plot", opts%plot, error)
         if (allocated(error)) return
-        call validate_sweep_options(model, opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        call validate_sweep_options(model, opts%sweep_options_t, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['sweep'])
     end subroutine read_sweep_group
 
     !> Read &robustness (optional): lists omegas, mus, rhos, harmonics, samples,
@@ -171,7 +185,8 @@ contains
         call get_real(nml, g, "wrong_tol", opts%wrong_tol, error)
         if (allocated(error)) return
         call validate_robustness_options(opts, error)
-        if (allocated(error)) call prefix_path(nml, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts    ', 'hbm_opts'], &
+                                                   ['robustness', 'hbm       '])
     end subroutine read_robustness_group
 
     !> The list, or an empty one for the single value 0 ("no runs of that method").

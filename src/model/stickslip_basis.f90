@@ -68,13 +68,13 @@ contains
         character(len=160) :: buf
 
         if (harmonics < 0 .or. (odd_only .and. harmonics < 1)) then
-            write (buf, '(a,i0,a)') "&hbm harmonics = ", harmonics, &
+            write (buf, '(a,i0,a)') "harmonics = ", harmonics, &
                 ": must be >= 0 (>= 1 with odd_only)"
             call fatal_error(error, trim(buf), stickslip_stat%input)
             return
         end if
         if (samples < 2*harmonics + 1) then
-            write (buf, '(a,i0,a,i0,a,i0,a)') "&hbm samples = ", samples, &
+            write (buf, '(a,i0,a,i0,a,i0,a)') "samples = ", samples, &
                 ": too few samples for the harmonics: need samples >= 2*harmonics+1 = ", &
                 2*harmonics + 1, " (harmonics = ", harmonics, ")"
             call fatal_error(error, trim(buf), stickslip_stat%input)

@@ -110,8 +110,8 @@ contains
                 placed = any(basis%harm == h)
             end if
             if (.not. placed) then
-                write (buf, '(a,i0,a,i0,a)') "&forcing force_harmonic(", i, ") = ", h, &
-                    ": not in the harmonic basis (check &hbm harmonics and odd_only)"
+                write (buf, '(a,i0,a,i0,a)') "model%force_harmonic(", i, ") = ", h, &
+                    ": not in the harmonic basis (check basis%harmonics and basis%odd_only)"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if

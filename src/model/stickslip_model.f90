@@ -78,8 +78,8 @@ contains
 
     !> Check a model for consistency: sizes, finite values, M symmetric positive definite,
     !> C and K symmetric-shaped and finite, DOF indices in range, mu >= 0, normal loads >= 0,
-    !> omega > 0. Errors (stat input) name the namelist group and variable, e.g.
-    !> "&friction mu(2) = -0.1: must be >= 0".
+    !> omega > 0. Errors (stat input) name the argument and its component, e.g.
+    !> "model%mu(2) = -0.1: must be >= 0" (a case file reports "&friction mu(2) = ...").
     subroutine validate_model(model, error)
         !> The model to check.
         type(model_t), intent(in) :: model
@@ -91,7 +91,7 @@ contains
 
         n = model%ndof
         if (n < 1) then
-            call fatal_error(error, "&system ndof: must be >= 1", stickslip_stat%input)
+            call fatal_error(error, "model%ndof: must be >= 1", stickslip_stat%input)
             return
         end if
         call check_matrix("mass", model%mass, .true., error)
@@ -102,7 +102,7 @@ contains
         if (allocated(error)) return
         do i = 1, n
             if (model%mass(i, i) <= 0.0_dp) then
-                write (buf, '(a,i0,a,i0,a,g0.6,a)') "&system mass(", i, ",", i, ") = ", &
+                write (buf, '(a,i0,a,i0,a,g0.6,a)') "model%mass(", i, ",", i, ") = ", &
                     model%mass(i, i), ": diagonal masses must be > 0"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
@@ -112,46 +112,49 @@ contains
         chol = model%mass
         call dpotrf('U', n, chol, n, info)
         if (info /= 0) then
-            call fatal_error(error, "&system mass: not positive definite", stickslip_stat%input)
+            call fatal_error(error, "model%mass: not positive definite", stickslip_stat%input)
             return
         end if
         if (.not. (model%omega > 0.0_dp) .or. model%omega > huge(1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&forcing omega = ", model%omega, ": must be finite and > 0"
+            write (buf, '(a,g0.6,a)') "model%omega = ", model%omega, ": must be finite and > 0"
             call fatal_error(error, trim(buf), stickslip_stat%input)
             return
         end if
 
         if (.not. (allocated(model%force_dof) .and. allocated(model%force_harmonic) .and. &
                    allocated(model%force_amplitude) .and. allocated(model%force_phase))) then
-            call fatal_error(error, "&forcing: forcing arrays not allocated", stickslip_stat%input)
+            call fatal_error(error, "model%force_dof, model%force_harmonic, "// &
+                             "model%force_amplitude, model%force_phase: not all allocated", &
+                             stickslip_stat%input)
             return
         end if
         if (any([size(model%force_harmonic), size(model%force_amplitude), &
                  size(model%force_phase)] /= size(model%force_dof))) then
-            call fatal_error(error, "&forcing: force_dof, force_harmonic, force_amplitude and "// &
-                             "force_phase must have the same length", stickslip_stat%input)
+            call fatal_error(error, "model%force_dof, model%force_harmonic, "// &
+                             "model%force_amplitude and model%force_phase: must have the same "// &
+                             "length", stickslip_stat%input)
             return
         end if
         do i = 1, size(model%force_dof)
             if (model%force_dof(i) < 1 .or. model%force_dof(i) > n) then
-                write (buf, '(a,i0,a,i0,a,i0,a)') "&forcing force_dof(", i, ") = ", &
+                write (buf, '(a,i0,a,i0,a,i0,a)') "model%force_dof(", i, ") = ", &
                     model%force_dof(i), ": must be a DOF in 1..", n, " (ndof)"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
             if (model%force_harmonic(i) < 0) then
-                write (buf, '(a,i0,a,i0,a)') "&forcing force_harmonic(", i, ") = ", &
+                write (buf, '(a,i0,a,i0,a)') "model%force_harmonic(", i, ") = ", &
                     model%force_harmonic(i), ": must be >= 0"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
             if (.not. finite(model%force_amplitude(i))) then
-                write (buf, '(a,i0,a)') "&forcing force_amplitude(", i, "): not a finite number"
+                write (buf, '(a,i0,a)') "model%force_amplitude(", i, "): not a finite number"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
             if (.not. finite(model%force_phase(i))) then
-                write (buf, '(a,i0,a)') "&forcing force_phase(", i, "): not a finite number"
+                write (buf, '(a,i0,a)') "model%force_phase(", i, "): not a finite number"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
@@ -159,42 +162,44 @@ contains
 
         if (.not. (allocated(model%contact_dof) .and. allocated(model%contact_dof2) .and. &
                    allocated(model%mu) .and. allocated(model%normal_load))) then
-            call fatal_error(error, "&friction: contact arrays not allocated", stickslip_stat%input)
+            call fatal_error(error, "model%contact_dof, model%contact_dof2, model%mu, "// &
+                             "model%normal_load: not all allocated", stickslip_stat%input)
             return
         end if
         if (any([size(model%contact_dof2), size(model%mu), size(model%normal_load)] &
                 /= size(model%contact_dof))) then
-            call fatal_error(error, "&friction: contact_dof, contact_dof2, mu and normal_load "// &
-                             "must have the same length", stickslip_stat%input)
+            call fatal_error(error, "model%contact_dof, model%contact_dof2, model%mu and "// &
+                             "model%normal_load: must have the same length", stickslip_stat%input)
             return
         end if
         do j = 1, size(model%contact_dof)
             if (model%contact_dof(j) < 1 .or. model%contact_dof(j) > n) then
-                write (buf, '(a,i0,a,i0,a,i0,a)') "&friction contact_dof(", j, ") = ", &
+                write (buf, '(a,i0,a,i0,a,i0,a)') "model%contact_dof(", j, ") = ", &
                     model%contact_dof(j), ": must be a DOF in 1..", n, " (ndof)"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
             if (model%contact_dof2(j) < 0 .or. model%contact_dof2(j) > n) then
-                write (buf, '(a,i0,a,i0,a,i0,a)') "&friction contact_dof2(", j, ") = ", &
+                write (buf, '(a,i0,a,i0,a,i0,a)') "model%contact_dof2(", j, ") = ", &
                     model%contact_dof2(j), ": must be 0 (ground) or a DOF in 1..", n, " (ndof)"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
             if (model%contact_dof2(j) == model%contact_dof(j)) then
-                write (buf, '(a,i0,a)') "&friction contact_dof2(", j, &
-                    "): equals contact_dof: a contact needs two different DOFs or the ground (0)"
+                write (buf, '(a,i0,a)') "model%contact_dof2(", j, &
+                    "): equals model%contact_dof: a contact needs two different DOFs or "// &
+                    "the ground (0)"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
             if (.not. finite(model%mu(j)) .or. model%mu(j) < 0.0_dp) then
-                write (buf, '(a,i0,a,g0.6,a)') "&friction mu(", j, ") = ", model%mu(j), &
+                write (buf, '(a,i0,a,g0.6,a)') "model%mu(", j, ") = ", model%mu(j), &
                     ": must be finite and >= 0"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
             end if
             if (.not. finite(model%normal_load(j)) .or. model%normal_load(j) < 0.0_dp) then
-                write (buf, '(a,i0,a,g0.6,a)') "&friction normal_load(", j, ") = ", &
+                write (buf, '(a,i0,a,g0.6,a)') "model%normal_load(", j, ") = ", &
                     model%normal_load(j), ": must be finite and >= 0"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
@@ -211,11 +216,11 @@ contains
             integer :: p, q
             real(dp) :: scale
             if (.not. allocated(a)) then
-                call fatal_error(error, "&system "//name//": not given", stickslip_stat%input)
+                call fatal_error(error, "model%"//name//": not given", stickslip_stat%input)
                 return
             end if
             if (size(a, 1) /= n .or. size(a, 2) /= n) then
-                write (buf, '(a,i0,a,i0,a,i0,a)') "&system "//name//": is ", size(a, 1), " x ", &
+                write (buf, '(a,i0,a,i0,a,i0,a)') "model%"//name//": is ", size(a, 1), " x ", &
                     size(a, 2), ", expected ndof x ndof = ", n, " squared"
                 call fatal_error(error, trim(buf), stickslip_stat%input)
                 return
@@ -223,7 +228,7 @@ contains
             do q = 1, n
                 do p = 1, n
                     if (.not. finite(a(p, q))) then
-                        write (buf, '(a,i0,a,i0,a)') "&system "//name//"(", p, ",", q, &
+                        write (buf, '(a,i0,a,i0,a)') "model%"//name//"(", p, ",", q, &
                             "): not a finite number (NaN or Inf)"
                         call fatal_error(error, trim(buf), stickslip_stat%input)
                         return
@@ -235,9 +240,9 @@ contains
                 do q = 1, n
                     do p = q + 1, n
                         if (abs(a(p, q) - a(q, p)) > 1.0e-12_dp*scale) then
-                            write (buf, '(a,i0,a,i0,a,g0.6,a,i0,a,i0,a,g0.6,a)') "&system "//name// &
-                                ": not symmetric: "//name//"(", p, ",", q, ") = ", a(p, q), &
-                                " but "//name//"(", q, ",", p, ") = ", a(q, p), &
+                            write (buf, '(a,i0,a,i0,a,g0.6,a,i0,a,i0,a,g0.6,a)') "model%"//name// &
+                                ": not symmetric: model%"//name//"(", p, ",", q, ") = ", a(p, q), &
+                                " but model%"//name//"(", q, ",", p, ") = ", a(q, p), &
                                 " (column-major order)"
                             call fatal_error(error, trim(buf), stickslip_stat%input)
                             return

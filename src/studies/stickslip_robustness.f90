@@ -19,9 +19,9 @@ module stickslip_robustness
     use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
     use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
-        validate_reference_options
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference, only: reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t, &
+        validate_reference_start_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_rho, only: automatic_rho
     use stickslip_progress, only: progress_t
@@ -114,7 +114,9 @@ contains
         allocate (opts%steps_per_period(0))
     end function default_robustness_options
 
-    !> Check robustness options. Errors (stat input) name the &robustness variable.
+    !> Check robustness options. Errors (stat input) name the
+    !> component ("opts%omegas: every entry must be finite and > 0"); "hbm_opts%samples" in a
+    !> message is the samples of run_robustness's argument `hbm_opts`.
     subroutine validate_robustness_options(opts, error)
         !> Options to check.
         type(robustness_options_t), intent(in) :: opts
@@ -133,47 +135,47 @@ contains
         if (.not. (allocated(opts%omegas) .and. allocated(opts%mus) .and. &
                    allocated(opts%harmonics) .and. allocated(opts%rhos) .and. &
                    allocated(opts%samples) .and. allocated(opts%steps_per_period))) then
-            msg = "&robustness: omegas, mus, harmonics, rhos, samples and steps_per_period "// &
-                  "must be set"
+            msg = "opts%omegas, opts%mus, opts%harmonics, opts%rhos, opts%samples and "// &
+                  "opts%steps_per_period: must be set"
         else if (max(size(opts%omegas), size(opts%mus), size(opts%harmonics), size(opts%rhos), &
                      size(opts%samples), size(opts%steps_per_period)) > max_list) then
-            msg = "&robustness omegas, mus, harmonics, rhos, samples, steps_per_period: at "// &
-                  "most "//itoa(max_list)//" values each"
+            msg = "opts%omegas, opts%mus, opts%harmonics, opts%rhos, opts%samples, "// &
+                  "opts%steps_per_period: at most "//itoa(max_list)//" values each"
         else if (size(opts%omegas) == 0 .or. size(opts%mus) == 0) then
-            msg = "&robustness omegas, mus: both need at least one value"
+            msg = "opts%omegas, opts%mus: both need at least one value"
         else if (size(opts%harmonics)*size(opts%rhos)*size(opts%samples) + &
                  size(opts%steps_per_period) == 0) then
-            msg = "&robustness harmonics, rhos, samples, steps_per_period: nothing to run"
+            msg = "opts%harmonics, opts%rhos, opts%samples, opts%steps_per_period: nothing to run"
         else if (.not. all(opts%omegas > 0.0_dp .and. opts%omegas < huge(1.0_dp))) then
-            msg = "&robustness omegas: every entry must be finite and > 0"
+            msg = "opts%omegas: every entry must be finite and > 0"
         else if (.not. all(opts%mus >= 0.0_dp .and. opts%mus < huge(1.0_dp))) then
-            msg = "&robustness mus: every entry must be finite and >= 0"
+            msg = "opts%mus: every entry must be finite and >= 0"
         else if (any(opts%harmonics < 1)) then
-            msg = "&robustness harmonics: every entry must be >= 1"
+            msg = "opts%harmonics: every entry must be >= 1"
         else if (any(opts%harmonics > hbm_max_harmonics)) then
-            msg = "&robustness harmonics: every entry must be <= "//itoa(hbm_max_harmonics)
+            msg = "opts%harmonics: every entry must be <= "//itoa(hbm_max_harmonics)
         else if (any(opts%samples > hbm_max_samples)) then
-            msg = "&robustness samples: every entry must be <= "//itoa(hbm_max_samples)// &
+            msg = "opts%samples: every entry must be <= "//itoa(hbm_max_samples)// &
                   " (2**20)"
         else if (any(opts%steps_per_period > euler_max_steps_per_period)) then
-            msg = "&robustness steps_per_period: every entry must be <= "// &
+            msg = "opts%steps_per_period: every entry must be <= "// &
                   itoa(euler_max_steps_per_period)
         else if (.not. all(opts%rhos >= 0.0_dp .and. opts%rhos < huge(1.0_dp))) then
-            msg = "&robustness rhos: every entry must be finite and >= 0 (0: automatic)"
+            msg = "opts%rhos: every entry must be finite and >= 0 (0: automatic)"
         else if (any(opts%samples < 0)) then
-            msg = "&robustness samples: every entry must be >= 0 (0: the &hbm samples)"
+            msg = "opts%samples: every entry must be >= 0 (0: the hbm_opts%samples)"
         else if (any(opts%steps_per_period < 2)) then
-            msg = "&robustness steps_per_period: every entry must be >= 2"
+            msg = "opts%steps_per_period: every entry must be >= 2"
         else if (opts%error_samples < 2 .or. opts%error_samples > max_error_samples) then
-            msg = "&robustness error_samples = "//itoa(opts%error_samples)//": must be in "// &
+            msg = "opts%error_samples = "//itoa(opts%error_samples)//": must be in "// &
                   "2.."//itoa(max_error_samples)
         else if (.not. (opts%wrong_tol > 0.0_dp .and. opts%wrong_tol < huge(1.0_dp))) then
-            msg = "&robustness wrong_tol: must be finite and > 0"
+            msg = "opts%wrong_tol: must be finite and > 0"
         else
             runs = int(size(opts%omegas), int64)*size(opts%mus)* &
                    (int(size(opts%harmonics), int64)*size(opts%rhos)*size(opts%samples)* &
                     merge(2, 1, opts%warm) + size(opts%steps_per_period))
-            if (runs > max_runs) msg = "&robustness: the grid asks for "// &
+            if (runs > max_runs) msg = "opts: the grid asks for "// &
                                        itoa(int(min(runs, int(huge(1), int64))))// &
                                        " runs, at most "//itoa(int(max_runs))//" allowed"
             do i = 1, size(opts%harmonics)
@@ -181,7 +183,7 @@ contains
                 do j = 1, size(opts%samples)
                     if (opts%samples(j) > 0 .and. &
                         opts%samples(j) < 2*opts%harmonics(i) + 1) then
-                        msg = "&robustness samples = "//itoa(opts%samples(j))// &
+                        msg = "opts%samples = "//itoa(opts%samples(j))// &
                               ": too few for harmonics = "//itoa(opts%harmonics(i))// &
                               " (need >= "//itoa(2*opts%harmonics(i) + 1)//")"
                         exit
@@ -232,7 +234,7 @@ contains
         !> Time-stepping options (steps_per_period is replaced).
         type(euler_options_t), intent(in) :: euler_opts
         !> Options of the reference.
-        type(reference_options_t), intent(in) :: ref_opts
+        type(reference_start_options_t), intent(in) :: ref_opts
         !> Robustness options.
         type(robustness_options_t), intent(in) :: opts
         !> The runs.
@@ -255,7 +257,7 @@ contains
         if (allocated(error)) return
         call validate_robustness_options(opts, error)
         if (allocated(error)) return
-        call validate_reference_options(ref_opts, error)
+        call validate_reference_start_options(ref_opts, error)
         if (allocated(error)) return
         call validate_options(hbm_opts, error)
         if (allocated(error)) return

@@ -9,8 +9,8 @@ module stickslip_side_by_side
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference, only: reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_checks, only: sampling_diagnostics
     implicit none
@@ -57,7 +57,7 @@ contains
         !> Time-stepping options.
         type(euler_options_t), intent(in) :: euler
         !> Reference options.
-        type(reference_options_t), intent(in) :: ref
+        type(reference_start_options_t), intent(in) :: ref
         !> The three solutions and their differences.
         type(side_by_side_t), intent(out) :: res
         !> Set on invalid input or numerical breakdown.

@@ -13,9 +13,9 @@ module stickslip_study
     use stickslip_hbm, only: hbm_max_harmonics, hbm_max_samples
     use stickslip_euler, only: euler_max_steps_per_period
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
-    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
-        validate_reference_options
-    use stickslip_reference_start, only: solve_reference_from_starts
+    use stickslip_reference, only: reference_result_t, sample_reference
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t, &
+        validate_reference_start_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_progress, only: progress_t
     implicit none
@@ -88,7 +88,9 @@ contains
         opts%steps_per_period = [100, 200, 500, 1000, 2000, 5000, 10000, 20000]
     end function default_study_options
 
-    !> Check study options. Errors (stat input) name the &study variable.
+    !> Check study options. Errors (stat input) name the component
+    !> ("opts%repeats = 0: must be in 1..1000"); "hbm%samples" in a message is the samples
+    !> of run_study's argument `hbm`.
     subroutine validate_study_options(opts, error)
         !> Options to check.
         type(study_options_t), intent(in) :: opts
@@ -104,35 +106,35 @@ contains
         msg = ""
         if (.not. (allocated(opts%harmonics) .and. allocated(opts%samples) .and. &
                    allocated(opts%steps_per_period))) then
-            msg = "&study: harmonics, samples and steps_per_period must be set"
+            msg = "opts%harmonics, opts%samples and opts%steps_per_period: must be set"
         else if (size(opts%harmonics) + size(opts%steps_per_period) == 0) then
-            msg = "&study harmonics, steps_per_period: both empty, nothing to study"
+            msg = "opts%harmonics, opts%steps_per_period: both empty, nothing to study"
         else if (size(opts%harmonics) > 0 .and. size(opts%samples) == 0) then
-            msg = "&study samples: empty (give 0 for the &hbm samples)"
+            msg = "opts%samples: empty (give 0 for the hbm%samples)"
         else if (max(size(opts%harmonics), size(opts%samples), size(opts%steps_per_period)) &
                  > max_list) then
-            msg = "&study harmonics, samples, steps_per_period: at most "//itoa(max_list)// &
+            msg = "opts%harmonics, opts%samples, opts%steps_per_period: at most "//itoa(max_list)// &
                   " values each"
         else if (any(opts%harmonics < 1)) then
-            msg = "&study harmonics: every entry must be >= 1"
+            msg = "opts%harmonics: every entry must be >= 1"
         else if (any(opts%harmonics > hbm_max_harmonics)) then
-            msg = "&study harmonics: every entry must be <= "//itoa(hbm_max_harmonics)
+            msg = "opts%harmonics: every entry must be <= "//itoa(hbm_max_harmonics)
         else if (any(opts%samples < 0)) then
-            msg = "&study samples: every entry must be >= 0 (0: the &hbm samples)"
+            msg = "opts%samples: every entry must be >= 0 (0: the hbm%samples)"
         else if (any(opts%samples > hbm_max_samples)) then
-            msg = "&study samples: every entry must be <= "//itoa(hbm_max_samples)//" (2**20)"
+            msg = "opts%samples: every entry must be <= "//itoa(hbm_max_samples)//" (2**20)"
         else if (any(opts%steps_per_period < 2)) then
-            msg = "&study steps_per_period: every entry must be >= 2"
+            msg = "opts%steps_per_period: every entry must be >= 2"
         else if (any(opts%steps_per_period > euler_max_steps_per_period)) then
-            msg = "&study steps_per_period: every entry must be <= "// &
+            msg = "opts%steps_per_period: every entry must be <= "// &
                   itoa(euler_max_steps_per_period)
         else if (opts%error_samples < 2 .or. opts%error_samples > max_error_samples) then
-            msg = "&study error_samples = "//itoa(opts%error_samples)//": must be in 2.."// &
+            msg = "opts%error_samples = "//itoa(opts%error_samples)//": must be in 2.."// &
                   itoa(max_error_samples)
         else if (opts%repeats < 1 .or. opts%repeats > max_repeats) then
-            msg = "&study repeats = "//itoa(opts%repeats)//": must be in 1.."//itoa(max_repeats)
+            msg = "opts%repeats = "//itoa(opts%repeats)//": must be in 1.."//itoa(max_repeats)
         else if (.not. (opts%repeat_below >= 0.0_dp .and. opts%repeat_below < huge(1.0_dp))) then
-            msg = "&study repeat_below: must be a finite number >= 0"
+            msg = "opts%repeat_below: must be a finite number >= 0"
         end if
         if (len(msg) > 0) call fatal_error(error, msg, stickslip_stat%input)
     end subroutine validate_study_options
@@ -151,7 +153,7 @@ contains
         !> Time-stepping options (steps_per_period is replaced).
         type(euler_options_t), intent(in) :: euler
         !> Options of the reference.
-        type(reference_options_t), intent(in) :: ref_opts
+        type(reference_start_options_t), intent(in) :: ref_opts
         !> Study options.
         type(study_options_t), intent(in) :: opts
         !> The study.
@@ -171,7 +173,7 @@ contains
         if (allocated(error)) return
         call validate_study_options(opts, error)
         if (allocated(error)) return
-        call validate_reference_options(ref_opts, error)
+        call validate_reference_start_options(ref_opts, error)
         if (allocated(error)) return
         call validate_options(hbm, error)
         if (allocated(error)) return

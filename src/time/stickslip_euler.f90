@@ -76,7 +76,8 @@ module stickslip_euler
 
 contains
 
-    !> Check time-stepping options. Errors (stat input) name the &euler variable and the
+    !> Check time-stepping options. Errors (stat input) name the component
+    !> ("opts%steps_per_period = 1: must be >= 2") and the
     !> limit; the product steps_per_period x max_periods is formed in 64-bit integers.
     subroutine validate_euler_options(opts, error)
         !> Options to check.
@@ -85,19 +86,19 @@ contains
         type(error_type), allocatable, intent(out) :: error
         character(len=200) :: buf
         if (opts%steps_per_period < 2) then
-            write (buf, '(a,i0,a)') "&euler steps_per_period = ", opts%steps_per_period, &
+            write (buf, '(a,i0,a)') "opts%steps_per_period = ", opts%steps_per_period, &
                 ": must be >= 2"
         else if (opts%steps_per_period > euler_max_steps_per_period) then
-            write (buf, '(a,i0,a,i0)') "&euler steps_per_period = ", opts%steps_per_period, &
+            write (buf, '(a,i0,a,i0)') "opts%steps_per_period = ", opts%steps_per_period, &
                 ": must be <= ", euler_max_steps_per_period
         else if (opts%max_periods < 1) then
-            write (buf, '(a,i0,a)') "&euler max_periods = ", opts%max_periods, ": must be >= 1"
+            write (buf, '(a,i0,a)') "opts%max_periods = ", opts%max_periods, ": must be >= 1"
         else if (int(opts%steps_per_period, int64)*opts%max_periods > euler_max_total_steps) then
-            write (buf, '(a,i0,a,i0,a,i0,a)') "&euler max_periods = ", opts%max_periods, &
+            write (buf, '(a,i0,a,i0,a,i0,a)') "opts%max_periods = ", opts%max_periods, &
                 ": steps_per_period x max_periods must be <= ", euler_max_total_steps, &
                 " time steps (steps_per_period = ", opts%steps_per_period, ")"
         else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
-            write (buf, '(a,g0.6,a)') "&euler tol = ", opts%tol, ": must be in (0, 1)"
+            write (buf, '(a,g0.6,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
         else
             return
         end if
@@ -133,15 +134,15 @@ contains
         call validate_model(model, error)
         if (allocated(error)) return
         if (opts%steps_per_period < 2) then
-            call fatal_error(error, "&euler steps_per_period: must be >= 2", stickslip_stat%input)
+            call fatal_error(error, "opts%steps_per_period: must be >= 2", stickslip_stat%input)
             return
         end if
         if (opts%max_periods < 1) then
-            call fatal_error(error, "&euler max_periods: must be >= 1", stickslip_stat%input)
+            call fatal_error(error, "opts%max_periods: must be >= 1", stickslip_stat%input)
             return
         end if
         if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
-            call fatal_error(error, "&euler tol: must be in (0, 1)", stickslip_stat%input)
+            call fatal_error(error, "opts%tol: must be in (0, 1)", stickslip_stat%input)
             return
         end if
         n = model%ndof

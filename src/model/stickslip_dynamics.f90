@@ -93,7 +93,7 @@ contains
         integer, allocatable :: ipiv(:)
         real(dp) :: anorm, rcond, w(model%ndof), knorm, mnorm, cnorm, zscale, rel
         complex(dp) :: ihw
-        character(len=300) :: buf
+        character(len=512) :: buf
         logical :: placed
 
         n = model%ndof
@@ -164,7 +164,9 @@ contains
                     write (buf, '(a,i0,a,g0.6,a,es9.2,a)') "undamped resonance at harmonic h = ", &
                         h, " (h omega = ", h*model%omega, " rad/s): the dynamic stiffness "// &
                         "K - (h omega)^2 M + i h omega C is singular (relative conditioning ", &
-                        rel, "): the linear response is unbounded. Add damping or move omega"
+                        rel, "): the weighted residual cannot condense the structure there (the "// &
+                        "friction may still hold it: implicit Euler and the exact reference "// &
+                        "integrate in time). Add damping or move omega"
                 end if
                 call fatal_error(error, trim(buf), stickslip_stat%numerical)
                 return

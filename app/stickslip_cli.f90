@@ -23,9 +23,10 @@ module stickslip_cli
     use stickslip_flow, only: event_name
     use stickslip_summary, only: energy_balance_error, reference_balance_error
     use stickslip_gnuplot, only: run_gnuplot, rename_pictures
+    use stickslip_files, only: remove_file
     implicit none
     private
-    public :: string_t, cli_options_t, parse_args, run_cli, report_run
+    public :: string_t, cli_options_t, parse_args, run_cli, report_run, stderr_line
 
 
     !> A string, for arrays of arguments of different lengths.
@@ -142,7 +143,7 @@ contains
             call read_case(opts%case_path, case, error)
         end if
         if (allocated(error)) then
-            write (err_unit, '(a)') "stickslip: error: "//error%message
+            write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message)
             code = exit_code_of(error%stat)
             return
         end if
@@ -183,11 +184,11 @@ contains
             call report_findings(result%diagnostics, err_unit, code)
         end if
         if (allocated(error)) then
-            write (err_unit, '(a)') "stickslip: error: "//error%message
+            write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message)
             code = exit_code_of(error%stat)
             if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
-                result%summary_written) write (err_unit, '(a)') &
-                "stickslip: the summary was written to "//case%directory//"/summary.nml"
+                result%summary_written) write (err_unit, '(a)') stderr_line( &
+                "stickslip: the summary was written to "//case%directory//"/summary.nml")
             return
         end if
         if (.not. quiet) then
@@ -224,7 +225,7 @@ contains
         if (.not. allocated(found%items)) return
         do k = 1, size(found%items)
             if (found%items(k)%level == level_warning) write (u, '(a)') &
-                "stickslip: warning: "//found%items(k)%message
+                stderr_line("stickslip: warning: "//found%items(k)%message)
         end do
         do k = 1, size(found%items)
             if (found%items(k)%level >= level_untrusted) then
@@ -232,8 +233,8 @@ contains
                 if (present(said)) then
                     if (index(said, found%items(k)%message) > 0) cycle
                 end if
-                write (u, '(a)') "stickslip: error: the answer cannot be trusted: "// &
-                    found%items(k)%message
+                write (u, '(a)') stderr_line("stickslip: error: the answer cannot be "// &
+                    "trusted: "//found%items(k)%message)
             end if
         end do
     end subroutine report_findings
@@ -286,14 +287,18 @@ contains
     subroutine draw(directory, script, pngs, err_unit)
         character(len=*), intent(in) :: directory, script, pngs(:)
         integer, intent(in) :: err_unit
-        integer :: status
+        integer :: status, k
         status = run_gnuplot(directory, script)
         if (status == 0) then
             call rename_pictures(directory, pngs)
         else
-            write (err_unit, '(a)') "stickslip: warning: pictures not drawn (gnuplot "// &
-                "not found or it failed); draw them later with: cd "//directory// &
-                " && gnuplot "//script
+            ! a gnuplot that failed may have left a partial picture under its temporary name
+            do k = 1, size(pngs)
+                call remove_file(directory//'/'//trim(pngs(k))//'.tmp')
+            end do
+            write (err_unit, '(a)') stderr_line("stickslip: warning: pictures not drawn "// &
+                "(gnuplot not found or it failed); draw them later with: cd "//directory// &
+                " && gnuplot "//script)
         end if
     end subroutine draw
 
@@ -497,4 +502,51 @@ contains
         end do
         write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, summary.nml}"
     end subroutine print_robustness_summary
+
+    !> `text` made fit for one line of standard error: every byte outside printable ASCII
+    !> (control characters, a line break, bytes of a binary or non-ASCII file that a message
+    !> quotes) shown as \xNN, and every run of more than 120 characters without a blank (a
+    !> 5000-character directory name) cut to its first and last 50 characters around
+    !> "...(<n> characters)...". Messages stay one readable line whatever the case file held.
+    pure function stderr_line(text) result(line)
+        !> The message.
+        character(len=*), intent(in) :: text
+        character(len=:), allocatable :: line
+        character(len=*), parameter :: hex = '0123456789ABCDEF'
+        character(len=:), allocatable :: escaped
+        character(len=12) :: count
+        integer :: i, j, k, n
+        escaped = ""
+        do i = 1, len(text)
+            k = modulo(iachar(text(i:i)), 256)
+            if (k >= 32 .and. k <= 126) then
+                escaped = escaped//text(i:i)
+            else
+                escaped = escaped//"\x"//hex(k/16 + 1:k/16 + 1)//hex(mod(k, 16) + 1:mod(k, 16) + 1)
+            end if
+        end do
+        line = ""
+        n = len(escaped)
+        i = 1
+        do while (i <= n)
+            if (escaped(i:i) == ' ') then
+                line = line//' '
+                i = i + 1
+                cycle
+            end if
+            j = i
+            do while (j < n)
+                if (escaped(j + 1:j + 1) == ' ') exit
+                j = j + 1
+            end do
+            if (j - i + 1 > 120) then
+                write (count, '(i0)') j - i + 1
+                line = line//escaped(i:i + 49)//"...("//trim(count)//" characters)..."// &
+                    escaped(j - 49:j)
+            else
+                line = line//escaped(i:j)
+            end if
+            i = j + 1
+        end do
+    end function stderr_line
 end module stickslip_cli

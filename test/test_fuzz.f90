@@ -1,0 +1,87 @@
+!> Regressions found by bench/fuzz_cases.py (generated and mutated case files run through the
+!> command line): every run ends with a clear one-line message or a result, never a runtime
+!> error, raw bytes on standard error or a temporary file left behind.
+module test_fuzz
+    use stickslip_cli, only: stderr_line
+    use stickslip_files, only: make_directory
+    use stickslip_error, only: error_type
+    use test_case, only: write_lines, scratch
+    use test_cli, only: cli
+    use testing, only: test_counter_t, check
+    use fixtures, only: enter_project_root
+    implicit none
+    private
+    public :: run_fuzz_tests
+
+contains
+
+    subroutine run_fuzz_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        type(error_type), allocatable :: error
+        call enter_project_root()
+        call make_directory(scratch, error)
+        call check(t, .not. allocated(error), "fuzz: scratch directory")
+        if (allocated(error)) return
+        call test_stderr_line(t)
+        call test_raw_bytes_in_string(t)
+        call test_failed_picture_removed(t)
+    end subroutine run_fuzz_tests
+
+    !> stderr_line: bytes outside printable ASCII as \xNN, a long run without blanks cut in
+    !> its middle, short messages unchanged.
+    subroutine test_stderr_line(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: s
+        call check(t, stderr_line("stickslip: error: a.nml: &hbm rho = 1") == &
+                   "stickslip: error: a.nml: &hbm rho = 1", "fuzz: plain message unchanged")
+        s = stderr_line("x 'a"//achar(143)//achar(10)//"b' y")
+        call check(t, s == "x 'a\x8F\x0Ab' y", "fuzz: raw bytes shown as \xNN", s)
+        s = stderr_line("cannot create "//repeat("d", 5000)//" : denied")
+        call check(t, len(s) < 200 .and. index(s, "...(5000 characters)...") > 0 .and. &
+                   index(s, ": denied") > 0 .and. index(s, "cannot create dddd") == 1, &
+                   "fuzz: a 5000-character name cut in its middle", s)
+    end subroutine test_stderr_line
+
+    !> A string value holding a byte of a binary file (fuzz: random bytes inside
+    !> `method = 'robustness'`) is quoted by the validator's message: it reaches standard
+    !> error as \xNN, on one line.
+    subroutine test_raw_bytes_in_string(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: out, err
+        integer :: code, k
+        logical :: printable
+        call write_lines(scratch//"/fuzz_bytes.nml", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0 /", &
+            "&run method = 'robustne"//achar(143)//achar(200)//"ss' /"])
+        call cli([character(len=200) :: scratch//"/fuzz_bytes.nml"], code, out, err)
+        printable = .true.
+        do k = 1, len(err)
+            if (err(k:k) /= new_line('a') .and. (iachar(err(k:k)) < 32 .or. &
+                iachar(err(k:k)) > 126)) printable = .false.
+        end do
+        call check(t, code == 1 .and. printable .and. index(err, "stickslip: error:") == 1, &
+                   "fuzz: a raw byte in a string is shown as \xNN on standard error", err)
+    end subroutine test_raw_bytes_in_string
+
+    !> A sweep whose picture gnuplot cannot draw (zero forcing: every amplitude 0) leaves no
+    !> frc.png.tmp (fuzz: zero_force/sweep).
+    subroutine test_failed_picture_removed(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/fuzz_zero_sweep"
+        character(len=:), allocatable :: out, err
+        integer :: code
+        logical :: tmp
+        call write_lines(scratch//"/fuzz_zero_sweep.nml", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 0 /", &
+            "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
+            "&hbm harmonics = 10, rho = 0.2, samples = 64 /", &
+            "&sweep parameter = 'mu', start = 4.0, stop = 1.2, max_points = 5 /", &
+            "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/fuzz_zero_sweep.nml"], code, out, err)
+        inquire (file=dir//"/frc.png.tmp", exist=tmp)
+        call check(t, (code == 0 .or. code == 2) .and. .not. tmp, &
+                   "fuzz: no frc.png.tmp left when gnuplot fails", err)
+    end subroutine test_failed_picture_removed
+end module test_fuzz

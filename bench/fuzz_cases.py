@@ -233,6 +233,31 @@ def method_groups(rng, method):
     return g
 
 
+# Sizes at, just above and far above the documented limits (README "Limits").
+SIZES = [("hbm", "harmonics", ["4096", "4097", "100000", "2147483647", "0", "-3"]),
+         ("hbm", "samples", ["1048577", "2147483647", "100000000", "-1", "0", "3"]),
+         ("hbm", "max_harmonics", ["4097", "2147483647"]),
+         ("hbm", "maxfev", ["2147483647", "-1", "1"]),
+         ("hbm", "verify_periods", ["1001", "2147483647", "-1", "3"]),
+         ("euler", "steps_per_period", ["10000001", "2000000000", "2147483647", "1", "2"]),
+         ("euler", "max_periods", ["2147483647", "0", "-1", "1"]),
+         ("reference", "samples", ["1000001", "100000000", "2147483647", "0", "1"]),
+         ("reference", "bracket_steps", ["100001", "2000000000", "7", "8"]),
+         ("reference", "maxfev", ["1", "0", "2147483647"]),
+         ("reference", "tol", ["1e-300", "1", "0", "0.5"]),
+         ("study", "harmonics", ["4097", "0", "2147483647", "1, 1, 1"]),
+         ("study", "error_samples", ["1000001", "2147483647", "1", "2"]),
+         ("study", "repeats", ["1001", "2147483647", "0"]),
+         ("sweep", "max_points", ["100001", "2147483647", "1", "2"]),
+         ("sweep", "max_failures", ["0", "2147483647"]),
+         ("sweep", "step", ["1e-300", "1e300", "-0.1", "0"]),
+         ("sweep", "min_step", ["1e-300", "1e300", "-1"]),
+         ("robustness", "omegas", ["0", "-1, 2", "1e-300", "1e300"]),
+         ("robustness", "harmonics", ["4097", "2147483647"]),
+         ("robustness", "error_samples", ["1000001", "2147483647"]),
+         ("robustness", "wrong_tol", ["-1", "0", "1e300"]),
+         ("system", "ndof", ["65", "2147483647", "0", "-1", "1", "3"])]
+
 METHODS = ["hbm", "euler", "reference", "all", "sweep", "study", "robustness"]
 
 GROUP_NAMES = ["system", "forcing", "friction", "hbm", "euler", "reference", "run", "output",
@@ -289,7 +314,8 @@ def structural_mutation(case, rng):
     kind = rng.choice(["delete_group", "dup_group", "rename_group", "delete_var", "dup_var",
                        "rename_var", "number", "number", "number", "swap_type", "matrix_size",
                        "bad_mass", "unknown_group", "unknown_var", "long_string", "dof_range",
-                       "list_length", "many_values", "method_mismatch", "extra_method_group"])
+                       "list_length", "many_values", "method_mismatch", "extra_method_group",
+                       "size", "size"])
     gi = rng.randrange(len(case))
     g, items = case[gi]
     if kind == "delete_group":
@@ -396,12 +422,20 @@ def structural_mutation(case, rng):
         case = set_var(case, "system", var, ", ".join(vals))
         return case, "matrix %s" % kindm
     if kind == "method_mismatch":
-        case = set_var(case, "run", "method", quote(rng.choice(METHODS + ["HBM", "bogus", ""]), rng))
-        return case, "method changed"
+        new = rng.choice(METHODS + ["HBM", "bogus", ""])
+        case = set_var(case, "run", "method", quote(new, rng))
+        have = [gg for gg, _ in case]
+        case += [grp for grp in method_groups(rng, new) if grp[0] not in have]
+        return case, "method changed to %r" % new
     if kind == "extra_method_group":
-        case.append((rng.choice(["sweep", "study", "robustness"]), [("start", "1"), ("stop", "2")]
-                     if rng.random() < 0.5 else []))
-        return case, "extra method group"
+        new = rng.choice(["sweep", "study", "robustness"])
+        case += method_groups(rng, new)
+        return case, "extra &%s group" % new
+    if kind == "size":
+        grp, var, vals = rng.choice(SIZES)
+        val = rng.choice(vals)
+        case = set_var(case, grp, var, val)
+        return case, "size %s %s = %s" % (grp, var, val)
     return case, "noop"
 
 
@@ -518,14 +552,19 @@ def generate(i, rng):
 # Running and classifying
 # ---------------------------------------------------------------------------------------------
 
-def build(root):
-    subprocess.run(["fpm", "build", "--profile", "release"], cwd=root, check=True,
-                   stdout=subprocess.DEVNULL)
-    cands = [p for p in glob.glob(os.path.join(root, "build", "gfortran_*", "app", "stickslip"))
-             if os.access(p, os.X_OK)]
-    if not cands:
-        sys.exit("fuzz_cases: no build/gfortran_*/app/stickslip after the release build")
-    return max(cands, key=os.path.getmtime)
+def build(root, build=True):
+    """Path of the release CLI (build/gfortran_<hash>/app/stickslip), built unless `build` is
+    false (then the release build must be up to date)."""
+    if build:
+        subprocess.run(["fpm", "build", "--profile", "release"], cwd=root, check=True,
+                       stdout=subprocess.DEVNULL)
+    # fpm prints the executable's path with a runner; the hash differs per profile
+    r = subprocess.run(["fpm", "run", "--profile", "release", "--runner", "echo"], cwd=root,
+                       stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    paths = [l.strip() for l in r.stdout.splitlines() if l.strip().endswith("stickslip")]
+    if r.returncode != 0 or not paths:
+        sys.exit("fuzz_cases: cannot find the release build of the stickslip program")
+    return os.path.join(root, paths[-1])
 
 
 def listing(folder):
@@ -540,7 +579,7 @@ def printable(s):
     return all(ch == "\n" or (" " <= ch <= "~") or ch == "\t" for ch in s)
 
 
-def classify(rc, out, err, elapsed, timed_out, folder, outdirs, before):
+def classify(rc, out, err, elapsed, timed_out, folder, outdirs, before, planted):
     """List of failure classes of one run (empty: fine)."""
     cls = []
     text = out + err
@@ -575,6 +614,11 @@ def classify(rc, out, err, elapsed, timed_out, folder, outdirs, before):
     after = listing(folder)
     new = after - before
     allowed = set()
+    outdirs = list(outdirs) + [d.rstrip() for d in outdirs]
+    for d in list(outdirs):
+        parts = d.split("/")
+        for k in range(1, len(parts)):
+            outdirs.append("/".join(parts[:k]))
     for d in outdirs:
         d = os.path.normpath(d)
         while d not in ("", ".", os.sep):
@@ -588,9 +632,11 @@ def classify(rc, out, err, elapsed, timed_out, folder, outdirs, before):
     if any(os.path.basename(p).startswith("PWNED") for p in after) or \
             os.path.exists(os.path.join(folder, "..", "PWNED")):
         cls.append("security:shell")
-    if any(p.endswith(".tmp") for p in after):
+    if any(p.endswith(".tmp") and os.path.normpath(p) not in planted for p in after):
         cls.append("files:tmp_left")
-    if any(os.path.basename(p) == ".stickslip.lock" for p in after):
+    if not timed_out and any(os.path.basename(p) == ".stickslip.lock"
+                             and os.path.normpath(p) not in planted
+                             for p in after):
         cls.append("files:lock_left")
     if rc == 0 and not timed_out:
         summaries = [p for p in after if os.path.basename(p) == "summary.nml"]
@@ -616,11 +662,118 @@ def classify(rc, out, err, elapsed, timed_out, folder, outdirs, before):
     return sorted(set(cls))
 
 
-def run_one(binary, tmp, i, data, desc, outdir, timeout):
+def plant(folder, outdir, state, checkpoint):
+    """Put the output directory into `state` before the run; returns {relative path: bytes}."""
+    planted = {}
+    if not state:
+        return planted
+    od = os.path.join(folder, outdir)
+    if state == "file_in_place":
+        os.makedirs(os.path.dirname(od) or folder, exist_ok=True)
+        with open(od, "wb") as f:
+            f.write(b"not a directory\n")
+        return planted
+    os.makedirs(od, exist_ok=True)
+    files = {}
+    if state == "stale_results":
+        for n in ("hbm.csv", "coefficients.csv", "euler.csv", "reference.csv", "events.csv",
+                  "study.csv", "frc.csv", "robustness.csv"):
+            files[n] = b"stale,from,an,earlier,run\n"
+    elif state == "stale_lock":
+        files[".stickslip.lock"] = b"999999999\n"
+    elif state == "garbage_lock":
+        files[".stickslip.lock"] = bytes(range(256))
+    elif state == "stale_tmp":
+        files["hbm.csv.999999999.1.tmp"] = b"partial"
+    elif state.startswith("checkpoint"):
+        files["frc.checkpoint"] = checkpoint
+    for n, content in files.items():
+        with open(os.path.join(od, n), "wb") as f:
+            f.write(content)
+        planted[os.path.normpath(os.path.join(outdir, n))] = content
+    return planted
+
+
+def damage_checkpoint(good, rng):
+    """A damaged copy of a sweep checkpoint (bytes) and a description."""
+    lines = good.split(b"\n")
+    kind = rng.choice(["counts", "counts", "counts", "truncate", "bytes", "number", "magic",
+                       "fingerprint", "drop_line", "empty", "swap"])
+    if kind == "counts" and len(lines) > 2:
+        c = lines[2].split()
+        k = rng.randrange(len(c))
+        c[k] = rng.choice([b"2147483647", b"-1", b"0", b"99999999999", b"1000000", b"x",
+                           b"1e3", b"3"])
+        lines[2] = b" ".join(c)
+        return b"\n".join(lines), "checkpoint counts %s" % lines[2].decode()
+    if kind == "truncate":
+        k = rng.randrange(len(good))
+        return good[:k], "checkpoint truncated at %d" % k
+    if kind == "bytes":
+        k = rng.randrange(len(good))
+        return good[:k] + bytes(rng.randrange(256) for _ in range(20)) + good[k:], \
+            "checkpoint bytes at %d" % k
+    if kind == "number" and len(lines) > 4:
+        k = rng.randrange(3, len(lines) - 1)
+        w = lines[k].split()
+        if w:
+            w[rng.randrange(len(w))] = rng.choice([b"NaN", b"Inf", b"1e400", b"-", b"1.0.0"])
+        lines[k] = b" ".join(w)
+        return b"\n".join(lines), "checkpoint number on line %d" % (k + 1)
+    if kind == "magic":
+        lines[0] = b"stickslip sweep checkpoint 2"
+        return b"\n".join(lines), "checkpoint magic"
+    if kind == "fingerprint" and len(lines) > 1:
+        lines[1] = b"0000000000000000"
+        return b"\n".join(lines), "checkpoint fingerprint"
+    if kind == "drop_line" and len(lines) > 4:
+        k = rng.randrange(3, len(lines))
+        del lines[k]
+        return b"\n".join(lines), "checkpoint line %d dropped" % (k + 1)
+    if kind == "swap" and len(lines) > 5:
+        a, b = rng.randrange(3, len(lines) - 1), rng.randrange(3, len(lines) - 1)
+        lines[a], lines[b] = lines[b], lines[a]
+        return b"\n".join(lines), "checkpoint lines swapped"
+    return b"", "checkpoint empty"
+
+
+CHECKPOINT_CASE = """&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1, damping = 0.06,-0.02,-0.02,0.04 /
+&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0 /
+&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /
+&hbm harmonics = 30, rho = 0.2, samples = 128 /
+&sweep parameter = 'omega', start = 0.2, stop = 6.0, step = 0.001, max_step = 0.001,
+       max_points = %d, plot = .false. /
+&output directory = 'out' /
+"""
+
+
+def make_checkpoint(binary, tmp):
+    """Run a long sweep and cut it off once its checkpoint exists; returns the checkpoint."""
+    folder = os.path.join(tmp, "checkpoint_source")
+    os.makedirs(folder)
+    with open(os.path.join(folder, "case.nml"), "w") as f:
+        f.write(CHECKPOINT_CASE % 20000)
+    p = subprocess.Popen([binary, "case.nml", "--quiet"], cwd=folder, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL, start_new_session=True)
+    path = os.path.join(folder, "out", "frc.checkpoint")
+    t0 = time.monotonic()
+    while not os.path.exists(path) and time.monotonic() - t0 < 30 and p.poll() is None:
+        time.sleep(0.05)
+    time.sleep(0.3)
+    os.killpg(p.pid, signal.SIGKILL)
+    p.wait()
+    if not os.path.exists(path):
+        return b""
+    with open(path, "rb") as f:
+        return f.read()
+
+
+def run_one(binary, tmp, i, data, desc, outdir, timeout, state=None, checkpoint=b""):
     folder = os.path.join(tmp, "run%05d" % i)
     os.makedirs(folder)
     with open(os.path.join(folder, "case.nml"), "wb") as f:
         f.write(data)
+    planted = plant(folder, outdir, state, checkpoint)
     before = listing(folder)
     t0 = time.monotonic()
     timed_out = False
@@ -639,10 +792,20 @@ def run_one(binary, tmp, i, data, desc, outdir, timeout):
     outdirs = [outdir, "out"]
     text = data.decode("latin-1")
     for m in re.finditer(r"directory\s*=\s*('((?:[^']|'')*)'|\"((?:[^\"]|\"\")*)\")", text, re.I):
-        outdirs.append(m.group(2).replace("''", "'") if m.group(2) is not None
-                       else m.group(3).replace('""', '"'))
-    cls = classify(p.returncode, out, err, elapsed, timed_out, folder, outdirs, before)
-    return i, p.returncode, out, err, elapsed, cls, desc, data
+        d = m.group(2).replace("''", "'") if m.group(2) is not None \
+            else m.group(3).replace('""', '"')
+        outdirs.append(os.fsdecode(d.encode("latin-1")))  # the bytes the program sees
+    cls = classify(p.returncode, out, err, elapsed, timed_out, folder, outdirs, before, planted)
+    # result files planted as if by an earlier run must be gone after a run that wrote a summary
+    summary = os.path.join(folder, outdir, "summary.nml")
+    if os.path.exists(summary) and not timed_out and p.returncode in (0, 2):
+        for name, content in planted.items():
+            fp = os.path.join(folder, name)
+            if name.endswith(".csv") and os.path.exists(fp):
+                with open(fp, "rb") as f:
+                    if f.read() == content:
+                        cls = sorted(set(cls + ["files:stale_result_left"]))
+    return i, p.returncode, out, err, elapsed, cls, desc + ("; state %s" % state if state else ""), data
 
 
 def main():
@@ -659,15 +822,29 @@ def main():
 
     if args.binary:
         binary = os.path.abspath(args.binary)
-    elif args.no_build:
-        cands = glob.glob(os.path.join(ROOT, "build", "gfortran_*", "app", "stickslip"))
-        binary = max(cands, key=os.path.getmtime)
     else:
-        binary = build(ROOT)
+        binary = build(ROOT, not args.no_build)
     print("binary:", binary)
     rng = random.Random(args.seed)
     cases = [(i,) + generate(i, rng) for i in range(args.count)]
     tmp = tempfile.mkdtemp(prefix="stickslip_fuzz_")
+    good_checkpoint = make_checkpoint(binary, tmp)
+    print("checkpoint for the resume cases: %d bytes" % len(good_checkpoint))
+    # about 10% of the runs find their output directory in a state left by an earlier run;
+    # about 3% resume a sweep from a damaged checkpoint
+    srng = random.Random(args.seed + 1)
+    jobs = []
+    for i, data, desc, od in cases:
+        r = srng.random()
+        state, cp = None, b""
+        if r < 0.10:
+            state = srng.choice(["stale_results", "stale_lock", "garbage_lock", "stale_tmp",
+                                 "file_in_place"])
+        elif r < 0.13 and good_checkpoint:
+            cp, d = damage_checkpoint(good_checkpoint, srng)
+            data = (CHECKPOINT_CASE % 800).encode()
+            desc, od, state = "sweep resume; " + d, "out", "checkpoint"
+        jobs.append((i, data, desc, od, state, cp))
     if os.path.isdir(args.report):
         shutil.rmtree(args.report)
     os.makedirs(args.report)
@@ -677,13 +854,19 @@ def main():
     slow = []
     failures = 0
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as ex:
-        futs = [ex.submit(run_one, binary, tmp, i, data, desc, od, args.timeout)
-                for i, data, desc, od in cases]
+        futs = [ex.submit(run_one, binary, tmp, i, data, desc, od, args.timeout, state, cp)
+                for i, data, desc, od, state, cp in jobs]
         for done, fut in enumerate(concurrent.futures.as_completed(futs), 1):
             i, rc, out, err, elapsed, cls, desc, data = fut.result()
             exits[rc] = exits.get(rc, 0) + 1
             if elapsed > 5:
                 slow.append((elapsed, i, desc))
+            if cls == ["timeout"] and re.search(r"delete &(robustness|study)|"
+                                                r"rename &(robustness|study)", desc):
+                # the method's default grid (README: ~20 s for the robustness example) was
+                # asked for: slow by request, not a hang
+                cls = []
+                counts["slow:default_grid"] = counts.get("slow:default_grid", 0) + 1
             for c in cls or ["ok"]:
                 counts[c] = counts.get(c, 0) + 1
             if cls:

@@ -25,6 +25,7 @@ contains
         call test_stderr_line(t)
         call test_raw_bytes_in_string(t)
         call test_failed_picture_removed(t)
+        call test_reference_energy_nan(t)
     end subroutine run_fuzz_tests
 
     !> stderr_line: bytes outside printable ASCII as \xNN, a long run without blanks cut in
@@ -84,4 +85,27 @@ contains
         call check(t, (code == 0 .or. code == 2) .and. .not. tmp, &
                    "fuzz: no frc.png.tmp left when gnuplot fails", err)
     end subroutine test_failed_picture_removed
+
+    !> An exact reference whose work integrals overflow (force 1e308 at omega 1e6: amplitudes
+    !> near 1e296) has a NaN energy balance error: the answer cannot be trusted (exit 2), not
+    !> exit 0 with NaN in the summary (fuzz: omega_huge/reference, force_amplitude = 1e308).
+    subroutine test_reference_energy_nan(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/fuzz_reference_nan"
+        character(len=:), allocatable :: out, err
+        integer :: code
+        call write_lines(scratch//"/fuzz_reference_nan.nml", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 1e6, force_dof = 1, force_amplitude = 1e308 /", &
+            "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
+            "&hbm harmonics = 30, rho = 0.2, samples = 1024 /", &
+            "&reference samples = 8, bracket_steps = 100 /", &
+            "&run method = 'reference' /", &
+            "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/fuzz_reference_nan.nml", "--quiet"], &
+                 code, out, err)
+        call check(t, code == 2 .and. index(err, "energy balance error") > 0 .and. &
+                   index(err, "NaN") > 0, "fuzz: a NaN energy balance of the reference is "// &
+                   "untrusted (exit 2)", err)
+    end subroutine test_reference_energy_nan
 end module test_fuzz

@@ -503,9 +503,10 @@ contains
         write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, summary.nml}"
     end subroutine print_robustness_summary
 
-    !> `text` made fit for one line of standard error: every byte outside printable ASCII
-    !> (control characters, a line break, bytes of a binary or non-ASCII file that a message
-    !> quotes) shown as \xNN, and every run of more than 120 characters without a blank (a
+    !> `text` made fit for standard error: every byte outside printable ASCII but the line
+    !> feed (control characters, bytes of a binary or non-ASCII file that a message quotes;
+    !> a case file's value cannot hold a line feed, the usage text of a usage error does)
+    !> shown as \xNN, and every run of more than 120 characters without a blank (a
     !> 5000-character directory name) cut to its first and last 50 characters around
     !> "...(<n> characters)...". Messages stay one readable line whatever the case file held.
     pure function stderr_line(text) result(line)
@@ -519,7 +520,7 @@ contains
         escaped = ""
         do i = 1, len(text)
             k = modulo(iachar(text(i:i)), 256)
-            if (k >= 32 .and. k <= 126) then
+            if ((k >= 32 .and. k <= 126) .or. k == 10) then
                 escaped = escaped//text(i:i)
             else
                 escaped = escaped//"\x"//hex(k/16 + 1:k/16 + 1)//hex(mod(k, 16) + 1:mod(k, 16) + 1)
@@ -529,14 +530,14 @@ contains
         n = len(escaped)
         i = 1
         do while (i <= n)
-            if (escaped(i:i) == ' ') then
-                line = line//' '
+            if (escaped(i:i) == ' ' .or. escaped(i:i) == new_line('a')) then
+                line = line//escaped(i:i)
                 i = i + 1
                 cycle
             end if
             j = i
             do while (j < n)
-                if (escaped(j + 1:j + 1) == ' ') exit
+                if (escaped(j + 1:j + 1) == ' ' .or. escaped(j + 1:j + 1) == new_line('a')) exit
                 j = j + 1
             end do
             if (j - i + 1 > 120) then

@@ -21,6 +21,7 @@ failure class; every failing case is written to the report folder with its stdou
 Deterministic for a given --seed (the cases; run times and timeouts depend on the machine).
 """
 import argparse
+import csv
 import concurrent.futures
 import glob
 import math
@@ -315,7 +316,7 @@ def structural_mutation(case, rng):
                        "rename_var", "number", "number", "number", "swap_type", "matrix_size",
                        "bad_mass", "unknown_group", "unknown_var", "long_string", "dof_range",
                        "list_length", "many_values", "method_mismatch", "extra_method_group",
-                       "size", "size"])
+                       "size", "size", "scale", "scale", "scale"])
     gi = rng.randrange(len(case))
     g, items = case[gi]
     if kind == "delete_group":
@@ -431,6 +432,22 @@ def structural_mutation(case, rng):
         new = rng.choice(["sweep", "study", "robustness"])
         case += method_groups(rng, new)
         return case, "extra &%s group" % new
+    if kind == "scale":
+        # a valid but badly scaled value: a number times 10**U(-12, 12)
+        nums = [(gi2, vi2) for gi2, (g2, it2) in enumerate(case) for vi2, (n2, v2) in enumerate(it2)
+                if re.fullmatch(r"[-+]?(\d+\.?\d*|\.\d+)([eEdD][-+]?\d+)?", v2.strip())
+                and "." in v2 + "e"]
+        if not nums:
+            return case, "noop"
+        gi2, vi2 = rng.choice(nums)
+        g2, it2 = case[gi2]
+        n2, v2 = it2[vi2]
+        try:
+            x = float(v2.replace("d", "e").replace("D", "e")) * 10 ** rng.uniform(-12, 12)
+        except ValueError:
+            return case, "noop"
+        it2[vi2] = (n2, "%.6g" % x if n2 not in ("ndof", "harmonics", "samples") else v2)
+        return case, "scale %s %s = %s" % (g2, n2, it2[vi2][1])
     if kind == "size":
         grp, var, vals = rng.choice(SIZES)
         val = rng.choice(vals)
@@ -638,6 +655,13 @@ def classify(rc, out, err, elapsed, timed_out, folder, outdirs, before, planted)
                              and os.path.normpath(p) not in planted
                              for p in after):
         cls.append("files:lock_left")
+    if not timed_out:
+        for p in after:
+            if p.endswith(".csv") and os.path.getsize(os.path.join(folder, p)) < 20_000_000:
+                with open(os.path.join(folder, p), newline="", errors="replace") as f:
+                    rows = list(csv.reader(f))
+                if rows and any(len(r) != len(rows[0]) for r in rows[1:]):
+                    cls.append("files:ragged_csv")
     if rc == 0 and not timed_out:
         summaries = [p for p in after if os.path.basename(p) == "summary.nml"]
         if not summaries:
@@ -779,12 +803,34 @@ def run_one(binary, tmp, i, data, desc, outdir, timeout, state=None, checkpoint=
     timed_out = False
     p = subprocess.Popen([binary, "case.nml", "--quiet"], cwd=folder, stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, start_new_session=True)
+    second = None
+    if state == "concurrent":
+        # a second run of the same case into the same directory at the same time
+        second = subprocess.Popen([binary, "case.nml", "--quiet"], cwd=folder,
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                  start_new_session=True)
     try:
         out, err = p.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
         timed_out = True
         os.killpg(p.pid, signal.SIGKILL)
         out, err = p.communicate()
+    extra = []
+    if second is not None:
+        try:
+            out2, err2 = second.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(second.pid, signal.SIGKILL)
+            out2, err2 = second.communicate()
+            extra.append("timeout")
+        err2 = err2.decode("utf-8", "replace")
+        if second.returncode not in (0, 1, 2, 3) or any(c in err2 for c in CRASH_PATTERNS):
+            extra.append("crash:concurrent_run")
+        if second.returncode == 3 and "being written by another" not in err2 \
+                and "being written by another" not in err.decode("utf-8", "replace"):
+            extra.append("concurrent:unexplained_exit3")
+        err = err + b"--- stderr of the concurrent run (exit %d)\n" % second.returncode + \
+            err2.encode()
     elapsed = time.monotonic() - t0
     out = out.decode("utf-8", "replace")
     err = err.decode("utf-8", "replace")
@@ -795,7 +841,9 @@ def run_one(binary, tmp, i, data, desc, outdir, timeout, state=None, checkpoint=
         d = m.group(2).replace("''", "'") if m.group(2) is not None \
             else m.group(3).replace('""', '"')
         outdirs.append(os.fsdecode(d.encode("latin-1")))  # the bytes the program sees
-    cls = classify(p.returncode, out, err, elapsed, timed_out, folder, outdirs, before, planted)
+    cls = classify(p.returncode, out, err.split("--- stderr of the concurrent")[0], elapsed,
+                   timed_out, folder, outdirs, before, planted)
+    cls = sorted(set(cls + extra))
     # result files planted as if by an earlier run must be gone after a run that wrote a summary
     summary = os.path.join(folder, outdir, "summary.nml")
     if os.path.exists(summary) and not timed_out and p.returncode in (0, 2):
@@ -838,7 +886,7 @@ def main():
         r = srng.random()
         state, cp = None, b""
         if r < 0.10:
-            state = srng.choice(["stale_results", "stale_lock", "garbage_lock", "stale_tmp",
+            state = srng.choice(["concurrent", "concurrent", "stale_results", "stale_lock", "garbage_lock", "stale_tmp",
                                  "file_in_place"])
         elif r < 0.13 and good_checkpoint:
             cp, d = damage_checkpoint(good_checkpoint, srng)

@@ -35,8 +35,11 @@ contains
         character(len=:), allocatable :: s
         call check(t, stderr_line("stickslip: error: a.nml: &hbm rho = 1") == &
                    "stickslip: error: a.nml: &hbm rho = 1", "fuzz: plain message unchanged")
-        s = stderr_line("x 'a"//achar(143)//achar(10)//"b' y")
-        call check(t, s == "x 'a\x8F\x0Ab' y", "fuzz: raw bytes shown as \xNN", s)
+        s = stderr_line("x 'a"//achar(143)//achar(13)//achar(27)//"b' y")
+        call check(t, s == "x 'a\x8F\x0D\x1Bb' y", "fuzz: raw bytes shown as \xNN", s)
+        s = stderr_line("no case file given"//new_line('a')//"usage: stickslip CASE.nml")
+        call check(t, s == "no case file given"//new_line('a')//"usage: stickslip CASE.nml", &
+                   "fuzz: the line feeds of the usage text are kept", s)
         s = stderr_line("cannot create "//repeat("d", 5000)//" : denied")
         call check(t, len(s) < 200 .and. index(s, "...(5000 characters)...") > 0 .and. &
                    index(s, ": denied") > 0 .and. index(s, "cannot create dddd") == 1, &

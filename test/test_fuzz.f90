@@ -26,6 +26,7 @@ contains
         call test_raw_bytes_in_string(t)
         call test_failed_picture_removed(t)
         call test_reference_energy_nan(t)
+        call test_directory_is_a_file(t)
     end subroutine run_fuzz_tests
 
     !> stderr_line: bytes outside printable ASCII as \xNN, a long run without blanks cut in
@@ -111,4 +112,32 @@ contains
                    index(err, "NaN") > 0, "fuzz: a NaN energy balance of the reference is "// &
                    "untrusted (exit 2)", err)
     end subroutine test_reference_energy_nan
+
+    !> An output directory that is an existing file, or below one: exit 3 with a message
+    !> naming the case file, the directory and the component in the way (it was
+    !> "<directory>: cannot create the output directory", which reads as if the directory
+    !> were the case file).
+    subroutine test_directory_is_a_file(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: file = scratch//"/fuzz_plain_file"
+        character(len=:), allocatable :: out, err
+        integer :: code
+        call write_lines(file, [character(len=10) :: "not a dir"])
+        call write_lines(scratch//"/fuzz_dir_file.nml", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0 /", &
+            "&output directory = '"//file//"/sub' /"])
+        call cli([character(len=200) :: scratch//"/fuzz_dir_file.nml", "--quiet"], code, out, err)
+        call check(t, code == 3 .and. index(err, "stickslip: error: "//scratch// &
+                   "/fuzz_dir_file.nml: cannot create the output directory '"//file// &
+                   "/sub': '"//file//"' exists and is not a directory") == 1, &
+                   "fuzz: an output directory below a file: exit 3 naming both", err)
+        call write_lines(scratch//"/fuzz_dir_file.nml", [character(len=120) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0 /", &
+            "&output directory = '"//file//"' /"])
+        call cli([character(len=200) :: scratch//"/fuzz_dir_file.nml", "--quiet"], code, out, err)
+        call check(t, code == 3 .and. index(err, "'"//file//"': it exists and is not a "// &
+                   "directory") > 0, "fuzz: an output directory that is a file: exit 3", err)
+    end subroutine test_directory_is_a_file
 end module test_fuzz

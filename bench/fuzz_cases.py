@@ -196,6 +196,64 @@ def ill_conditioned_cases():
     return c
 
 
+def random_physical_case(rng):
+    """A valid case with random physics: a chain of 1..5 DOFs with random masses, springs
+    (some zero), damping (often none), forcing terms and contacts (some relative)."""
+    n = rng.randint(1, 5)
+    lg = lambda a, b: 10 ** rng.uniform(a, b)
+    scale = lg(-6, 6) if rng.random() < 0.3 else 1.0
+    m = [lg(-1, 1) * scale for _ in range(n)]
+    springs = [0.0 if rng.random() < 0.1 else lg(-1, 1) * scale for _ in range(n)]
+    M = [[0.0] * n for _ in range(n)]
+    K = [[0.0] * n for _ in range(n)]
+    for i in range(n):
+        M[i][i] = m[i]
+        K[i][i] += springs[i]
+        if i > 0:
+            K[i][i] += springs[i - 1] * 0.5
+            K[i - 1][i - 1] += springs[i - 1] * 0.5
+            K[i][i - 1] -= springs[i - 1] * 0.5
+            K[i - 1][i] -= springs[i - 1] * 0.5
+    flat = lambda A: ", ".join("%.9g" % A[i][j] for j in range(n) for i in range(n))
+    system = [("ndof", str(n)), ("mass", flat(M)), ("stiffness", flat(K))]
+    if rng.random() < 0.5:
+        a, b = rng.choice([0, lg(-4, -1)]), rng.choice([0, lg(-4, -1)])
+        system.append(("damping", flat([[a * M[i][j] + b * K[i][j] for j in range(n)]
+                                         for i in range(n)])))
+    nf = rng.randint(1, 3)
+    forcing = [("omega", "%.9g" % lg(-2, 1.5)),
+               ("force_dof", ", ".join(str(rng.randint(1, n)) for _ in range(nf))),
+               ("force_amplitude", ", ".join("%.6g" % (lg(-2, 2) * scale) for _ in range(nf))),
+               ("force_harmonic", ", ".join(str(rng.choice([0, 1, 1, 1, 2, 3, 5]))
+                                            for _ in range(nf))),
+               ("force_phase", ", ".join("%.4g" % rng.uniform(-7, 7) for _ in range(nf)))]
+    case = [("system", system), ("forcing", forcing)]
+    nc = rng.randint(0, 3)
+    if nc:
+        d1 = [rng.randint(1, n) for _ in range(nc)]
+        d2 = [rng.choice([0, 0] + [k for k in range(1, n + 1) if k != d1[c]]) for c in range(nc)]
+        case.append(("friction", [("contact_dof", ", ".join(map(str, d1))),
+                                  ("contact_dof2", ", ".join(map(str, d2))),
+                                  ("mu", ", ".join("%.4g" % lg(-3, 1) for _ in range(nc))),
+                                  ("normal_load", ", ".join("%.4g" % (lg(-2, 2) * scale)
+                                                            for _ in range(nc)))]))
+    h = rng.choice([1, 2, 3, 5, 8, 15, 30, 40])
+    samples = rng.choice([2 * h + 1, 2 * h + 2, 4 * h, 64, 256, 1024])
+    samples = max(samples, 2 * h + 1)
+    hbm = [("harmonics", str(h)), ("samples", str(samples)),
+           ("rho", rng.choice(["0", "0", "0.2", "%.3g" % lg(-3, 3)]))]
+    if rng.random() < 0.3:
+        hbm.append(("odd_only", ".true."))
+    if rng.random() < 0.2:
+        hbm.append(("start", rng.choice(["'direct'", "'ladder'"])))
+    if rng.random() < 0.2:
+        hbm.append(("stability", ".true."))
+    if rng.random() < 0.1:
+        hbm.append(("verify_periods", "3"))
+    case.append(("hbm", hbm))
+    return case
+
+
 def example_cases():
     return [("seed", seed_case()), ("chain4", chain4_case()), ("mirrored", mirrored_case()),
             ("many_sticks", many_sticks_case()),
@@ -531,7 +589,10 @@ def text_mutation(text, rng):
 def generate(i, rng):
     """Case number i: (text bytes, description, output directory relative to the run folder)."""
     pool = example_cases() + ill_conditioned_cases()
-    name, case = rng.choice(pool)
+    if rng.random() < 0.3:
+        name, case = "random_physics", random_physical_case(rng)
+    else:
+        name, case = rng.choice(pool)
     method = rng.choice(METHODS + ["hbm", "hbm", "all", "reference"])
     case = case + method_groups(rng, method)
     if method != "hbm" or rng.random() < 0.5:
@@ -877,6 +938,10 @@ def main():
     ap.add_argument("--keep", action="store_true", help="keep the temporary directory")
     ap.add_argument("--no-build", action="store_true")
     ap.add_argument("--binary")
+    ap.add_argument("--state-share", type=float, default=0.10,
+                    help="share of runs whose output directory holds an earlier run's state")
+    ap.add_argument("--checkpoint-share", type=float, default=0.03,
+                    help="share of runs that resume a sweep from a damaged checkpoint")
     args = ap.parse_args()
 
     if args.binary:
@@ -896,10 +961,10 @@ def main():
     for i, data, desc, od in cases:
         r = srng.random()
         state, cp = None, b""
-        if r < 0.10:
+        if r < args.state_share:
             state = srng.choice(["concurrent", "concurrent", "stale_results", "stale_lock", "garbage_lock", "stale_tmp",
                                  "file_in_place"])
-        elif r < 0.13 and good_checkpoint:
+        elif r < args.state_share + args.checkpoint_share and good_checkpoint:
             cp, d = damage_checkpoint(good_checkpoint, srng)
             data = (CHECKPOINT_CASE % 800).encode()
             desc, od, state = "sweep resume; " + d, "out", "checkpoint"

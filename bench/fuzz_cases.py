@@ -586,6 +586,9 @@ def text_mutation(text, rng):
     return text, "noop"
 
 
+MAX_MUTATIONS = [3]
+
+
 def generate(i, rng):
     """Case number i: (text bytes, description, output directory relative to the run folder)."""
     pool = example_cases() + ill_conditioned_cases()
@@ -610,7 +613,8 @@ def generate(i, rng):
     if r < 0.2:
         nmut = 0  # valid (or ill-conditioned) case as is
     else:
-        nmut = rng.choice([1, 1, 1, 2, 3])
+        nmut = rng.choice([1, 1, 1, 2, 3] if MAX_MUTATIONS[0] <= 3
+                          else list(range(1, MAX_MUTATIONS[0] + 1)))
     textmuts = []
     for _ in range(nmut):
         if rng.random() < 0.65:
@@ -969,7 +973,10 @@ def main():
                     help="share of runs whose output directory holds an earlier run's state")
     ap.add_argument("--checkpoint-share", type=float, default=0.03,
                     help="share of runs that resume a sweep from a damaged checkpoint")
+    ap.add_argument("--max-mutations", type=int, default=3,
+                    help="most mutations per case (default 3: 1 to 3, mostly 1)")
     args = ap.parse_args()
+    MAX_MUTATIONS[0] = args.max_mutations
 
     if args.binary:
         binary = os.path.abspath(args.binary)

@@ -65,8 +65,8 @@ module stickslip_cli
 
 contains
 
-    !> Parse the arguments. Errors (stat input): an unknown option, no case file, more than
-    !> one case file.
+    !> Parse the arguments (`--` ends the options: what follows is the case file). Errors
+    !> (stat input): an unknown option, no case file, more than one case file.
     subroutine parse_args(args, opts, error)
         !> The arguments (without the program name).
         type(string_t), intent(in) :: args(:)
@@ -75,8 +75,23 @@ contains
         !> Set on a usage error.
         type(error_type), allocatable, intent(out) :: error
         integer :: i
+        logical :: options_end
+        options_end = .false.
         do i = 1, size(args)
+            if (options_end) then
+                ! after "--" every argument is a file name (a case file named "-x.nml")
+                if (allocated(opts%case_path)) then
+                    call fatal_error(error, "one case file at a time (got '"//opts%case_path// &
+                                     "' and '"//args(i)%s//"')"//new_line('a')//usage, &
+                                     stickslip_stat%input)
+                    return
+                end if
+                opts%case_path = args(i)%s
+                cycle
+            end if
             select case (args(i)%s)
+            case ("--")
+                options_end = .true.
             case ("--quiet", "-q")
                 opts%quiet = .true.
             case ("--help", "-h")
@@ -128,6 +143,7 @@ contains
         type(case_t) :: case
         type(run_result_t) :: result
         type(progress_t) :: progress
+        integer :: k
 
         code = 0
         call parse_args(args, opts, error)
@@ -143,7 +159,14 @@ contains
             call read_case(opts%case_path, case, error)
         end if
         if (allocated(error)) then
-            write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message)
+            ! a usage error carries the usage text (our own, several lines) after its message
+            k = index(error%message, new_line('a')//usage)
+            if (k > 0) then
+                write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message(1:k - 1))
+                write (err_unit, '(a)') usage
+            else
+                write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message)
+            end if
             code = exit_code_of(error%stat)
             return
         end if
@@ -503,10 +526,9 @@ contains
         write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, summary.nml}"
     end subroutine print_robustness_summary
 
-    !> `text` made fit for standard error: every byte outside printable ASCII but the line
-    !> feed (control characters, bytes of a binary or non-ASCII file that a message quotes;
-    !> a case file's value cannot hold a line feed, the usage text of a usage error does)
-    !> shown as \xNN, and every run of more than 120 characters without a blank (a
+    !> `text` made fit for one line of standard error: every byte outside printable ASCII
+    !> (control characters, a line feed in a file name, bytes of a binary or non-ASCII file
+    !> that a message quotes) shown as \xNN, and every run of more than 120 characters without a blank (a
     !> 5000-character directory name) cut to its first and last 50 characters around
     !> "...(<n> characters)...". Messages stay one readable line whatever the case file held.
     pure function stderr_line(text) result(line)
@@ -520,7 +542,7 @@ contains
         escaped = ""
         do i = 1, len(text)
             k = modulo(iachar(text(i:i)), 256)
-            if ((k >= 32 .and. k <= 126) .or. k == 10) then
+            if (k >= 32 .and. k <= 126) then
                 escaped = escaped//text(i:i)
             else
                 escaped = escaped//"\x"//hex(k/16 + 1:k/16 + 1)//hex(mod(k, 16) + 1:mod(k, 16) + 1)
@@ -530,14 +552,14 @@ contains
         n = len(escaped)
         i = 1
         do while (i <= n)
-            if (escaped(i:i) == ' ' .or. escaped(i:i) == new_line('a')) then
-                line = line//escaped(i:i)
+            if (escaped(i:i) == ' ') then
+                line = line//' '
                 i = i + 1
                 cycle
             end if
             j = i
             do while (j < n)
-                if (escaped(j + 1:j + 1) == ' ' .or. escaped(j + 1:j + 1) == new_line('a')) exit
+                if (escaped(j + 1:j + 1) == ' ') exit
                 j = j + 1
             end do
             if (j - i + 1 > 120) then

@@ -27,6 +27,7 @@ contains
         call test_failed_picture_removed(t)
         call test_reference_energy_nan(t)
         call test_directory_is_a_file(t)
+        call test_usage_lines(t)
     end subroutine run_fuzz_tests
 
     !> stderr_line: bytes outside printable ASCII as \xNN, a long run without blanks cut in
@@ -38,9 +39,9 @@ contains
                    "stickslip: error: a.nml: &hbm rho = 1", "fuzz: plain message unchanged")
         s = stderr_line("x 'a"//achar(143)//achar(13)//achar(27)//"b' y")
         call check(t, s == "x 'a\x8F\x0D\x1Bb' y", "fuzz: raw bytes shown as \xNN", s)
-        s = stderr_line("no case file given"//new_line('a')//"usage: stickslip CASE.nml")
-        call check(t, s == "no case file given"//new_line('a')//"usage: stickslip CASE.nml", &
-                   "fuzz: the line feeds of the usage text are kept", s)
+        s = stderr_line("stickslip: error: nl"//new_line('a')//"x.nml: &hbm")
+        call check(t, s == "stickslip: error: nl\x0Ax.nml: &hbm", &
+                   "fuzz: a line feed (in a file name) keeps the message on one line", s)
         s = stderr_line("cannot create "//repeat("d", 5000)//" : denied")
         call check(t, len(s) < 200 .and. index(s, "...(5000 characters)...") > 0 .and. &
                    index(s, ": denied") > 0 .and. index(s, "cannot create dddd") == 1, &
@@ -140,4 +141,28 @@ contains
         call check(t, code == 3 .and. index(err, "'"//file//"': it exists and is not a "// &
                    "directory") > 0, "fuzz: an output directory that is a file: exit 3", err)
     end subroutine test_directory_is_a_file
+
+    !> A usage error: one `stickslip: error:` line, then the usage text as it is (its own
+    !> lines, not \x0A); `--` ends the options, so a case file named "-x.nml" can be run.
+    subroutine test_usage_lines(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: out, err
+        integer :: code
+        call cli([character(len=20) :: "--bogus"], code, out, err)
+        call check(t, code == 1 .and. index(err, "stickslip: error: unknown option '--bogus'"// &
+                   new_line('a')//"usage: stickslip CASE.nml") == 1 .and. &
+                   index(err, "\x0A") == 0, "fuzz: usage error on one line, usage below", err)
+        call write_lines("-fuzz_dash.nml", [character(len=80) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0 /", &
+            "&friction contact_dof = 2, mu = -0.45, normal_load = 1.0 /"])
+        call cli([character(len=20) :: "--quiet", "--", "-fuzz_dash.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "stickslip: error: -fuzz_dash.nml: &friction") &
+                   == 1, "fuzz: '--' ends the options", err)
+        open (newunit=code, file="-fuzz_dash.nml", status='old')
+        close (code, status='delete')
+        call cli([character(len=20) :: "--", "a.nml", "b.nml"], code, out, err)
+        call check(t, code == 1 .and. index(err, "one case file at a time") > 0, &
+                   "fuzz: '--' and two files: a usage error", err)
+    end subroutine test_usage_lines
 end module test_fuzz

@@ -16,7 +16,7 @@ a summary.nml that does not say `trusted = F` and result files without NaN. Anyt
 failure class; every failing case is written to the report folder with its stdout and stderr.
 
     python3 bench/fuzz_cases.py [--count 2000] [--seed 1] [--jobs 2] [--timeout 20]
-                                [--report fuzz_report] [--keep] [--no-build] [--binary PATH]
+                                [--report build/fuzz_report] [--keep] [--no-build] [--binary PATH]
 
 Deterministic for a given --seed (the cases; run times and timeouts depend on the machine).
 """
@@ -965,7 +965,9 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=20.0)
-    ap.add_argument("--report", default="fuzz_report")
+    ap.add_argument("--report", default=os.path.join(ROOT, "build", "fuzz_report"),
+                    help="folder for the failing cases (its case* files of an earlier "
+                         "campaign are removed first)")
     ap.add_argument("--keep", action="store_true", help="keep the temporary directory")
     ap.add_argument("--no-build", action="store_true")
     ap.add_argument("--binary")
@@ -1003,9 +1005,10 @@ def main():
             data = (CHECKPOINT_CASE % 800).encode()
             desc, od, state = "sweep resume; " + d, "out", "checkpoint"
         jobs.append((i, data, desc, od, state, cp))
-    if os.path.isdir(args.report):
-        shutil.rmtree(args.report)
-    os.makedirs(args.report)
+    os.makedirs(args.report, exist_ok=True)
+    for old in glob.glob(os.path.join(args.report, "case[0-9]*.nml")) + \
+            glob.glob(os.path.join(args.report, "case[0-9]*.txt")):
+        os.remove(old)
     t0 = time.monotonic()
     counts = {}
     exits = {}

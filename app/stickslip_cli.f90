@@ -26,7 +26,8 @@ module stickslip_cli
     use stickslip_files, only: remove_file
     implicit none
     private
-    public :: string_t, cli_options_t, parse_args, run_cli, report_run, stderr_line
+    public :: string_t, cli_options_t, parse_args, run_cli, report_run, stderr_line, &
+        with_exponent_e
 
 
     !> A string, for arrays of arguments of different lengths.
@@ -45,6 +46,9 @@ module stickslip_cli
         !> Print the version and exit.
         logical :: version = .false.
     end type cli_options_t
+
+    !> A line of the human summary before emit writes it.
+    character(len=2000) :: buffer = ''
 
     character(len=*), parameter :: usage = &
         "usage: stickslip CASE.nml [--quiet] [--help] [--version]"//new_line('a')// &
@@ -332,9 +336,10 @@ contains
         type(hbm_checks_t), intent(in) :: checks
         integer :: j
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
-        write (u, '(a,es9.2,a,i0,a,i0,a,i0,a,f0.3,a)') "  converged: residual ", sol%fnorm, &
+        write (buffer, '(a,es9.2,a,i0,a,i0,a,i0,a,f0.3,a)') "  converged: residual ", sol%fnorm, &
             " (hybrj info ", sol%info, ", ", sol%nfev, " evaluations, ", sol%njev, &
             " Jacobians) in ", 1.0e3_dp*sol%seconds, " ms"
+        call emit(u)
         write (u, '(a,i0,a,a,a,i0,a,g0.4)') "  basis: harmonics ", sol%harmonics, " (", &
             trim(merge("odd only", "all     ", sol%odd_only)), "), samples ", sol%samples, &
             ", rho ", sol%rho
@@ -347,24 +352,35 @@ contains
                 "; stuck all period: mean force set to the admissible value closest to 0"
             write (u, '(a)') ""
         end do
-        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+        write (buffer, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') &
+            "  energy per period [J]: forcing ", &
             sol%work_forcing, ", friction ", sol%diss_friction, ", damping ", sol%diss_damping, &
             " (balance error ", energy_balance_error(sol), ")"
-        if (checks%truncation%available) write (u, '(a,es9.2,a,i0,a)') &
-            "  truncation error estimate ", checks%truncation%estimate, " (relative; vs H = ", &
-            checks%truncation%coarse_harmonics, " and the oversampled Coulomb defect)"
-        if (checks%truncation%tolerance > 0.0_dp) write (u, '(a,es9.2,a)') &
-            "  harmonics_tol ", checks%truncation%tolerance, &
-            trim(merge(" met                                  ", &
-                       " NOT met: max_harmonics reached       ", checks%truncation%met))
+        call emit(u)
+        if (checks%truncation%available) then
+            write (buffer, '(a,es9.2,a,i0,a)') &
+                "  truncation error estimate ", checks%truncation%estimate, " (relative; vs H = ", &
+                checks%truncation%coarse_harmonics, " and the oversampled Coulomb defect)"
+            call emit(u)
+        end if
+        if (checks%truncation%tolerance > 0.0_dp) then
+            write (buffer, '(a,es9.2,a)') &
+                "  harmonics_tol ", checks%truncation%tolerance, &
+                trim(merge(" met                                  ", &
+                           " NOT met: max_harmonics reached       ", checks%truncation%met))
+            call emit(u)
+        end if
         if (checks%stability) write (u, '(a)') "  stability: "//checks%floquet%diagnosis
         if (allocated(checks%notes)) then
             if (len(checks%notes) > 0) write (u, '(a)') "  note: "//checks%notes
         end if
         if (allocated(checks%defect)) then
-            if (size(checks%defect) > 0) write (u, '(a,i0,a,es9.2)') &
-                "  periodicity defect of the exact flow after ", size(checks%defect), &
-                " period(s): ", checks%defect(size(checks%defect))
+            if (size(checks%defect) > 0) then
+                write (buffer, '(a,i0,a,es9.2)') &
+                    "  periodicity defect of the exact flow after ", size(checks%defect), &
+                    " period(s): ", checks%defect(size(checks%defect))
+                call emit(u)
+            end if
         end if
         write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, summary.nml}"
     end subroutine print_summary
@@ -375,9 +391,10 @@ contains
         type(euler_result_t), intent(in) :: res
         integer :: j
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
-        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: periodic after ", &
+        write (buffer, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: periodic after ", &
             res%periods, " periods of ", case%euler%steps_per_period, " steps (defect ", &
             res%defect, ") in ", 1.0e3_dp*res%seconds, " ms"
+        call emit(u)
         do j = 1, size(res%r, 2)
             write (u, '(a,i0,a,g0.4,a,g0.4,a)') "  contact ", j, ": max |r| ", &
                 maxval(abs(res%r(:, j))), " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
@@ -399,10 +416,11 @@ contains
         type(case_t), intent(in) :: case
         type(reference_result_t), intent(in) :: ref
         integer :: j, k
-        write (u, '(a,es9.2,a,i0,a,i0,a,a,a,f0.3,a,f0.3,a)') "  exact reference: periodic "// &
+        write (buffer, '(a,es9.2,a,i0,a,i0,a,a,a,f0.3,a,f0.3,a)') "  exact reference: periodic "// &
             "(defect ", ref%defect, ", ", ref%nfev, " period maps, ", ref%njev, &
             " monodromies) from the ", ref%start, " start in ", 1.0e3_dp*ref%seconds, &
             " ms CPU (start ", 1.0e3_dp*ref%start_seconds, " ms)"
+        call emit(u)
         do j = 1, size(ref%stick_fraction)
             write (u, '(a,i0,a,f0.1,a,i0,a)', advance='no') "  contact ", j, ": sticks ", &
                 100*ref%stick_fraction(j), "% of the period in ", ref%stick_phases(j), &
@@ -413,9 +431,11 @@ contains
             end do
             write (u, '(a,g0.4,a)') " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
         end do
-        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+        write (buffer, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') &
+            "  energy per period [J]: forcing ", &
             ref%work_forcing, ", friction ", ref%diss_friction, ", damping ", ref%diss_damping, &
             " (balance error ", reference_balance_error(ref), ")"
+        call emit(u)
     end subroutine print_reference_lines
 
     subroutine print_side_by_side_summary(u, case, sbs)
@@ -424,12 +444,14 @@ contains
         type(side_by_side_t), intent(in) :: sbs
         integer :: k
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
-        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  weighted residual: H = ", &
+        write (buffer, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  weighted residual: H = ", &
             sbs%hbm%harmonics, ", ", sbs%hbm%nfev, " evaluations, residual ", sbs%hbm%fnorm, &
             ", ", 1.0e3_dp*sbs%hbm_seconds, " ms CPU"
-        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: ", &
+        call emit(u)
+        write (buffer, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: ", &
             case%euler%steps_per_period, " steps/period, periodic after ", sbs%euler%periods, &
             " periods (defect ", sbs%euler%defect, "), ", 1.0e3_dp*sbs%euler_seconds, " ms CPU"
+        call emit(u)
         call print_reference_lines(u, case, sbs%reference)
         write (u, '(a,i0,a)') "  differences on the common grid (", sbs%grid, &
             " points per period), relative to each quantity's amplitude, worst DOF/contact:"
@@ -447,8 +469,9 @@ contains
         type(comparison_t), intent(in) :: cmp
         character(len=26) :: label
         label = "    "//cmp%method//" vs "//cmp%against
-        write (u, '(a,6es10.2)') label, cmp%worst('x'), cmp%worst('v'), cmp%worst('r'), &
+        write (buffer, '(a,6es10.2)') label, cmp%worst('x'), cmp%worst('v'), cmp%worst('r'), &
             cmp%worst('x', .true.), cmp%worst('v', .true.), cmp%worst('r', .true.)
+        call emit(u)
     end subroutine print_comparison
 
     subroutine print_study_summary(u, case, study)
@@ -464,14 +487,16 @@ contains
         do k = 1, size(study%rows)
             associate (row => study%rows(k))
                 if (allocated(row%cmp%max_error)) then
-                    write (u, '(4x,a6,i11,i9,a6,es10.2,3es10.2)') trim(row%method), &
+                    write (buffer, '(4x,a6,i11,i9,a6,es10.2,3es10.2)') trim(row%method), &
                         row%parameter, row%samples, merge("   yes", "    no", row%converged), &
                         row%cpu_seconds, row%cmp%worst('x'), row%cmp%worst('v'), &
                         row%cmp%worst('r')
+                    call emit(u)
                 else
-                    write (u, '(4x,a6,i11,i9,a6,es10.2,a)') trim(row%method), row%parameter, &
+                    write (buffer, '(4x,a6,i11,i9,a6,es10.2,a)') trim(row%method), row%parameter, &
                         row%samples, merge("   yes", "    no", row%converged), &
                         row%cpu_seconds, "  (no solution)"
+                    call emit(u)
                 end if
             end associate
         end do
@@ -528,9 +553,10 @@ contains
 
     !> `text` made fit for one line of standard error: every byte outside printable ASCII
     !> (control characters, a line feed in a file name, bytes of a binary or non-ASCII file
-    !> that a message quotes) shown as \xNN, and every run of more than 120 characters without a blank (a
-    !> 5000-character directory name) cut to its first and last 50 characters around
-    !> "...(<n> characters)...". Messages stay one readable line whatever the case file held.
+    !> that a message quotes) shown as \xNN, and every run of more than 120 characters
+    !> without a blank (a 5000-character directory name) cut to its first and last 50
+    !> characters around "...(<n> characters)...". Messages stay one readable line whatever
+    !> the case file held.
     pure function stderr_line(text) result(line)
         !> The message.
         character(len=*), intent(in) :: text
@@ -545,7 +571,8 @@ contains
             if (k >= 32 .and. k <= 126) then
                 escaped = escaped//text(i:i)
             else
-                escaped = escaped//"\x"//hex(k/16 + 1:k/16 + 1)//hex(mod(k, 16) + 1:mod(k, 16) + 1)
+                escaped = escaped//"\x"//hex(k/16 + 1:k/16 + 1)// &
+                    hex(mod(k, 16) + 1:mod(k, 16) + 1)
             end if
         end do
         line = ""
@@ -572,4 +599,47 @@ contains
             i = j + 1
         end do
     end function stderr_line
+    !> Write `buffer` (a line of the human summary) on unit `u`, with the `E` that an ES edit
+    !> descriptor drops from a three-digit exponent put back: `1.80+284` becomes `1.80E+284`.
+    subroutine emit(u)
+        integer, intent(in) :: u
+        write (u, '(a)') with_exponent_e(trim(buffer))
+    end subroutine emit
+
+    !> `s` with an `E` inserted in every number of the form `<digit>.<digits><sign><3 digits>`
+    !> (what `ESw.d` prints for |exponent| > 99); other text unchanged.
+    pure function with_exponent_e(s) result(t)
+        !> A formatted line.
+        character(len=*), intent(in) :: s
+        character(len=:), allocatable :: t
+        integer :: i, k
+        logical :: mantissa
+        t = ""
+        do i = 1, len(s)
+            if ((s(i:i) == '+' .or. s(i:i) == '-') .and. i > 3 .and. i + 3 <= len(s)) then
+                mantissa = is_digit(s(i - 1:i - 1))
+                k = i - 1
+                do while (k > 1 .and. mantissa)
+                    if (.not. is_digit(s(k:k))) exit
+                    k = k - 1
+                end do
+                mantissa = mantissa .and. s(k:k) == '.' .and. k > 1
+                if (mantissa) mantissa = is_digit(s(k - 1:k - 1))
+                if (mantissa .and. is_digit(s(i + 1:i + 1)) .and. is_digit(s(i + 2:i + 2)) .and. &
+                    is_digit(s(i + 3:i + 3))) then
+                    if (i + 4 > len(s)) then
+                        t = t//'E'
+                    else if (.not. is_digit(s(i + 4:i + 4))) then
+                        t = t//'E'
+                    end if
+                end if
+            end if
+            t = t//s(i:i)
+        end do
+    contains
+        pure logical function is_digit(c)
+            character(len=1), intent(in) :: c
+            is_digit = c >= '0' .and. c <= '9'
+        end function is_digit
+    end function with_exponent_e
 end module stickslip_cli

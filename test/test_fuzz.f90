@@ -2,7 +2,8 @@
 !> command line): every run ends with a clear one-line message or a result, never a runtime
 !> error, raw bytes on standard error or a temporary file left behind.
 module test_fuzz
-    use stickslip_cli, only: stderr_line
+    use stickslip_cli, only: stderr_line, with_exponent_e
+    use stickslip_kinds, only: dp
     use stickslip_files, only: make_directory
     use stickslip_error, only: error_type
     use test_case, only: write_lines, scratch
@@ -28,6 +29,7 @@ contains
         call test_reference_energy_nan(t)
         call test_directory_is_a_file(t)
         call test_usage_lines(t)
+        call test_exponent_e(t)
     end subroutine run_fuzz_tests
 
     !> stderr_line: bytes outside printable ASCII as \xNN, a long run without blanks cut in
@@ -165,4 +167,16 @@ contains
         call check(t, code == 1 .and. index(err, "one case file at a time") > 0, &
                    "fuzz: '--' and two files: a usage error", err)
     end subroutine test_usage_lines
+
+    !> The human summary puts back the E that ES drops from a three-digit exponent
+    !> (fuzz: force_amplitude = 1e308 printed "friction  1.8000+284").
+    subroutine test_exponent_e(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=40) :: buf
+        write (buf, '(a,es11.4,a,es9.2)') "friction ", 1.8e284_dp, ", tol ", 9.0e-302_dp
+        call check(t, with_exponent_e(trim(buf)) == "friction  1.8000E+284, tol  9.00E-302", &
+                   "fuzz: E put back in three-digit exponents", with_exponent_e(trim(buf)))
+        call check(t, with_exponent_e("H = 30-100, x 1.5E-02, t=.00001, 2.5-1234") == &
+                   "H = 30-100, x 1.5E-02, t=.00001, 2.5-1234", "fuzz: other text unchanged")
+    end subroutine test_exponent_e
 end module test_fuzz

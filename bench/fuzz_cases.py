@@ -1027,7 +1027,9 @@ def main():
                 re.search(r"&study\b[^/]*?steps_per_period\s*=", low)
             if cls == ["timeout"] and (re.search(r"delete &(robustness|study)|"
                                                  r"rename &(robustness|study)", desc) or
-                                       (re.search(r"&(robustness|study)\b", low) and not grid)):
+                                       ((re.search(r"&(robustness|study)\b", low) or
+                                         re.search(r"method\s*=\s*['\"](robustness|study)",
+                                                   low)) and not grid)):
                 # the method's default grid (README: ~20 s for the robustness example) was
                 # asked for: slow by request, not a hang
                 cls = []

@@ -23,9 +23,11 @@ module stickslip_cli
     use stickslip_flow, only: event_name
     use stickslip_summary, only: energy_balance_error, reference_balance_error
     use stickslip_gnuplot, only: run_gnuplot, rename_pictures
+    use stickslip_files, only: remove_file
     implicit none
     private
-    public :: string_t, cli_options_t, parse_args, run_cli, report_run
+    public :: string_t, cli_options_t, parse_args, run_cli, report_run, stderr_line, &
+        with_exponent_e
 
 
     !> A string, for arrays of arguments of different lengths.
@@ -44,6 +46,9 @@ module stickslip_cli
         !> Print the version and exit.
         logical :: version = .false.
     end type cli_options_t
+
+    !> A line of the human summary before emit writes it.
+    character(len=2000) :: buffer = ''
 
     character(len=*), parameter :: usage = &
         "usage: stickslip CASE.nml [--quiet] [--help] [--version]"//new_line('a')// &
@@ -64,8 +69,8 @@ module stickslip_cli
 
 contains
 
-    !> Parse the arguments. Errors (stat input): an unknown option, no case file, more than
-    !> one case file.
+    !> Parse the arguments (`--` ends the options: what follows is the case file). Errors
+    !> (stat input): an unknown option, no case file, more than one case file.
     subroutine parse_args(args, opts, error)
         !> The arguments (without the program name).
         type(string_t), intent(in) :: args(:)
@@ -74,8 +79,23 @@ contains
         !> Set on a usage error.
         type(error_type), allocatable, intent(out) :: error
         integer :: i
+        logical :: options_end
+        options_end = .false.
         do i = 1, size(args)
+            if (options_end) then
+                ! after "--" every argument is a file name (a case file named "-x.nml")
+                if (allocated(opts%case_path)) then
+                    call fatal_error(error, "one case file at a time (got '"//opts%case_path// &
+                                     "' and '"//args(i)%s//"')"//new_line('a')//usage, &
+                                     stickslip_stat%input)
+                    return
+                end if
+                opts%case_path = args(i)%s
+                cycle
+            end if
             select case (args(i)%s)
+            case ("--")
+                options_end = .true.
             case ("--quiet", "-q")
                 opts%quiet = .true.
             case ("--help", "-h")
@@ -127,6 +147,7 @@ contains
         type(case_t) :: case
         type(run_result_t) :: result
         type(progress_t) :: progress
+        integer :: k
 
         code = 0
         call parse_args(args, opts, error)
@@ -142,7 +163,14 @@ contains
             call read_case(opts%case_path, case, error)
         end if
         if (allocated(error)) then
-            write (err_unit, '(a)') "stickslip: error: "//error%message
+            ! a usage error carries the usage text (our own, several lines) after its message
+            k = index(error%message, new_line('a')//usage)
+            if (k > 0) then
+                write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message(1:k - 1))
+                write (err_unit, '(a)') usage
+            else
+                write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message)
+            end if
             code = exit_code_of(error%stat)
             return
         end if
@@ -183,11 +211,11 @@ contains
             call report_findings(result%diagnostics, err_unit, code)
         end if
         if (allocated(error)) then
-            write (err_unit, '(a)') "stickslip: error: "//error%message
+            write (err_unit, '(a)') stderr_line("stickslip: error: "//error%message)
             code = exit_code_of(error%stat)
             if (error%stat == stickslip_stat%numerical .and. allocated(case%directory) .and. &
-                result%summary_written) write (err_unit, '(a)') &
-                "stickslip: the summary was written to "//case%directory//"/summary.nml"
+                result%summary_written) write (err_unit, '(a)') stderr_line( &
+                "stickslip: the summary was written to "//case%directory//"/summary.nml")
             return
         end if
         if (.not. quiet) then
@@ -224,7 +252,7 @@ contains
         if (.not. allocated(found%items)) return
         do k = 1, size(found%items)
             if (found%items(k)%level == level_warning) write (u, '(a)') &
-                "stickslip: warning: "//found%items(k)%message
+                stderr_line("stickslip: warning: "//found%items(k)%message)
         end do
         do k = 1, size(found%items)
             if (found%items(k)%level >= level_untrusted) then
@@ -232,8 +260,8 @@ contains
                 if (present(said)) then
                     if (index(said, found%items(k)%message) > 0) cycle
                 end if
-                write (u, '(a)') "stickslip: error: the answer cannot be trusted: "// &
-                    found%items(k)%message
+                write (u, '(a)') stderr_line("stickslip: error: the answer cannot be "// &
+                    "trusted: "//found%items(k)%message)
             end if
         end do
     end subroutine report_findings
@@ -286,14 +314,18 @@ contains
     subroutine draw(directory, script, pngs, err_unit)
         character(len=*), intent(in) :: directory, script, pngs(:)
         integer, intent(in) :: err_unit
-        integer :: status
+        integer :: status, k
         status = run_gnuplot(directory, script)
         if (status == 0) then
             call rename_pictures(directory, pngs)
         else
-            write (err_unit, '(a)') "stickslip: warning: pictures not drawn (gnuplot "// &
-                "not found or it failed); draw them later with: cd "//directory// &
-                " && gnuplot "//script
+            ! a gnuplot that failed may have left a partial picture under its temporary name
+            do k = 1, size(pngs)
+                call remove_file(directory//'/'//trim(pngs(k))//'.tmp')
+            end do
+            write (err_unit, '(a)') stderr_line("stickslip: warning: pictures not drawn "// &
+                "(gnuplot not found or it failed); draw them later with: cd "//directory// &
+                " && gnuplot "//script)
         end if
     end subroutine draw
 
@@ -304,9 +336,10 @@ contains
         type(hbm_checks_t), intent(in) :: checks
         integer :: j
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
-        write (u, '(a,es9.2,a,i0,a,i0,a,i0,a,f0.3,a)') "  converged: residual ", sol%fnorm, &
+        write (buffer, '(a,es9.2,a,i0,a,i0,a,i0,a,f0.3,a)') "  converged: residual ", sol%fnorm, &
             " (hybrj info ", sol%info, ", ", sol%nfev, " evaluations, ", sol%njev, &
             " Jacobians) in ", 1.0e3_dp*sol%seconds, " ms"
+        call emit(u)
         write (u, '(a,i0,a,a,a,i0,a,g0.4)') "  basis: harmonics ", sol%harmonics, " (", &
             trim(merge("odd only", "all     ", sol%odd_only)), "), samples ", sol%samples, &
             ", rho ", sol%rho
@@ -319,24 +352,35 @@ contains
                 "; stuck all period: mean force set to the admissible value closest to 0"
             write (u, '(a)') ""
         end do
-        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+        write (buffer, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') &
+            "  energy per period [J]: forcing ", &
             sol%work_forcing, ", friction ", sol%diss_friction, ", damping ", sol%diss_damping, &
             " (balance error ", energy_balance_error(sol), ")"
-        if (checks%truncation%available) write (u, '(a,es9.2,a,i0,a)') &
-            "  truncation error estimate ", checks%truncation%estimate, " (relative; vs H = ", &
-            checks%truncation%coarse_harmonics, " and the oversampled Coulomb defect)"
-        if (checks%truncation%tolerance > 0.0_dp) write (u, '(a,es9.2,a)') &
-            "  harmonics_tol ", checks%truncation%tolerance, &
-            trim(merge(" met                                  ", &
-                       " NOT met: max_harmonics reached       ", checks%truncation%met))
+        call emit(u)
+        if (checks%truncation%available) then
+            write (buffer, '(a,es9.2,a,i0,a)') &
+                "  truncation error estimate ", checks%truncation%estimate, " (relative; vs H = ", &
+                checks%truncation%coarse_harmonics, " and the oversampled Coulomb defect)"
+            call emit(u)
+        end if
+        if (checks%truncation%tolerance > 0.0_dp) then
+            write (buffer, '(a,es9.2,a)') &
+                "  harmonics_tol ", checks%truncation%tolerance, &
+                trim(merge(" met                                  ", &
+                           " NOT met: max_harmonics reached       ", checks%truncation%met))
+            call emit(u)
+        end if
         if (checks%stability) write (u, '(a)') "  stability: "//checks%floquet%diagnosis
         if (allocated(checks%notes)) then
             if (len(checks%notes) > 0) write (u, '(a)') "  note: "//checks%notes
         end if
         if (allocated(checks%defect)) then
-            if (size(checks%defect) > 0) write (u, '(a,i0,a,es9.2)') &
-                "  periodicity defect of the exact flow after ", size(checks%defect), &
-                " period(s): ", checks%defect(size(checks%defect))
+            if (size(checks%defect) > 0) then
+                write (buffer, '(a,i0,a,es9.2)') &
+                    "  periodicity defect of the exact flow after ", size(checks%defect), &
+                    " period(s): ", checks%defect(size(checks%defect))
+                call emit(u)
+            end if
         end if
         write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, summary.nml}"
     end subroutine print_summary
@@ -347,9 +391,10 @@ contains
         type(euler_result_t), intent(in) :: res
         integer :: j
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
-        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: periodic after ", &
+        write (buffer, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: periodic after ", &
             res%periods, " periods of ", case%euler%steps_per_period, " steps (defect ", &
             res%defect, ") in ", 1.0e3_dp*res%seconds, " ms"
+        call emit(u)
         do j = 1, size(res%r, 2)
             write (u, '(a,i0,a,g0.4,a,g0.4,a)') "  contact ", j, ": max |r| ", &
                 maxval(abs(res%r(:, j))), " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
@@ -371,10 +416,11 @@ contains
         type(case_t), intent(in) :: case
         type(reference_result_t), intent(in) :: ref
         integer :: j, k
-        write (u, '(a,es9.2,a,i0,a,i0,a,a,a,f0.3,a,f0.3,a)') "  exact reference: periodic "// &
+        write (buffer, '(a,es9.2,a,i0,a,i0,a,a,a,f0.3,a,f0.3,a)') "  exact reference: periodic "// &
             "(defect ", ref%defect, ", ", ref%nfev, " period maps, ", ref%njev, &
             " monodromies) from the ", ref%start, " start in ", 1.0e3_dp*ref%seconds, &
             " ms CPU (start ", 1.0e3_dp*ref%start_seconds, " ms)"
+        call emit(u)
         do j = 1, size(ref%stick_fraction)
             write (u, '(a,i0,a,f0.1,a,i0,a)', advance='no') "  contact ", j, ": sticks ", &
                 100*ref%stick_fraction(j), "% of the period in ", ref%stick_phases(j), &
@@ -385,9 +431,11 @@ contains
             end do
             write (u, '(a,g0.4,a)') " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
         end do
-        write (u, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') "  energy per period [J]: forcing ", &
+        write (buffer, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') &
+            "  energy per period [J]: forcing ", &
             ref%work_forcing, ", friction ", ref%diss_friction, ", damping ", ref%diss_damping, &
             " (balance error ", reference_balance_error(ref), ")"
+        call emit(u)
     end subroutine print_reference_lines
 
     subroutine print_side_by_side_summary(u, case, sbs)
@@ -396,12 +444,14 @@ contains
         type(side_by_side_t), intent(in) :: sbs
         integer :: k
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
-        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  weighted residual: H = ", &
+        write (buffer, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  weighted residual: H = ", &
             sbs%hbm%harmonics, ", ", sbs%hbm%nfev, " evaluations, residual ", sbs%hbm%fnorm, &
             ", ", 1.0e3_dp*sbs%hbm_seconds, " ms CPU"
-        write (u, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: ", &
+        call emit(u)
+        write (buffer, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  implicit Euler: ", &
             case%euler%steps_per_period, " steps/period, periodic after ", sbs%euler%periods, &
             " periods (defect ", sbs%euler%defect, "), ", 1.0e3_dp*sbs%euler_seconds, " ms CPU"
+        call emit(u)
         call print_reference_lines(u, case, sbs%reference)
         write (u, '(a,i0,a)') "  differences on the common grid (", sbs%grid, &
             " points per period), relative to each quantity's amplitude, worst DOF/contact:"
@@ -419,8 +469,9 @@ contains
         type(comparison_t), intent(in) :: cmp
         character(len=26) :: label
         label = "    "//cmp%method//" vs "//cmp%against
-        write (u, '(a,6es10.2)') label, cmp%worst('x'), cmp%worst('v'), cmp%worst('r'), &
+        write (buffer, '(a,6es10.2)') label, cmp%worst('x'), cmp%worst('v'), cmp%worst('r'), &
             cmp%worst('x', .true.), cmp%worst('v', .true.), cmp%worst('r', .true.)
+        call emit(u)
     end subroutine print_comparison
 
     subroutine print_study_summary(u, case, study)
@@ -436,14 +487,16 @@ contains
         do k = 1, size(study%rows)
             associate (row => study%rows(k))
                 if (allocated(row%cmp%max_error)) then
-                    write (u, '(4x,a6,i11,i9,a6,es10.2,3es10.2)') trim(row%method), &
+                    write (buffer, '(4x,a6,i11,i9,a6,es10.2,3es10.2)') trim(row%method), &
                         row%parameter, row%samples, merge("   yes", "    no", row%converged), &
                         row%cpu_seconds, row%cmp%worst('x'), row%cmp%worst('v'), &
                         row%cmp%worst('r')
+                    call emit(u)
                 else
-                    write (u, '(4x,a6,i11,i9,a6,es10.2,a)') trim(row%method), row%parameter, &
+                    write (buffer, '(4x,a6,i11,i9,a6,es10.2,a)') trim(row%method), row%parameter, &
                         row%samples, merge("   yes", "    no", row%converged), &
                         row%cpu_seconds, "  (no solution)"
+                    call emit(u)
                 end if
             end associate
         end do
@@ -497,4 +550,96 @@ contains
         end do
         write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, summary.nml}"
     end subroutine print_robustness_summary
+
+    !> `text` made fit for one line of standard error: every byte outside printable ASCII
+    !> (control characters, a line feed in a file name, bytes of a binary or non-ASCII file
+    !> that a message quotes) shown as \xNN, and every run of more than 120 characters
+    !> without a blank (a 5000-character directory name) cut to its first and last 50
+    !> characters around "...(<n> characters)...". Messages stay one readable line whatever
+    !> the case file held.
+    pure function stderr_line(text) result(line)
+        !> The message.
+        character(len=*), intent(in) :: text
+        character(len=:), allocatable :: line
+        character(len=*), parameter :: hex = '0123456789ABCDEF'
+        character(len=:), allocatable :: escaped
+        character(len=12) :: count
+        integer :: i, j, k, n
+        escaped = ""
+        do i = 1, len(text)
+            k = modulo(iachar(text(i:i)), 256)
+            if (k >= 32 .and. k <= 126) then
+                escaped = escaped//text(i:i)
+            else
+                escaped = escaped//"\x"//hex(k/16 + 1:k/16 + 1)// &
+                    hex(mod(k, 16) + 1:mod(k, 16) + 1)
+            end if
+        end do
+        line = ""
+        n = len(escaped)
+        i = 1
+        do while (i <= n)
+            if (escaped(i:i) == ' ') then
+                line = line//' '
+                i = i + 1
+                cycle
+            end if
+            j = i
+            do while (j < n)
+                if (escaped(j + 1:j + 1) == ' ') exit
+                j = j + 1
+            end do
+            if (j - i + 1 > 120) then
+                write (count, '(i0)') j - i + 1
+                line = line//escaped(i:i + 49)//"...("//trim(count)//" characters)..."// &
+                    escaped(j - 49:j)
+            else
+                line = line//escaped(i:j)
+            end if
+            i = j + 1
+        end do
+    end function stderr_line
+    !> Write `buffer` (a line of the human summary) on unit `u`, with the `E` that an ES edit
+    !> descriptor drops from a three-digit exponent put back: `1.80+284` becomes `1.80E+284`.
+    subroutine emit(u)
+        integer, intent(in) :: u
+        write (u, '(a)') with_exponent_e(trim(buffer))
+    end subroutine emit
+
+    !> `s` with an `E` inserted in every number of the form `<digit>.<digits><sign><3 digits>`
+    !> (what `ESw.d` prints for |exponent| > 99); other text unchanged.
+    pure function with_exponent_e(s) result(t)
+        !> A formatted line.
+        character(len=*), intent(in) :: s
+        character(len=:), allocatable :: t
+        integer :: i, k
+        logical :: mantissa
+        t = ""
+        do i = 1, len(s)
+            if ((s(i:i) == '+' .or. s(i:i) == '-') .and. i > 3 .and. i + 3 <= len(s)) then
+                mantissa = is_digit(s(i - 1:i - 1))
+                k = i - 1
+                do while (k > 1 .and. mantissa)
+                    if (.not. is_digit(s(k:k))) exit
+                    k = k - 1
+                end do
+                mantissa = mantissa .and. s(k:k) == '.' .and. k > 1
+                if (mantissa) mantissa = is_digit(s(k - 1:k - 1))
+                if (mantissa .and. is_digit(s(i + 1:i + 1)) .and. is_digit(s(i + 2:i + 2)) .and. &
+                    is_digit(s(i + 3:i + 3))) then
+                    if (i + 4 > len(s)) then
+                        t = t//'E'
+                    else if (.not. is_digit(s(i + 4:i + 4))) then
+                        t = t//'E'
+                    end if
+                end if
+            end if
+            t = t//s(i:i)
+        end do
+    contains
+        pure logical function is_digit(c)
+            character(len=1), intent(in) :: c
+            is_digit = c >= '0' .and. c <= '9'
+        end function is_digit
+    end function with_exponent_e
 end module stickslip_cli

@@ -28,6 +28,7 @@ program tester
     use test_api, only: run_api_tests
     use test_trust, only: run_trust_tests
     use test_case_messages, only: run_case_messages_tests
+    use test_fuzz, only: run_fuzz_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -65,6 +66,7 @@ program tester
     if (selected("api")) call run_api_tests(t)
     if (selected("case_messages")) call run_case_messages_tests(t)
     if (selected("trust")) call run_trust_tests(t)
+    if (selected("fuzz")) call run_fuzz_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

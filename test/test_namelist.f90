@@ -226,6 +226,13 @@ contains
         call expect(t, "overflowing real", "&hbm rho = 1e400 /", &
                     [character(len=40) :: "&hbm rho = 1e400", "not a finite number"], &
                     "hbm", "rho", "real")
+        ! fuzz: a nonzero literal that underflows to 0 must not pass for 0 (rho = 0: automatic)
+        call expect(t, "real underflow", "&hbm rho = 1e-400 /", &
+                    [character(len=40) :: "&hbm rho = 1e-400", "underflows to 0"], &
+                    "hbm", "rho", "real")
+        call expect(t, "real underflow, long literal", "&hbm rho = 0."//repeat("0", 400)//"1 /", &
+                    [character(len=40) :: "&hbm rho = 0.000", "underflows to 0"], &
+                    "hbm", "rho", "real")
         call expect(t, "bad logical", "&hbm odd_only = yes /", &
                     [character(len=40) :: "&hbm odd_only = yes", "not a logical"], &
                     "hbm", "odd_only", "logical")

@@ -590,7 +590,13 @@ contains
             return
         end if
         call make_directory(case%directory, error)
-        if (allocated(error)) return
+        if (allocated(error)) then
+            ! an I/O error, but one the case file's &output directory asked for: name both
+            if (allocated(case%path)) then
+                if (len(case%path) > 0) error%message = case%path//": "//error%message
+            end if
+            return
+        end if
         call acquire_lock(lock, case%directory, error)
     end subroutine open_output
 

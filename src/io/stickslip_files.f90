@@ -84,13 +84,15 @@ module stickslip_files
 contains
 
     !> Create directory `path` and its missing parents (like mkdir -p). Error (stat io) when
-    !> a component cannot be created.
+    !> a component cannot be created: "cannot create the output directory '<path>': <part>
+    !> exists and is not a directory" (or "...: cannot create <part>").
     subroutine make_directory(path, error)
         !> Directory path.
         character(len=*), intent(in) :: path
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         integer :: k, stat
+        logical :: exists
         do k = 1, len(path)
             if (k < len(path) .and. path(k:k) /= '/') cycle
             if (k == 1 .and. path(1:1) == '/') cycle
@@ -102,8 +104,34 @@ contains
                 stat = c_mkdir(path//c_null_char, int(o'755', c_int))
             end if
         end do
-        if (.not. is_directory(path)) call fatal_error(error, path// &
-            ": cannot create the output directory", stickslip_stat%io)
+        if (is_directory(path)) return
+        ! say which component is in the way
+        do k = 1, len(path)
+            if (k < len(path) .and. path(k:k) /= '/') cycle
+            if (k == 1 .and. path(1:1) == '/') cycle
+            if (path(k:k) == '/') then
+                if (is_directory(path(1:k - 1))) cycle
+                inquire (file=path(1:k - 1), exist=exists)
+                if (exists) then
+                    call fatal_error(error, "cannot create the output directory '"//path// &
+                                     "': '"//path(1:k - 1)//"' exists and is not a directory", &
+                                     stickslip_stat%io)
+                else
+                    call fatal_error(error, "cannot create the output directory '"//path// &
+                                     "': cannot create '"//path(1:k - 1)//"'", stickslip_stat%io)
+                end if
+                return
+            end if
+        end do
+        inquire (file=path, exist=exists)
+        if (exists) then
+            call fatal_error(error, "cannot create the output directory '"//path//"': it "// &
+                             "exists and is not a directory", stickslip_stat%io)
+        else
+            call fatal_error(error, "cannot create the output directory '"//path//"' "// &
+                             "(permission denied, read-only file system or name too long)", &
+                             stickslip_stat%io)
+        end if
     end subroutine make_directory
 
     logical function is_directory(path)

@@ -380,7 +380,7 @@ contains
         type(nml_token_t), intent(in) :: token
         real(dp), intent(out) :: value
         character(len=:), allocatable, intent(out) :: why
-        integer :: stat
+        integer :: stat, k
         character(len=:), allocatable :: t
         value = 0.0_dp
         why = ""
@@ -403,7 +403,14 @@ contains
         if (stat /= 0 .or. .not. ieee_is_finite(value)) then
             why = "not a finite number (out of the range of a double)"
             value = 0.0_dp
+            return
         end if
+        ! a nonzero literal that underflows to 0 (1e-400) must not pass for 0 (rho = 0
+        ! means "automatic")
+        k = scan(t, 'ed')
+        if (k == 0) k = len(t) + 1
+        if (value == 0.0_dp .and. scan(t(1:k - 1), '123456789') > 0) &
+            why = "too small: underflows to 0 (the smallest double is about 4.9e-324)"
     end subroutine to_real
 
     !> Whether s is a Fortran real literal: [sign] digits [. digits] [e|d [sign] digits].

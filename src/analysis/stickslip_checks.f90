@@ -140,13 +140,13 @@ contains
         end if
         if (checks%truncation%available) then
             if (checks%truncation%estimate > truncation_untrusted) then
-                write (buf, '(a,es9.2,a,f4.2,a)') "truncation error estimate ", &
+                write (buf, '(a,es10.2e3,a,f4.2,a)') "truncation error estimate ", &
                     checks%truncation%estimate, " > ", truncation_untrusted, ": the harmonics "// &
                     "do not resolve the response; raise harmonics (and samples) or set "// &
                     "harmonics_tol"
                 call checks%diagnostics%add(level_untrusted, "truncation", trim(buf))
             else if (checks%truncation%estimate > truncation_warning) then
-                write (buf, '(a,es9.2,a,f4.2,a)') "truncation error estimate ", &
+                write (buf, '(a,es10.2e3,a,f4.2,a)') "truncation error estimate ", &
                     checks%truncation%estimate, " > ", truncation_warning, ": raise "// &
                     "harmonics or set harmonics_tol"
                 call checks%diagnostics%add(level_warning, "truncation", trim(buf))

@@ -285,7 +285,7 @@ contains
             end if
             if (h >= max_harmonics) then
                 sol = cur
-                write (buf, '(a,es9.2,a,i0,a,es9.2)') "tolerance ", tol, &
+                write (buf, '(a,es10.2e3,a,i0,a,es10.2e3)') "tolerance ", tol, &
                     " not met at max_harmonics = ", h, ": estimate ", est%estimate
                 est%note = trim(buf)
                 exit

@@ -584,7 +584,7 @@ contains
             level = level_warning
             if (self%level(i) == level_untrusted .and. self%count(i) == self%points) &
                 level = level_untrusted
-            write (buf, '(i0,a,i0,a,es12.5,a)') self%count(i), " of ", self%points, &
+            write (buf, '(i0,a,i0,a,es13.5e3,a)') self%count(i), " of ", self%points, &
                 " points failed the check '"//trim(self%key(i))//"' (the first at "// &
                 trim(parameter)//" = ", self%first(i), "): see the points' columns"
             call diag%add(level, "points_"//trim(self%key(i)), trim(buf))

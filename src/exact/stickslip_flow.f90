@@ -489,7 +489,7 @@ contains
                 zero_length = 0
             end if
             if (zero_length > max_zero_length + 2*self%nc) then
-                write (buf, '(a,es12.5,a)') "no consistent contact mode at t = ", te, &
+                write (buf, '(a,es13.5e3,a)') "no consistent contact mode at t = ", te, &
                     " s: the contacts switch again at the same instant"
                 call fail(trim(buf))
                 return

@@ -210,12 +210,12 @@ contains
         e = reference_energy_error(res)
         ! NaN (work integrals that overflowed) fails the check too
         if (.not. (e <= energy_untrusted)) then
-            write (buf, '(a,es9.2,a,es9.2,a)') "reference: energy balance error ", e, &
+            write (buf, '(a,es10.2e3,a,es10.2e3,a)') "reference: energy balance error ", e, &
                 " > ", energy_untrusted, " of the work per period: the orbit is not a "// &
                 "solution of the model"
             call res%diagnostics%add(level_untrusted, "energy_balance", trim(buf))
         else if (e > energy_warning) then
-            write (buf, '(a,es9.2,a,es9.2,a)') "reference: energy balance error ", e, &
+            write (buf, '(a,es10.2e3,a,es10.2e3,a)') "reference: energy balance error ", e, &
                 " > ", energy_warning, " of the work per period"
             call res%diagnostics%add(level_warning, "energy_balance", trim(buf))
         end if
@@ -224,7 +224,7 @@ contains
             limit = model%mu(j)*model%normal_load(j)
             excess = maxval(abs(res%r(:, j))) - limit
             if (excess > coulomb_margin*max(limit, tiny(1.0_dp))) then
-                write (buf, '(a,i0,a,es11.4,a,es11.4,a)') "reference: contact ", j, &
+                write (buf, '(a,i0,a,es12.4e3,a,es12.4e3,a)') "reference: contact ", j, &
                     " breaks Coulomb's law: max |r| = ", maxval(abs(res%r(:, j))), &
                     " > mu N = ", limit, " [N]"
                 call res%diagnostics%add(level_untrusted, "coulomb_law", trim(buf))
@@ -345,7 +345,7 @@ contains
         if (res%converged) then
             res%diagnosis = ""
         else
-            write (buf, '(a,es9.2,a,es9.2,a,i0,a,i0,a)') "shooting from the "//name// &
+            write (buf, '(a,es10.2e3,a,es10.2e3,a,i0,a,i0,a)') "shooting from the "//name// &
                 " start did not converge: periodicity defect ", res%defect, " > tol ", &
                 opts%tol, " (hybrj info ", report%info, ", ", report%nfev, &
                 " period maps). The start may be too far from the orbit or the orbit may "// &

@@ -172,7 +172,7 @@ contains
             fl%verdict = 'unstable'
             fl%stable = .false.
             fl%asymptotic = .false.
-            write (buf, '(a,i0,a,es12.5,a,f9.5,a)') "unstable: ", &
+            write (buf, '(a,i0,a,es13.5e3,a,f9.5,a)') "unstable: ", &
                 count(modulus > 1.0_dp + fl%tol), &
                 " multiplier(s) outside the unit circle, the largest of modulus ", &
                 fl%max_modulus, " (argument ", atan2(aimag(fl%multipliers(1)), &
@@ -182,14 +182,14 @@ contains
             fl%verdict = 'stable'
             fl%stable = .true.
             fl%asymptotic = .true.
-            write (buf, '(a,es12.5,a)') "asymptotically stable: largest multiplier modulus ", &
+            write (buf, '(a,es13.5e3,a)') "asymptotically stable: largest multiplier modulus ", &
                 fl%max_modulus, " < 1"
             fl%diagnosis = trim(buf)
         else
             fl%verdict = 'marginal'
             fl%stable = .true.
             fl%asymptotic = .false.
-            write (buf, '(a,i0,a,es9.2,a)') "marginal: ", fl%nmarginal, &
+            write (buf, '(a,i0,a,es10.2e3,a)') "marginal: ", fl%nmarginal, &
                 " multiplier(s) on the unit circle within ", fl%tol, &
                 " (an undamped mode, or a contact stuck all period); Lyapunov-stable to "// &
                 "first order, not asymptotically"
@@ -302,7 +302,7 @@ contains
         distance = max(maxval(abs(sol%x - xr))/ampx, maxval(abs(sol%v - vr))/ampv)
         fl%distance = distance
         if (distance > max_orbit_distance) then
-            write (buf, '(a,es9.2,a)') "the exact orbit shot from the weighted-residual "// &
+            write (buf, '(a,es10.2e3,a)') "the exact orbit shot from the weighted-residual "// &
                 "solution differs from it by ", distance, " of its amplitude: possibly "// &
                 "another periodic solution; the multipliers are that orbit's: "
             fl%diagnosis = trim(buf)//fl%diagnosis

@@ -186,7 +186,7 @@ contains
         if (.not. sol%converged) then
             block
                 character(len=400) :: buf
-                write (buf, '(a,es10.3,a,es10.3,a,i0,a,i0,a,i0,a)') &
+                write (buf, '(a,es11.3e3,a,es11.3e3,a,i0,a,i0,a,i0,a)') &
                     "not converged: residual ||F|| = ", sol%fnorm, " > tol * fscale = ", &
                     target_norm, " (hybrj info ", sol%info, ", ", sol%nfev, &
                     " evaluations, ", sol%hybrj_calls, " hybrj calls). Try &hbm start = "// &
@@ -462,14 +462,14 @@ contains
         if (.not. sol%converged) &
             call sol%diagnostics%add(level_untrusted, "not_converged", sol%diagnosis)
         if (prob%nc > 0 .and. rho_out_of_band(model, opts%rho)) then
-            write (buf, '(a,es10.2e3,a,es10.2e3,a,es8.1,a,es8.1,a)') "rho = ", opts%rho, &
+            write (buf, '(a,es10.2e3,a,es10.2e3,a,es9.1e3,a,es9.1e3,a)') "rho = ", opts%rho, &
                 " is ", rho_ratio(model, opts%rho), " times the contact mobility (outside ", &
                 rho_ratio_min, " .. ", rho_ratio_max, "): the friction equality cannot "// &
                 "resolve the forces; use &hbm rho = 0 (automatic)"
             call sol%diagnostics%add(level_untrusted, "rho_out_of_range", trim(buf))
         end if
         if (prob%dyn%relative_conditioning < near_singular_threshold) then
-            write (buf, '(a,i0,a,g0.6,a,es9.2,a,es8.1,a)') "near an undamped resonance at "// &
+            write (buf, '(a,i0,a,g0.6,a,es10.2e3,a,es9.1e3,a)') "near an undamped resonance at "// &
                 "harmonic h = ", prob%dyn%worst_harmonic, " (h omega = ", &
                 prob%dyn%worst_harmonic*model%omega, " rad/s): the dynamic stiffness is "// &
                 "nearly singular (relative conditioning ", prob%dyn%relative_conditioning, &
@@ -497,11 +497,11 @@ contains
             real(dp), intent(in) :: value, warn, untrusted
             character(len=300) :: text
             if (.not. (value <= untrusted)) then
-                write (text, '(a,es10.2e3,a,es9.2)') "weighted residual: "//what//" ", value, &
+                write (text, '(a,es10.2e3,a,es10.2e3)') "weighted residual: "//what//" ", value, &
                     " > ", untrusted
                 call sol%diagnostics%add(level_untrusted, key, trim(text))
             else if (value > warn) then
-                write (text, '(a,es10.2e3,a,es9.2)') "weighted residual: "//what//" ", value, &
+                write (text, '(a,es10.2e3,a,es10.2e3)') "weighted residual: "//what//" ", value, &
                     " > ", warn
                 call sol%diagnostics%add(level_warning, key, trim(text))
             end if

@@ -154,7 +154,7 @@ contains
             end do
             if (s(k:k) == '.') s(k:k) = ' '
         else
-            write (s, '(es10.2)') x
+            write (s, '(es11.2e3)') x
             s = adjustl(s)
         end if
     end function gfmt

@@ -157,11 +157,11 @@ contains
             end if
             if (.not. (rcond >= singular_threshold .and. rel >= singular_threshold)) then
                 if (h == 0) then
-                    write (buf, '(a,es9.2,a)') "the stiffness matrix K is singular (rcond = ", &
+                    write (buf, '(a,es10.2e3,a)') "the stiffness matrix K is singular (rcond = ", &
                         rcond, "): the static (zeroth-harmonic) response is undetermined; "// &
                         "restrain the rigid-body motion or set &hbm odd_only = .true."
                 else
-                    write (buf, '(a,i0,a,g0.6,a,es9.2,a)') "undamped resonance at harmonic h = ", &
+                    write (buf, '(a,i0,a,g0.6,a,es10.2e3,a)') "undamped resonance at harmonic h = ", &
                         h, " (h omega = ", h*model%omega, " rad/s): the dynamic stiffness "// &
                         "K - (h omega)^2 M + i h omega C is singular (relative conditioning ", &
                         rel, "): the weighted residual cannot condense the structure there (the "// &

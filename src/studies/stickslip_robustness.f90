@@ -390,7 +390,7 @@ contains
                 if (.not. sol%converged) then
                     block
                         character(len=80) :: buf
-                        write (buf, '(a,i0,a,es9.2)') "not converged: hybrj info ", &
+                        write (buf, '(a,i0,a,es10.2e3)') "not converged: hybrj info ", &
                             sol%info, "; ||F||/fscale = ", sol%fnorm/max(sol%fscale, tiny(1.0_dp))
                         row%diagnosis = trim(buf)
                     end block
@@ -458,7 +458,7 @@ contains
             character(len=80) :: buf
             row%success = robustness_success(row, opts%wrong_tol)
             if (row%converged .and. .not. row%success) then
-                write (buf, '(a,es9.2,a,es9.2)') "wrong solution: err_amplitude ", &
+                write (buf, '(a,es10.2e3,a,es10.2e3)') "wrong solution: err_amplitude ", &
                     row%err_amplitude, " > wrong_tol ", opts%wrong_tol
                 row%diagnosis = join(row%diagnosis, trim(buf))
             end if

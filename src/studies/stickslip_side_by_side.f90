@@ -175,7 +175,7 @@ contains
                     cycle
                 end if
                 e = displacement_difference(c)
-                write (buf, '(a,es9.2,a)') c%method//" and "//c%against//" differ by ", e, &
+                write (buf, '(a,es10.2e3,a)') c%method//" and "//c%against//" differ by ", e, &
                     " of the displacement amplitude"
                 if (.not. (e <= disagree_untrusted)) then
                     call diag%add(level_untrusted, key, trim(buf)//": at least one of them "// &

@@ -233,7 +233,7 @@ contains
         end do
 
         if (.not. res%periodic .and. .not. allocated(res%diagnosis)) then
-            write (buf, '(a,i0,a,es9.2,a,es9.2,a)') "no periodic state after ", res%periods, &
+            write (buf, '(a,i0,a,es10.2e3,a,es10.2e3,a)') "no periodic state after ", res%periods, &
                 " periods: the states one period apart still differ by ", res%defect, &
                 " of the amplitude (tol ", opts%tol, "); the response drifts, is "// &
                 "quasi-periodic or decays too slowly (raise &euler max_periods or add damping)"

@@ -17,6 +17,7 @@ contains
     subroutine run_compare_tests(t)
         type(test_counter_t), intent(inout) :: t
         call test_compare_samples(t)
+        call test_roundoff_amplitude(t)
         call test_evaluate_series(t)
     end subroutine run_compare_tests
 
@@ -70,6 +71,30 @@ contains
         if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
                                          "compare: different grids is an input error")
     end subroutine test_compare_samples
+
+    !> A DOF at rest up to roundoff (amplitude 1e-14 against 1 for the other DOF), where the
+    !> two solutions differ by roundoff: measured against the kind's largest amplitude, the
+    !> error is roundoff too, not 100% (the fuzzing found 'all' reporting 1.0 there).
+    subroutine test_roundoff_amplitude(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: ng = 8
+        real(dp) :: xa(ng, 2), va(ng, 2), ra(ng, 1), x(ng, 2), th(ng)
+        type(comparison_t) :: cmp
+        type(error_type), allocatable :: error
+        integer :: k
+        th = [(two_pi*k/ng, k=0, ng - 1)]
+        xa(:, 1) = cos(th)
+        xa(:, 2) = 1.0e-14_dp*sin(th)
+        x = xa
+        x(:, 2) = -1.0e-14_dp*sin(th)
+        va = 1.0_dp
+        ra = 1.0_dp
+        call compare_samples("hbm", x, va, ra, "reference", xa, va, ra, cmp, error)
+        call check_error(t, error, "compare: roundoff amplitude", .false.)
+        if (allocated(error)) return
+        call check(t, cmp%worst('x') < 1.0e-12_dp, "compare: a DOF at rest up to roundoff "// &
+                   "is measured against the largest x amplitude")
+    end subroutine test_roundoff_amplitude
 
     !> A hand-made solution u = c0 + a1 cos wt + b1 sin wt + a3 cos 3wt + b3 sin 3wt, its
     !> derivative as v and a friction force r = d0 + e3 sin 3wt, evaluated on 16 and on 4

@@ -10,6 +10,7 @@ module test_euler
     use stickslip_contact_solve, only: contact_forces
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_progress, only: progress_t
     use fixtures, only: seed_model, one_dof_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
@@ -24,7 +25,47 @@ contains
         call test_first_order(t)
         call test_no_periodic_state(t)
         call test_seed_against_hbm(t)
+        call test_progress(t)
     end subroutine run_euler_tests
+
+    !> Progress of the periods: with a unit, no delay and no interval, one line per period
+    !> not yet periodic, counting periods; the result is the same as without progress.
+    subroutine test_progress(t)
+        type(test_counter_t), intent(inout) :: t
+        type(euler_options_t) :: opts
+        type(euler_result_t) :: a, b
+        type(error_type), allocatable :: error
+        type(progress_t) :: p
+        integer :: u, stat, lines
+        character(len=200) :: line
+        logical :: worded
+        opts%steps_per_period = 200
+        opts%max_periods = 5
+        open (newunit=u, status='scratch', action='readwrite')
+        p = progress_t(unit=u, delay=0.0_dp, interval=0.0_dp)
+        p%label = 'euler'
+        p%items = 'periods'
+        call p%begin()
+        call integrate_euler(seed_model(), opts, a, error, progress=p)
+        if (allocated(error)) deallocate (error)
+        call integrate_euler(seed_model(), opts, b, error)
+        if (allocated(error)) deallocate (error)
+        rewind (u)
+        lines = 0
+        worded = .true.
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            lines = lines + 1
+            worded = worded .and. index(line, "stickslip: euler ") == 1 .and. &
+                     index(line, "/5 periods, periodicity defect") > 0
+        end do
+        close (u)
+        call check(t, lines == a%periods .and. .not. a%periodic .and. worded, &
+                   "euler: one progress line per period", line)
+        call check(t, a%periods == b%periods .and. all(a%x == b%x), &
+                   "euler: progress does not change the result")
+    end subroutine test_progress
 
     !> Coulomb's law between r and u = u_free + D r, up to tol.
     logical function coulomb_holds(d, ufree, limit, r, tol) result(ok)

@@ -16,6 +16,8 @@ module stickslip_progress
         integer :: unit = -1
         !> What progresses, e.g. 'sweep' (the word after 'stickslip: ').
         character(len=:), allocatable :: label
+        !> What is counted ('points' of a sweep or study, 'periods' of a time integration).
+        character(len=:), allocatable :: items
         !> Wall time before the first line [s] (short runs print nothing).
         real(dp) :: delay = 2.0_dp
         !> Shortest wall time between two lines [s].
@@ -59,7 +61,10 @@ contains
         integer(int64) :: now, rate
         real(dp) :: elapsed
         character(len=32) :: count, seconds
+        character(len=:), allocatable :: items
         if (self%unit == -1) return
+        items = "points"
+        if (allocated(self%items)) items = self%items
         call system_clock(now, rate)
         if (self%start < 0) self%start = now
         elapsed = real(now - self%start, dp)/real(max(rate, 1_int64), dp)
@@ -77,9 +82,9 @@ contains
         if (seconds(1:1) == '.') seconds = '0'//seconds(1:len(seconds) - 1)
         if (allocated(self%label)) then
             write (self%unit, '(a)') "stickslip: "//self%label//" "//trim(count)// &
-                " points, "//text//", "//trim(seconds)//" s"
+                " "//items//", "//text//", "//trim(seconds)//" s"
         else
-            write (self%unit, '(a)') "stickslip: progress "//trim(count)//" points, "// &
+            write (self%unit, '(a)') "stickslip: progress "//trim(count)//" "//items//", "// &
                 text//", "//trim(seconds)//" s"
         end if
         flush (self%unit)

@@ -100,7 +100,7 @@ contains
             result%diagnostics = hbm_findings(result%hbm, result%checks)
             result%summary_written = allocated(result%hbm%diagnosis)
         case ('euler')
-            call run_euler_case(case, result%euler, error)
+            call run_euler_case(case, result%euler, error, progress)
             result%diagnostics = result%euler%diagnostics
             result%summary_written = allocated(result%euler%diagnosis)
         case ('reference')
@@ -248,29 +248,38 @@ contains
     !> period, in the format and phase convention of hbm.csv) and summary.nml into
     !> case%directory. With no periodic state, only summary.nml is written (periodic = F and
     !> the diagnosis) and an error with stat numerical is returned. Other errors: stat input,
-    !> stat numerical (singular iteration matrix), stat io.
-    subroutine run_euler_case(case, res, error)
+    !> stat numerical (singular iteration matrix), stat io. With `progress`, a line per
+    !> period at most once a second.
+    subroutine run_euler_case(case, res, error, progress)
         !> The case to run.
         type(case_t), intent(in) :: case
         !> The integration result.
         type(euler_result_t), intent(out) :: res
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> Progress of the periods (optional).
+        type(progress_t), intent(inout), optional :: progress
         type(directory_lock_t) :: lock
         call open_output(case, lock, error)
         if (allocated(error)) return
-        call euler_run(case, res, error)
+        call euler_run(case, res, error, progress)
         call release_lock(lock)
         call name_case_file(case, error, ['opts'], ['euler'])
     end subroutine run_euler_case
 
-    subroutine euler_run(case, res, error)
+    subroutine euler_run(case, res, error, progress)
         type(case_t), intent(in) :: case
         type(euler_result_t), intent(out) :: res
         type(error_type), allocatable, intent(out) :: error
+        type(progress_t), intent(inout), optional :: progress
         type(error_type), allocatable :: io_error
         logical :: wanted
-        call integrate_euler(case%model, case%euler, res, error)
+        if (present(progress)) then
+            progress%items = 'periods'
+            call integrate_euler(case%model, case%euler, res, error, progress=progress)
+        else
+            call integrate_euler(case%model, case%euler, res, error)
+        end if
         call after_method(case, error, wanted)
         if (.not. wanted) return
         if (res%periodic) then

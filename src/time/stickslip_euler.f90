@@ -16,6 +16,7 @@ module stickslip_euler
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
+    use stickslip_progress, only: progress_t
     use stickslip_diagnostics, only: diagnostics_t, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
@@ -109,7 +110,7 @@ contains
     !> Not reaching a periodic state within max_periods is an outcome (res%periodic = F and a
     !> diagnosis: drift, quasi-periodic or unbounded response). Errors: stat input (invalid
     !> model or options), stat numerical (singular iteration matrix).
-    subroutine integrate_euler(model, opts, res, error, x0, v0)
+    subroutine integrate_euler(model, opts, res, error, x0, v0, progress)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Integration options.
@@ -122,7 +123,10 @@ contains
         real(dp), intent(in), optional :: x0(:)
         !> Initial velocities [m/s] (default 0).
         real(dp), intent(in), optional :: v0(:)
+        !> Progress of the periods (a line at most once a second when its unit is set).
+        type(progress_t), intent(inout), optional :: progress
         integer :: n, nc, ns, info, j, k, period, step, sweeps, i
+        character(len=40) :: defect_text
         real(dp) :: h, period_t, t, ampx, ampv, dx, dv
         real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), b(:), wk(:), x(:), v(:), &
                                  xstart(:), vstart(:), r(:), ufree(:), limit(:), famp(:), fph(:)
@@ -229,6 +233,10 @@ contains
             if (res%defect <= opts%tol) then
                 res%periodic = .true.
                 exit
+            end if
+            if (present(progress)) then
+                write (defect_text, '(a,es9.2e3)') "periodicity defect ", res%defect
+                call progress%report(period, opts%max_periods, trim(defect_text))
             end if
         end do
 

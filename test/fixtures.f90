@@ -13,6 +13,27 @@ module fixtures
     private
     public :: seed_model, damped_seed, chain_model, one_dof_model
     public :: scratch_dir, project_path, project_root, enter_project_root
+    public :: scratch, write_lines, good_system, good_forcing, good_friction, sweep_case
+
+    !> Scratch directory of the suites that write files, relative to the project root that
+    !> they enter first (enter_project_root). A constant: gfortran 12 corrupts memory on
+    !> [character(len=n) :: s//"x"] with a variable s.
+    character(len=*), parameter :: scratch = "build/test-scratch"
+    !> The seed case as case-file groups: the structure, its forcing, its contact.
+    character(len=*), parameter :: good_system = &
+        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /"
+    character(len=*), parameter :: good_forcing = "&forcing omega = 4.5, force_dof = 1, " // &
+        "force_amplitude = 10.0 /"
+    character(len=*), parameter :: good_friction = "&friction contact_dof = 2, mu = 0.45, " // &
+        "normal_load = 1.0 /"
+    !> A small forced-response curve of the damped seed structure (11 points or so).
+    character(len=*), parameter :: sweep_case(6) = [character(len=120) :: &
+        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1, damping = 0.06,-0.02,-0.02,0.04 /", &
+        "&forcing omega = 2.0, force_dof = 1, force_amplitude = 10.0 /", &
+        "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
+        "&hbm harmonics = 10, rho = 0.2, samples = 64 /", &
+        "&run method = 'sweep' /", &
+        "&sweep parameter = 'omega', start = 2.0, stop = 3.0, step = 0.1, max_step = 0.1 /"]
 
     !> Whether enter_project_root changed the working directory.
     logical, save :: entered = .false.
@@ -257,4 +278,16 @@ contains
         character(len=*), intent(in) :: path
         inquire (file=path//"/.", exist=is_directory)
     end function is_directory
+
+    !> Write `lines` (each trimmed) as the text file `path`.
+    subroutine write_lines(path, lines)
+        character(len=*), intent(in) :: path
+        character(len=*), intent(in) :: lines(:)
+        integer :: u, i
+        open (newunit=u, file=path, status='replace', action='write')
+        do i = 1, size(lines)
+            write (u, '(a)') trim(lines(i))
+        end do
+        close (u)
+    end subroutine write_lines
 end module fixtures

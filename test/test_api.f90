@@ -7,7 +7,7 @@ module test_api
         reference_start_options_t, reference_result_t, solve_reference_from_starts, level_warning, level_untrusted, &
         stickslip_version, stickslip_thread_safe
     use stickslip_io, only: case_t, read_case, run_result_t, run_method, method_names
-    use fixtures, only: seed_model, enter_project_root, project_path
+    use fixtures, only: seed_model, enter_project_root, project_path, scratch
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -69,7 +69,7 @@ contains
         call read_case(project_path("examples/chain4.nml"), c, error)
         call check_error(t, error, "api: read chain4.nml", .false.)
         if (allocated(error)) return
-        c%directory = "build/test-scratch/out_api"
+        c%directory = scratch//"/out_api"
         call run_method(c, res, error)
         call check_error(t, error, "api: run_method", .false.)
         if (allocated(error)) return

@@ -7,20 +7,12 @@ module test_case
     use stickslip_case, only: case_t, read_case, write_case
     use stickslip_files, only: make_directory
     use testing, only: test_counter_t, check, check_close, check_error
-    use fixtures, only: enter_project_root, project_path
+    use fixtures, only: enter_project_root, project_path, scratch, write_lines, good_system, &
+        good_forcing, good_friction
     implicit none
     private
-    public :: run_case_tests, write_lines, scratch
+    public :: run_case_tests
 
-    !> Scratch directory, relative to the project root that run_case_tests enters (a constant:
-    !> gfortran 12 corrupts memory on [character(len=n) :: s//"x"] with a variable s).
-    character(len=*), parameter :: scratch = "build/test-scratch"
-    character(len=*), parameter :: good_system = &
-        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /"
-    character(len=*), parameter :: good_forcing = "&forcing omega = 4.5, force_dof = 1, " // &
-        "force_amplitude = 10.0 /"
-    character(len=*), parameter :: good_friction = "&friction contact_dof = 2, mu = 0.45, " // &
-        "normal_load = 1.0 /"
     character(len=*), parameter :: good_hbm = "&hbm harmonics = 10, samples = 128 /"
 
 contains
@@ -41,17 +33,6 @@ contains
         call test_round_trip(t)
         call test_examples_as_gfortran(t)
     end subroutine run_case_tests
-
-    subroutine write_lines(path, lines)
-        character(len=*), intent(in) :: path
-        character(len=*), intent(in) :: lines(:)
-        integer :: u, i
-        open (newunit=u, file=path, status='replace', action='write')
-        do i = 1, size(lines)
-            write (u, '(a)') trim(lines(i))
-        end do
-        close (u)
-    end subroutine write_lines
 
     subroutine test_good_case(t)
         type(test_counter_t), intent(inout) :: t

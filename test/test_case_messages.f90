@@ -16,18 +16,12 @@ module test_case_messages
     use stickslip_case_messages, only: case_message, model_group
     use stickslip_files, only: make_directory
     use testing, only: test_counter_t, check, check_error
-    use fixtures, only: enter_project_root, damped_seed
+    use fixtures, only: enter_project_root, damped_seed, scratch, write_lines, good_system, &
+        good_forcing, good_friction
     implicit none
     private
     public :: run_case_messages_tests
 
-    character(len=*), parameter :: scratch = "build/test-scratch"
-    character(len=*), parameter :: good_system = &
-        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /"
-    character(len=*), parameter :: good_forcing = "&forcing omega = 4.5, force_dof = 1, " // &
-        "force_amplitude = 10.0 /"
-    character(len=*), parameter :: good_friction = "&friction contact_dof = 2, mu = 0.45, " // &
-        "normal_load = 1.0 /"
 
 contains
 
@@ -250,15 +244,4 @@ contains
                          [character(len=90) :: path//": &study samples: every entry must be "// &
                           ">= 0 (0: the &hbm samples)"])
     end subroutine test_host_and_case_study
-
-    subroutine write_lines(path, lines)
-        character(len=*), intent(in) :: path
-        character(len=*), intent(in) :: lines(:)
-        integer :: u, i
-        open (newunit=u, file=path, status='replace', action='write')
-        do i = 1, size(lines)
-            write (u, '(a)') trim(lines(i))
-        end do
-        close (u)
-    end subroutine write_lines
 end module test_case_messages

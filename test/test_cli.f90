@@ -14,27 +14,13 @@ module test_cli
     use stickslip_driver, only: run_result_t, run_method
     use stickslip_progress, only: progress_t
     use stickslip_summary, only: write_summary
-    use test_case, only: write_lines, scratch
     use testing, only: test_counter_t, check, check_close, check_error
-    use fixtures, only: enter_project_root, project_path
+    use fixtures, only: enter_project_root, project_path, scratch, write_lines, good_system, &
+        good_forcing, good_friction, sweep_case
     implicit none
     private
     public :: run_cli_tests, cli, summary_value, count_lines
 
-    character(len=*), parameter :: good_system = &
-        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /"
-    character(len=*), parameter :: good_forcing = "&forcing omega = 4.5, force_dof = 1, " // &
-        "force_amplitude = 10.0 /"
-    character(len=*), parameter :: good_friction = "&friction contact_dof = 2, mu = 0.45, " // &
-        "normal_load = 1.0 /"
-    !> A small forced-response curve.
-    character(len=*), parameter :: sweep_lines(6) = [character(len=120) :: &
-        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1, damping = 0.06,-0.02,-0.02,0.04 /", &
-        "&forcing omega = 2.0, force_dof = 1, force_amplitude = 10.0 /", &
-        "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
-        "&hbm harmonics = 10, rho = 0.2, samples = 64 /", &
-        "&run method = 'sweep' /", &
-        "&sweep parameter = 'omega', start = 2.0, stop = 3.0, step = 0.1, max_step = 0.1 /"]
 
 contains
 
@@ -306,7 +292,7 @@ contains
         call p%report(1, 1, "x")
         call check(t, p%lines == 0, "progress: off by default (unit -1)")
         close (u)
-        call write_lines(scratch//"/progress.nml", [character(len=120) :: sweep_lines, &
+        call write_lines(scratch//"/progress.nml", [character(len=120) :: sweep_case, &
             "&output directory = '"//dir//"' /"])
         call cli([character(len=200) :: scratch//"/progress.nml"], code, out, err, &
                  progress_interval=0.0_dp)
@@ -326,7 +312,7 @@ contains
         character(len=:), allocatable :: out, err
         integer :: code
         logical :: drawn
-        call write_lines(scratch//"/odd_sweep.nml", [character(len=160) :: sweep_lines, &
+        call write_lines(scratch//"/odd_sweep.nml", [character(len=160) :: sweep_case, &
             '&output directory = "'//dir//'" /'])
         call cli([character(len=200) :: scratch//"/odd_sweep.nml"], code, out, err)
         call check(t, code == 0 .and. exists(dir//"/frc.csv"), "odd directory: sweep written", err)
@@ -339,7 +325,7 @@ contains
                        "odd directory: one warning without gnuplot", err)
         end if
         call write_lines(scratch//"/odd_robustness.nml", [character(len=160) :: &
-            sweep_lines(1:4), "&run method = 'robustness' /", &
+            sweep_case(1:4), "&run method = 'robustness' /", &
             "&robustness omegas = 2.0, 4.5, mus = 0.45, harmonics = 5, rhos = 0.2, "// &
             "steps_per_period = 200 /", '&output directory = "'//dir//'" /'])
         call cli([character(len=200) :: scratch//"/odd_robustness.nml"], code, out, err)

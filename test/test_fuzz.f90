@@ -6,10 +6,9 @@ module test_fuzz
     use stickslip_kinds, only: dp
     use stickslip_files, only: make_directory
     use stickslip_error, only: error_type
-    use test_case, only: write_lines, scratch
     use test_cli, only: cli
     use testing, only: test_counter_t, check
-    use fixtures, only: enter_project_root
+    use fixtures, only: enter_project_root, write_lines, scratch
     implicit none
     private
     public :: run_fuzz_tests

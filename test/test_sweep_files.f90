@@ -9,9 +9,8 @@ module test_sweep_files
     use stickslip_driver, only: run_sweep_case
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
     use stickslip_files, only: make_directory
-    use test_case, only: write_lines, scratch
     use test_cli, only: cli
-    use fixtures, only: enter_project_root
+    use fixtures, only: enter_project_root, scratch, write_lines, sweep_case
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -25,13 +24,6 @@ module test_sweep_files
         procedure :: observe => killed_observe
     end type killed_writer_t
 
-    character(len=*), parameter :: lines_common(6) = [character(len=120) :: &
-        "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1, damping = 0.06,-0.02,-0.02,0.04 /", &
-        "&forcing omega = 2.0, force_dof = 1, force_amplitude = 10.0 /", &
-        "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
-        "&hbm harmonics = 10, rho = 0.2, samples = 64 /", &
-        "&run method = 'sweep' /", &
-        "&sweep parameter = 'omega', start = 2.0, stop = 3.0, step = 0.1, max_step = 0.1 /"]
 
 contains
 
@@ -54,7 +46,7 @@ contains
         character(len=2000) :: line
         integer :: code, u, stat, rows
         logical :: exists
-        call write_lines(dir//".nml", [lines_common(1:4), &
+        call write_lines(dir//".nml", [sweep_case(1:4), &
             "&run method = 'robustness' /" // repeat(' ', 0), &
             "&robustness omegas = 2.0, 4.5, mus = 0.45, harmonics = 5, rhos = 0.2, 0, "// &
             "steps_per_period = 500 /", "&output directory = '"//dir//"' /"])
@@ -75,7 +67,7 @@ contains
         call check(t, rows == 10, "robustness cli: one row per run")
         inquire (file=dir//"/robustness.gp", exist=exists)
         call check(t, exists, "robustness cli: robustness.gp written")
-        call write_lines(dir//".nml", [lines_common(1:4), &
+        call write_lines(dir//".nml", [sweep_case(1:4), &
             "&run method = 'robustness' /" // repeat(' ', 0), &
             "&robustness omegas = 2.0, -1.0 /", "&output directory = '"//dir//"' /"])
         call cli([character(len=200) :: dir//".nml"], code, out, err)
@@ -101,7 +93,7 @@ contains
         character(len=2000) :: line
         integer :: code, u, stat, rows
         logical :: exists
-        call write_lines(dir//".nml", [lines_common, &
+        call write_lines(dir//".nml", [sweep_case, &
             "&output directory = '"//dir//"' /" // repeat(' ', 0)])
         call cli([character(len=200) :: dir//".nml"], code, out, err)
         call check(t, code == 0, "sweep cli: exit 0", err)
@@ -151,7 +143,7 @@ contains
         type(error_type), allocatable :: error
         logical :: exists, same
         integer :: k
-        call write_lines(dir//".nml", [lines_common, "&output directory = '"//dir//"' /"])
+        call write_lines(dir//".nml", [sweep_case, "&output directory = '"//dir//"' /"])
         call read_case(dir//".nml", c, error)
         call check_error(t, error, "resume: read case", .false.)
         if (allocated(error)) return
@@ -219,7 +211,7 @@ contains
         character(len=*), parameter :: names(7) = [character(len=24) :: "huge unknowns", &
             "huge points", "negative points", "other ndof", "negative count", "truncated", &
             "garbage counts"]
-        call write_lines(dir//".nml", [lines_common, "&output directory = '"//dir//"' /"])
+        call write_lines(dir//".nml", [sweep_case, "&output directory = '"//dir//"' /"])
         call read_case(dir//".nml", c, error)
         if (allocated(error)) return
         call make_directory(dir, error)
@@ -306,13 +298,13 @@ contains
         bad(5, :) = [character(len=120) :: "&sweep start = 1, stop = 2, max_points = 1 /", &
                      "&sweep max_points"]
         do k = 1, size(bad, 1)
-            call write_lines(path, [lines_common(1:5), bad(k, 1), &
+            call write_lines(path, [sweep_case(1:5), bad(k, 1), &
                                     "&output directory = '"//scratch//"/sweep_bad' /"])
             call cli([character(len=200) :: path], code, out, err)
             call check(t, code == 1 .and. index(err, trim(bad(k, 2))) > 0 .and. &
                        index(err, path) > 0, "bad &sweep input "//trim(bad(k, 1)), err)
         end do
-        call write_lines(path, [lines_common(1:5), &
+        call write_lines(path, [sweep_case(1:5), &
                                 "&output directory = '"//scratch//"/sweep_bad' /"])
         call cli([character(len=200) :: path], code, out, err)
         call check(t, code == 1 .and. index(err, "&sweep: missing") > 0, &

@@ -29,6 +29,8 @@ program tester
     use test_trust, only: run_trust_tests
     use test_case_messages, only: run_case_messages_tests
     use test_fuzz, only: run_fuzz_tests
+    use test_umfpack, only: run_umfpack_tests
+    use test_arpack, only: run_arpack_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -67,6 +69,8 @@ program tester
     if (selected("case_messages")) call run_case_messages_tests(t)
     if (selected("trust")) call run_trust_tests(t)
     if (selected("fuzz")) call run_fuzz_tests(t)
+    if (selected("umfpack")) call run_umfpack_tests(t)
+    if (selected("arpack")) call run_arpack_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

@@ -4,7 +4,8 @@ module stickslip_lapack
     use stickslip_kinds, only: dp
     implicit none
     private
-    public :: dpotrf, dpotrs, dgetrf, dgetrs, zgetrf, zgetrs, zgecon, zlange, dgeev
+    public :: dpotrf, dpotrs, dgetrf, dgetrs, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
+        zgesv, dsygv
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -101,5 +102,40 @@ module stickslip_lapack
             real(dp), intent(out) :: work(*)
             integer, intent(out) :: info
         end subroutine dgeev
+        !> Solve A X = B for a general real matrix (LU with partial pivoting; a is overwritten
+        !> by the factors, b by the solution).
+        subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
+            import :: dp
+            integer, intent(in) :: n, nrhs, lda, ldb
+            real(dp), intent(inout) :: a(lda, *)
+            integer, intent(out) :: ipiv(*)
+            real(dp), intent(inout) :: b(ldb, *)
+            integer, intent(out) :: info
+        end subroutine dgesv
+
+        !> Solve A X = B for a general complex matrix (as dgesv).
+        subroutine zgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
+            import :: dp
+            integer, intent(in) :: n, nrhs, lda, ldb
+            complex(dp), intent(inout) :: a(lda, *)
+            integer, intent(out) :: ipiv(*)
+            complex(dp), intent(inout) :: b(ldb, *)
+            integer, intent(out) :: info
+        end subroutine zgesv
+
+        !> Generalized symmetric-definite eigenproblem A x = lambda B x (itype 1), eigenvalues
+        !> w ascending; with jobz = 'V' a holds the B-orthonormal eigenvectors and b its
+        !> Cholesky factor. lwork = -1 is a workspace query.
+        subroutine dsygv(itype, jobz, uplo, n, a, lda, b, ldb, w, work, lwork, info)
+            import :: dp
+            integer, intent(in) :: itype
+            character(len=1), intent(in) :: jobz, uplo
+            integer, intent(in) :: n, lda, ldb, lwork
+            real(dp), intent(inout) :: a(lda, *)
+            real(dp), intent(inout) :: b(ldb, *)
+            real(dp), intent(out) :: w(*)
+            real(dp), intent(out) :: work(*)
+            integer, intent(out) :: info
+        end subroutine dsygv
     end interface
 end module stickslip_lapack

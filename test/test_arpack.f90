@@ -1,0 +1,275 @@
+!> stickslip_arpack: shift-invert Lanczos (ARPACK) with the operator applied through a sparse
+!> LU (UMFPACK). A fixed-fixed spring-mass chain of N = 500 equal masses m and springs k has
+!> lambda_j = 2 k / m (1 - cos(j pi / (N + 1))): the nev smallest, their M-orthonormal
+!> vectors and residuals ||K phi - lambda M phi||. A chain with random springs and a
+!> consistent (tridiagonal) mass matrix against LAPACK dsygv, at shift 0 and at a shift
+!> inside the spectrum. Failures: nev >= n, an operator that stops.
+module test_arpack
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_lapack, only: dsygv
+    use stickslip_umfpack, only: sparse_lu_t
+    use stickslip_arpack, only: shift_invert_operator_t, eigen_options_t, eigen_report_t, &
+        smallest_eigenpairs
+    use test_umfpack, only: dense_to_csc
+    use testing, only: test_counter_t, check, check_close
+    implicit none
+    private
+    public :: run_arpack_tests
+
+    real(dp), parameter :: pi = acos(-1.0_dp)
+
+    !> (K - sigma M)^-1 by a sparse LU, M x by a compressed-column product.
+    type, extends(shift_invert_operator_t) :: sparse_op_t
+        type(sparse_lu_t) :: lu
+        integer, allocatable :: mcol(:), mrow(:)
+        real(dp), allocatable :: mval(:)
+        !> Stop after this many mass products (0: never), to test the callback stop.
+        integer :: stop_after = 0
+        integer :: products = 0
+    contains
+        procedure :: solve_shifted => op_solve
+        procedure :: apply_mass => op_mass
+    end type sparse_op_t
+
+contains
+
+    subroutine run_arpack_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call test_uniform_chain(t)
+        call test_against_dsygv(t)
+        call test_failures(t)
+    end subroutine run_arpack_tests
+
+    subroutine op_solve(self, x, y, stat)
+        class(sparse_op_t), intent(inout) :: self
+        real(dp), intent(in) :: x(:)
+        real(dp), intent(out) :: y(:)
+        integer, intent(inout) :: stat
+        type(error_type), allocatable :: error
+        call self%lu%solve(x, y, error)
+        if (allocated(error)) stat = 1
+    end subroutine op_solve
+
+    subroutine op_mass(self, x, y, stat)
+        class(sparse_op_t), intent(inout) :: self
+        real(dp), intent(in) :: x(:)
+        real(dp), intent(out) :: y(:)
+        integer, intent(inout) :: stat
+        call csc_matvec(self%mcol, self%mrow, self%mval, x, y)
+        self%products = self%products + 1
+        if (self%stop_after > 0 .and. self%products >= self%stop_after) stat = 7
+    end subroutine op_mass
+
+    !> y = A x for A in 1-based compressed sparse column form.
+    subroutine csc_matvec(colptr, rowind, values, x, y)
+        integer, intent(in) :: colptr(:), rowind(:)
+        real(dp), intent(in) :: values(:), x(:)
+        real(dp), intent(out) :: y(:)
+        integer :: j, k
+        y = 0.0_dp
+        do j = 1, size(colptr) - 1
+            do k = colptr(j), colptr(j + 1) - 1
+                y(rowind(k)) = y(rowind(k)) + values(k)*x(j)
+            end do
+        end do
+    end subroutine csc_matvec
+
+    !> Stiffness and consistent mass of a fixed-fixed chain of n masses and n + 1 springs:
+    !> springs(e) joins mass e - 1 and e (mass 0 and n + 1 are the walls); lumped(i) on the
+    !> diagonal of M plus consistent element masses me(e) (me/6 [2 1; 1 2]).
+    subroutine chain(n, springs, lumped, me, k, m)
+        integer, intent(in) :: n
+        real(dp), intent(in) :: springs(n + 1), lumped(n), me(n + 1)
+        real(dp), intent(out) :: k(n, n), m(n, n)
+        integer :: e, i, j
+        k = 0.0_dp
+        m = 0.0_dp
+        do i = 1, n
+            m(i, i) = lumped(i)
+        end do
+        do e = 1, n + 1
+            i = e - 1
+            j = e
+            if (i >= 1) then
+                k(i, i) = k(i, i) + springs(e)
+                m(i, i) = m(i, i) + me(e)/3.0_dp
+            end if
+            if (j <= n) then
+                k(j, j) = k(j, j) + springs(e)
+                m(j, j) = m(j, j) + me(e)/3.0_dp
+            end if
+            if (i >= 1 .and. j <= n) then
+                k(i, j) = k(i, j) - springs(e)
+                k(j, i) = k(j, i) - springs(e)
+                m(i, j) = m(i, j) + me(e)/6.0_dp
+                m(j, i) = m(j, i) + me(e)/6.0_dp
+            end if
+        end do
+    end subroutine chain
+
+    !> Build the operator for K - sigma M.
+    subroutine new_op(k, m, sigma, op, error)
+        real(dp), intent(in) :: k(:, :), m(:, :), sigma
+        type(sparse_op_t), intent(out) :: op
+        type(error_type), allocatable, intent(out) :: error
+        integer, allocatable :: colptr(:), rowind(:)
+        real(dp), allocatable :: values(:)
+        call dense_to_csc(k - sigma*m, colptr, rowind, values)
+        call op%lu%factorize(size(k, 1), colptr, rowind, values, error)
+        if (allocated(error)) return
+        call dense_to_csc(m, op%mcol, op%mrow, op%mval)
+    end subroutine new_op
+
+    subroutine test_uniform_chain(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 500, nev = 6
+        real(dp), parameter :: mass = 2.0_dp, stiff = 3.0_dp
+        real(dp), allocatable :: k(:, :), m(:, :), values(:), vectors(:, :), gram(:, :)
+        real(dp) :: exact(nev), res, ek(n), em(n)
+        type(sparse_op_t) :: op
+        type(eigen_report_t) :: report
+        type(error_type), allocatable :: error
+        integer :: j
+        allocate (k(n, n), m(n, n))
+        call chain(n, [(stiff, j=1, n + 1)], [(mass, j=1, n)], [(0.0_dp, j=1, n + 1)], k, m)
+        call new_op(k, m, 0.0_dp, op, error)
+        call check(t, .not. allocated(error), "arpack: factorize the chain's K")
+        if (allocated(error)) return
+        call smallest_eigenpairs(op, n, nev, 0.0_dp, eigen_options_t(), values, vectors, &
+                                 report, error)
+        call check(t, .not. allocated(error), "arpack: chain N = 500 eigensolve succeeds")
+        if (allocated(error)) then
+            call check(t, .false., "arpack: chain error", error%message)
+            return
+        end if
+        exact = [(2.0_dp*stiff/mass*(1.0_dp - cos(j*pi/(n + 1))), j=1, nev)]
+        call check_close(t, values, exact, "arpack: chain lambda_j = 2k/m (1 - cos(j pi/(N+1)))", &
+                         rtol=1.0e-10_dp)
+        call check(t, report%converged >= nev, "arpack: report counts nev converged")
+        gram = matmul(transpose(vectors), matmul(m, vectors))
+        do j = 1, nev
+            gram(j, j) = gram(j, j) - 1.0_dp
+        end do
+        call check_close(t, maxval(abs(gram)), 0.0_dp, "arpack: chain vectors M-orthonormal", &
+                         atol=1.0e-10_dp)
+        res = 0.0_dp
+        do j = 1, nev
+            call csc_matvec_dense(k, vectors(:, j), ek)
+            call csc_matvec_dense(m, vectors(:, j), em)
+            res = max(res, norm2(ek - values(j)*em)/(4.0_dp*stiff*norm2(vectors(:, j))))
+        end do
+        call check_close(t, res, 0.0_dp, "arpack: chain residual ||K phi - lambda M phi|| / " &
+                         //"(||K|| ||phi||)", atol=1.0e-10_dp)
+        call op%lu%release()
+    end subroutine test_uniform_chain
+
+    !> y = A x (dense; the reference products).
+    subroutine csc_matvec_dense(a, x, y)
+        real(dp), intent(in) :: a(:, :), x(:)
+        real(dp), intent(out) :: y(:)
+        y = matmul(a, x)
+    end subroutine csc_matvec_dense
+
+    subroutine test_against_dsygv(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 40, nev = 5
+        real(dp) :: k(n, n), m(n, n), a(n, n), b(n, n), w(n), springs(n + 1), lumped(n), &
+                    me(n + 1), work(20*n), sigma, dist(n), overlap
+        real(dp), allocatable :: values(:), vectors(:, :)
+        type(sparse_op_t) :: op
+        type(eigen_report_t) :: report
+        type(error_type), allocatable :: error
+        integer :: info, j, idx(nev), i
+        logical :: used(n)
+        call random_number(springs)
+        call random_number(lumped)
+        call random_number(me)
+        springs = 1.0_dp + springs
+        lumped = 0.5_dp + lumped
+        me = 0.2_dp*me
+        call chain(n, springs, lumped, me, k, m)
+        a = k
+        b = m
+        call dsygv(1, 'V', 'U', n, a, n, b, n, w, work, size(work), info)
+        call check(t, info == 0, "arpack: reference dsygv info 0")
+        ! shift 0: the nev smallest
+        call new_op(k, m, 0.0_dp, op, error)
+        call smallest_eigenpairs(op, n, nev, 0.0_dp, eigen_options_t(), values, vectors, &
+                                 report, error)
+        call check(t, .not. allocated(error), "arpack: random chain eigensolve succeeds")
+        if (allocated(error)) return
+        call check_close(t, values, w(1:nev), "arpack: nev smallest = dsygv", rtol=1.0e-10_dp)
+        overlap = 0.0_dp
+        do j = 1, nev
+            overlap = max(overlap, abs(1.0_dp - abs(dot_product(vectors(:, j), &
+                                                                  matmul(m, a(:, j))))))
+        end do
+        call check_close(t, overlap, 0.0_dp, "arpack: vectors = dsygv's up to sign " &
+                         //"(|phi^T M psi| = 1)", atol=1.0e-8_dp)
+        call op%lu%release()
+        ! a shift inside the spectrum: the nev eigenvalues nearest sigma
+        sigma = 0.5_dp*(w(10) + w(11)) + 0.1_dp*(w(11) - w(10))
+        call new_op(k, m, sigma, op, error)
+        call check(t, .not. allocated(error), "arpack: factorize K - sigma M (indefinite)")
+        if (allocated(error)) return
+        call smallest_eigenpairs(op, n, nev, sigma, eigen_options_t(tol=1.0e-13_dp), values, &
+                                 vectors, report, error)
+        call check(t, .not. allocated(error), "arpack: shifted eigensolve succeeds")
+        if (allocated(error)) return
+        dist = abs(w - sigma)
+        used = .false.
+        do j = 1, nev
+            idx(j) = minloc(dist, 1, mask=.not. used)
+            used(idx(j)) = .true.
+        end do
+        ! sort the nearest ones ascending
+        do j = 2, nev
+            do i = j, 2, -1
+                if (w(idx(i - 1)) <= w(idx(i))) exit
+                idx([i - 1, i]) = idx([i, i - 1])
+            end do
+        end do
+        call check_close(t, values, w(idx), "arpack: the nev nearest sigma = dsygv's", &
+                         rtol=1.0e-10_dp)
+        call op%lu%release()
+    end subroutine test_against_dsygv
+
+    subroutine test_failures(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 30
+        real(dp) :: k(n, n), m(n, n)
+        real(dp), allocatable :: values(:), vectors(:, :)
+        type(sparse_op_t) :: op
+        type(eigen_report_t) :: report
+        type(error_type), allocatable :: error
+        integer :: j
+        call chain(n, [(1.0_dp, j=1, n + 1)], [(1.0_dp, j=1, n)], [(0.0_dp, j=1, n + 1)], k, m)
+        call new_op(k, m, 0.0_dp, op, error)
+        call smallest_eigenpairs(op, n, n, 0.0_dp, eigen_options_t(), values, vectors, &
+                                 report, error)
+        call check(t, allocated(error), "arpack: nev = n is reported")
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%input .and. &
+                                         index(error%message, "nev = 30") > 0, &
+                                         "arpack: nev = n is input, named", error%message)
+        call smallest_eigenpairs(op, n, 3, 0.0_dp, eigen_options_t(ncv=3), values, vectors, &
+                                 report, error)
+        call check(t, allocated(error), "arpack: ncv = nev is reported")
+        op%stop_after = 3
+        call smallest_eigenpairs(op, n, 3, 0.0_dp, eigen_options_t(), values, vectors, &
+                                 report, error)
+        call check(t, allocated(error), "arpack: an operator that stops is reported")
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%callback, &
+                                         "arpack: operator stop is a callback error", &
+                                         error%message)
+        ! a run after an aborted one starts afresh
+        op%stop_after = 0
+        call smallest_eigenpairs(op, n, 3, 0.0_dp, eigen_options_t(), values, vectors, &
+                                 report, error)
+        call check(t, .not. allocated(error), "arpack: a solve after an aborted one succeeds")
+        if (.not. allocated(error)) call check_close(t, values, &
+            [(2.0_dp*(1.0_dp - cos(j*pi/(n + 1))), j=1, 3)], &
+            "arpack: ... and is right", rtol=1.0e-10_dp)
+        call op%lu%release()
+    end subroutine test_failures
+end module test_arpack

@@ -3,7 +3,8 @@
 !> lambda_j = 2 k / m (1 - cos(j pi / (N + 1))): the nev smallest, their M-orthonormal
 !> vectors and residuals ||K phi - lambda M phi||. A chain with random springs and a
 !> consistent (tridiagonal) mass matrix against LAPACK dsygv, at shift 0 and at a shift
-!> inside the spectrum. Failures: nev >= n, an operator that stops.
+!> inside the spectrum. Failures: nev >= n, an operator that stops. Four chains solved from
+!> four OpenMP threads at once (OpenMP build; serially otherwise) give their closed forms.
 module test_arpack
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
@@ -39,7 +40,49 @@ contains
         call test_uniform_chain(t)
         call test_against_dsygv(t)
         call test_failures(t)
+        call test_threads(t)
     end subroutine run_arpack_tests
+
+    !> Four uniform chains (stiffness 1..4) solved at once: each must give its closed form
+    !> (the ARPACK calls are serialized inside smallest_eigenpairs).
+    subroutine test_threads(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp) :: worst(4)
+        integer :: i
+        worst = huge(1.0_dp)
+        !$omp parallel do num_threads(4) schedule(static, 1)
+        do i = 1, 4
+            call one_chain(real(i, dp), worst(i))
+        end do
+        !$omp end parallel do
+        call check_close(t, maxval(worst), 0.0_dp, "arpack: four chains at once (OpenMP " &
+                         //"build: four threads) give lambda_j to 1e-10", atol=1.0e-10_dp)
+    end subroutine test_threads
+
+    !> Largest relative error of the 4 smallest eigenvalues of a uniform chain of 120 unit
+    !> masses with springs `stiff` (huge on failure).
+    subroutine one_chain(stiff, worst)
+        real(dp), intent(in) :: stiff
+        real(dp), intent(out) :: worst
+        integer, parameter :: n = 120, nev = 4
+        real(dp), allocatable :: k(:, :), m(:, :), values(:), vectors(:, :)
+        real(dp) :: exact(nev)
+        type(sparse_op_t) :: op
+        type(eigen_report_t) :: report
+        type(error_type), allocatable :: error
+        integer :: j
+        worst = huge(1.0_dp)
+        allocate (k(n, n), m(n, n))
+        call chain(n, [(stiff, j=1, n + 1)], [(1.0_dp, j=1, n)], [(0.0_dp, j=1, n + 1)], k, m)
+        call new_op(k, m, 0.0_dp, op, error)
+        if (allocated(error)) return
+        call smallest_eigenpairs(op, n, nev, 0.0_dp, eigen_options_t(), values, vectors, &
+                                 report, error)
+        call op%lu%release()
+        if (allocated(error)) return
+        exact = [(2.0_dp*stiff*(1.0_dp - cos(j*pi/(n + 1))), j=1, nev)]
+        worst = maxval(abs(values - exact)/exact)
+    end subroutine one_chain
 
     subroutine op_solve(self, x, y, stat)
         class(sparse_op_t), intent(inout) :: self

@@ -10,10 +10,12 @@
 !> module state are needed here.
 !>
 !> **Not thread-safe:** ARPACK's dsaupd/dseupd keep their iteration state in SAVEd local
-!> variables (and timing/debug COMMON blocks) between the reverse-communication calls, so
-!> `smallest_eigenpairs` must not run on several threads at once (serialize it, e.g. in a
-!> named critical section). Each call starts ARPACK afresh (ido = 0), so calls one after
-!> another are independent. The start vector is a fixed pseudo-random sequence, so results
+!> variables (and timing/debug COMMON blocks) between the reverse-communication calls, so two
+!> eigensolves must never run at once. Built with OpenMP, `smallest_eigenpairs` serializes
+!> itself (named critical section `stickslip_arpack` around the ARPACK calls; the operator's
+!> callbacks run inside it, so they must not start another eigensolve); built without
+!> OpenMP it must be called from one thread at a time. Each call starts ARPACK afresh
+!> (ido = 0), so calls one after another are independent, also after an aborted one. The start vector is a fixed pseudo-random sequence, so results
 !> do not depend on earlier calls or on the caller's random_number state.
 module stickslip_arpack
     use stickslip_kinds, only: dp
@@ -191,7 +193,8 @@ contains
     !> returned ascending and the vectors M-orthonormal (phi_i^T M phi_j = delta_ij).
     !> Errors: bad sizes or options (input), an operator that stopped (callback), fewer than
     !> nev converged or any other ARPACK failure (numerical; the message gives ARPACK's
-    !> reading of its info code). Not thread-safe (see the module header).
+    !> reading of its info code). Concurrent calls are serialized with OpenMP and forbidden
+    !> without it (see the module header).
     subroutine smallest_eigenpairs(op, n, nev, sigma, opts, values, vectors, report, error)
         !> The operator: (K - sigma M)^-1 x and M x.
         class(shift_invert_operator_t), intent(inout) :: op
@@ -211,11 +214,9 @@ contains
         type(eigen_report_t), intent(out) :: report
         !> Error (last).
         type(error_type), allocatable, intent(out) :: error
-        integer :: ido, ncv, lworkl, info, iparam(11), ipntr(11), stat, i, j
-        real(dp) :: tol, tmpv
-        real(dp), allocatable :: resid(:), v(:, :), workd(:), workl(:), d(:), z(:, :), tmp(:)
-        real(dp), allocatable :: col(:)
-        logical, allocatable :: select(:)
+        integer :: ncv, maxiter, stage, stat, i, j
+        real(dp) :: tmpv
+        real(dp), allocatable :: d(:), z(:, :), col(:)
 
         if (n < 2) then
             call fatal_error(error, "eigenpairs: n = "//itoa(n)//": must be >= 2", &
@@ -240,84 +241,47 @@ contains
             return
         end if
         report%ncv = ncv
-        lworkl = ncv*(ncv + 8)
-        allocate (resid(n), v(n, ncv), workd(3*n), workl(lworkl), tmp(n))
-        ! a fixed start vector with no structure (golden-ratio sequence), so that no
-        ! symmetric or antisymmetric mode is missed and the result is reproducible
-        do i = 1, n
-            tmpv = real(i, dp)*0.6180339887498949_dp
-            resid(i) = tmpv - aint(tmpv) - 0.5_dp
-        end do
-        iparam = 0
-        iparam(1) = 1                                   ! exact shifts
-        iparam(3) = opts%maxiter
-        if (iparam(3) == 0) iparam(3) = max(300, 10*nev)
-        iparam(7) = 3                                   ! shift-invert, generalized
-        ipntr = 0
-        tol = opts%tol
-        ido = 0
-        info = 1                                        ! resid holds the start vector
-        stat = 0
-        do
-            call dsaupd(ido, 'G', n, 'LM', nev, tol, resid, ncv, v, n, iparam, ipntr, workd, &
-                        workl, lworkl, info)
-            select case (ido)
-            case (-1)
-                ! y = OP x = (K - sigma M)^-1 M x (x at ipntr(1), y at ipntr(2))
-                call op%apply_mass(workd(ipntr(1):ipntr(1) + n - 1), tmp, stat)
-                if (stat /= 0) exit
-                call op%solve_shifted(tmp, workd(ipntr(2):ipntr(2) + n - 1), stat)
-            case (1)
-                ! y = (K - sigma M)^-1 (M x), M x already at ipntr(3)
-                call op%solve_shifted(workd(ipntr(3):ipntr(3) + n - 1), &
-                                      workd(ipntr(2):ipntr(2) + n - 1), stat)
-            case (2)
-                ! y = M x
-                call op%apply_mass(workd(ipntr(1):ipntr(1) + n - 1), &
-                                   workd(ipntr(2):ipntr(2) + n - 1), stat)
-            case (99)
-                exit
-            case default
-                call fatal_error(error, "eigenpairs: dsaupd asked for ido = "//itoa(ido) &
-                                 //" (not used in mode 3)", stickslip_stat%internal)
-                return
-            end select
-            if (stat /= 0) exit
-        end do
-        report%info = info
-        report%iterations = iparam(3)
-        report%converged = iparam(5)
-        report%op_applications = iparam(9)
-        if (stat /= 0) then
+        maxiter = opts%maxiter
+        if (maxiter == 0) maxiter = max(300, 10*nev)
+        allocate (d(nev), z(n, nev))
+        ! ARPACK keeps SAVEd state between its reverse-communication calls: with OpenMP,
+        ! concurrent eigensolves are serialized here (no early exit may leave this block)
+        !$omp critical (stickslip_arpack)
+        call run_lanczos(op, n, nev, sigma, ncv, maxiter, opts%tol, d, z, report, stage, stat)
+        !$omp end critical (stickslip_arpack)
+        select case (stage)
+        case (-1)
+            call fatal_error(error, "eigenpairs: dsaupd asked for ido = "//itoa(report%info) &
+                             //" (not used in mode 3)", stickslip_stat%internal)
+            return
+        case (0)
             call fatal_error(error, "eigenpairs: the operator stopped the iteration (status " &
                              //itoa(stat)//")", stickslip_stat%callback)
             return
-        end if
-        if (info == 1) then
-            call fatal_error(error, "eigenpairs: "//itoa(iparam(5))//" of "//itoa(nev) &
-                             //" eigenvalues converged: "//arpack_info_text("dsaupd", info) &
-                             //"; raise opts%maxiter or opts%ncv", stickslip_stat%numerical)
-            return
-        end if
-        if (info /= 0) then
-            call fatal_error(error, "eigenpairs: "//arpack_info_text("dsaupd", info), &
-                             info_category(info))
-            return
-        end if
-        allocate (select(ncv), d(nev), z(n, nev))
-        select = .true.
-        call dseupd(.true., 'A', select, d, z, n, sigma, 'G', n, 'LM', nev, tol, resid, ncv, v, &
-                    n, iparam, ipntr, workd, workl, lworkl, info)
-        report%info = info
-        if (info /= 0) then
-            call fatal_error(error, "eigenpairs: "//arpack_info_text("dseupd", info), &
-                             info_category(info))
-            return
-        end if
-        if (iparam(5) < nev) then
-            call fatal_error(error, "eigenpairs: only "//itoa(iparam(5))//" of "//itoa(nev) &
-                             //" eigenvalues converged; raise opts%maxiter or opts%ncv", &
-                             stickslip_stat%numerical)
+        case (1)
+            if (report%info == 1) then
+                call fatal_error(error, "eigenpairs: "//itoa(report%converged)//" of " &
+                                 //itoa(nev)//" eigenvalues converged: " &
+                                 //arpack_info_text("dsaupd", report%info) &
+                                 //"; raise opts%maxiter or opts%ncv", stickslip_stat%numerical)
+                return
+            end if
+            if (report%info /= 0) then
+                call fatal_error(error, "eigenpairs: "//arpack_info_text("dsaupd", report%info), &
+                                 info_category(report%info))
+                return
+            end if
+        case (2)
+            if (report%info /= 0) then
+                call fatal_error(error, "eigenpairs: "//arpack_info_text("dseupd", report%info), &
+                                 info_category(report%info))
+                return
+            end if
+        end select
+        if (report%converged < nev) then
+            call fatal_error(error, "eigenpairs: only "//itoa(report%converged)//" of " &
+                             //itoa(nev)//" eigenvalues converged; raise opts%maxiter or " &
+                             //"opts%ncv", stickslip_stat%numerical)
             return
         end if
         ! sort ascending (insertion sort: nev is small), vectors along
@@ -338,6 +302,80 @@ contains
         call move_alloc(d, values)
         call move_alloc(z, vectors)
     end subroutine smallest_eigenpairs
+
+    !> The ARPACK calls of one eigensolve (dsaupd's reverse-communication loop, then dseupd),
+    !> with no early exit so that the caller can hold a critical section around it. stage on
+    !> return: -1 unexpected ido (in report%info), 0 the operator stopped (stat), 1 dsaupd
+    !> failed (report%info), 2 dseupd ran (report%info its info).
+    subroutine run_lanczos(op, n, nev, sigma, ncv, maxiter, tol_in, d, z, report, stage, stat)
+        class(shift_invert_operator_t), intent(inout) :: op
+        integer, intent(in) :: n, nev, ncv, maxiter
+        real(dp), intent(in) :: sigma, tol_in
+        real(dp), intent(out) :: d(nev), z(n, nev)
+        type(eigen_report_t), intent(inout) :: report
+        integer, intent(out) :: stage, stat
+        integer :: ido, lworkl, info, iparam(11), ipntr(11), i
+        real(dp) :: tol, tmpv
+        real(dp), allocatable :: resid(:), v(:, :), workd(:), workl(:), tmp(:)
+        logical, allocatable :: select(:)
+        lworkl = ncv*(ncv + 8)
+        allocate (resid(n), v(n, ncv), workd(3*n), workl(lworkl), tmp(n), select(ncv))
+        ! a fixed start vector with no structure (golden-ratio sequence), so that no
+        ! symmetric or antisymmetric mode is missed and the result is reproducible
+        do i = 1, n
+            tmpv = real(i, dp)*0.6180339887498949_dp
+            resid(i) = tmpv - aint(tmpv) - 0.5_dp
+        end do
+        iparam = 0
+        iparam(1) = 1                                   ! exact shifts
+        iparam(3) = maxiter
+        iparam(7) = 3                                   ! shift-invert, generalized
+        ipntr = 0
+        tol = tol_in
+        ido = 0
+        info = 1                                        ! resid holds the start vector
+        stat = 0
+        stage = 1
+        do
+            call dsaupd(ido, 'G', n, 'LM', nev, tol, resid, ncv, v, n, iparam, ipntr, workd, &
+                        workl, lworkl, info)
+            select case (ido)
+            case (-1)
+                ! y = OP x = (K - sigma M)^-1 M x (x at ipntr(1), y at ipntr(2))
+                call op%apply_mass(workd(ipntr(1):ipntr(1) + n - 1), tmp, stat)
+                if (stat == 0) call op%solve_shifted(tmp, workd(ipntr(2):ipntr(2) + n - 1), stat)
+            case (1)
+                ! y = (K - sigma M)^-1 (M x), M x already at ipntr(3)
+                call op%solve_shifted(workd(ipntr(3):ipntr(3) + n - 1), &
+                                      workd(ipntr(2):ipntr(2) + n - 1), stat)
+            case (2)
+                ! y = M x
+                call op%apply_mass(workd(ipntr(1):ipntr(1) + n - 1), &
+                                   workd(ipntr(2):ipntr(2) + n - 1), stat)
+            case (99)
+                exit
+            case default
+                stage = -1
+                info = ido
+                exit
+            end select
+            if (stat /= 0) then
+                stage = 0
+                exit
+            end if
+        end do
+        report%info = info
+        report%iterations = iparam(3)
+        report%converged = iparam(5)
+        report%op_applications = iparam(9)
+        if (stage /= 1 .or. info /= 0) return
+        stage = 2
+        select = .true.
+        call dseupd(.true., 'A', select, d, z, n, sigma, 'G', n, 'LM', nev, tol, resid, ncv, v, &
+                    n, iparam, ipntr, workd, workl, lworkl, info)
+        report%info = info
+        if (info == 0) report%converged = iparam(5)
+    end subroutine run_lanczos
 
     !> Error category of an ARPACK info: argument errors are ours (internal, since they are
     !> checked before the call), the rest numerical.

@@ -5,6 +5,11 @@
 !> consistent (tridiagonal) mass matrix against LAPACK dsygv, at shift 0 and at a shift
 !> inside the spectrum. Failures: nev >= n, an operator that stops. Four chains solved from
 !> four OpenMP threads at once (OpenMP build; serially otherwise) give their closed forms.
+!> stickslip_sparse_eigen: alpha A + beta B on the union pattern against the dense sum; a
+!> chain of N = 1000 with a consistent (tridiagonal) mass matrix in compressed columns against
+!> lambda_j = k (2 - 2 cos t_j) / (m + me/6 (4 + 2 cos t_j)), t_j = j pi/(N+1); a free-free
+!> chain: sigma = 0 reported singular, sigma < 0 finds the rigid mode lambda = 0 and
+!> lambda_j = 2k/m (1 - cos(j pi/N)).
 module test_arpack
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
@@ -12,6 +17,8 @@ module test_arpack
     use stickslip_umfpack, only: sparse_lu_t
     use stickslip_arpack, only: shift_invert_operator_t, eigen_options_t, eigen_report_t, &
         smallest_eigenpairs
+    use stickslip_sparse_eigen, only: csc_combine, csc_matvec_lib => csc_matvec, &
+        sparse_eigenpairs
     use test_umfpack, only: dense_to_csc
     use testing, only: test_counter_t, check, check_close
     implicit none
@@ -41,7 +48,160 @@ contains
         call test_against_dsygv(t)
         call test_failures(t)
         call test_threads(t)
+        call test_combine(t)
+        call test_sparse_chain(t)
+        call test_free_chain(t)
     end subroutine run_arpack_tests
+
+    subroutine test_combine(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 30
+        real(dp) :: a(n, n), b(n, n), keep(n, n), c(n, n), x(n), y(n)
+        integer, allocatable :: acol(:), arow(:), bcol(:), brow(:), ccol(:), crow(:)
+        real(dp), allocatable :: aval(:), bval(:), cval(:)
+        integer :: j, k
+        call random_number(a)
+        call random_number(keep)
+        where (keep > 0.2_dp) a = 0.0_dp
+        call random_number(b)
+        call random_number(keep)
+        where (keep > 0.2_dp) b = 0.0_dp
+        call dense_to_csc(a, acol, arow, aval)
+        call dense_to_csc(b, bcol, brow, bval)
+        call csc_combine(n, acol, arow, aval, 2.0_dp, bcol, brow, bval, -3.0_dp, ccol, crow, cval)
+        c = 0.0_dp
+        do j = 1, n
+            do k = ccol(j), ccol(j + 1) - 1
+                c(crow(k), j) = cval(k)
+            end do
+        end do
+        call check_close(t, reshape(c, [n*n]), reshape(2.0_dp*a - 3.0_dp*b, [n*n]), &
+                         "sparse_eigen: csc_combine = 2 A - 3 B", atol=1.0e-15_dp)
+        call check(t, size(crow) == count(a /= 0.0_dp .or. b /= 0.0_dp) .and. &
+                   all([(all(crow(ccol(j) + 1:ccol(j + 1) - 1) > crow(ccol(j):ccol(j + 1) - 2)), &
+                         j=1, n)]), "sparse_eigen: union pattern, rows ascending")
+        call random_number(x)
+        call csc_matvec_lib(ccol, crow, cval, x, y)
+        call check_close(t, y, matmul(c, x), "sparse_eigen: csc_matvec = dense product", &
+                         rtol=1.0e-13_dp, atol=1.0e-13_dp)
+    end subroutine test_combine
+
+    !> A uniform chain in compressed sparse columns: n masses (lumped m plus consistent
+    !> element masses me), n + 1 springs k when fixed at both ends, n - 1 when free.
+    subroutine csc_chain(n, fixed, stiff, m, me, kcol, krow, kval, mcol, mrow, mval)
+        integer, intent(in) :: n
+        logical, intent(in) :: fixed
+        real(dp), intent(in) :: stiff, m, me
+        integer, allocatable, intent(out) :: kcol(:), krow(:), mcol(:), mrow(:)
+        real(dp), allocatable, intent(out) :: kval(:), mval(:)
+        integer :: j, k
+        real(dp) :: kd, md
+        allocate (kcol(n + 1), krow(3*n - 2), kval(3*n - 2))
+        k = 0
+        kcol(1) = 1
+        do j = 1, n
+            kd = 2.0_dp*stiff
+            md = m + 2.0_dp*me/3.0_dp
+            if (.not. fixed .and. (j == 1 .or. j == n)) then
+                kd = stiff
+                md = m + me/3.0_dp
+            end if
+            if (j > 1) call put(j - 1, -stiff)
+            call put(j, kd)
+            if (j < n) call put(j + 1, -stiff)
+            kcol(j + 1) = k + 1
+        end do
+        mcol = kcol
+        mrow = krow
+        allocate (mval(size(kval)))
+        do j = 1, n
+            do k = kcol(j), kcol(j + 1) - 1
+                if (krow(k) == j) then
+                    mval(k) = m + 2.0_dp*me/3.0_dp
+                    if (.not. fixed .and. (j == 1 .or. j == n)) mval(k) = m + me/3.0_dp
+                else
+                    mval(k) = me/6.0_dp
+                end if
+            end do
+        end do
+    contains
+        subroutine put(row, value)
+            integer, intent(in) :: row
+            real(dp), intent(in) :: value
+            k = k + 1
+            krow(k) = row
+            kval(k) = value
+        end subroutine put
+    end subroutine csc_chain
+
+    subroutine test_sparse_chain(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 1000, nev = 8
+        real(dp), parameter :: stiff = 5.0_dp, m = 0.7_dp, me = 0.4_dp
+        integer, allocatable :: kcol(:), krow(:), mcol(:), mrow(:)
+        real(dp), allocatable :: kval(:), mval(:), values(:), vectors(:, :)
+        real(dp) :: exact(nev), th, kp(n), mp(n), res, orth
+        type(eigen_report_t) :: report
+        type(error_type), allocatable :: error
+        integer :: i, j
+        call csc_chain(n, .true., stiff, m, me, kcol, krow, kval, mcol, mrow, mval)
+        call sparse_eigenpairs(n, kcol, krow, kval, mcol, mrow, mval, nev, 0.0_dp, &
+                               eigen_options_t(), values, vectors, report, error)
+        call check(t, .not. allocated(error), "sparse_eigen: chain N = 1000, consistent mass")
+        if (allocated(error)) then
+            call check(t, .false., "sparse_eigen: chain error", error%message)
+            return
+        end if
+        do j = 1, nev
+            th = j*pi/(n + 1)
+            exact(j) = stiff*(2.0_dp - 2.0_dp*cos(th))/(m + me/6.0_dp*(4.0_dp + 2.0_dp*cos(th)))
+        end do
+        call check_close(t, values, exact, "sparse_eigen: consistent-mass chain closed form", &
+                         rtol=1.0e-10_dp)
+        res = 0.0_dp
+        orth = 0.0_dp
+        do j = 1, nev
+            call csc_matvec_lib(kcol, krow, kval, vectors(:, j), kp)
+            call csc_matvec_lib(mcol, mrow, mval, vectors(:, j), mp)
+            res = max(res, norm2(kp - values(j)*mp)/(4.0_dp*stiff*norm2(vectors(:, j))))
+            do i = 1, nev
+                call csc_matvec_lib(mcol, mrow, mval, vectors(:, i), mp)
+                orth = max(orth, abs(dot_product(vectors(:, j), mp) - merge(1.0_dp, 0.0_dp, i == j)))
+            end do
+        end do
+        call check_close(t, res, 0.0_dp, "sparse_eigen: residuals", atol=1.0e-10_dp)
+        call check_close(t, orth, 0.0_dp, "sparse_eigen: M-orthonormal", atol=1.0e-10_dp)
+    end subroutine test_sparse_chain
+
+    subroutine test_free_chain(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 200, nev = 4
+        real(dp), parameter :: stiff = 2.0_dp, m = 1.5_dp
+        integer, allocatable :: kcol(:), krow(:), mcol(:), mrow(:)
+        real(dp), allocatable :: kval(:), mval(:), values(:), vectors(:, :)
+        type(eigen_report_t) :: report
+        type(error_type), allocatable :: error
+        integer :: j
+        call csc_chain(n, .false., stiff, m, 0.0_dp, kcol, krow, kval, mcol, mrow, mval)
+        call sparse_eigenpairs(n, kcol, krow, kval, mcol, mrow, mval, nev, 0.0_dp, &
+                               eigen_options_t(), values, vectors, report, error)
+        call check(t, allocated(error), "sparse_eigen: free chain at sigma = 0 is reported")
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%numerical .and. &
+                                         index(error%message, "singular") > 0 .and. &
+                                         index(error%message, "sigma") > 0, &
+                                         "sparse_eigen: ... as singular K - sigma M", error%message)
+        call sparse_eigenpairs(n, kcol, krow, kval, mcol, mrow, mval, nev, -0.01_dp, &
+                               eigen_options_t(), values, vectors, report, error)
+        call check(t, .not. allocated(error), "sparse_eigen: free chain at sigma < 0")
+        if (allocated(error)) return
+        call check_close(t, values(1), 0.0_dp, "sparse_eigen: the rigid mode lambda = 0", &
+                         atol=1.0e-12_dp)
+        call check_close(t, values(2:), [(2.0_dp*stiff/m*(1.0_dp - cos(j*pi/n)), j=1, nev - 1)], &
+                         "sparse_eigen: free chain lambda_j = 2k/m (1 - cos(j pi/N))", &
+                         rtol=1.0e-10_dp)
+        call check_close(t, maxval(vectors(:, 1)) - minval(vectors(:, 1)), 0.0_dp, &
+                         "sparse_eigen: the rigid mode is a translation", atol=1.0e-10_dp)
+    end subroutine test_free_chain
 
     !> Four uniform chains (stiffness 1..4) solved at once: each must give its closed form
     !> (the ARPACK calls are serialized inside smallest_eigenpairs).

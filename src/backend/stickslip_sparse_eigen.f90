@@ -1,0 +1,254 @@
+!> Eigenpairs of sparse K phi = lambda M phi: the shift-invert operator of stickslip_arpack
+!> realized with a sparse LU of K - sigma M (stickslip_umfpack), plus the two compressed
+!> sparse column helpers it needs (alpha A + beta B on the union pattern, y = A x).
+!>
+!> Matrices are 1-based compressed sparse column (colptr(n+1), rowind, values) with row
+!> numbers strictly ascending within each column, both triangles stored. The operator owns
+!> its factorization and a copy of M: one per thread; `release()` frees the factorization.
+module stickslip_sparse_eigen
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_umfpack, only: sparse_lu_t
+    use stickslip_arpack, only: shift_invert_operator_t, eigen_options_t, eigen_report_t, &
+        smallest_eigenpairs
+    implicit none
+    private
+    public :: sparse_shift_invert_t, csc_combine, csc_matvec, sparse_eigenpairs
+
+    !> (K - sigma M)^-1 by a sparse LU and M x by a compressed-column product.
+    type, extends(shift_invert_operator_t) :: sparse_shift_invert_t
+        !> The shift sigma the LU was made at.
+        real(dp) :: sigma = 0.0_dp
+        !> The sparse LU of K - sigma M.
+        type(sparse_lu_t) :: lu
+        integer, allocatable, private :: mcol(:), mrow(:)
+        real(dp), allocatable, private :: mval(:)
+    contains
+        !> Factorize K - sigma M and keep M: `setup(n, kcol, krow, kval, mcol, mrow, mval,
+        !> sigma, error)`.
+        procedure :: setup => op_setup
+        procedure :: solve_shifted => op_solve
+        procedure :: apply_mass => op_mass
+        !> Free the factorization and the copy of M.
+        procedure :: release => op_release
+    end type sparse_shift_invert_t
+
+contains
+
+    !> C = alpha A + beta B for n-column compressed sparse column matrices, on the union of
+    !> the patterns (an entry present in either is kept, even if the sum is zero, so that
+    !> the pattern does not depend on alpha and beta). Row numbers ascending in, ascending out.
+    pure subroutine csc_combine(n, acol, arow, aval, alpha, bcol, brow, bval, beta, ccol, &
+                                crow, cval)
+        !> Number of columns.
+        integer, intent(in) :: n
+        !> A: column pointers, row numbers, values.
+        integer, intent(in) :: acol(:), arow(:)
+        real(dp), intent(in) :: aval(:)
+        !> Factor of A.
+        real(dp), intent(in) :: alpha
+        !> B: column pointers, row numbers, values.
+        integer, intent(in) :: bcol(:), brow(:)
+        real(dp), intent(in) :: bval(:)
+        !> Factor of B.
+        real(dp), intent(in) :: beta
+        !> C: column pointers (n + 1), row numbers, values.
+        integer, allocatable, intent(out) :: ccol(:), crow(:)
+        real(dp), allocatable, intent(out) :: cval(:)
+        integer :: j, ia, ib, k, pass, row
+        real(dp) :: value
+        allocate (ccol(n + 1))
+        do pass = 1, 2
+            k = 0
+            ccol(1) = 1
+            do j = 1, n
+                ia = acol(j)
+                ib = bcol(j)
+                do while (ia < acol(j + 1) .or. ib < bcol(j + 1))
+                    k = k + 1
+                    if (ib >= bcol(j + 1)) then
+                        row = arow(ia)
+                        value = alpha*aval(ia)
+                        ia = ia + 1
+                    else if (ia >= acol(j + 1)) then
+                        row = brow(ib)
+                        value = beta*bval(ib)
+                        ib = ib + 1
+                    else if (arow(ia) < brow(ib)) then
+                        row = arow(ia)
+                        value = alpha*aval(ia)
+                        ia = ia + 1
+                    else if (brow(ib) < arow(ia)) then
+                        row = brow(ib)
+                        value = beta*bval(ib)
+                        ib = ib + 1
+                    else
+                        row = arow(ia)
+                        value = alpha*aval(ia) + beta*bval(ib)
+                        ia = ia + 1
+                        ib = ib + 1
+                    end if
+                    if (pass == 2) then
+                        crow(k) = row
+                        cval(k) = value
+                    end if
+                end do
+                ccol(j + 1) = k + 1
+            end do
+            if (pass == 1) allocate (crow(k), cval(k))
+        end do
+    end subroutine csc_combine
+
+    !> y = A x for A in compressed sparse column form (size(colptr) - 1 columns).
+    pure subroutine csc_matvec(colptr, rowind, values, x, y)
+        !> Column pointers.
+        integer, intent(in) :: colptr(:)
+        !> Row numbers.
+        integer, intent(in) :: rowind(:)
+        !> Values.
+        real(dp), intent(in) :: values(:)
+        !> The vector, one entry per column.
+        real(dp), intent(in) :: x(:)
+        !> The product, one entry per row.
+        real(dp), intent(out) :: y(:)
+        integer :: j, k
+        y = 0.0_dp
+        do j = 1, size(colptr) - 1
+            do k = colptr(j), colptr(j + 1) - 1
+                y(rowind(k)) = y(rowind(k)) + values(k)*x(j)
+            end do
+        end do
+    end subroutine csc_matvec
+
+    !> Factorize K - sigma M (sparse LU) and keep a copy of M. Errors: bad patterns (input),
+    !> K - sigma M singular (numerical: sigma is an eigenvalue, or K has a rigid-body mode
+    !> and sigma = 0; shift sigma below the spectrum).
+    subroutine op_setup(self, n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
+        !> The operator.
+        class(sparse_shift_invert_t), intent(inout) :: self
+        !> Order of K and M.
+        integer, intent(in) :: n
+        !> K: column pointers, row numbers, values.
+        integer, intent(in) :: kcol(:), krow(:)
+        real(dp), intent(in) :: kval(:)
+        !> M: column pointers, row numbers, values.
+        integer, intent(in) :: mcol(:), mrow(:)
+        real(dp), intent(in) :: mval(:)
+        !> The shift [units of lambda].
+        real(dp), intent(in) :: sigma
+        !> Error (last).
+        type(error_type), allocatable, intent(out) :: error
+        integer, allocatable :: scol(:), srow(:)
+        real(dp), allocatable :: sval(:)
+        call self%release()
+        if (size(kcol) /= n + 1 .or. size(mcol) /= n + 1) then
+            call fatal_error(error, "sparse eigenproblem: K and M need n + 1 = "//itoa(n + 1) &
+                             //" column pointers", stickslip_stat%input)
+            return
+        end if
+        if (kcol(n + 1) - 1 /= size(krow) .or. size(krow) /= size(kval) .or. &
+            mcol(n + 1) - 1 /= size(mrow) .or. size(mrow) /= size(mval) .or. &
+            kcol(1) /= 1 .or. mcol(1) /= 1) then
+            call fatal_error(error, "sparse eigenproblem: K or M: colptr, rowind and values " &
+                             //"disagree", stickslip_stat%input)
+            return
+        end if
+        if (any(mrow < 1) .or. any(mrow > n)) then
+            call fatal_error(error, "sparse eigenproblem: M has a row number outside 1.." &
+                             //itoa(n), stickslip_stat%input)
+            return
+        end if
+        call csc_combine(n, kcol, krow, kval, 1.0_dp, mcol, mrow, mval, -sigma, scol, srow, sval)
+        call self%lu%factorize(n, scol, srow, sval, error)
+        if (allocated(error)) then
+            error%message = "K - sigma M, sigma = "//real_text(sigma)//": "//error%message
+            return
+        end if
+        self%sigma = sigma
+        self%mcol = mcol
+        self%mrow = mrow
+        self%mval = mval
+    end subroutine op_setup
+
+    !> y = (K - sigma M)^-1 x.
+    subroutine op_solve(self, x, y, stat)
+        !> The operator.
+        class(sparse_shift_invert_t), intent(inout) :: self
+        !> Input vector.
+        real(dp), intent(in) :: x(:)
+        !> Result.
+        real(dp), intent(out) :: y(:)
+        !> Set to 1 if the solve fails.
+        integer, intent(inout) :: stat
+        type(error_type), allocatable :: error
+        call self%lu%solve(x, y, error)
+        if (allocated(error)) stat = 1
+    end subroutine op_solve
+
+    !> y = M x.
+    subroutine op_mass(self, x, y, stat)
+        !> The operator.
+        class(sparse_shift_invert_t), intent(inout) :: self
+        !> Input vector.
+        real(dp), intent(in) :: x(:)
+        !> Result.
+        real(dp), intent(out) :: y(:)
+        !> Unchanged (the product cannot fail).
+        integer, intent(inout) :: stat
+        call csc_matvec(self%mcol, self%mrow, self%mval, x, y)
+    end subroutine op_mass
+
+    !> Free the factorization and the copy of M.
+    subroutine op_release(self)
+        !> The operator.
+        class(sparse_shift_invert_t), intent(inout) :: self
+        call self%lu%release()
+        if (allocated(self%mcol)) deallocate (self%mcol)
+        if (allocated(self%mrow)) deallocate (self%mrow)
+        if (allocated(self%mval)) deallocate (self%mval)
+    end subroutine op_release
+
+    !> The nev eigenpairs of sparse K phi = lambda M phi nearest sigma (the nev smallest when
+    !> sigma lies below the spectrum), ascending, M-orthonormal: K - sigma M factorized once
+    !> with UMFPACK, then shift-invert Lanczos (ARPACK). Errors as `op%setup` and
+    !> `smallest_eigenpairs`; not for concurrent use without OpenMP (ARPACK).
+    subroutine sparse_eigenpairs(n, kcol, krow, kval, mcol, mrow, mval, nev, sigma, opts, &
+                                 values, vectors, report, error)
+        !> Order of K and M.
+        integer, intent(in) :: n
+        !> K: column pointers, row numbers, values (1-based, both triangles).
+        integer, intent(in) :: kcol(:), krow(:)
+        real(dp), intent(in) :: kval(:)
+        !> M: column pointers, row numbers, values (1-based, both triangles).
+        integer, intent(in) :: mcol(:), mrow(:)
+        real(dp), intent(in) :: mval(:)
+        !> Number of eigenpairs, 1 <= nev < n.
+        integer, intent(in) :: nev
+        !> The shift [units of lambda]; 0 for a structure fixed against rigid-body motion.
+        real(dp), intent(in) :: sigma
+        !> Lanczos options (`eigen_options_t()`: ARPACK's defaults).
+        type(eigen_options_t), intent(in) :: opts
+        !> Eigenvalues, ascending.
+        real(dp), allocatable, intent(out) :: values(:)
+        !> Eigenvectors (n x nev), M-orthonormal.
+        real(dp), allocatable, intent(out) :: vectors(:, :)
+        !> Counts of the Lanczos run.
+        type(eigen_report_t), intent(out) :: report
+        !> Error (last).
+        type(error_type), allocatable, intent(out) :: error
+        type(sparse_shift_invert_t) :: op
+        call op%setup(n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
+        if (allocated(error)) return
+        call smallest_eigenpairs(op, n, nev, sigma, opts, values, vectors, report, error)
+        call op%release()
+    end subroutine sparse_eigenpairs
+
+    !> A real number as short text.
+    pure function real_text(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=32) :: buf
+        write (buf, '(es12.5)') x
+        s = trim(adjustl(buf))
+    end function real_text
+end module stickslip_sparse_eigen

@@ -29,6 +29,9 @@ program tester
     use test_trust, only: run_trust_tests
     use test_case_messages, only: run_case_messages_tests
     use test_fuzz, only: run_fuzz_tests
+    use test_sparse, only: run_sparse_tests
+    use test_matrix_market, only: run_matrix_market_tests
+    use test_system_files, only: run_system_files_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -67,6 +70,9 @@ program tester
     if (selected("case_messages")) call run_case_messages_tests(t)
     if (selected("trust")) call run_trust_tests(t)
     if (selected("fuzz")) call run_fuzz_tests(t)
+    if (selected("sparse")) call run_sparse_tests(t)
+    if (selected("matrix_market")) call run_matrix_market_tests(t)
+    if (selected("system_files")) call run_system_files_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

@@ -51,7 +51,7 @@ contains
         character(len=:), allocatable :: line, tok(:)
         character(len=512) :: msg
         character(len=16) :: format, field, symmetry
-        logical :: sym, is_int
+        logical :: sym, is_int, is_open
         integer, allocatable :: rows(:), cols(:), lines(:)
         real(dp), allocatable :: vals(:)
         real(dp) :: v
@@ -64,6 +64,7 @@ contains
                              stickslip_stat%io)
             return
         end if
+        is_open = .true.
         line_no = 0
         ! the header
         call next_line(.false., stat)
@@ -254,6 +255,7 @@ contains
             return
         end if
         close (u)
+        is_open = .false.
         if (sym .and. format == "coordinate") then
             call reject_duplicates()
             if (allocated(error)) return
@@ -299,6 +301,8 @@ contains
                 else if (stat > 0) then
                     call fatal_error(error, path//":"//itoa(line_no + 1)//": cannot read: "// &
                                      trim(msg), stickslip_stat%io)
+                    close (u)
+                    is_open = .false.
                     return
                 end if
                 stat = 0
@@ -331,12 +335,12 @@ contains
             ok = .false.
             x = 0.0_dp
             if (is_int) then
-                if (verify(s, "+-0123456789") /= 0) then
+                if (len_trim(s) == 0 .or. verify(trim(s), "+-0123456789") /= 0) then
                     call fail(at, "value '"//clip(s)//"' is not an integer (the header "// &
                               "says field integer)")
                     return
                 end if
-            else if (verify(lower(s), "+-0123456789.edinfaty") /= 0) then
+            else if (len_trim(s) == 0 .or. verify(lower(trim(s)), "+-0123456789.edinfaty") /= 0) then
                 call fail(at, "value '"//clip(s)//"' is not a real number")
                 return
             end if
@@ -382,10 +386,9 @@ contains
         subroutine fail(at, message)
             integer, intent(in) :: at
             character(len=*), intent(in) :: message
-            logical :: opened
             call fatal_error(error, path//":"//itoa(at)//": "//message, stickslip_stat%input)
-            inquire (unit=u, opened=opened)
-            if (opened) close (u)
+            if (is_open) close (u)
+            is_open = .false.
         end subroutine fail
     end subroutine read_matrix_market
 
@@ -417,7 +420,9 @@ contains
                 if (.not. symmetric .or. a%col(p) <= i) count = count + 1
             end do
         end do
+        u = -1
         open (newunit=u, file=path, status='replace', action='write', iostat=stat, iomsg=msg)
+        if (stat /= 0) u = -1
         if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) "%%MatrixMarket matrix "// &
             "coordinate real "//trim(merge("symmetric", "general  ", symmetric))
         if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) "% written by stickslip"
@@ -464,7 +469,9 @@ contains
                 end if
             end if
         end if
+        u = -1
         open (newunit=u, file=path, status='replace', action='write', iostat=stat, iomsg=msg)
+        if (stat /= 0) u = -1
         if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) "%%MatrixMarket matrix "// &
             "array real "//trim(merge("symmetric", "general  ", symmetric))
         if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) "% written by stickslip"
@@ -485,10 +492,8 @@ contains
         integer, intent(inout) :: stat
         character(len=*), intent(inout) :: msg
         type(error_type), allocatable, intent(out) :: error
-        logical :: opened
         integer :: st2
-        inquire (unit=u, opened=opened)
-        if (opened) then
+        if (u /= -1) then
             close (u, iostat=st2)
             if (stat == 0 .and. st2 /= 0) then
                 stat = st2

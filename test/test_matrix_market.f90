@@ -5,7 +5,8 @@ module test_matrix_market
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_from_dense
-    use stickslip_matrix_market, only: read_matrix_market, write_matrix_market, &
+    use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size, &
+        write_matrix_market, &
         write_matrix_market_array
     use stickslip_files, only: make_directory
     use testing, only: test_counter_t, check, check_close, check_error
@@ -193,6 +194,14 @@ contains
                  "rejected"])
         call bad(t, "binary", [character(len=60) :: gen_header, "1 1 1", "1 1 "//achar(1)], &
                  3, [character(len=40) :: "non-printable"])
+        block
+            integer :: m, n
+            call write_lines(dir//"/size_only.mtx", [character(len=60) :: gen_header, &
+                             "% c", "7 9 30", "1 1 1"])
+            call read_matrix_market_size(dir//"/size_only.mtx", m, n, error)
+            call check_error(t, error, "mm: size only, entries not read", .false.)
+            call check(t, m == 7 .and. n == 9, "mm: size only: 7 x 9")
+        end block
         call read_matrix_market(dir//"/does_not_exist.mtx", a, error)
         call check_error(t, error, "mm: missing file", .true., [character(len=60) :: &
                          dir//"/does_not_exist.mtx", "cannot open"])

@@ -291,6 +291,15 @@ contains
         call bad(t, "beyond 2000 DOFs", "&system mass_file = 'big.mtx', stiffness_file = "// &
                  "'big.mtx' /", [character(len=80) :: dir//"/big.mtx", "N = 2001", &
                  "larger models need the reduction of a later increment"])
+        ! refused from the size line, before the entries (this file has one of 50000)
+        call write_lines(dir//"/huge.mtx", [character(len=60) :: &
+            "%%MatrixMarket matrix coordinate real symmetric", "5000 5000 50000", "1 1 1"])
+        call bad(t, "refused before reading", "&system mass_file = 'huge.mtx', "// &
+                 "stiffness_file = 'huge.mtx' /", [character(len=80) :: "N = 5000 DOFs"])
+        ! a damping file of another size than the model
+        call bad(t, "damping size", "&system mass_file = 'm8.mtx', stiffness_file = "// &
+                 "'k8.mtx', damping_file = 'k4.mtx' /", [character(len=80) :: &
+                 "&system damping_file", "4 x 4", "N = 8", "sizes must agree"])
     end subroutine test_bad_cases
 
     !> examples/beam_mm/beam.nml reads, with its files, and solves.

@@ -13,7 +13,7 @@ module stickslip_case_model
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_integers, &
         get_reals, get_string
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_symmetry_defect
-    use stickslip_matrix_market, only: read_matrix_market
+    use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size
     implicit none
     private
     public :: read_system_group, read_forcing_group, read_friction_group
@@ -229,39 +229,46 @@ contains
             end do
         end subroutine not_both
 
-        !> The dense square matrix of a Matrix Market file; n > 0: its required size.
+        !> The dense square matrix of a Matrix Market file; n > 0: its required size. The
+        !> size is checked from the size line before the entries are read.
         subroutine read_dense(path, name, n, a)
             character(len=*), intent(in) :: path, name
             integer, intent(in) :: n
             real(dp), allocatable, intent(out) :: a(:, :)
             type(sparse_matrix_t) :: s
-            call read_matrix_market(path, s, error)
+            integer :: rows, cols
+            call read_matrix_market_size(path, rows, cols, error)
             if (allocated(error)) then
                 error%message = nml%path//": &system "//name//": "//error%message
                 return
             end if
-            if (s%nrows /= s%ncols) then
+            if (rows /= cols) then
                 call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
-                                 itoa(s%nrows)//" x "//itoa(s%ncols)//" matrix, not square")
+                                 itoa(rows)//" x "//itoa(cols)//" matrix, not square")
                 return
             end if
-            if (n > 0 .and. s%nrows /= n) then
+            if (n > 0 .and. rows /= n) then
                 call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
-                                 itoa(s%nrows)//" x "//itoa(s%ncols)//" matrix, but "// &
-                                 "mass_file is "//itoa(n)//" x "//itoa(n)//": sizes must agree")
+                                 itoa(rows)//" x "//itoa(cols)//" matrix, but the model "// &
+                                 "has N = "//itoa(n)//" DOFs: sizes must agree")
                 return
             end if
-            if (s%nrows < 1) then
+            if (rows < 1) then
                 call group_error(nml, error, "&system "//name//" '"//path//"': an empty "// &
                                  "0 x 0 matrix")
                 return
             end if
-            if (s%nrows > max_file_dof) then
+            if (rows > max_file_dof) then
                 call group_error(nml, error, "&system "//name//" '"//path//"': N = "// &
-                                 itoa(s%nrows)//" DOFs: more than "//itoa(max_file_dof)// &
+                                 itoa(rows)//" DOFs: more than "//itoa(max_file_dof)// &
                                  ", the largest model this version converts to dense "// &
                                  "matrices; larger models need the reduction of a later "// &
                                  "increment")
+                return
+            end if
+            call read_matrix_market(path, s, error)
+            if (allocated(error)) then
+                error%message = nml%path//": &system "//name//": "//error%message
                 return
             end if
             if (name == "mass_file") then

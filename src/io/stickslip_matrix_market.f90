@@ -26,7 +26,8 @@ module stickslip_matrix_market
         sparse_symmetry_defect, max_dense_entries
     implicit none
     private
-    public :: read_matrix_market, write_matrix_market, write_matrix_market_array
+    public :: read_matrix_market, read_matrix_market_size, write_matrix_market, &
+        write_matrix_market_array
     public :: max_mm_entries, max_mm_line
 
     !> Most entries a coordinate file may announce (10**8: 1.6 GB of triplets).
@@ -45,6 +46,33 @@ contains
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         !> The file declared the matrix symmetric.
+        logical, intent(out), optional :: symmetric
+        call read_file(path, .false., a, error, symmetric)
+    end subroutine read_matrix_market
+
+    !> The size of the matrix of the Matrix Market file `path` from its header and size line
+    !> only (the entries are not read), e.g. to refuse a model too large before reading it.
+    !> Errors: those of the header and the size line (see the module).
+    subroutine read_matrix_market_size(path, nrows, ncols, error)
+        !> Path of the file.
+        character(len=*), intent(in) :: path
+        !> Rows and columns announced.
+        integer, intent(out) :: nrows, ncols
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        type(sparse_matrix_t) :: a
+        call read_file(path, .true., a, error)
+        nrows = a%nrows
+        ncols = a%ncols
+    end subroutine read_matrix_market_size
+
+    !> The reader: the whole file, or (size_only) the header and size line (a%nrows,
+    !> a%ncols set, no entries).
+    subroutine read_file(path, size_only, a, error, symmetric)
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: size_only
+        type(sparse_matrix_t), intent(out) :: a
+        type(error_type), allocatable, intent(out) :: error
         logical, intent(out), optional :: symmetric
         integer :: u, stat, line_no, size_line, k, m, n, i, j, tri_line, tri, nvals, ntok
         integer(int64) :: announced
@@ -180,6 +208,12 @@ contains
             end if
         end if
 
+        if (size_only) then
+            close (u)
+            a%nrows = m
+            a%ncols = n
+            return
+        end if
         ! the entries
         allocate (rows(nvals), cols(nvals), vals(nvals), lines(nvals))
         tri = 0
@@ -390,7 +424,7 @@ contains
             if (is_open) close (u)
             is_open = .false.
         end subroutine fail
-    end subroutine read_matrix_market
+    end subroutine read_file
 
     !> Write `a` to `path` as `coordinate real general`, or `coordinate real symmetric` (the
     !> lower triangle, i >= j) when `symmetric`. Values with 17 significant digits. Errors:

@@ -10,8 +10,10 @@ module test_system_files
     use stickslip_files, only: make_directory
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_cli, only: run_cli, string_t
     use testing, only: test_counter_t, check, check_close, check_error
-    use fixtures, only: enter_project_root, scratch, scratch_dir, write_lines, good_forcing
+    use fixtures, only: enter_project_root, scratch, scratch_dir, project_path, write_lines, &
+        good_forcing
     implicit none
     private
     public :: run_system_files_tests
@@ -315,5 +317,40 @@ contains
         call solve_periodic(c%model, c%hbm, s, error)
         call check_error(t, error, "example beam_mm: solves", .false.)
         if (.not. allocated(error)) call check(t, s%converged, "example beam_mm: converged")
+        ! the command line on a copy (files by absolute path, output in the scratch area):
+        ! exit 0 (converged and trusted), and summary.nml reads back as the case
+        block
+            integer :: ui, uo, ue, stat, code
+            character(len=1000) :: line
+            type(string_t), allocatable :: args(:)
+            type(case_t) :: back
+            open (newunit=ui, file="examples/beam_mm/beam.nml", status='old', action='read')
+            open (newunit=uo, file=dir//"/beam_copy.nml", status='replace', action='write')
+            do
+                read (ui, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                if (index(line, "&output") > 0) line = "&output directory = '"//dir//"/out_beam' /"
+                if (index(line, "mass_file") > 0) line = "mass_file = '"// &
+                    project_path("examples/beam_mm/mass.mtx")//"'"
+                if (index(line, "stiffness_file") > 0) line = "stiffness_file = '"// &
+                    project_path("examples/beam_mm/stiffness.mtx")//"'"
+                write (uo, '(a)') trim(line)
+            end do
+            close (ui)
+            close (uo)
+            allocate (args(1))
+            args(1)%s = dir//"/beam_copy.nml"
+            open (newunit=uo, status='scratch', action='readwrite')
+            open (newunit=ue, status='scratch', action='readwrite')
+            code = run_cli(args, uo, ue)
+            close (uo)
+            close (ue)
+            call check(t, code == 0, "example beam_mm: the command line exits 0")
+            call read_case(dir//"/out_beam/summary.nml", back, error)
+            call check_error(t, error, "example beam_mm: summary.nml reads back", .false.)
+            if (.not. allocated(error)) call check(t, all(back%model%mass == c%model%mass) &
+                .and. all(back%model%damping == c%model%damping), &
+                "example beam_mm: summary.nml gives the same model")
+        end block
     end subroutine test_example
 end module test_system_files

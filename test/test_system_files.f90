@@ -11,6 +11,7 @@ module test_system_files
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_cli, only: run_cli, string_t
+    use stickslip_checkpoint, only: case_fingerprint
     use testing, only: test_counter_t, check, check_close, check_error
     use fixtures, only: enter_project_root, scratch, scratch_dir, project_path, write_lines, &
         good_forcing
@@ -165,6 +166,14 @@ contains
                          "beam: same displacements both ways", rtol=0.0_dp, &
                          atol=1e-12_dp*maxval(abs(sa%x)))
         call check(t, maxval(abs(sa%x(:, 7))) > 0.0_dp, "beam: the contact DOF moves")
+        ! a sweep checkpoint of a model from files is tied to the matrices, not only the names
+        block
+            character(len=16) :: fp
+            fp = case_fingerprint(b)
+            b%model%stiffness(3, 3) = b%model%stiffness(3, 3)*(1.0_dp + epsilon(1.0_dp))
+            call check(t, case_fingerprint(b) /= fp, "beam files: fingerprint follows the "// &
+                       "matrix values")
+        end block
     end subroutine test_beam_both_ways
 
     !> Relative paths from the case file's folder; absolute paths; the echo reads back from

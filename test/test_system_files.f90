@@ -12,6 +12,7 @@ module test_system_files
     use stickslip_hbm, only: solve_periodic
     use stickslip_cli, only: run_cli, string_t
     use stickslip_checkpoint, only: case_fingerprint
+    use stickslip_matrix_market, only: write_matrix_market_array
     use testing, only: test_counter_t, check, check_close, check_error
     use fixtures, only: enter_project_root, scratch, scratch_dir, project_path, write_lines, &
         good_forcing
@@ -154,6 +155,19 @@ contains
                          rtol=1e-14_dp, atol=1e-14_dp*maxval(abs(beta*k)))
         call check(t, all(a%model%damping == b%model%damping), &
                    "beam: Rayleigh damping inline = files")
+        ! the same beam as dense superelement files (array symmetric, array general)
+        block
+            type(case_t) :: c
+            call write_matrix_market_array(dir//"/beam_m_array.mtx", m, .true., error)
+            call write_matrix_market_array(dir//"/beam_k_array.mtx", k, .false., error)
+            call write_lines(dir//"/beam_array.nml", [character(len=200) :: &
+                "&system mass_file = 'beam_m_array.mtx', stiffness_file = 'beam_k_array.mtx', "// &
+                "ndof = 8 /", beam_forcing, beam_friction, beam_hbm])
+            call read_case(dir//"/beam_array.nml", c, error)
+            call check_error(t, error, "beam array files: read", .false.)
+            if (.not. allocated(error)) call check(t, all(c%model%mass == m) .and. &
+                all(c%model%stiffness == k), "beam array files: M and K exact")
+        end block
         opts = a%hbm
         call solve_periodic(a%model, opts, sa, error)
         call check_error(t, error, "beam inline: solve", .false.)

@@ -32,7 +32,49 @@ contains
         call test_good_files(t)
         call test_bad_files(t)
         call test_round_trip(t)
+        call test_mutations(t)
     end subroutine run_matrix_market_tests
+
+    !> Random byte edits of a valid file: every outcome is a matrix or an error that names
+    !> the file (never a crash, a hang or a message without the file).
+    subroutine test_mutations(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: base = sym_header//achar(10)//"% c"//achar(10)// &
+            "3 3 4"//achar(10)//"1 1 4.0"//achar(10)//"2 1 -1.5e0"//achar(10)// &
+            "2 2 3"//achar(10)//"3 3 2.25"//achar(10)
+        character(len=*), parameter :: alphabet = "0123456789 -+.eE%"//achar(10)//"x,/"
+        character(len=len(base)) :: text
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        integer :: trial, k, u, pos, bad_messages, accepted
+        real(dp) :: r(3)
+        bad_messages = 0
+        accepted = 0
+        do trial = 1, 300
+            text = base
+            do k = 1, 3
+                call random_number(r)
+                pos = 1 + int(r(1)*len(base))
+                if (r(3) < 0.05_dp) then
+                    text(pos:pos) = achar(int(r(2)*256))
+                else
+                    text(pos:pos) = alphabet(1 + int(r(2)*len(alphabet)):1 + int(r(2)*len(alphabet)))
+                end if
+            end do
+            open (newunit=u, file=dir//"/fuzz.mtx", status='replace', access='stream', &
+                  form='unformatted')
+            write (u) text
+            close (u)
+            call read_matrix_market(dir//"/fuzz.mtx", a, error)
+            if (allocated(error)) then
+                if (index(error%message, dir//"/fuzz.mtx") /= 1) bad_messages = bad_messages + 1
+            else
+                accepted = accepted + 1
+            end if
+        end do
+        call check(t, bad_messages == 0, "mm mutations: every error names the file")
+        call check(t, accepted < 300, "mm mutations: some mutations rejected")
+    end subroutine test_mutations
 
     !> Read `lines` as a file and compare with `expected` (exactly).
     subroutine good(t, name, lines, expected, symmetric)

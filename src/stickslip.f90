@@ -13,6 +13,9 @@ module stickslip
     use stickslip_version_info, only: stickslip_version, stickslip_thread_safe
     ! the model
     use stickslip_model, only: model_t, validate_model
+    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, &
+        sparse_to_dense, sparse_from_dense, sparse_transpose, sparse_scaled_sum, &
+        sparse_symmetry_defect
     ! the weighted residual
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
@@ -44,6 +47,8 @@ module stickslip
     public :: diagnosis_t, diagnostics_t, level_note, level_warning, level_untrusted
     public :: progress_t, stickslip_version, stickslip_thread_safe
     public :: model_t, validate_model
+    public :: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, sparse_to_dense, &
+              sparse_from_dense, sparse_transpose, sparse_scaled_sum, sparse_symmetry_defect
     public :: hbm_options_t, hbm_solution_t, solve_periodic, validate_options, automatic_rho
     public :: euler_options_t, euler_result_t, integrate_euler
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference, &

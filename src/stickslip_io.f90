@@ -17,6 +17,8 @@ module stickslip_io
     use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script
     use stickslip_checkpoint, only: checkpoint_writer_t, read_checkpoint, case_fingerprint
     use stickslip_error, only: exit_code_of
+    use stickslip_matrix_market, only: read_matrix_market, write_matrix_market, &
+        write_matrix_market_array
     implicit none
     private
     public :: case_t, read_case, write_case, sweep_run_options_t
@@ -30,4 +32,5 @@ module stickslip_io
               write_robustness_summary, energy_balance_error, reference_balance_error
     public :: write_frc_plot_script, write_robustness_plot_script
     public :: checkpoint_writer_t, read_checkpoint, case_fingerprint
+    public :: read_matrix_market, write_matrix_market, write_matrix_market_array
 end module stickslip_io

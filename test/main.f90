@@ -31,6 +31,9 @@ program tester
     use test_fuzz, only: run_fuzz_tests
     use test_umfpack, only: run_umfpack_tests
     use test_arpack, only: run_arpack_tests
+    use test_sparse, only: run_sparse_tests
+    use test_matrix_market, only: run_matrix_market_tests
+    use test_system_files, only: run_system_files_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -71,6 +74,9 @@ program tester
     if (selected("fuzz")) call run_fuzz_tests(t)
     if (selected("umfpack")) call run_umfpack_tests(t)
     if (selected("arpack")) call run_arpack_tests(t)
+    if (selected("sparse")) call run_sparse_tests(t)
+    if (selected("matrix_market")) call run_matrix_market_tests(t)
+    if (selected("system_files")) call run_system_files_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

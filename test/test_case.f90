@@ -31,6 +31,7 @@ contains
         call test_method_inference(t)
         call test_unusual_valid(t)
         call test_round_trip(t)
+        call test_round_trip_files(t)
         call test_examples_as_gfortran(t)
     end subroutine run_case_tests
 
@@ -465,6 +466,48 @@ contains
             end select
         end do
     end subroutine test_round_trip
+
+    !> write_case output reads back as the same model when &system uses Rayleigh factors
+    !> (inline: the damping is echoed in full) and Matrix Market files (echoed as absolute
+    !> paths, read back from the output directory of examples/beam_mm/beam.nml).
+    subroutine test_round_trip_files(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: a, b
+        type(error_type), allocatable :: error
+        integer :: u, stat, k
+        character(len=200) :: msg
+        character(len=*), parameter :: inputs(2) = [character(len=40) :: &
+            scratch//"/trip_rayleigh.nml", "examples/beam_mm/beam.nml"]
+        call write_lines(inputs(1), [character(len=200) :: "&system ndof = 2, mass = 1,0,0,1, "// &
+            "stiffness = 2,-1,-1,1, damping = 0.1,0,0,0, rayleigh_alpha = 0.3, "// &
+            "rayleigh_beta = 0.01 /", good_forcing, good_friction])
+        do k = 1, 2
+            call read_case(trim(inputs(k)), a, error)
+            call check_error(t, error, "round trip files: case read", .false.)
+            if (allocated(error)) cycle
+            call make_directory(scratch//"/trip_files", error)
+            open (newunit=u, file=scratch//"/trip_files/echo.nml", status='replace', &
+                  action='write')
+            msg = ""
+            call write_case(u, a, stat, msg)
+            close (u)
+            call read_case(scratch//"/trip_files/echo.nml", b, error)
+            call check_error(t, error, "round trip files: echo reads back ("// &
+                             trim(inputs(k))//")", .false.)
+            if (allocated(error)) cycle
+            call check(t, b%model%ndof == a%model%ndof .and. &
+                       all(a%model%mass == b%model%mass) .and. &
+                       all(a%model%stiffness == b%model%stiffness) .and. &
+                       all(a%model%damping == b%model%damping), &
+                       "round trip files: same M, K, C ("//trim(inputs(k))//")")
+            call check(t, allocated(b%system_files%mass_file) .eqv. (k == 2), &
+                       "round trip files: files echoed only for a model from files")
+            if (k == 1) call check_close(t, [b%model%damping(1, 1), b%model%damping(2, 1), &
+                b%model%damping(2, 2)], [0.1_dp + 0.3_dp + 0.01_dp*2, -0.01_dp, &
+                0.3_dp + 0.01_dp], "round trip files: C = damping + alpha M + beta K", &
+                rtol=1e-15_dp)
+        end do
+    end subroutine test_round_trip_files
 
     !> Every example reads as gfortran's own namelist read reads it (&system, &forcing,
     !> &friction, &hbm, &euler).

@@ -18,7 +18,7 @@ module stickslip_case
     use stickslip_robustness, only: robustness_options_t
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
-        read_friction_group, max_dof, max_terms, group_error
+        read_friction_group, max_dof, max_terms, group_error, system_files_t, max_file_dof
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
         read_run_group, read_output_group
     use stickslip_case_messages, only: to_case_message
@@ -27,6 +27,7 @@ module stickslip_case
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms, known_groups
+    public :: system_files_t, max_file_dof
     public :: sweep_run_options_t
     public :: max_sample_values
     public :: put, rtoa, ltoa, rlist, ilist, llist
@@ -45,6 +46,9 @@ module stickslip_case
         character(len=:), allocatable :: path
         !> The structure, its contacts and forcing.
         type(model_t) :: model
+        !> &system mass_file, stiffness_file, damping_file, rayleigh_alpha, rayleigh_beta as
+        !> read (the matrices themselves are in model; C includes the Rayleigh terms).
+        type(system_files_t) :: system_files
         !> Method: 'hbm' (weighted residual), 'euler' (implicit Euler time stepping),
         !> 'reference' (exact event-driven), 'all' (the three side by side) or 'study' (the
         !> work-precision study).
@@ -95,7 +99,7 @@ contains
         call check_groups(nml, error)
         if (allocated(error)) return
 
-        call read_system_group(nml, case%model, error)
+        call read_system_group(nml, case%model, case%system_files, error)
         if (allocated(error)) return
         call read_forcing_group(nml, case%model, error)
         if (allocated(error)) return
@@ -104,6 +108,9 @@ contains
         call validate_model(case%model, error)
         if (allocated(error)) then
             call to_case_message(error, nml%path, [character(len=1) ::], [character(len=1) ::])
+            call name_matrix_file(error, "mass", case%system_files%mass_path)
+            call name_matrix_file(error, "stiffness", case%system_files%stiffness_path)
+            call name_matrix_file(error, "damping", case%system_files%damping_path)
             return
         end if
 
@@ -134,6 +141,20 @@ contains
         end if
         call check_sizes(nml, case, error)
     end subroutine read_case
+
+    !> A model message about &system `name` names the file the matrix came from.
+    subroutine name_matrix_file(error, name, path)
+        type(error_type), intent(inout) :: error
+        character(len=*), intent(in) :: name
+        character(len=:), allocatable, intent(in) :: path
+        integer :: k
+        if (.not. allocated(path)) return
+        k = index(error%message, "&system "//name)
+        if (k == 0) return
+        k = k + len("&system "//name)
+        error%message = error%message(1:k - 1)//" (from "//name//"_file '"//path//"')"// &
+                        error%message(k:)
+    end subroutine name_matrix_file
 
     !> Every group known and given once (groups named summary* are the results echoed in
     !> a summary.nml: ignored). Errors name the group (and suggest the closest known one)
@@ -294,6 +315,10 @@ contains
     end subroutine check_sizes
 
     !> Write `case` as namelist text that read_case reads back (full precision), to `unit`.
+    !> A model read from Matrix Market files is echoed as its file variables with ABSOLUTE
+    !> paths (the echo is read from another folder: the output directory) and the Rayleigh
+    !> factors; an inline model as its matrices, the damping written in full (Rayleigh terms
+    !> included, so rayleigh_alpha and rayleigh_beta are not repeated).
     !> I/O errors do not stop the program: stat /= 0 and msg say what failed.
     subroutine write_case(unit, case, stat, msg)
         !> An open formatted unit.
@@ -309,9 +334,23 @@ contains
         associate (m => case%model, o => case%hbm)
             call put(unit, "&system", stat, msg)
             call put(unit, "  ndof = "//itoa(m%ndof), stat, msg)
-            call put(unit, "  mass = "//rlist(reshape(m%mass, [m%ndof**2])), stat, msg)
-            call put(unit, "  stiffness = "//rlist(reshape(m%stiffness, [m%ndof**2])), stat, msg)
-            call put(unit, "  damping = "//rlist(reshape(m%damping, [m%ndof**2])), stat, msg)
+            associate (f => case%system_files)
+                if (allocated(f%mass_absolute) .and. allocated(f%stiffness_absolute)) then
+                    call put(unit, "  mass_file = "//quoted(f%mass_absolute), stat, msg)
+                    call put(unit, "  stiffness_file = "//quoted(f%stiffness_absolute), stat, &
+                             msg)
+                    if (allocated(f%damping_absolute)) call put(unit, "  damping_file = "// &
+                        quoted(f%damping_absolute), stat, msg)
+                    call put(unit, "  rayleigh_alpha = "//rtoa(f%rayleigh_alpha), stat, msg)
+                    call put(unit, "  rayleigh_beta = "//rtoa(f%rayleigh_beta), stat, msg)
+                else
+                    call put(unit, "  mass = "//rlist(reshape(m%mass, [m%ndof**2])), stat, msg)
+                    call put(unit, "  stiffness = "//rlist(reshape(m%stiffness, [m%ndof**2])), &
+                             stat, msg)
+                    call put(unit, "  damping = "//rlist(reshape(m%damping, [m%ndof**2])), stat, &
+                             msg)
+                end if
+            end associate
             call put(unit, "/", stat, msg)
             call put(unit, "&forcing", stat, msg)
             call put(unit, "  omega = "//rtoa(m%omega), stat, msg)
@@ -427,6 +466,20 @@ contains
         if (stat /= 0) return
         write (unit, '(a)', iostat=stat, iomsg=msg) line
     end subroutine put
+
+    !> s as a namelist string: in single quotes, a quote doubled.
+    pure function quoted(s) result(q)
+        !> The text.
+        character(len=*), intent(in) :: s
+        character(len=:), allocatable :: q
+        integer :: i
+        q = "'"
+        do i = 1, len(s)
+            q = q//s(i:i)
+            if (s(i:i) == "'") q = q//"'"
+        end do
+        q = q//"'"
+    end function quoted
 
     !> A real as text with 17 significant digits.
     pure function rtoa(x) result(s)

@@ -2,60 +2,161 @@
 !> reads one group of a parsed namelist file into `model_t`, with messages that start
 !> "<path>[:<line>]: &<group> <variable>: ". The whole-model checks (symmetry, definiteness,
 !> DOF ranges) are validate_model's, called by read_case once the three groups are read.
+!> &system may take its matrices from Matrix Market files (stickslip_matrix_market), converted
+!> to the dense model_t up to max_file_dof DOFs.
 module stickslip_case_model
+    use, intrinsic :: iso_c_binding, only: c_char, c_size_t, c_ptr, c_null_char, c_associated
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
     use stickslip_namelist, only: nml_file_t
-    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_integers, get_reals
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_integers, &
+        get_reals, get_string
+    use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_symmetry_defect
+    use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size
     implicit none
     private
     public :: read_system_group, read_forcing_group, read_friction_group
-    public :: max_dof, max_terms, group_error
+    public :: max_dof, max_terms, group_error, max_file_dof, system_files_t, resolve_path
 
     !> Largest ndof a case file can hold (host codes calling the library have no limit).
     integer, parameter :: max_dof = 64
+    !> Largest N of a model read from Matrix Market files (&system mass_file, stiffness_file):
+    !> this version converts them to the dense model_t; larger models need the reduction of a
+    !> later increment.
+    integer, parameter :: max_file_dof = 2000
     !> Largest number of forcing terms or contacts (and of entries of a list) in a case file.
     integer, parameter :: max_terms = 256
 
+    !> The &system file variables and Rayleigh factors of a case (unallocated: not given).
+    type :: system_files_t
+        !> mass_file, stiffness_file, damping_file as written in the case.
+        character(len=:), allocatable :: mass_file, stiffness_file, damping_file
+        !> The same resolved against the case file's folder (what is read; in messages).
+        character(len=:), allocatable :: mass_path, stiffness_path, damping_path
+        !> The same as absolute paths (what write_case echoes).
+        character(len=:), allocatable :: mass_absolute, stiffness_absolute, damping_absolute
+        !> C += rayleigh_alpha M + rayleigh_beta K [1/s], [s].
+        real(dp) :: rayleigh_alpha = 0.0_dp
+        real(dp) :: rayleigh_beta = 0.0_dp
+    end type system_files_t
+
+    interface
+        function c_getcwd(buf, size) bind(c, name='getcwd') result(p)
+            import :: c_char, c_size_t, c_ptr
+            character(kind=c_char), intent(out) :: buf(*)
+            integer(c_size_t), value :: size
+            type(c_ptr) :: p
+        end function c_getcwd
+    end interface
+
 contains
 
-    !> Read &system (required): ndof (1..max_dof), mass, stiffness (ndof**2 values each,
-    !> column-major, required) and damping (default 0). Errors (stat input) name the variable.
-    subroutine read_system_group(nml, model, error)
+    !> Read &system (required). Either inline matrices: ndof (1..max_dof), mass, stiffness
+    !> (ndof**2 values each, column-major, required) and damping (default 0); or Matrix
+    !> Market files: mass_file and stiffness_file (both, square, of equal size N <=
+    !> max_file_dof; ndof optional and then equal to N; inline mass/stiffness/damping not
+    !> allowed beside them). damping_file (optional, N x N) replaces inline damping in either
+    !> form. Relative file paths resolve against the case file's folder. Finally C += alpha M
+    !> + beta K (rayleigh_alpha, rayleigh_beta, default 0, finite and >= 0). Errors (stat
+    !> input; stat io for an unreadable file) name the variable, and the file and its line.
+    subroutine read_system_group(nml, model, files, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model: ndof, mass, stiffness, damping set.
         type(model_t), intent(inout) :: model
+        !> The file variables and Rayleigh factors as read (echoed by write_case).
+        type(system_files_t), intent(out) :: files
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         integer :: n
-        logical :: found
+        logical :: found, from_files
         if (nml%find("system") == 0) then
             call group_error(nml, error, "&system: required group not found")
             return
         end if
-        call check_names(nml, "system", [character(len=9) :: "ndof", "mass", "stiffness", &
-                                        "damping"], error)
+        call check_names(nml, "system", [character(len=14) :: "ndof", "mass", "stiffness", &
+                                        "damping", "mass_file", "stiffness_file", &
+                                        "damping_file", "rayleigh_alpha", "rayleigh_beta"], error)
         if (allocated(error)) return
+        call take_file("mass_file", files%mass_file, files%mass_path, files%mass_absolute)
+        if (allocated(error)) return
+        call take_file("stiffness_file", files%stiffness_file, files%stiffness_path, &
+                       files%stiffness_absolute)
+        if (allocated(error)) return
+        call take_file("damping_file", files%damping_file, files%damping_path, &
+                       files%damping_absolute)
+        if (allocated(error)) return
+        call take_factor("rayleigh_alpha", files%rayleigh_alpha)
+        if (allocated(error)) return
+        call take_factor("rayleigh_beta", files%rayleigh_beta)
+        if (allocated(error)) return
+        from_files = allocated(files%mass_file) .or. allocated(files%stiffness_file)
+
         n = 0
         call get_integer(nml, "system", "ndof", n, error, found)
         if (allocated(error)) return
-        if (.not. found) then
-            call group_error(nml, error, "&system ndof: missing (number of degrees of freedom)")
-            return
+        if (from_files) then
+            if (.not. allocated(files%mass_file)) then
+                call group_error(nml, error, "&system mass_file: missing (stiffness_file "// &
+                                 "is given; the two come together)")
+                return
+            end if
+            if (.not. allocated(files%stiffness_file)) then
+                call group_error(nml, error, "&system stiffness_file: missing (mass_file "// &
+                                 "is given; the two come together)")
+                return
+            end if
+            call not_both("mass", "mass_file")
+            if (allocated(error)) return
+            call not_both("stiffness", "stiffness_file")
+            if (allocated(error)) return
+            call not_both("damping", "damping_file (the matrices come from files)")
+            if (allocated(error)) return
+            call read_dense(files%mass_path, "mass_file", 0, model%mass)
+            if (allocated(error)) return
+            model%ndof = size(model%mass, 1)
+            if (found .and. n /= model%ndof) then
+                call group_error(nml, error, "&system ndof = "//itoa(n)//" but mass_file '"// &
+                                 files%mass_path//"' holds a "//itoa(model%ndof)//" x "// &
+                                 itoa(model%ndof)//" matrix: they must agree (or leave "// &
+                                 "ndof out)")
+                return
+            end if
+            n = model%ndof
+            call read_dense(files%stiffness_path, "stiffness_file", n, model%stiffness)
+            if (allocated(error)) return
+        else
+            if (.not. found) then
+                call group_error(nml, error, "&system ndof: missing (number of degrees "// &
+                                 "of freedom; or give mass_file and stiffness_file)")
+                return
+            end if
+            if (n < 1 .or. n > max_dof) then
+                call group_error(nml, error, "&system ndof = "//itoa(n)//": must be in 1.."// &
+                                 itoa(max_dof)//" for inline matrices (use mass_file/"// &
+                                 "stiffness_file for larger models)")
+                return
+            end if
+            model%ndof = n
+            call take_matrix("mass", .true., model%mass)
+            if (allocated(error)) return
+            call take_matrix("stiffness", .true., model%stiffness)
+            if (allocated(error)) return
         end if
-        if (n < 1 .or. n > max_dof) then
-            call group_error(nml, error, "&system ndof = "//itoa(n)//": must be in 1.."// &
-                             itoa(max_dof)//" in a case file (larger models: call the library)")
-            return
+        if (allocated(files%damping_file)) then
+            call not_both("damping", "damping_file")
+            if (allocated(error)) return
+            call read_dense(files%damping_path, "damping_file", n, model%damping)
+            if (allocated(error)) return
+        else
+            call take_matrix("damping", .false., model%damping)
+            if (allocated(error)) return
         end if
-        model%ndof = n
-        call take_matrix("mass", .true., model%mass)
-        if (allocated(error)) return
-        call take_matrix("stiffness", .true., model%stiffness)
-        if (allocated(error)) return
-        call take_matrix("damping", .false., model%damping)
+        if (files%rayleigh_alpha /= 0.0_dp) model%damping = model%damping + &
+            files%rayleigh_alpha*model%mass
+        if (files%rayleigh_beta /= 0.0_dp) model%damping = model%damping + &
+            files%rayleigh_beta*model%stiffness
 
     contains
 
@@ -85,7 +186,142 @@ contains
             end if
             a = reshape(values, [n, n])
         end subroutine take_matrix
+
+        !> A file variable: as written, resolved against the case file's folder, absolute.
+        subroutine take_file(name, given, path, absolute)
+            character(len=*), intent(in) :: name
+            character(len=:), allocatable, intent(out) :: given, path, absolute
+            character(len=:), allocatable :: value
+            logical :: here
+            call get_string(nml, "system", name, value, error, here)
+            if (allocated(error) .or. .not. here) return
+            if (len_trim(value) == 0) then
+                call group_error(nml, error, "&system "//name//" = '': an empty file name")
+                return
+            end if
+            given = value
+            path = resolve_path(nml%path, value)
+            absolute = path
+            if (path(1:1) /= '/') absolute = working_directory()//"/"//path
+        end subroutine take_file
+
+        subroutine take_factor(name, x)
+            character(len=*), intent(in) :: name
+            real(dp), intent(inout) :: x
+            call get_real(nml, "system", name, x, error)
+            if (allocated(error)) return
+            if (.not. (x >= 0.0_dp .and. x <= huge(x))) call group_error(nml, error, &
+                "&system "//name//" = "//rtoa_short(x)//": must be finite and >= 0")
+        end subroutine take_factor
+
+        !> Error when the inline variable `inline` is given beside `file`.
+        subroutine not_both(inline, file)
+            character(len=*), intent(in) :: inline, file
+            integer :: g, k
+            g = nml%find("system")
+            do k = 1, nml%groups(g)%nentries
+                if (nml%groups(g)%entries(k)%name /= inline) cycle
+                call fatal_error(error, nml%path//":"//itoa(nml%groups(g)%entries(k)%line)// &
+                                 ": &system "//inline//" and "//file//" both given: give "// &
+                                 "the matrix inline or in a file, not both", &
+                                 stickslip_stat%input)
+                return
+            end do
+        end subroutine not_both
+
+        !> The dense square matrix of a Matrix Market file; n > 0: its required size. The
+        !> size is checked from the size line before the entries are read.
+        subroutine read_dense(path, name, n, a)
+            character(len=*), intent(in) :: path, name
+            integer, intent(in) :: n
+            real(dp), allocatable, intent(out) :: a(:, :)
+            type(sparse_matrix_t) :: s
+            integer :: rows, cols
+            call read_matrix_market_size(path, rows, cols, error)
+            if (allocated(error)) then
+                error%message = nml%path//": &system "//name//": "//error%message
+                return
+            end if
+            if (rows /= cols) then
+                call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
+                                 itoa(rows)//" x "//itoa(cols)//" matrix, not square")
+                return
+            end if
+            if (n > 0 .and. rows /= n) then
+                call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
+                                 itoa(rows)//" x "//itoa(cols)//" matrix, but the model "// &
+                                 "has N = "//itoa(n)//" DOFs: sizes must agree")
+                return
+            end if
+            if (rows < 1) then
+                call group_error(nml, error, "&system "//name//" '"//path//"': an empty "// &
+                                 "0 x 0 matrix")
+                return
+            end if
+            if (rows > max_file_dof) then
+                call group_error(nml, error, "&system "//name//" '"//path//"': N = "// &
+                                 itoa(rows)//" DOFs: more than "//itoa(max_file_dof)// &
+                                 ", the largest model this version converts to dense "// &
+                                 "matrices; larger models need the reduction of a later "// &
+                                 "increment")
+                return
+            end if
+            call read_matrix_market(path, s, error)
+            if (allocated(error)) then
+                error%message = nml%path//": &system "//name//": "//error%message
+                return
+            end if
+            if (name == "mass_file") then
+                if (.not. (sparse_symmetry_defect(s) <= 1.0e-12_dp)) then
+                    call group_error(nml, error, "&system "//name//" '"//path//"': M is "// &
+                                     "not symmetric (max |M(i,j) - M(j,i)| is "// &
+                                     rtoa_short(sparse_symmetry_defect(s))//" of its "// &
+                                     "largest entry)")
+                    return
+                end if
+            end if
+            call sparse_to_dense(s, a, error)
+            if (allocated(error)) error%message = nml%path//": &system "//name//" '"// &
+                path//"': "//error%message
+        end subroutine read_dense
     end subroutine read_system_group
+
+    !> `file` resolved against the folder of `case_path`: unchanged when absolute (starts
+    !> with '/') or when the case file has no folder part; else "<folder of case>/file".
+    pure function resolve_path(case_path, file) result(path)
+        !> Path of the case file.
+        character(len=*), intent(in) :: case_path
+        !> The file name as written in the case.
+        character(len=*), intent(in) :: file
+        character(len=:), allocatable :: path
+        integer :: k
+        path = file
+        if (file(1:1) == '/') return
+        k = index(case_path, '/', back=.true.)
+        if (k > 0) path = case_path(1:k)//file
+    end function resolve_path
+
+    !> The working directory (absolute; '.' when getcwd fails).
+    function working_directory() result(cwd)
+        character(len=:), allocatable :: cwd
+        character(kind=c_char) :: buf(4096)
+        integer :: i
+        cwd = "."
+        if (.not. c_associated(c_getcwd(buf, int(size(buf), c_size_t)))) return
+        cwd = ""
+        do i = 1, size(buf)
+            if (buf(i) == c_null_char) exit
+            cwd = cwd//buf(i)
+        end do
+    end function working_directory
+
+    pure function rtoa_short(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=32) :: buf
+        write (buf, '(g0.6)') x
+        s = trim(adjustl(buf))
+    end function rtoa_short
 
     !> Read &forcing (required): omega (required), force_dof (at least one), force_amplitude
     !> (one per force_dof), force_harmonic (default 1), force_phase (default 0).

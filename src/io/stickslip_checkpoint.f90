@@ -45,7 +45,9 @@ contains
     !> A hash (16 hexadecimal digits: two 32-bit FNV-1a hashes with different offsets, in
     !> exact integer arithmetic) of the effective case as written by write_case, without the
     !> variables that may change between a run and its resumption (&output directory, &sweep
-    !> max_points, max_failures, resume, plot).
+    !> max_points, max_failures, resume, plot). A model read from Matrix Market files is
+    !> echoed by its file names only, so its M, K and C values are hashed too (a file changed
+    !> between a run and its resumption gives another fingerprint).
     function case_fingerprint(case) result(fp)
         !> The case.
         type(case_t), intent(in) :: case
@@ -75,7 +77,29 @@ contains
             end do
         end do
         close (u)
+        if (allocated(case%system_files%mass_file)) then
+            call mix(case%model%mass)
+            call mix(case%model%stiffness)
+            call mix(case%model%damping)
+        end if
         write (fp, '(2z8.8)') h
+
+    contains
+
+        !> Mix the bytes of every value of a into h.
+        subroutine mix(a)
+            real(dp), intent(in) :: a(:, :)
+            integer :: p, q, b
+            integer(int64) :: bits
+            do q = 1, size(a, 2)
+                do p = 1, size(a, 1)
+                    bits = transfer(a(p, q), bits)
+                    do b = 0, 7
+                        h = modulo(ieor(h, iand(shiftr(bits, 8*b), 255_int64))*prime, modulus)
+                    end do
+                end do
+            end do
+        end subroutine mix
     end function case_fingerprint
 
     !> Save the curve so far into <directory>/frc.checkpoint (atomic). Error: stat io.

@@ -1,0 +1,295 @@
+!> Tests of the Matrix Market reader and writers: every supported kind read against the
+!> dense matrix written here, every class of bad file rejected with "<file>:<line>:" and
+!> what is wrong, and the round trip writer -> reader exact.
+module test_matrix_market
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_from_dense
+    use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size, &
+        write_matrix_market, &
+        write_matrix_market_array
+    use stickslip_files, only: make_directory
+    use testing, only: test_counter_t, check, check_close, check_error
+    use fixtures, only: enter_project_root, scratch, write_lines
+    implicit none
+    private
+    public :: run_matrix_market_tests
+
+    character(len=*), parameter :: dir = scratch//"/mm"
+    character(len=*), parameter :: sym_header = "%%MatrixMarket matrix coordinate real symmetric"
+    character(len=*), parameter :: gen_header = "%%MatrixMarket matrix coordinate real general"
+
+contains
+
+    subroutine run_matrix_market_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        type(error_type), allocatable :: error
+        call enter_project_root()
+        call make_directory(scratch, error)
+        call make_directory(dir, error)
+        call check_error(t, error, "mm: scratch directory", .false.)
+        if (allocated(error)) return
+        call test_good_files(t)
+        call test_bad_files(t)
+        call test_round_trip(t)
+        call test_mutations(t)
+    end subroutine run_matrix_market_tests
+
+    !> Random byte edits of a valid file: every outcome is a matrix or an error that names
+    !> the file (never a crash, a hang or a message without the file).
+    subroutine test_mutations(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: base = sym_header//achar(10)//"% c"//achar(10)// &
+            "3 3 4"//achar(10)//"1 1 4.0"//achar(10)//"2 1 -1.5e0"//achar(10)// &
+            "2 2 3"//achar(10)//"3 3 2.25"//achar(10)
+        character(len=*), parameter :: alphabet = "0123456789 -+.eE%"//achar(10)//"x,/"
+        character(len=len(base)) :: text
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        integer :: trial, k, u, pos, bad_messages, accepted
+        real(dp) :: r(3)
+        bad_messages = 0
+        accepted = 0
+        do trial = 1, 300
+            text = base
+            do k = 1, 3
+                call random_number(r)
+                pos = 1 + int(r(1)*len(base))
+                if (r(3) < 0.05_dp) then
+                    text(pos:pos) = achar(int(r(2)*256))
+                else
+                    text(pos:pos) = alphabet(1 + int(r(2)*len(alphabet)):1 + int(r(2)*len(alphabet)))
+                end if
+            end do
+            open (newunit=u, file=dir//"/fuzz.mtx", status='replace', access='stream', &
+                  form='unformatted')
+            write (u) text
+            close (u)
+            call read_matrix_market(dir//"/fuzz.mtx", a, error)
+            if (allocated(error)) then
+                if (index(error%message, dir//"/fuzz.mtx") /= 1) bad_messages = bad_messages + 1
+            else
+                accepted = accepted + 1
+            end if
+        end do
+        call check(t, bad_messages == 0, "mm mutations: every error names the file")
+        call check(t, accepted < 300, "mm mutations: some mutations rejected")
+    end subroutine test_mutations
+
+    !> Read `lines` as a file and compare with `expected` (exactly).
+    subroutine good(t, name, lines, expected, symmetric)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), intent(in) :: name
+        character(len=*), intent(in) :: lines(:)
+        real(dp), intent(in) :: expected(:, :)
+        logical, intent(in) :: symmetric
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: d(:, :)
+        logical :: sym
+        call write_lines(dir//"/"//name//".mtx", lines)
+        call read_matrix_market(dir//"/"//name//".mtx", a, error, sym)
+        call check_error(t, error, "mm good "//name//": read", .false.)
+        if (allocated(error)) return
+        call sparse_to_dense(a, d, error)
+        if (size(d, 1) /= size(expected, 1) .or. size(d, 2) /= size(expected, 2)) then
+            call check(t, .false., "mm good "//name//": size")
+            return
+        end if
+        call check(t, all(d == expected) .and. (sym .eqv. symmetric), "mm good "//name//": values")
+    end subroutine good
+
+    subroutine test_good_files(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp) :: s(3, 3), g(2, 3)
+        s = reshape([4.0_dp, -1.0_dp, 0.5_dp, -1.0_dp, 3.0_dp, 0.0_dp, 0.5_dp, 0.0_dp, 2.0_dp], &
+                    [3, 3])
+        g = reshape([1.0_dp, 0.0_dp, -2.0_dp, 3.5_dp, 0.0_dp, 1.0e-300_dp], [2, 3])
+        ! symmetric, lower triangle, comments and blank lines, unsorted
+        call good(t, "sym_lower", [character(len=60) :: sym_header, "% a comment", "", &
+                  "  3 3 5", "% another", "3 1 0.5", "1 1 4", "2 1 -1.0", "", "2 2 3.0e0", &
+                  "3 3 2"], s, .true.)
+        ! symmetric, upper triangle, keywords in capitals, tabs
+        call good(t, "sym_upper", [character(len=60) :: &
+                  "%%MatrixMarket MATRIX Coordinate Real Symmetric", "3 3 5", &
+                  "1"//achar(9)//"1 4", "1 2 -1", "1 3 0.5", "2 2 3", "3 3 2.0D0"], s, .true.)
+        ! general with a duplicate (summed) and an explicit zero
+        call good(t, "general", [character(len=60) :: gen_header, "2 3 5", "1 1 0.5", &
+                  "2 2 3.5", "1 2 -2", "1 1 0.5", "2 3 1e-300"], g, .false.)
+        ! integer field, read as reals
+        call good(t, "integer", [character(len=60) :: &
+                  "%%MatrixMarket matrix coordinate integer general", "2 3 3", "1 1 1", &
+                  "1 2 -2", "2 2 +7"], reshape([1.0_dp, 0.0_dp, -2.0_dp, 7.0_dp, 0.0_dp, &
+                                                0.0_dp], [2, 3]), .false.)
+        ! dense arrays: general (column by column) and symmetric (lower triangle)
+        call good(t, "array_general", [character(len=60) :: &
+                  "%%MatrixMarket matrix array real general", "% dense", "2 3", "1", "0", &
+                  "-2", "3.5", "0", "1e-300"], g, .false.)
+        call good(t, "array_symmetric", [character(len=60) :: &
+                  "%%MatrixMarket matrix array real symmetric", "3 3", "4", "-1", "0.5", "3", &
+                  "0", "2"], s, .true.)
+        ! an empty matrix, and a last line without newline is fine (write_lines always adds one)
+        call good(t, "empty", [character(len=60) :: gen_header, "2 2 0"], &
+                  reshape([0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp], [2, 2]), .false.)
+        ! CR LF line ends
+        call good(t, "crlf", [character(len=60) :: gen_header//achar(13), "1 1 1"//achar(13), &
+                  "1 1 2.5"//achar(13)], reshape([2.5_dp], [1, 1]), .false.)
+    end subroutine test_good_files
+
+    !> A bad file: the error names "<file>:<line>:" and contains every string of `what`.
+    subroutine bad(t, name, lines, line, what, stat)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), intent(in) :: name
+        character(len=*), intent(in) :: lines(:)
+        integer, intent(in) :: line
+        character(len=*), intent(in) :: what(:)
+        integer, intent(in), optional :: stat
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        character(len=16) :: at
+        character(len=:), allocatable :: path
+        character(len=120) :: expect(size(what) + 1)
+        integer :: k
+        path = dir//"/bad_"//name//".mtx"
+        call write_lines(path, lines)
+        call read_matrix_market(path, a, error)
+        write (at, '(a,i0,a)') ":", line, ":"
+        expect(1) = path//trim(at)
+        do k = 1, size(what)
+            expect(k + 1) = what(k)
+        end do
+        call check_error(t, error, "mm bad "//name, .true., expect)
+        if (allocated(error)) call check(t, error%stat == merge(stat, stickslip_stat%input, &
+                                         present(stat)), "mm bad "//name//": stat")
+    end subroutine bad
+
+    subroutine test_bad_files(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        call bad(t, "empty", [character(len=1) :: ], 1, [character(len=30) :: "empty file"])
+        call bad(t, "no_header", [character(len=60) :: "2 2 1", "1 1 1"], 1, &
+                 [character(len=30) :: "missing header"])
+        call bad(t, "short_header", [character(len=60) :: "%%MatrixMarket matrix coordinate", &
+                 "1 1 1", "1 1 1"], 1, [character(len=30) :: "5 words"])
+        call bad(t, "vector", [character(len=60) :: &
+                 "%%MatrixMarket vector coordinate real general", "1 1 1", "1 1 1"], 1, &
+                 [character(len=30) :: "object 'vector'"])
+        call bad(t, "complex", [character(len=60) :: &
+                 "%%MatrixMarket matrix coordinate complex general", "1 1 1", "1 1 1 0"], 1, &
+                 [character(len=30) :: "field 'complex'"])
+        call bad(t, "pattern", [character(len=60) :: &
+                 "%%MatrixMarket matrix coordinate pattern general", "1 1 1", "1 1"], 1, &
+                 [character(len=30) :: "field 'pattern'"])
+        call bad(t, "format", [character(len=60) :: &
+                 "%%MatrixMarket matrix sparse real general", "1 1 1", "1 1 1"], 1, &
+                 [character(len=30) :: "format 'sparse'"])
+        call bad(t, "skew", [character(len=60) :: &
+                 "%%MatrixMarket matrix coordinate real skew-symmetric", "1 1 1", "1 1 1"], 1, &
+                 [character(len=30) :: "symmetry 'skew-symmetric'"])
+        call bad(t, "no_size", [character(len=60) :: gen_header, "% only a comment"], 2, &
+                 [character(len=30) :: "before the size line"])
+        call bad(t, "size_two", [character(len=60) :: gen_header, "% c", "2 2", "1 1 1"], 3, &
+                 [character(len=30) :: "size line", "3 integers"])
+        call bad(t, "size_real", [character(len=60) :: gen_header, "2 2.0 1", "1 1 1"], 2, &
+                 [character(len=30) :: "size line", "not integers"])
+        call bad(t, "size_negative", [character(len=60) :: gen_header, "2 -2 1", "1 1 1"], 2, &
+                 [character(len=30) :: "negative size"])
+        call bad(t, "sym_not_square", [character(len=60) :: sym_header, "2 3 1", "1 1 1"], 2, &
+                 [character(len=30) :: "must be square"])
+        call bad(t, "too_many_announced", [character(len=60) :: gen_header, "2 2 5", "1 1 1"], &
+                 2, [character(len=30) :: "more than the 2 x 2"])
+        call bad(t, "beyond_limit", [character(len=60) :: gen_header, &
+                 "100000 100000 200000000", "1 1 1"], 2, [character(len=30) :: "10**8"])
+        call bad(t, "array_too_big", [character(len=60) :: &
+                 "%%MatrixMarket matrix array real general", "100000 100000", "1"], 2, &
+                 [character(len=30) :: "2**25"])
+        call bad(t, "fewer", [character(len=60) :: gen_header, "2 2 3", "1 1 1", "% c", &
+                 "2 2 1"], 5, [character(len=40) :: "end of file after 2 of the 3", "line 2"])
+        call bad(t, "more", [character(len=60) :: gen_header, "2 2 2", "1 1 1", "2 2 1", &
+                 "", "1 2 1"], 6, [character(len=40) :: "more entries than the 2", "line 2"])
+        call bad(t, "array_fewer", [character(len=60) :: &
+                 "%%MatrixMarket matrix array real general", "2 2", "1", "2", "3"], 5, &
+                 [character(len=40) :: "end of file after 3 of the 4"])
+        call bad(t, "row_range", [character(len=60) :: gen_header, "2 2 2", "1 1 1", &
+                 "3 1 1"], 4, [character(len=40) :: "entry (3,1) outside the 2 x 2"])
+        call bad(t, "col_zero", [character(len=60) :: gen_header, "2 2 1", "1 0 1"], 3, &
+                 [character(len=40) :: "entry (1,0) outside", "1-based"])
+        call bad(t, "nan", [character(len=60) :: gen_header, "2 2 2", "1 1 1", "2 2 NaN"], 4, &
+                 [character(len=40) :: "'NaN'", "not a finite number"])
+        call bad(t, "inf", [character(len=60) :: sym_header, "2 2 1", "2 1 -Inf"], 3, &
+                 [character(len=40) :: "not a finite number"])
+        call bad(t, "overflow", [character(len=60) :: gen_header, "1 1 1", "1 1 1e999"], 3, &
+                 [character(len=40) :: "1e999"])
+        call bad(t, "word", [character(len=60) :: gen_header, "1 1 1", "1 1 one"], 3, &
+                 [character(len=40) :: "'one' is not a real number"])
+        call bad(t, "two_values", [character(len=60) :: gen_header, "1 1 1", "1 1 1 2"], 3, &
+                 [character(len=40) :: "'row column value'"])
+        call bad(t, "int_field", [character(len=60) :: &
+                 "%%MatrixMarket matrix coordinate integer general", "1 1 1", "1 1 1.5"], 3, &
+                 [character(len=40) :: "not an integer"])
+        call bad(t, "both_triangles", [character(len=60) :: sym_header, "2 2 3", "2 1 1", &
+                 "1 1 2", "1 2 1"], 5, [character(len=60) :: "(1,2) is in the upper triangle", &
+                 "line 3", "non-symmetric data"])
+        call bad(t, "sym_duplicate", [character(len=60) :: sym_header, "2 2 3", "1 1 1", &
+                 "2 1 1", "1 1 1"], 5, [character(len=60) :: "(1,1) given twice (lines 3 and 5)", &
+                 "rejected"])
+        call bad(t, "binary", [character(len=60) :: gen_header, "1 1 1", "1 1 "//achar(1)], &
+                 3, [character(len=40) :: "non-printable"])
+        block
+            integer :: m, n
+            call write_lines(dir//"/size_only.mtx", [character(len=60) :: gen_header, &
+                             "% c", "7 9 30", "1 1 1"])
+            call read_matrix_market_size(dir//"/size_only.mtx", m, n, error)
+            call check_error(t, error, "mm: size only, entries not read", .false.)
+            call check(t, m == 7 .and. n == 9, "mm: size only: 7 x 9")
+        end block
+        call read_matrix_market(dir//"/does_not_exist.mtx", a, error)
+        call check_error(t, error, "mm: missing file", .true., [character(len=60) :: &
+                         dir//"/does_not_exist.mtx", "cannot open"])
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%io, "mm: missing file is io")
+    end subroutine test_bad_files
+
+    subroutine test_round_trip(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: a, b
+        type(error_type), allocatable :: error
+        real(dp) :: d(5, 5), g(4, 3)
+        real(dp), allocatable :: back(:, :)
+        logical :: sym
+        call random_number(d)
+        d = (d + transpose(d))*1.0e7_dp/3.0_dp
+        d(2, 4) = 0.0_dp
+        d(4, 2) = 0.0_dp
+        call random_number(g)
+        g = g - 0.5_dp
+        g(1, 1) = -1.0e-200_dp
+        call sparse_from_dense(d, a)
+        call write_matrix_market(dir//"/trip_sym.mtx", a, .true., error)
+        call check_error(t, error, "mm round trip: write symmetric", .false.)
+        call read_matrix_market(dir//"/trip_sym.mtx", b, error, sym)
+        call sparse_to_dense(b, back, error)
+        call check(t, all(back == d) .and. sym, "mm round trip: coordinate symmetric, exact")
+        call sparse_from_dense(g, a)
+        call write_matrix_market(dir//"/trip_gen.mtx", a, .false., error)
+        call read_matrix_market(dir//"/trip_gen.mtx", b, error, sym)
+        call sparse_to_dense(b, back, error)
+        call check(t, all(back == g) .and. .not. sym, "mm round trip: coordinate general, exact")
+        call write_matrix_market(dir//"/trip_bad.mtx", a, .true., error)
+        call check_error(t, error, "mm: writing a non-symmetric matrix as symmetric refused", &
+                         .true., [character(len=30) :: "non-symmetric"])
+        call write_matrix_market_array(dir//"/trip_arr.mtx", g, .false., error)
+        call check_error(t, error, "mm round trip: write array", .false.)
+        call read_matrix_market(dir//"/trip_arr.mtx", b, error)
+        call sparse_to_dense(b, back, error)
+        call check(t, all(back == g), "mm round trip: array general, exact")
+        call write_matrix_market_array(dir//"/trip_arrs.mtx", d, .true., error)
+        call read_matrix_market(dir//"/trip_arrs.mtx", b, error, sym)
+        call sparse_to_dense(b, back, error)
+        call check(t, all(back == d) .and. sym, "mm round trip: array symmetric, exact")
+        call write_matrix_market_array(scratch//"/no/such/dir/x.mtx", g, .false., error)
+        call check_error(t, error, "mm: unwritable path", .true., [character(len=30) :: &
+                         "cannot write"])
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%io, "mm: unwritable is io")
+    end subroutine test_round_trip
+end module test_matrix_market

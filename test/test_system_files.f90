@@ -336,7 +336,7 @@ contains
         call read_case("examples/beam_mm/beam.nml", c, error)
         call check_error(t, error, "example beam_mm: reads", .false.)
         if (allocated(error)) return
-        call check(t, c%model%ndof == 20 .and. c%method == 'hbm', "example beam_mm: 20 DOFs, hbm")
+        call check(t, c%model%ndof == 80 .and. c%method == 'hbm', "example beam_mm: 80 DOFs, hbm")
         call solve_periodic(c%model, c%hbm, s, error)
         call check_error(t, error, "example beam_mm: solves", .false.)
         if (.not. allocated(error)) call check(t, s%converged, "example beam_mm: converged")

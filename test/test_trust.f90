@@ -9,6 +9,7 @@ module test_trust
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_lapack, only: dsygv
     use stickslip_euler, only: euler_options_t
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference
     use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
@@ -37,7 +38,73 @@ contains
         call test_sound_cases_quiet(t)
         call test_disagreement(t)
         call test_sweep_tally(t)
+        call test_fine_mesh_not_resonant(t)
     end subroutine run_trust_tests
+
+    !> A fixed-free chain of 60 masses whose springs span 12 decades (cond(K) ~ 1e14, like a
+    !> badly graded FE mesh), forced between two natural frequencies: not a resonance, and
+    !> no 'near_resonance' finding; forced at a natural frequency (LAPACK dsygv): an error
+    !> naming the harmonic. The singularity test must measure the distance to a mode, not
+    !> the conditioning of K.
+    subroutine test_fine_mesh_not_resonant(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 60
+        type(model_t) :: m
+        type(hbm_options_t) :: o
+        type(hbm_solution_t) :: sol
+        type(error_type), allocatable :: error
+        real(dp) :: kk(n), a(n, n), b(n, n), w(n), work(10*n)
+        integer :: i, info
+        do i = 1, n
+            kk(i) = 10.0_dp**(12.0_dp*real(i - 1, dp)/real(n - 1, dp) - 6.0_dp)
+        end do
+        m%ndof = n
+        allocate (m%stiffness(n, n), m%mass(n, n), m%damping(n, n))
+        m%stiffness = 0.0_dp
+        m%mass = 0.0_dp
+        m%damping = 0.0_dp
+        do i = 1, n
+            m%mass(i, i) = 1.0_dp
+            m%stiffness(i, i) = kk(i)
+            if (i < n) m%stiffness(i, i) = m%stiffness(i, i) + kk(i + 1)
+            if (i < n) then
+                m%stiffness(i, i + 1) = -kk(i + 1)
+                m%stiffness(i + 1, i) = -kk(i + 1)
+            end if
+        end do
+        a = m%stiffness
+        b = m%mass
+        call dsygv(1, 'N', 'U', n, a, n, b, n, w, work, size(work), info)
+        call check(t, info == 0, "fine mesh: eigenvalues")
+        if (info /= 0) return
+        m%omega = sqrt(sqrt(w(10)*w(11)))
+        m%force_dof = [n]
+        m%force_harmonic = [1]
+        m%force_amplitude = [1.0_dp]
+        m%force_phase = [0.0_dp]
+        m%contact_dof = [n]
+        m%contact_dof2 = [0]
+        m%mu = [0.3_dp]
+        m%normal_load = [1.0_dp]
+        o%harmonics = 1
+        o%odd_only = .true.
+        o%samples = 64
+        call solve_periodic(m, o, sol, error)
+        call check_error(t, error, "fine mesh between modes: solved", .false.)
+        if (allocated(error)) return
+        call check(t, .not. sol%diagnostics%has('near_resonance'), &
+                   "fine mesh between modes (cond(K) ~ 1e14): no near_resonance finding")
+        m%omega = sqrt(w(10))
+        call solve_periodic(m, o, sol, error)
+        if (.not. allocated(error)) then
+            call check(t, sol%diagnostics%has('near_resonance'), &
+                       "fine mesh at a natural frequency: near_resonance (untrusted)")
+        else
+            call check(t, index(error%message, "resonance at harmonic h = 1") > 0, &
+                       "fine mesh at a natural frequency: the message names the harmonic", &
+                       error%message)
+        end if
+    end subroutine test_fine_mesh_not_resonant
 
     !> A sweep counts the points whose checks fail: at H = 5 (64 samples) the seed case's
     !> truncation estimate is far above 10%, so the curve carries 'points_truncation'.

@@ -42,11 +42,14 @@ module stickslip_dynamics
         !> d G_h / d omega, n_c x n_c x nharm (only when built with_omega_derivative)
         !> [m/N].
         complex(dp), allocatable :: dg(:, :, :)
-        !> Smallest relative conditioning over the harmonics of the basis (the constant
-        !> included): 1 / (||Z_h^-1||_1 s_h), s_h = ||K||_1 + (h omega)^2 ||M||_1 +
-        !> h omega ||C||_1, i.e. about the smallest singular value of Z_h over the scale of
-        !> its terms (dimensionless; unlike rcond it sees the resonance of a 1 x 1 Z_h,
-        !> whose rcond is always 1). Below singular_threshold new_dynamics fails.
+        !> Smallest relative conditioning over the harmonics h > 0 of the basis: the smallest
+        !> singular value of Z_h over that of the same terms without cancellation,
+        !> s(Z_h) / (s(K) + (h omega)^2 s(M)), each s = 1 / ||A^-1||_1 (LAPACK estimates).
+        !> About the relative distance of (h omega)^2 to the nearest natural frequency squared
+        !> of the undamped structure: dimensionless, blind to the mesh's own conditioning (a
+        !> fine FE mesh with cond(K) = 1e13 is far from 0 when h omega is between its modes),
+        !> and, unlike rcond, it sees the resonance of a 1 x 1 Z_h (whose rcond is always 1).
+        !> Below singular_threshold new_dynamics fails. 1 when the basis has no h > 0.
         real(dp) :: relative_conditioning = huge(1.0_dp)
         !> Harmonic where relative_conditioning is reached (-1 before new_dynamics).
         integer :: worst_harmonic = -1
@@ -56,10 +59,13 @@ module stickslip_dynamics
         procedure :: displacement
     end type dynamics_t
 
-    !> Z_h is called singular when its relative conditioning (see relative_conditioning in
-    !> dynamics_t) is below this: the smallest singular value is then at the roundoff level
-    !> of the matrix's own scale ||K|| + (h omega)^2 ||M|| + h omega ||C||.
+    !> Z_h (h > 0) is called singular when its relative conditioning (see
+    !> relative_conditioning in dynamics_t) is below this: h omega is a natural frequency to
+    !> roundoff. K itself (h = 0) is called singular when its rcond is below
+    !> static_singular_threshold (a few roundoffs: a healthy fine mesh with cond 1e13 passes).
     real(dp), parameter, public :: singular_threshold = 1.0e-13_dp
+    !> rcond of K below which the static (zeroth-harmonic) problem is singular.
+    real(dp), parameter, public :: static_singular_threshold = 1.0e-15_dp
     !> Z_h is called nearly singular (a resonance of the undamped structure within about
     !> this relative distance) below this: the response then hangs on the last digits of
     !> omega, M and K (stickslip_hbm reports it as untrusted, key 'near_resonance').
@@ -91,7 +97,7 @@ contains
         logical :: deriv
         real(dp), allocatable :: rwork(:)
         integer, allocatable :: ipiv(:)
-        real(dp) :: anorm, rcond, w(model%ndof), knorm, mnorm, cnorm, zscale, rel
+        real(dp) :: anorm, rcond, w(model%ndof), knorm, mnorm, zscale, rel, smin_k, smin_m
         complex(dp) :: ihw
         character(len=512) :: buf
         logical :: placed
@@ -127,7 +133,10 @@ contains
 
         knorm = maxval(sum(abs(model%stiffness), dim=1))
         mnorm = maxval(sum(abs(model%mass), dim=1))
-        cnorm = maxval(sum(abs(model%damping), dim=1))
+        ! the smallest singular values of K and M (1-norm estimates; 0 when singular)
+        smin_k = smallest_singular(model%stiffness, knorm)
+        smin_m = smallest_singular(model%mass, mnorm)
+        self%relative_conditioning = 1.0_dp
         do ih = 0, basis%nharm
             if (ih == 0) then
                 if (.not. basis%has_zero) cycle
@@ -147,15 +156,20 @@ contains
             if (info == 0) then
                 call zgecon('1', n, z, n, anorm, rcond, work, rwork, info)
             end if
-            ! relative to the scale of the terms, not to ||Z_h|| (rcond of a 1 x 1 is 1)
-            zscale = knorm + (h*model%omega)**2*mnorm + h*model%omega*cnorm
-            rel = 0.0_dp
-            if (zscale > 0.0_dp) rel = rcond*anorm/zscale
-            if (rel < self%relative_conditioning) then
-                self%relative_conditioning = rel
-                self%worst_harmonic = h
+            ! h > 0: the smallest singular value of Z_h relative to that of K + (h omega)^2 M
+            ! (no cancellation): the distance to a resonance, not the mesh's conditioning
+            rel = 1.0_dp
+            if (h > 0) then
+                zscale = smin_k + (h*model%omega)**2*smin_m
+                rel = 0.0_dp
+                if (zscale > 0.0_dp) rel = rcond*anorm/zscale
+                if (rel < self%relative_conditioning) then
+                    self%relative_conditioning = rel
+                    self%worst_harmonic = h
+                end if
             end if
-            if (.not. (rcond >= singular_threshold .and. rel >= singular_threshold)) then
+            if ((h == 0 .and. .not. (rcond >= static_singular_threshold)) .or. &
+                (h > 0 .and. .not. (rel >= singular_threshold))) then
                 if (h == 0) then
                     write (buf, '(a,es10.2e3,a)') "the stiffness matrix K is singular (rcond = ", &
                         rcond, "): the static (zeroth-harmonic) response is undetermined; "// &
@@ -295,4 +309,29 @@ contains
             xcoef(k + 1, :) = -aimag(x)
         end do
     end subroutine displacement
+
+    !> 1 / ||A^-1||_1 of a real square matrix (LAPACK's estimate, through the complex
+    !> routines used for Z_h), `anorm` = ||A||_1; 0 when A is singular.
+    function smallest_singular(a, anorm) result(smin)
+        !> The matrix.
+        real(dp), intent(in) :: a(:, :)
+        !> Its 1-norm.
+        real(dp), intent(in) :: anorm
+        real(dp) :: smin
+        complex(dp), allocatable :: z(:, :), work(:)
+        real(dp), allocatable :: rwork(:)
+        real(dp) :: rcond
+        integer, allocatable :: ipiv(:)
+        integer :: info, n
+        n = size(a, 1)
+        smin = 0.0_dp
+        if (n == 0) return
+        allocate (z(n, n), work(2*n), rwork(2*n), ipiv(n))
+        z = cmplx(a, 0.0_dp, dp)
+        call zgetrf(n, n, z, n, ipiv, info)
+        if (info /= 0) return
+        call zgecon('1', n, z, n, anorm, rcond, work, rwork, info)
+        if (info /= 0) return
+        smin = rcond*anorm
+    end function smallest_singular
 end module stickslip_dynamics

@@ -4,7 +4,8 @@
 !> writes its files atomically into the case's output directory under a lock; the writers
 !> are also callable one by one. The numerics without files are in the umbrella `stickslip`.
 module stickslip_io
-    use stickslip_case, only: case_t, read_case, write_case, sweep_run_options_t
+    use stickslip_case, only: case_t, read_case, write_case, sweep_run_options_t, selected_dofs, &
+        default_output_dofs
     use stickslip_driver, only: run_result_t, run_method, method_names, run_case, &
         run_euler_case, run_reference_case, run_side_by_side_case, run_study_case, &
         run_sweep_case, run_robustness_case
@@ -21,7 +22,8 @@ module stickslip_io
         write_matrix_market_array
     implicit none
     private
-    public :: case_t, read_case, write_case, sweep_run_options_t
+    public :: case_t, read_case, write_case, sweep_run_options_t, selected_dofs, &
+              default_output_dofs
     public :: run_result_t, run_method, method_names, run_case, run_euler_case, &
               run_reference_case, run_side_by_side_case, run_study_case, run_sweep_case, &
               run_robustness_case, exit_code_of

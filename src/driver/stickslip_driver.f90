@@ -17,7 +17,7 @@ module stickslip_driver
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_progress, only: progress_t
-    use stickslip_case, only: case_t
+    use stickslip_case, only: case_t, selected_dofs
     use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t, solve_and_check
@@ -229,9 +229,9 @@ contains
         if (sol%converged) then
             call remove_stale_results(case%directory, [character(len=24) :: "hbm.csv", &
                                       "coefficients.csv"])
-            call write_hbm_csv(case%directory, sol, error)
+            call write_hbm_csv(case%directory, sol, error, selected_dofs(case))
             if (allocated(error)) return
-            call write_coefficients_csv(case%directory, sol, error)
+            call write_coefficients_csv(case%directory, sol, error, selected_dofs(case))
             if (allocated(error)) return
         else
             call remove_stale_results(case%directory, [character(len=24) ::])
@@ -284,7 +284,8 @@ contains
         if (.not. wanted) return
         if (res%periodic) then
             call remove_stale_results(case%directory, [character(len=24) :: "euler.csv"])
-            call write_samples_csv(case%directory, "euler.csv", res%t, res%x, res%v, res%r, error)
+            call write_samples_csv(case%directory, "euler.csv", res%t, res%x, res%v, res%r, &
+                                   error, selected_dofs(case))
             if (allocated(error)) return
         else
             call remove_stale_results(case%directory, [character(len=24) ::])
@@ -382,14 +383,14 @@ contains
                                               "events.csv"]
         call remove_stale_results(case%directory, files)
         if (res%hbm%converged) then
-            call write_hbm_csv(case%directory, res%hbm, error)
+            call write_hbm_csv(case%directory, res%hbm, error, selected_dofs(case))
             if (allocated(error)) return
-            call write_coefficients_csv(case%directory, res%hbm, error)
+            call write_coefficients_csv(case%directory, res%hbm, error, selected_dofs(case))
             if (allocated(error)) return
         end if
         if (res%euler%periodic) then
             call write_samples_csv(case%directory, "euler.csv", res%euler%t, res%euler%x, &
-                                   res%euler%v, res%euler%r, error)
+                                   res%euler%v, res%euler%r, error, selected_dofs(case))
             if (allocated(error)) return
         end if
         if (res%reference%converged) then
@@ -455,7 +456,8 @@ contains
         end if
         call remove_stale_results(case%directory, [character(len=24) :: "study.csv", &
                                   "reference.csv", "events.csv"])
-        call write_study_csv(case%directory, res, case%model%ndof, case%model%ncontact(), error)
+        call write_study_csv(case%directory, res, case%model%ndof, case%model%ncontact(), error, &
+                             selected_dofs(case))
         if (allocated(error)) return
         call write_reference_files(case, res%reference, error)
         if (allocated(error)) return
@@ -518,10 +520,10 @@ contains
         call after_method(case, error, wanted)
         if (.not. wanted) return
         call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
-        call write_frc_csv(case%directory, res, error)
+        call write_frc_csv(case%directory, res, error, selected_dofs(case))
         if (allocated(error)) return
         call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
-                                   case%model%ndof, error)
+                                   case%model%ndof, error, selected_dofs(case))
         if (allocated(error)) return
         call write_sweep_summary(case%directory, case, res, error)
         if (allocated(error)) return
@@ -583,7 +585,7 @@ contains
         type(reference_result_t), intent(in) :: res
         type(error_type), allocatable, intent(out) :: error
         call write_samples_csv(case%directory, "reference.csv", res%t, res%x, res%v, res%r, &
-                               error)
+                               error, selected_dofs(case))
         if (allocated(error)) return
         call write_events_csv(case%directory, res, error)
     end subroutine write_reference_files

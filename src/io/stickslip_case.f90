@@ -20,7 +20,7 @@ module stickslip_case
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         read_friction_group, max_dof, max_terms, group_error, system_files_t, max_file_dof
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
-        read_run_group, read_output_group
+        read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t
@@ -31,6 +31,7 @@ module stickslip_case
     public :: sweep_run_options_t
     public :: max_sample_values
     public :: put, rtoa, ltoa, rlist, ilist, llist
+    public :: selected_dofs, default_output_dofs
 
     !> The groups of a case file.
     character(len=10), parameter :: known_groups(11) = [character(len=10) :: 'system', &
@@ -72,6 +73,12 @@ module stickslip_case
         type(robustness_options_t) :: robustness = robustness_options_t()
         !> Output directory (&output directory), created if missing.
         character(len=:), allocatable :: directory
+        !> The DOFs the result files hold, in column order (&output dofs, or the default
+        !> selection, default_output_dofs; unallocated in a case built in memory: see
+        !> selected_dofs).
+        integer, allocatable :: output_dofs(:)
+        !> &output dofs was given (write_case echoes it).
+        logical :: output_dofs_given = .false.
     end type case_t
 
 contains
@@ -116,7 +123,8 @@ contains
 
         call read_hbm_group(nml, case%hbm, case%checks, error)
         if (allocated(error)) return
-        call read_output_group(nml, case%directory, error)
+        call read_output_group(nml, case%model, case%directory, case%output_dofs, &
+                               case%output_dofs_given, error)
         if (allocated(error)) return
         call read_run_group(nml, method, method_given, error)
         if (allocated(error)) return
@@ -314,6 +322,19 @@ contains
         end subroutine sample_limit
     end subroutine check_sizes
 
+    !> The DOFs the result files of `case` hold, in column order: case%output_dofs, or the
+    !> default selection of its model (default_output_dofs) when that is not set.
+    function selected_dofs(case) result(dofs)
+        !> The case.
+        type(case_t), intent(in) :: case
+        integer, allocatable :: dofs(:)
+        if (allocated(case%output_dofs)) then
+            dofs = case%output_dofs
+        else
+            dofs = default_output_dofs(case%model)
+        end if
+    end function selected_dofs
+
     !> Write `case` as namelist text that read_case reads back (full precision), to `unit`.
     !> A model read from Matrix Market files is echoed as its file variables with ABSOLUTE
     !> paths (the echo is read from another folder: the output directory) and the Rayleigh
@@ -382,6 +403,8 @@ contains
             call put(unit, "/", stat, msg)
             call put(unit, "&output", stat, msg)
             call put(unit, "  directory = '"//case%directory//"'", stat, msg)
+            if (case%output_dofs_given .and. allocated(case%output_dofs)) &
+                call put(unit, "  dofs = "//ilist(case%output_dofs), stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&run", stat, msg)
             call put(unit, "  method = '"//trim(case%method)//"'", stat, msg)

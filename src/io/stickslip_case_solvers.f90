@@ -13,13 +13,15 @@ module stickslip_case_solvers
     use stickslip_reference_start, only: reference_start_options_t, &
         validate_reference_start_options
     use stickslip_namelist, only: nml_file_t
-    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string
-    use stickslip_case_model, only: group_error
+    use stickslip_model, only: model_t
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, &
+        get_string, get_integers
+    use stickslip_case_model, only: group_error, max_dof, max_file_dof
     use stickslip_case_messages, only: to_case_message
     implicit none
     private
     public :: read_hbm_group, read_euler_group, read_reference_group, read_run_group
-    public :: read_output_group, known_methods
+    public :: read_output_group, default_output_dofs, known_methods
 
     !> Methods of &run method.
     character(len=10), parameter :: known_methods(7) = [character(len=10) :: 'hbm', 'euler', &
@@ -163,16 +165,27 @@ contains
         method = trim(method)
     end subroutine read_run_group
 
-    !> Read &output (optional): directory (any length, not empty; default 'out').
-    subroutine read_output_group(nml, directory, error)
+    !> Read &output (optional): directory (any length, not empty; default 'out') and dofs,
+    !> the DOFs the result files hold, in the order given (each in 1..N, no duplicates;
+    !> absent: default_output_dofs(model)). Errors (stat input) name &output and the
+    !> variable, for dofs its element: "&output dofs(2) = 0: ...".
+    subroutine read_output_group(nml, model, directory, dofs, dofs_given, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
+        !> The model read (its ndof, contacts and forcing give the default selection).
+        type(model_t), intent(in) :: model
         !> The output directory.
         character(len=:), allocatable, intent(out) :: directory
+        !> The selected DOFs (the default selection when not given).
+        integer, allocatable, intent(out) :: dofs(:)
+        !> &output dofs was given.
+        logical, intent(out) :: dofs_given
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        integer :: k
         directory = 'out'
-        call check_names(nml, "output", [character(len=9) :: "directory"], error)
+        dofs_given = .false.
+        call check_names(nml, "output", [character(len=9) :: "directory", "dofs"], error)
         if (allocated(error)) return
         call get_string(nml, "output", "directory", directory, error)
         if (allocated(error)) return
@@ -181,5 +194,62 @@ contains
             return
         end if
         directory = trim(directory)
+        call get_integers(nml, "output", "dofs", dofs, dofs_given, max_file_dof, error)
+        if (allocated(error)) return
+        if (.not. dofs_given) then
+            dofs = default_output_dofs(model)
+            return
+        end if
+        do k = 1, size(dofs)
+            if (dofs(k) < 1 .or. dofs(k) > model%ndof) then
+                call group_error(nml, error, "&output dofs("//itoa(k)//") = "// &
+                                 itoa(dofs(k))//": not a DOF of the model (1.."// &
+                                 itoa(model%ndof)//")")
+                return
+            end if
+            if (any(dofs(1:k - 1) == dofs(k))) then
+                call group_error(nml, error, "&output dofs("//itoa(k)//") = "// &
+                                 itoa(dofs(k))//": given twice (also dofs("// &
+                                 itoa(findloc(dofs(1:k - 1), dofs(k), 1))//"))")
+                return
+            end if
+        end do
     end subroutine read_output_group
+
+    !> The DOFs the result files hold when &output dofs is absent: every DOF, 1..N, when
+    !> N <= max_dof (64, the inline limit: the files of small models are unchanged);
+    !> otherwise the contact DOFs (contact_dof and the nonzero contact_dof2) and the forced
+    !> DOFs (force_dof), in increasing order without duplicates.
+    pure function default_output_dofs(model) result(dofs)
+        !> The model.
+        type(model_t), intent(in) :: model
+        integer, allocatable :: dofs(:)
+        logical, allocatable :: touched(:)
+        integer :: i
+        if (model%ndof <= max_dof) then
+            dofs = [(i, i=1, model%ndof)]
+            return
+        end if
+        allocate (touched(model%ndof))
+        touched = .false.
+        touched = marked(touched, model%contact_dof)
+        touched = marked(touched, model%contact_dof2)
+        touched = marked(touched, model%force_dof)
+        dofs = pack([(i, i=1, model%ndof)], touched)
+
+    contains
+
+        !> `flags` with the entries of `list` in range set (0: no second DOF).
+        pure function marked(flags, list) result(out)
+            logical, intent(in) :: flags(:)
+            integer, allocatable, intent(in) :: list(:)
+            logical :: out(size(flags))
+            integer :: j
+            out = flags
+            if (.not. allocated(list)) return
+            do j = 1, size(list)
+                if (list(j) >= 1 .and. list(j) <= size(flags)) out(list(j)) = .true.
+            end do
+        end function marked
+    end function default_output_dofs
 end module stickslip_case_solvers

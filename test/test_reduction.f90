@@ -11,7 +11,13 @@ module test_reduction
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_to_dense
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
         craig_bampton, recover_dofs, receptance_error
+    use stickslip_model, only: model_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_case, only: case_t, read_case, write_case
+    use stickslip_matrix_market, only: write_matrix_market
     use testing, only: test_counter_t, check, check_close
+    use fixtures, only: enter_project_root, scratch, write_lines
     implicit none
     private
     public :: run_reduction_tests, chain_matrices
@@ -25,6 +31,8 @@ contains
         call test_static(t)
         call test_rule(t)
         call test_large(t)
+        call test_weighted_residual(t)
+        call test_case_file(t)
     end subroutine run_reduction_tests
 
     !> Fixed-free chain of n masses: springs k between neighbours and to the ground at DOF 1,
@@ -259,6 +267,147 @@ contains
         call dpotrf('U', size(mr, 1), mr, size(mr, 1), info)
         call check(t, info == 0, "reduction: reduced M SPD (3000 DOFs)")
     end subroutine test_large
+
+    !> The weighted residual on the reduced chain (N = 200, all modes below 3 H omega) against
+    !> the same on the full dense chain: the contact's harmonic amplitudes agree to the
+    !> measured reduction error (times a modest factor: the friction is a nonlinear function
+    !> of the receptance).
+    subroutine test_weighted_residual(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep
+        type(error_type), allocatable :: error
+        type(model_t) :: full, small
+        type(hbm_options_t) :: opts
+        type(hbm_solution_t) :: sf, sr
+        real(dp) :: err, diff, scale
+        integer, parameter :: n = 200, dc = 150, df = 200
+        real(dp), parameter :: omega = 0.5_dp
+        call chain_matrices(n, k, m, c)
+        opts%harmonics = 5
+        call craig_bampton(k, m, [dc, df], reduction_options_t(highest_frequency= &
+                           opts%harmonics*omega), red, rep, error, cmat=c)
+        call check(t, .not. allocated(error), "reduction: residual model reduces", msg(error))
+        if (allocated(error)) return
+        call receptance_error(k, m, red, [dc], [0], omega*[1.0_dp, 2.0_dp, 3.0_dp, 5.0_dp], &
+                              err, error, cmat=c)
+        full%ndof = n
+        call sparse_to_dense(m, full%mass, error)
+        call sparse_to_dense(k, full%stiffness, error)
+        call sparse_to_dense(c, full%damping, error)
+        full%omega = omega
+        full%force_dof = [df]
+        full%force_harmonic = [1]
+        full%force_amplitude = [2.0_dp]
+        full%force_phase = [0.0_dp]
+        full%contact_dof = [dc]
+        full%contact_dof2 = [0]
+        full%mu = [0.5_dp]
+        full%normal_load = [1.0_dp]
+        small = full
+        small%ndof = red%nr
+        small%mass = red%mass
+        small%stiffness = red%stiffness
+        small%damping = red%damping
+        small%force_dof = [2]
+        small%contact_dof = [1]
+        call solve_periodic(full, opts, sf, error)
+        call check(t, .not. allocated(error) .and. sf%converged, &
+                   "reduction: residual on the full chain converges", msg(error))
+        if (allocated(error)) return
+        call solve_periodic(small, opts, sr, error)
+        call check(t, .not. allocated(error) .and. sr%converged, &
+                   "reduction: residual on the reduced chain converges", msg(error))
+        if (allocated(error)) return
+        scale = maxval(abs(sf%xcoef(:, dc)))
+        diff = maxval(abs(sr%xcoef(:, 1) - sf%xcoef(:, dc)))
+        call check(t, diff <= max(10.0_dp*err, 1.0e-8_dp)*scale, &
+                   "reduction: residual reduced vs full agree to the reduction error", &
+                   "diff/scale "//rt(diff/scale)//" reduction error "//rt(err)//" modes "// &
+                   it(rep%modes))
+        diff = maxval(abs(sr%rcoef(:, 1) - sf%rcoef(:, 1)))
+        call check(t, diff <= max(10.0_dp*err, 1.0e-8_dp)*maxval(abs(sf%rcoef(:, 1))), &
+                   "reduction: contact force reduced vs full", rt(diff))
+    end subroutine test_weighted_residual
+
+    !> A case file with 3000-DOF Matrix Market files (written here) and &reduction method =
+    !> 'craig-bampton': read_case reduces it (DOFs remapped, report filled), the weighted
+    !> residual solves it; the echo names the full DOF numbers; 'none' names the limit.
+    subroutine test_case_file(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(error_type), allocatable :: error
+        type(case_t) :: cs
+        type(hbm_solution_t) :: s
+        integer :: u, stat
+        character(len=200) :: iomsg
+        character(len=2000) :: line
+        logical :: echo_ok
+        call enter_project_root()
+        call chain_matrices(3000, k, m, c)
+        call write_matrix_market(scratch//"/cb_m.mtx", m, .true., error)
+        call write_matrix_market(scratch//"/cb_k.mtx", k, .true., error)
+        call check(t, .not. allocated(error), "reduction case: files written", msg(error))
+        if (allocated(error)) return
+        call write_lines(scratch//"/cb.nml", [character(len=100) :: &
+            "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx',", &
+            "  rayleigh_alpha = 0.01 /", &
+            "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+            "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+            "&reduction method = 'craig-bampton' /", &
+            "&hbm harmonics = 3 /"])
+        call read_case(scratch//"/cb.nml", cs, error)
+        call check(t, .not. allocated(error), "reduction case: reads", msg(error))
+        if (allocated(error)) return
+        associate (r => cs%reduction%report)
+            call check(t, r%method == 'craig-bampton' .and. r%full_dof == 3000 .and. &
+                       r%boundary_dof == 2 .and. r%reduced_dof == 2 + r%modes .and. &
+                       cs%model%ndof == r%reduced_dof .and. r%modes > 0, &
+                       "reduction case: reduced sizes", "reduced "//it(r%reduced_dof)// &
+                       " modes "//it(r%modes))
+            call check(t, r%error >= 0.0_dp .and. r%error < 0.05_dp, &
+                       "reduction case: reduction error measured and small", rt(r%error))
+            call check(t, r%highest_mode_frequency < 3.0_dp*3*0.03_dp, &
+                       "reduction case: modes below 3 H omega")
+        end associate
+        call check(t, all(cs%model%contact_dof == [1]) .and. all(cs%model%force_dof == [2]), &
+                   "reduction case: DOFs remapped (2990 -> 1, 3000 -> 2)")
+        call solve_periodic(cs%model, cs%hbm, s, error)
+        call check(t, .not. allocated(error) .and. s%converged, "reduction case: solves", &
+                   msg(error))
+        ! the echo: full ndof and full DOF numbers, and the &reduction group
+        open (newunit=u, file=scratch//"/cb_echo.nml", status='replace', action='write')
+        call write_case(u, cs, stat, iomsg)
+        close (u)
+        echo_ok = .false.
+        open (newunit=u, file=scratch//"/cb_echo.nml", status='old', action='read')
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            if (index(line, "contact_dof = 2990") > 0) echo_ok = .true.
+        end do
+        close (u)
+        call check(t, echo_ok, "reduction case: echo holds the full contact DOF")
+        ! 'none' beyond 2000 DOFs names the limit
+        call write_lines(scratch//"/cb_none.nml", [character(len=100) :: &
+            "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx' /", &
+            "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+            "&reduction method = 'none' /"])
+        call read_case(scratch//"/cb_none.nml", cs, error)
+        call check(t, allocated(error), "reduction case: 'none' beyond 2000 DOFs refused")
+        if (allocated(error)) call check(t, index(error%message, "2000") > 0, &
+                                         "reduction case: the message names the limit", &
+                                         error%message)
+        call write_lines(scratch//"/cb_bad.nml", [character(len=100) :: &
+            "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx' /", &
+            "&forcing omega = 0.03, force_dof = 3001, force_amplitude = 1.0 /", &
+            "&reduction method = 'cb' /"])
+        call read_case(scratch//"/cb_bad.nml", cs, error)
+        call check(t, allocated(error), "reduction case: bad method refused")
+        if (allocated(error)) call check(t, index(error%message, "&reduction method") > 0, &
+                                         "reduction case: bad method named", error%message)
+    end subroutine test_case_file
 
     function msg(error) result(s)
         type(error_type), allocatable, intent(in) :: error

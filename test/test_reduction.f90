@@ -17,6 +17,7 @@ module test_reduction
     use stickslip_case, only: case_t, read_case, write_case
     use stickslip_matrix_market, only: write_matrix_market
     use testing, only: test_counter_t, check, check_close
+    use stickslip_cli, only: run_cli, string_t
     use fixtures, only: enter_project_root, scratch, write_lines
     implicit none
     private
@@ -389,6 +390,49 @@ contains
         end do
         close (u)
         call check(t, echo_ok, "reduction case: echo holds the full contact DOF")
+        ! the command line: summary.nml holds the reduction keys and reads back as the case
+        block
+            type(string_t), allocatable :: args(:)
+            type(case_t) :: back
+            integer :: uo, ue, code
+            logical :: keys(3)
+            call write_lines(scratch//"/cb_cli.nml", [character(len=100) :: &
+                "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx',", &
+                "  rayleigh_alpha = 0.01 /", &
+                "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+                "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+                "&hbm harmonics = 3 /", &
+                "&output directory = '"//scratch//"/out_cb' /"])
+            allocate (args(1))
+            args(1)%s = scratch//"/cb_cli.nml"
+            open (newunit=uo, status='scratch', action='readwrite')
+            open (newunit=ue, status='scratch', action='readwrite')
+            code = run_cli(args, uo, ue)
+            close (uo)
+            close (ue)
+            call check(t, code == 0, "reduction case: the command line exits 0 ('auto', "// &
+                       "N = 3000)", it(code))
+            keys = .false.
+            open (newunit=u, file=scratch//"/out_cb/summary.nml", status='old', &
+                  action='read', iostat=stat)
+            do while (stat == 0)
+                read (u, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                if (index(line, "reduction_method = 'craig-bampton'") > 0) keys(1) = .true.
+                if (index(line, "full_dof = 3000") > 0) keys(2) = .true.
+                if (index(line, "reduction_error = ") > 0) keys(3) = .true.
+            end do
+            close (u, iostat=stat)
+            call check(t, all(keys), "reduction case: summary.nml reduction keys")
+            call read_case(scratch//"/out_cb/summary.nml", back, error)
+            call check(t, .not. allocated(error), "reduction case: summary.nml reads back", &
+                       msg(error))
+            if (.not. allocated(error)) call check(t, back%model%ndof == cs%model%ndof .and. &
+                all(abs(back%model%stiffness - cs%model%stiffness) <= &
+                    1.0e-9_dp*maxval(abs(cs%model%stiffness))) .and. &
+                all(back%model%contact_dof == cs%model%contact_dof), &
+                "reduction case: summary.nml gives the same reduced model")
+        end block
         ! 'none' beyond 2000 DOFs names the limit
         call write_lines(scratch//"/cb_none.nml", [character(len=100) :: &
             "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx' /", &

@@ -32,6 +32,7 @@ contains
         call test_static(t)
         call test_rule(t)
         call test_large(t)
+        call test_damping_and_errors(t)
         call test_weighted_residual(t)
         call test_case_file(t)
     end subroutine run_reduction_tests
@@ -268,6 +269,65 @@ contains
         call dpotrf('U', size(mr, 1), mr, size(mr, 1), info)
         call check(t, info == 0, "reduction: reduced M SPD (3000 DOFs)")
     end subroutine test_large
+
+    !> damping_ratio alone gives the modal damping 2 zeta w_k on the modal diagonal and
+    !> nothing else; bad input is an error, never a crash: a boundary DOF out of range, no
+    !> interior, a floating interior (K_ii singular), wrong sizes to recover_dofs.
+    subroutine test_damping_and_errors(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c, kf
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: expected(:, :), x(:)
+        integer :: j
+        call chain_matrices(60, k, m, c)
+        call craig_bampton(k, m, [30], reduction_options_t(modes=5, damping_ratio=0.02_dp), &
+                           red, rep, error)
+        call check(t, .not. allocated(error), "reduction: damping ratio runs", msg(error))
+        if (allocated(error)) return
+        allocate (expected(6, 6))
+        expected = 0.0_dp
+        do j = 1, 5
+            expected(1 + j, 1 + j) = 2.0_dp*0.02_dp*red%frequencies(j)
+        end do
+        call check_close(t, reshape(red%damping, [36]), reshape(expected, [36]), &
+                         "reduction: modal damping 2 zeta w_k", rtol=1.0e-12_dp, atol=1.0e-14_dp)
+        ! modes are M_ii-orthonormal: the reduced M has the identity on the modal block
+        call check_close(t, [(red%mass(1 + j, 1 + j), j=1, 5)], [(1.0_dp, j=1, 5)], &
+                         "reduction: modal block of M_r is the identity", rtol=1.0e-10_dp)
+        call check_close(t, [(red%stiffness(1 + j, 1 + j), j=1, 5)], red%frequencies**2, &
+                         "reduction: modal block of K_r is diag(w_k^2)", rtol=1.0e-10_dp)
+        call craig_bampton(k, m, [0, 3], reduction_options_t(), red, rep, error)
+        call check(t, allocated(error), "reduction: boundary DOF 0 refused")
+        call craig_bampton(k, m, [(j, j=1, 60)], reduction_options_t(), red, rep, error)
+        call check(t, allocated(error), "reduction: no interior refused")
+        ! a floating interior: two free chains 1..30 and 31..60 (no ground spring, no spring
+        ! between 30 and 31); the boundary DOF 60 holds only the second one
+        block
+            integer, allocatable :: r(:), cc(:)
+            real(dp), allocatable :: v(:)
+            integer :: i
+            allocate (r(0), cc(0), v(0))
+            do i = 1, 59
+                if (i == 30) cycle
+                r = [r, i, i + 1, i, i + 1]
+                cc = [cc, i, i + 1, i + 1, i]
+                v = [v, 1.0_dp, 1.0_dp, -1.0_dp, -1.0_dp]
+            end do
+            call new_sparse_from_triplets(kf, 60, 60, r, cc, v, error)
+        end block
+        call craig_bampton(kf, m, [60], reduction_options_t(), red, rep, error)
+        call check(t, allocated(error), "reduction: floating interior refused")
+        if (allocated(error)) call check(t, index(error%message, "K_ii") > 0, &
+                                         "reduction: floating interior named", error%message)
+        call craig_bampton(k, m, [30], reduction_options_t(modes=2), red, rep, error)
+        allocate (x(2))
+        call recover_dofs(red, [1, 2], [1.0_dp, 2.0_dp], x, error)
+        call check(t, allocated(error), "reduction: recover with a wrong size q refused")
+        call recover_dofs(red, [1, 61], [1.0_dp, 2.0_dp, 3.0_dp], x, error)
+        call check(t, allocated(error), "reduction: recover of a DOF out of range refused")
+    end subroutine test_damping_and_errors
 
     !> The weighted residual on the reduced chain (N = 200, all modes below 3 H omega) against
     !> the same on the full dense chain: the contact's harmonic amplitudes agree to the

@@ -8,7 +8,8 @@ module test_reduction
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
     use stickslip_lapack, only: dgesv, dpotrf
-    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_to_dense
+    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_to_dense, &
+        sparse_scaled_sum
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
         craig_bampton, recover_dofs, receptance_error
     use stickslip_model, only: model_t
@@ -492,6 +493,33 @@ contains
                     1.0e-9_dp*maxval(abs(cs%model%stiffness))) .and. &
                 all(back%model%contact_dof == cs%model%contact_dof), &
                 "reduction case: summary.nml gives the same reduced model")
+        end block
+        ! damping_file plus Rayleigh through the case = the library's projection of their sum
+        block
+            type(sparse_matrix_t) :: csum
+            type(reduced_model_t) :: red
+            type(reduction_report_t) :: rep
+            call write_matrix_market(scratch//"/cb_c.mtx", c, .true., error)
+            call write_lines(scratch//"/cb_damped.nml", [character(len=100) :: &
+                "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx',", &
+                "  damping_file = 'cb_c.mtx', rayleigh_alpha = 0.01, rayleigh_beta = 1e-5 /", &
+                "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+                "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+                "&hbm harmonics = 3 /"])
+            call read_case(scratch//"/cb_damped.nml", cs, error)
+            call check(t, .not. allocated(error), "reduction case: damped reads", msg(error))
+            if (allocated(error)) return
+            call sparse_scaled_sum(1.0_dp, c, 0.01_dp, m, csum, error)
+            call sparse_scaled_sum(1.0_dp, csum, 1.0e-5_dp, k, c, error)
+            call craig_bampton(k, m, [2990, 3000], reduction_options_t(highest_frequency= &
+                               3*0.03_dp), red, rep, error, cmat=c)
+            call check(t, .not. allocated(error), "reduction case: damped direct", msg(error))
+            if (allocated(error)) return
+            call check(t, cs%model%ndof == red%nr, "reduction case: damped sizes")
+            if (cs%model%ndof == red%nr) call check_close(t, reshape(cs%model%damping, &
+                [red%nr**2]), reshape(red%damping, [red%nr**2]), &
+                "reduction case: damping_file + Rayleigh projected", rtol=1.0e-8_dp, &
+                atol=1.0e-10_dp*maxval(abs(red%damping)))
         end block
         ! 'none' beyond 2000 DOFs names the limit
         call write_lines(scratch//"/cb_none.nml", [character(len=100) :: &

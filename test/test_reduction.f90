@@ -32,6 +32,7 @@ contains
         call test_convergence(t)
         call test_static(t)
         call test_rule(t)
+        call test_rule_damped(t)
         call test_large(t)
         call test_damping_and_errors(t)
         call test_weighted_residual(t)
@@ -243,6 +244,37 @@ contains
         call check(t, .not. allocated(error) .and. rep%modes == &
                    count(red_all%frequencies < 30.0_dp), "reduction: max_frequency overrides")
     end subroutine test_rule
+
+    !> The rule on a heavily damped model (C = 20 M): modes whose damping force at H omega
+    !> rivals their stiffness are kept too, and the error is then far below that of the
+    !> plain frequency limit.
+    subroutine test_rule_damped(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c, heavy
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep, rep_plain
+        type(error_type), allocatable :: error
+        real(dp) :: err_rule, err_plain
+        real(dp), parameter :: w = 2.0_dp
+        call chain_matrices(250, k, m, c)
+        call sparse_scaled_sum(20.0_dp, m, 0.0_dp, m, heavy, error)
+        call craig_bampton(k, m, [125, 250], reduction_options_t(highest_frequency=w, &
+                           max_frequency=3.0_dp*w), red, rep_plain, error, cmat=heavy)
+        call receptance_error(k, m, red, [125, 250], [0, 0], [0.5_dp*w, w], err_plain, error, &
+                              cmat=heavy)
+        call craig_bampton(k, m, [125, 250], reduction_options_t(highest_frequency=w), red, &
+                           rep, error, cmat=heavy)
+        call check(t, .not. allocated(error), "reduction: damped rule runs", msg(error))
+        if (allocated(error)) return
+        call receptance_error(k, m, red, [125, 250], [0, 0], [0.5_dp*w, w], err_rule, error, &
+                              cmat=heavy)
+        call check(t, rep%modes > rep_plain%modes .and. &
+                   rep%highest_mode_frequency**2 <= 9.0_dp*w*20.0_dp*(1.0_dp + 1.0e-12_dp), &
+                   "reduction: damped rule keeps the damping-dominated modes", &
+                   it(rep_plain%modes)//" -> "//it(rep%modes))
+        call check(t, err_rule < 0.02_dp .and. err_rule < 0.5_dp*err_plain, &
+                   "reduction: damped rule error small", rt(err_plain)//" -> "//rt(err_rule))
+    end subroutine test_rule_damped
 
     !> A 3000-DOF chain (sparse LU + ARPACK in batches): rule-chosen modes, small error.
     subroutine test_large(t)

@@ -16,7 +16,12 @@
 !> interior mode far above the band of the excitation responds quasi-statically, and the
 !> quasi-static response of the interior to the boundary is exactly what the constraint modes
 !> carry, so leaving it out costs an error of order (w / w_k)^2 (<= 1/9 of that mode's share at
-!> the factor 3 and falling fast above). The modes are requested in batches (20, 40, 80, ...)
+!> the factor 3 and falling fast above). Damped models: a mode whose damping force at the
+!> excitation frequency is comparable to its stiffness does not respond quasi-statically, so
+!> (without max_frequency) mode k is also kept when w_k^2 <= cutoff_factor^2 w_h c_k, with
+!> w_h = highest_frequency and c_k = phi_k^T C_ii phi_k + 2 zeta w_k its modal damping
+!> coefficient (heavy mass-proportional damping then keeps more modes); the count is the last
+!> mode kept by either test. The modes are requested in batches (20, 40, 80, ...)
 !> until the largest found exceeds the limit, capped at max_modes (report%capped then).
 !> options%modes > 0 keeps exactly that many (at most the number of interior DOFs).
 !>
@@ -134,7 +139,7 @@ contains
         integer, allocatable :: loc(:)
         integer :: n, nb, ni, j, p, r, q, nm, nev, nr
         integer(int64) :: t0, t1, rate
-        type(sparse_matrix_t) :: kii, mii, kiit, miit
+        type(sparse_matrix_t) :: kii, mii, kiit, miit, cii
         type(sparse_lu_t) :: lu
         real(dp), allocatable :: rhs(:, :), lam(:), vec(:, :), t(:, :), at(:, :)
         real(dp) :: limit
@@ -200,6 +205,10 @@ contains
         call submatrix(kmat, kii)
         call submatrix(mmat, mii)
         if (allocated(error)) return
+        if (present(cmat)) then
+            call submatrix(cmat, cii)
+            if (allocated(error)) return
+        end if
         call sparse_transpose(kii, kiit)
         call sparse_transpose(mii, miit)
         allocate (rhs(ni, nb))
@@ -238,7 +247,7 @@ contains
             if (ni <= dense_interior) then
                 call eigen(ni, lam, vec)
                 if (allocated(error)) return
-                nm = count(lam <= limit**2)
+                nm = last_kept(lam, vec)
                 if (nm > options%max_modes) then
                     nm = options%max_modes
                     report%capped = .true.
@@ -248,14 +257,14 @@ contains
                 do
                     call eigen(nev, lam, vec)
                     if (allocated(error)) return
-                    if (lam(nev) > limit**2) exit
+                    if (last_kept(lam, vec) < nev) exit
                     if (nev >= min(ni - 1, options%max_modes)) then
                         report%capped = .true.
                         exit
                     end if
                     nev = min(2*nev, ni - 1, options%max_modes)
                 end do
-                nm = count(lam <= limit**2)
+                nm = min(last_kept(lam, vec), options%max_modes)
             end if
         else
             nm = 0
@@ -302,6 +311,33 @@ contains
         if (nm > 0) report%highest_mode_frequency = reduced%frequencies(nm)
 
     contains
+
+        !> The last mode the rule keeps (0: none): w_k <= limit, or (damped, no max_frequency)
+        !> w_k^2 <= cutoff_factor^2 highest_frequency c_k.
+        integer function last_kept(lam, vec) result(last)
+            real(dp), intent(in) :: lam(:), vec(:, :)
+            real(dp), allocatable :: cphi(:, :)
+            real(dp) :: ck, wh
+            integer :: kk
+            logical :: damped
+            wh = options%highest_frequency
+            damped = options%max_frequency == 0.0_dp .and. wh > 0.0_dp .and. &
+                     (present(cmat) .or. options%damping_ratio > 0.0_dp)
+            if (damped .and. present(cmat)) then
+                allocate (cphi(ni, size(lam)))
+                call csr_times_dense(cii, vec, cphi)
+            end if
+            last = 0
+            do kk = 1, size(lam)
+                if (lam(kk) <= limit**2) then
+                    last = kk
+                else if (damped) then
+                    ck = 2.0_dp*options%damping_ratio*sqrt(max(lam(kk), 0.0_dp))
+                    if (present(cmat)) ck = ck + dot_product(vec(:, kk), cphi(:, kk))
+                    if (lam(kk) <= options%cutoff_factor**2*wh*ck) last = kk
+                end if
+            end do
+        end function last_kept
 
         !> The interior-interior block of a.
         subroutine submatrix(a, s)
@@ -389,11 +425,15 @@ contains
         type(sparse_matrix_t), intent(in) :: a
         real(dp), intent(in) :: x(:, :)
         real(dp), intent(out) :: y(:, :)
-        integer :: row, k
-        y = 0.0_dp
-        do row = 1, a%nrows
-            do k = a%row_start(row), a%row_start(row + 1) - 1
-                y(row, :) = y(row, :) + a%val(k)*x(a%col(k), :)
+        integer :: row, k, j
+        real(dp) :: acc
+        do j = 1, size(x, 2)
+            do row = 1, a%nrows
+                acc = 0.0_dp
+                do k = a%row_start(row), a%row_start(row + 1) - 1
+                    acc = acc + a%val(k)*x(a%col(k), j)
+                end do
+                y(row, j) = acc
             end do
         end do
     end subroutine csr_times_dense

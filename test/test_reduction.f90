@@ -553,6 +553,19 @@ contains
                 "reduction case: damping_file + Rayleigh projected", rtol=1.0e-8_dp, &
                 atol=1.0e-10_dp*maxval(abs(red%damping)))
         end block
+        ! a sweep over omega: the rule takes the sweep's top frequency
+        call write_lines(scratch//"/cb_sweep.nml", [character(len=100) :: &
+            "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx' /", &
+            "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+            "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+            "&hbm harmonics = 3 /", &
+            "&sweep parameter = 'omega', start = 0.02, stop = 0.09 /"])
+        call read_case(scratch//"/cb_sweep.nml", cs, error)
+        call check(t, .not. allocated(error), "reduction case: sweep reads", msg(error))
+        if (.not. allocated(error)) call check(t, abs(cs%reduction%report%frequency_limit - &
+            3.0_dp*3.0_dp*0.09_dp) < 1.0e-12_dp .and. cs%method == 'sweep', &
+            "reduction case: the rule takes the sweep's stop frequency", &
+            rt(cs%reduction%report%frequency_limit))
         ! 'none' beyond 2000 DOFs names the limit
         call write_lines(scratch//"/cb_none.nml", [character(len=100) :: &
             "&system mass_file = 'cb_m.mtx', stiffness_file = 'cb_k.mtx' /", &

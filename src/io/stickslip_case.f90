@@ -88,7 +88,9 @@ contains
     !> missing required group or variable, a value of the wrong type, a non-finite, out of
     !> range or inconsistent value, a size above its limit, or a method that contradicts the
     !> study groups given. Every message starts with "<path>: " or "<path>:<line>: " and
-    !> names the group and the variable.
+    !> names the group and the variable. A model from Matrix Market files is reduced here
+    !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
+    !> model and case%reduction holds the report and the full-model DOF numbers.
     subroutine read_case(path, case, error)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path

@@ -30,6 +30,7 @@ program tester
     use test_case_messages, only: run_case_messages_tests
     use test_fuzz, only: run_fuzz_tests
     use test_umfpack, only: run_umfpack_tests
+    use test_reduction, only: run_reduction_tests
     use test_arpack, only: run_arpack_tests
     use test_sparse, only: run_sparse_tests
     use test_matrix_market, only: run_matrix_market_tests
@@ -74,6 +75,7 @@ program tester
     if (selected("trust")) call run_trust_tests(t)
     if (selected("fuzz")) call run_fuzz_tests(t)
     if (selected("umfpack")) call run_umfpack_tests(t)
+    if (selected("reduction")) call run_reduction_tests(t)
     if (selected("arpack")) call run_arpack_tests(t)
     if (selected("sparse")) call run_sparse_tests(t)
     if (selected("matrix_market")) call run_matrix_market_tests(t)

@@ -314,13 +314,15 @@ contains
         end do
         close (u)
         call bad(t, "beyond 2000 DOFs", "&system mass_file = 'big.mtx', stiffness_file = "// &
-                 "'big.mtx' /", [character(len=80) :: dir//"/big.mtx", "N = 2001", &
-                 "larger models need the reduction of a later increment"])
+                 "'big.mtx' / &reduction method = 'none' /", [character(len=80) :: &
+                 dir//"/big.mtx", "N = 2001", "the largest unreduced model", &
+                 "&reduction method = 'craig-bampton' or 'auto'"])
         ! refused from the size line, before the entries (this file has one of 50000)
         call write_lines(dir//"/huge.mtx", [character(len=60) :: &
             "%%MatrixMarket matrix coordinate real symmetric", "5000 5000 50000", "1 1 1"])
         call bad(t, "refused before reading", "&system mass_file = 'huge.mtx', "// &
-                 "stiffness_file = 'huge.mtx' /", [character(len=80) :: "N = 5000 DOFs"])
+                 "stiffness_file = 'huge.mtx' / &reduction method = 'none' /", &
+                 [character(len=80) :: "N = 5000 DOFs"])
         ! a damping file of another size than the model
         call bad(t, "damping size", "&system mass_file = 'm8.mtx', stiffness_file = "// &
                  "'k8.mtx', damping_file = 'k4.mtx' /", [character(len=80) :: &

@@ -1,5 +1,5 @@
-!> The case file: namelist groups &system, &forcing, &friction, &hbm, &euler, &reference,
-!> &run, &output, &study, &sweep, &robustness read into a `case_t` (the model, the solver
+!> The case file: namelist groups &system, &forcing, &friction, &reduction, &hbm, &euler,
+!> &reference, &run, &output, &study, &sweep, &robustness read into a `case_t` (the model, the solver
 !> options and the output directory) by a strict parser (stickslip_namelist) and one reader
 !> per group (stickslip_case_model, stickslip_case_solvers, stickslip_case_studies), with
 !> messages that name the file, the line, the group and the variable. Also writes a case back
@@ -18,7 +18,10 @@ module stickslip_case
     use stickslip_robustness, only: robustness_options_t
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
-        read_friction_group, max_dof, max_terms, group_error, system_files_t, max_file_dof
+        read_friction_group, max_dof, max_terms, group_error, system_files_t, max_file_dof, &
+        sparse_system_t
+    use stickslip_case_reduction, only: reduction_case_t, read_reduction_group, &
+        reduce_case_model
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
         read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
@@ -27,16 +30,16 @@ module stickslip_case
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms, known_groups
-    public :: system_files_t, max_file_dof
+    public :: system_files_t, max_file_dof, reduction_case_t
     public :: sweep_run_options_t
     public :: max_sample_values
     public :: put, rtoa, ltoa, rlist, ilist, llist
     public :: selected_dofs, default_output_dofs
 
     !> The groups of a case file.
-    character(len=10), parameter :: known_groups(11) = [character(len=10) :: 'system', &
+    character(len=10), parameter :: known_groups(12) = [character(len=10) :: 'system', &
         'forcing', 'friction', 'hbm', 'output', 'run', 'euler', 'reference', 'study', 'sweep', &
-        'robustness']
+        'robustness', 'reduction']
     !> Most doubles of the sampled results of one run (samples or steps per period times
     !> 2 ndof + 3 ncontact + 1): 2**27 doubles = 1 GiB.
     integer(int64), parameter :: max_sample_values = 2_int64**27
@@ -50,6 +53,10 @@ module stickslip_case
         !> &system mass_file, stiffness_file, damping_file, rayleigh_alpha, rayleigh_beta as
         !> read (the matrices themselves are in model; C includes the Rayleigh terms).
         type(system_files_t) :: system_files
+        !> &reduction as read and what the reduction did (report%method 'none': the model is
+        !> the full one). When reduced, `model` is the reduced model (contact and force DOFs in
+        !> reduced numbering) and the full-model DOF numbers are kept here.
+        type(reduction_case_t) :: reduction
         !> Method: 'hbm' (weighted residual), 'euler' (implicit Euler time stepping),
         !> 'reference' (exact event-driven), 'all' (the three side by side) or 'study' (the
         !> work-precision study).
@@ -88,7 +95,9 @@ contains
     !> missing required group or variable, a value of the wrong type, a non-finite, out of
     !> range or inconsistent value, a size above its limit, or a method that contradicts the
     !> study groups given. Every message starts with "<path>: " or "<path>:<line>: " and
-    !> names the group and the variable.
+    !> names the group and the variable. A model from Matrix Market files is reduced here
+    !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
+    !> model and case%reduction holds the report and the full-model DOF numbers.
     subroutine read_case(path, case, error)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path
@@ -99,6 +108,7 @@ contains
         type(nml_file_t) :: nml
         character(len=:), allocatable :: method
         logical :: method_given
+        type(sparse_system_t) :: sparse
 
         case%path = path
         call read_namelist_file(path, nml, error)
@@ -106,12 +116,22 @@ contains
         call check_groups(nml, error)
         if (allocated(error)) return
 
-        call read_system_group(nml, case%model, case%system_files, error)
+        call read_reduction_group(nml, case%reduction, error)
+        if (allocated(error)) return
+        call read_system_group(nml, case%model, case%system_files, error, &
+                               case%reduction%method, sparse)
         if (allocated(error)) return
         call read_forcing_group(nml, case%model, error)
         if (allocated(error)) return
         call read_friction_group(nml, case%model, error)
         if (allocated(error)) return
+        call read_hbm_group(nml, case%hbm, case%checks, error)
+        if (allocated(error)) return
+        if (sparse%read) then
+            call reduce_case_model(nml, case%reduction, sparse, case%hbm%harmonics, &
+                                   case%model, error)
+            if (allocated(error)) return
+        end if
         call validate_model(case%model, error)
         if (allocated(error)) then
             call to_case_message(error, nml%path, [character(len=1) ::], [character(len=1) ::])
@@ -121,10 +141,17 @@ contains
             return
         end if
 
-        call read_hbm_group(nml, case%hbm, case%checks, error)
-        if (allocated(error)) return
         call read_output_group(nml, case%model, case%directory, case%output_dofs, &
                                case%output_dofs_given, error)
+        if (allocated(error)) return
+        if (sparse%read .and. case%output_dofs_given) then
+            call group_error(nml, error, "&output dofs: not available yet with a reduction "// &
+                             "(the result files then hold the reduced DOFs: the contact and "// &
+                             "forced DOFs in increasing order of their full numbers, then "// &
+                             "the modal amplitudes); leave dofs out or set &reduction method "// &
+                             "= 'none'")
+            return
+        end if
         if (allocated(error)) return
         call read_run_group(nml, method, method_given, error)
         if (allocated(error)) return
@@ -354,7 +381,11 @@ contains
         stat = 0
         associate (m => case%model, o => case%hbm)
             call put(unit, "&system", stat, msg)
-            call put(unit, "  ndof = "//itoa(m%ndof), stat, msg)
+            if (case%reduction%report%method == 'craig-bampton') then
+                call put(unit, "  ndof = "//itoa(case%reduction%report%full_dof), stat, msg)
+            else
+                call put(unit, "  ndof = "//itoa(m%ndof), stat, msg)
+            end if
             associate (f => case%system_files)
                 if (allocated(f%mass_absolute) .and. allocated(f%stiffness_absolute)) then
                     call put(unit, "  mass_file = "//quoted(f%mass_absolute), stat, msg)
@@ -375,18 +406,35 @@ contains
             call put(unit, "/", stat, msg)
             call put(unit, "&forcing", stat, msg)
             call put(unit, "  omega = "//rtoa(m%omega), stat, msg)
-            call put(unit, "  force_dof = "//ilist(m%force_dof), stat, msg)
+            if (allocated(case%reduction%force_dof)) then
+                call put(unit, "  force_dof = "//ilist(case%reduction%force_dof), stat, msg)
+            else
+                call put(unit, "  force_dof = "//ilist(m%force_dof), stat, msg)
+            end if
             call put(unit, "  force_harmonic = "//ilist(m%force_harmonic), stat, msg)
             call put(unit, "  force_amplitude = "//rlist(m%force_amplitude), stat, msg)
             call put(unit, "  force_phase = "//rlist(m%force_phase), stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&friction", stat, msg)
             if (m%ncontact() > 0) then
-                call put(unit, "  contact_dof = "//ilist(m%contact_dof), stat, msg)
-                call put(unit, "  contact_dof2 = "//ilist(m%contact_dof2), stat, msg)
+                if (allocated(case%reduction%contact_dof)) then
+                    call put(unit, "  contact_dof = "//ilist(case%reduction%contact_dof), stat, &
+                             msg)
+                    call put(unit, "  contact_dof2 = "//ilist(case%reduction%contact_dof2), &
+                             stat, msg)
+                else
+                    call put(unit, "  contact_dof = "//ilist(m%contact_dof), stat, msg)
+                    call put(unit, "  contact_dof2 = "//ilist(m%contact_dof2), stat, msg)
+                end if
                 call put(unit, "  mu = "//rlist(m%mu), stat, msg)
                 call put(unit, "  normal_load = "//rlist(m%normal_load), stat, msg)
             end if
+            call put(unit, "/", stat, msg)
+            call put(unit, "&reduction", stat, msg)
+            call put(unit, "  method = '"//trim(case%reduction%method)//"'", stat, msg)
+            call put(unit, "  modes = "//itoa(case%reduction%modes), stat, msg)
+            call put(unit, "  max_frequency = "//rtoa(case%reduction%max_frequency), stat, msg)
+            call put(unit, "  damping_ratio = "//rtoa(case%reduction%damping_ratio), stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&hbm", stat, msg)
             call put(unit, "  harmonics = "//itoa(o%harmonics), stat, msg)

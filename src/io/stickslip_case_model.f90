@@ -3,7 +3,8 @@
 !> "<path>[:<line>]: &<group> <variable>: ". The whole-model checks (symmetry, definiteness,
 !> DOF ranges) are validate_model's, called by read_case once the three groups are read.
 !> &system may take its matrices from Matrix Market files (stickslip_matrix_market), converted
-!> to the dense model_t up to max_file_dof DOFs.
+!> to the dense model_t up to max_file_dof DOFs, or kept sparse (sparse_system_t) for the
+!> reduction of stickslip_case_reduction.
 module stickslip_case_model
     use, intrinsic :: iso_c_binding, only: c_char, c_size_t, c_ptr, c_null_char, c_associated
     use stickslip_kinds, only: dp
@@ -12,18 +13,20 @@ module stickslip_case_model
     use stickslip_namelist, only: nml_file_t
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_integers, &
         get_reals, get_string
-    use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_symmetry_defect
+    use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_symmetry_defect, &
+        sparse_scaled_sum
     use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size
     implicit none
     private
     public :: read_system_group, read_forcing_group, read_friction_group
     public :: max_dof, max_terms, group_error, max_file_dof, system_files_t, resolve_path
+    public :: sparse_system_t
 
     !> Largest ndof a case file can hold (host codes calling the library have no limit).
     integer, parameter :: max_dof = 64
-    !> Largest N of a model read from Matrix Market files (&system mass_file, stiffness_file):
-    !> this version converts them to the dense model_t; larger models need the reduction of a
-    !> later increment.
+    !> Largest N of an UNREDUCED model read from Matrix Market files (&system mass_file,
+    !> stiffness_file), converted to the dense model_t; larger models are reduced
+    !> (&reduction method = 'craig-bampton' or 'auto').
     integer, parameter :: max_file_dof = 2000
     !> Largest number of forcing terms or contacts (and of entries of a list) in a case file.
     integer, parameter :: max_terms = 256
@@ -40,6 +43,17 @@ module stickslip_case_model
         real(dp) :: rayleigh_alpha = 0.0_dp
         real(dp) :: rayleigh_beta = 0.0_dp
     end type system_files_t
+
+    !> The matrices of a model from files kept sparse (for the reduction), damping including
+    !> the Rayleigh terms.
+    type :: sparse_system_t
+        !> The matrices were read sparse (model%mass etc. are then NOT set, model%ndof is N).
+        logical :: read = .false.
+        !> Damping was given (damping_file or a Rayleigh factor).
+        logical :: has_damping = .false.
+        !> M, K, C (N x N, full storage).
+        type(sparse_matrix_t) :: mass, stiffness, damping
+    end type sparse_system_t
 
     interface
         function c_getcwd(buf, size) bind(c, name='getcwd') result(p)
@@ -60,7 +74,9 @@ contains
     !> form. Relative file paths resolve against the case file's folder. Finally C += alpha M
     !> + beta K (rayleigh_alpha, rayleigh_beta, default 0, finite and >= 0). Errors (stat
     !> input; stat io for an unreadable file) name the variable, and the file and its line.
-    subroutine read_system_group(nml, model, files, error)
+    !> With `sparse` present and `method` = 'craig-bampton', or 'auto' and N > max_file_dof, the
+    !> file matrices are kept sparse in `sparse` (no size limit) and model gets only ndof = N.
+    subroutine read_system_group(nml, model, files, error, method, sparse)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model: ndof, mass, stiffness, damping set.
@@ -69,8 +85,13 @@ contains
         type(system_files_t), intent(out) :: files
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
-        integer :: n
-        logical :: found, from_files
+        !> &reduction method ('none', 'craig-bampton', 'auto'; absent: 'none').
+        character(len=*), intent(in), optional :: method
+        !> The sparse matrices when the model is to be reduced.
+        type(sparse_system_t), intent(out), optional :: sparse
+        integer :: n, rows, cols
+        logical :: found, from_files, keep_sparse
+        type(sparse_matrix_t) :: tmp
         if (nml%find("system") == 0) then
             call group_error(nml, error, "&system: required group not found")
             return
@@ -113,9 +134,25 @@ contains
             if (allocated(error)) return
             call not_both("damping", "damping_file (the matrices come from files)")
             if (allocated(error)) return
-            call read_dense(files%mass_path, "mass_file", 0, model%mass)
-            if (allocated(error)) return
-            model%ndof = size(model%mass, 1)
+            keep_sparse = .false.
+            if (present(sparse) .and. present(method)) then
+                call read_matrix_market_size(files%mass_path, rows, cols, error)
+                if (allocated(error)) then
+                    error%message = nml%path//": &system mass_file: "//error%message
+                    return
+                end if
+                keep_sparse = method == 'craig-bampton' .or. &
+                              (method == 'auto' .and. rows > max_file_dof)
+            end if
+            if (keep_sparse) then
+                call read_sparse(files%mass_path, "mass_file", 0, sparse%mass)
+                if (allocated(error)) return
+                model%ndof = sparse%mass%nrows
+            else
+                call read_dense(files%mass_path, "mass_file", 0, model%mass)
+                if (allocated(error)) return
+                model%ndof = size(model%mass, 1)
+            end if
             if (found .and. n /= model%ndof) then
                 call group_error(nml, error, "&system ndof = "//itoa(n)//" but mass_file '"// &
                                  files%mass_path//"' holds a "//itoa(model%ndof)//" x "// &
@@ -124,6 +161,30 @@ contains
                 return
             end if
             n = model%ndof
+            if (keep_sparse) then
+                call read_sparse(files%stiffness_path, "stiffness_file", n, sparse%stiffness)
+                if (allocated(error)) return
+                sparse%read = .true.
+                sparse%has_damping = allocated(files%damping_file) .or. &
+                                     files%rayleigh_alpha /= 0.0_dp .or. files%rayleigh_beta /= 0.0_dp
+                if (allocated(files%damping_file)) then
+                    call read_sparse(files%damping_path, "damping_file", n, sparse%damping)
+                    if (allocated(error)) return
+                else
+                    call sparse_scaled_sum(0.0_dp, sparse%mass, 0.0_dp, sparse%mass, &
+                                           sparse%damping, error)
+                    if (allocated(error)) return
+                end if
+                if (files%rayleigh_alpha /= 0.0_dp .or. files%rayleigh_beta /= 0.0_dp) then
+                    call sparse_scaled_sum(1.0_dp, sparse%damping, files%rayleigh_alpha, &
+                                           sparse%mass, tmp, error)
+                    if (allocated(error)) return
+                    call sparse_scaled_sum(1.0_dp, tmp, files%rayleigh_beta, &
+                                           sparse%stiffness, sparse%damping, error)
+                    if (allocated(error)) return
+                end if
+                return
+            end if
             call read_dense(files%stiffness_path, "stiffness_file", n, model%stiffness)
             if (allocated(error)) return
         else
@@ -229,13 +290,39 @@ contains
             end do
         end subroutine not_both
 
-        !> The dense square matrix of a Matrix Market file; n > 0: its required size. The
-        !> size is checked from the size line before the entries are read.
+        !> The dense square matrix of a Matrix Market file (N <= max_file_dof); n > 0: its
+        !> required size.
         subroutine read_dense(path, name, n, a)
             character(len=*), intent(in) :: path, name
             integer, intent(in) :: n
             real(dp), allocatable, intent(out) :: a(:, :)
             type(sparse_matrix_t) :: s
+            integer :: rows, cols
+            call read_matrix_market_size(path, rows, cols, error)
+            if (allocated(error)) then
+                error%message = nml%path//": &system "//name//": "//error%message
+                return
+            end if
+            if (rows > max_file_dof .and. rows == cols) then
+                call group_error(nml, error, "&system "//name//" '"//path//"': N = "// &
+                                 itoa(rows)//" DOFs: more than "//itoa(max_file_dof)// &
+                                 ", the largest unreduced model (dense matrices); use "// &
+                                 "&reduction method = 'craig-bampton' or 'auto'")
+                return
+            end if
+            call read_sparse(path, name, n, s)
+            if (allocated(error)) return
+            call sparse_to_dense(s, a, error)
+            if (allocated(error)) error%message = nml%path//": &system "//name//" '"// &
+                path//"': "//error%message
+        end subroutine read_dense
+
+        !> The sparse square matrix of a Matrix Market file; n > 0: its required size. The
+        !> size is checked from the size line before the entries are read.
+        subroutine read_sparse(path, name, n, s)
+            character(len=*), intent(in) :: path, name
+            integer, intent(in) :: n
+            type(sparse_matrix_t), intent(out) :: s
             integer :: rows, cols
             call read_matrix_market_size(path, rows, cols, error)
             if (allocated(error)) then
@@ -258,14 +345,6 @@ contains
                                  "0 x 0 matrix")
                 return
             end if
-            if (rows > max_file_dof) then
-                call group_error(nml, error, "&system "//name//" '"//path//"': N = "// &
-                                 itoa(rows)//" DOFs: more than "//itoa(max_file_dof)// &
-                                 ", the largest model this version converts to dense "// &
-                                 "matrices; larger models need the reduction of a later "// &
-                                 "increment")
-                return
-            end if
             call read_matrix_market(path, s, error)
             if (allocated(error)) then
                 error%message = nml%path//": &system "//name//": "//error%message
@@ -280,10 +359,7 @@ contains
                     return
                 end if
             end if
-            call sparse_to_dense(s, a, error)
-            if (allocated(error)) error%message = nml%path//": &system "//name//" '"// &
-                path//"': "//error%message
-        end subroutine read_dense
+        end subroutine read_sparse
     end subroutine read_system_group
 
     !> `file` resolved against the folder of `case_path`: unchanged when absolute (starts

@@ -75,6 +75,7 @@ contains
             if (present(checks)) call found%extend(checks%diagnostics)
         end if
         call begin_summary(dir, "hbm", found, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put_hbm_keys(u, sol, stat, msg)
         if (present(checks)) call put_check_keys(u, checks, stat, msg)
@@ -154,6 +155,7 @@ contains
             found = res%diagnostics
         end if
         call begin_summary(dir, "euler", found, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put_euler_keys(u, case, res, stat, msg)
         call end_summary(dir, case, u, stat, msg, error)
@@ -265,6 +267,7 @@ contains
             found = ref%diagnostics
         end if
         call begin_summary(dir, "reference", found, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put_reference_keys(u, ref, stat, msg)
         call end_summary(dir, case, u, stat, msg, error)
@@ -311,6 +314,7 @@ contains
             found = res%diagnostics
         end if
         call begin_summary(dir, "all", found, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  hbm_cpu_seconds = "//rtoa(res%hbm_seconds), stat, msg)
         call put(u, "  euler_cpu_seconds = "//rtoa(res%euler_seconds), stat, msg)
@@ -364,6 +368,7 @@ contains
             found = study%diagnostics
         end if
         call begin_summary(dir, "study", found, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  rows = "//itoa(nrow), stat, msg)
         call put(u, "  skipped = "//itoa(study%skipped), stat, msg)
@@ -398,6 +403,7 @@ contains
             found = res%diagnostics
         end if
         call begin_summary(dir, "sweep", found, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  complete = "//ltoa(res%complete), stat, msg)
         call put(u, "  points = "//itoa(res%npoints), stat, msg)
@@ -454,6 +460,7 @@ contains
         character(len=512) :: msg
         if (present(diagnostics)) found = diagnostics
         call begin_summary(dir, "robustness", found, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  rows = "//itoa(size(rows)), stat, msg)
         do k = 1, 3
@@ -510,6 +517,28 @@ contains
             end do
         end if
     end subroutine begin_summary
+
+    !> The reduction keys of &summary (only when the model was reduced): reduction_method,
+    !> reduced_dof, full_dof, reduction_modes, reduction_highest_mode_frequency [rad/s],
+    !> reduction_seconds, reduction_error (-1: not measured, e.g. no contact).
+    subroutine put_reduction_keys(u, case, stat, msg)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        associate (r => case%reduction%report)
+            if (r%method == 'craig-bampton') then
+                call put(u, "  reduction_method = '"//trim(r%method)//"'", stat, msg)
+                call put(u, "  reduced_dof = "//itoa(r%reduced_dof), stat, msg)
+                call put(u, "  full_dof = "//itoa(r%full_dof), stat, msg)
+                call put(u, "  reduction_modes = "//itoa(r%modes), stat, msg)
+                call put(u, "  reduction_highest_mode_frequency = "// &
+                         rtoa(r%highest_mode_frequency), stat, msg)
+                call put(u, "  reduction_seconds = "//rtoa(r%seconds), stat, msg)
+                call put(u, "  reduction_error = "//rtoa(r%error), stat, msg)
+            end if
+        end associate
+    end subroutine put_reduction_keys
 
     !> Close the group &summary, echo the effective case, close and rename summary.nml.
     subroutine end_summary(dir, case, u, stat, msg, error)

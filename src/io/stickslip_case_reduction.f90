@@ -1,0 +1,221 @@
+!> The &reduction group of a case file and the reduction of a model read from Matrix Market
+!> files (stickslip_reduction, Craig-Bampton) to the small dense model_t every method runs on.
+!>
+!> &reduction method = 'auto' (default) | 'craig-bampton' | 'none', modes = 0,
+!> max_frequency = 0 [rad/s], damping_ratio = 0. 'auto' reduces a model from files with
+!> N > max_file_dof (2000) DOFs and keeps smaller ones unreduced; 'none' keeps the full model
+!> (dense, so N <= 2000 for now). Boundary DOFs = every contact DOF (contact_dof, contact_dof2
+!> > 0) and every forced DOF; the reduced model numbers them 1..nb in ascending order of
+!> their full-model numbers, then the nm fixed-interface modes. The contact and force DOF
+!> numbers of the case's model_t are remapped to that numbering (the full-model numbers are
+!> kept in reduction_case_t for the echo). The results (hbm.csv, ...) then hold REDUCED DOFs.
+!> modes = 0 chooses the mode count by the rule of stickslip_reduction: every fixed-interface
+!> mode below 3 x the highest harmonic frequency of the run, H_max omega_max, with H_max the
+!> larger of &hbm harmonics and the forcing harmonics and omega_max the larger of &forcing
+!> omega and, for a sweep over omega, its start and stop; max_frequency > 0 overrides.
+!> The measured reduction error (receptance_error) is taken at the forcing harmonics'
+!> frequencies h omega (at most 4 distinct ones).
+module stickslip_case_reduction
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_model, only: model_t
+    use stickslip_namelist, only: nml_file_t
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_string
+    use stickslip_case_model, only: group_error, sparse_system_t
+    use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
+        craig_bampton, receptance_error, reduced_dof_of
+    implicit none
+    private
+    public :: reduction_case_t, read_reduction_group, reduce_case_model
+
+    !> The &reduction group as read, what the reduction did, and the full-model DOF numbers.
+    type :: reduction_case_t
+        !> 'auto', 'craig-bampton' or 'none'.
+        character(len=16) :: method = 'auto'
+        !> Fixed-interface modes (0: the rule).
+        integer :: modes = 0
+        !> Frequency limit of the rule [rad/s] (0: 3 H omega).
+        real(dp) :: max_frequency = 0.0_dp
+        !> Modal damping ratio of the fixed-interface modes.
+        real(dp) :: damping_ratio = 0.0_dp
+        !> What the reduction did (method 'none' when the model was not reduced).
+        type(reduction_report_t) :: report
+        !> The model's contact_dof, contact_dof2, force_dof in FULL-model numbering (allocated
+        !> only when the model was reduced; write_case echoes these).
+        integer, allocatable :: contact_dof(:), contact_dof2(:), force_dof(:)
+    end type reduction_case_t
+
+contains
+
+    !> Read &reduction (optional). Errors (stat input) name the variable: an unknown method,
+    !> a negative modes, max_frequency or damping_ratio.
+    subroutine read_reduction_group(nml, red, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The options read (defaults when the group is absent).
+        type(reduction_case_t), intent(out) :: red
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: method
+        character(len=*), parameter :: g = "reduction"
+        call check_names(nml, g, [character(len=13) :: "method", "modes", "max_frequency", &
+                                 "damping_ratio"], error)
+        if (allocated(error)) return
+        method = trim(red%method)
+        call get_string(nml, g, "method", method, error)
+        if (allocated(error)) return
+        select case (trim(method))
+        case ('auto', 'craig-bampton', 'none')
+            red%method = trim(method)
+        case default
+            call group_error(nml, error, "&reduction method = '"//trim(method)//"': must be "// &
+                             "'auto', 'craig-bampton' or 'none'")
+            return
+        end select
+        call get_integer(nml, g, "modes", red%modes, error)
+        if (allocated(error)) return
+        if (red%modes < 0) then
+            call group_error(nml, error, "&reduction modes = "//itoa(red%modes)//": must be "// &
+                             ">= 0 (0: all fixed-interface modes below 3 H omega)")
+            return
+        end if
+        call get_real(nml, g, "max_frequency", red%max_frequency, error)
+        if (allocated(error)) return
+        if (.not. (red%max_frequency >= 0.0_dp)) then
+            call group_error(nml, error, "&reduction max_frequency: must be >= 0 [rad/s]")
+            return
+        end if
+        call get_real(nml, g, "damping_ratio", red%damping_ratio, error)
+        if (allocated(error)) return
+        if (.not. (red%damping_ratio >= 0.0_dp .and. red%damping_ratio < 1.0_dp)) then
+            call group_error(nml, error, "&reduction damping_ratio: must be in [0, 1)")
+            return
+        end if
+    end subroutine read_reduction_group
+
+    !> Reduce the sparse model `sparse` (read by read_system_group) to the dense `model`:
+    !> boundary = contact and forced DOFs, remapped; report and error measure in red%report.
+    !> `harmonics` is &hbm harmonics. Errors (input): a contact or force DOF outside 1..N
+    !> (named), no boundary DOF; (numerical): the reduction failing; all start "<path>: ".
+    subroutine reduce_case_model(nml, red, sparse, harmonics, model, error)
+        !> The parsed case file (its path, and &sweep for the frequency range).
+        type(nml_file_t), intent(in) :: nml
+        !> The options; on return the report and the full-model DOF numbers.
+        type(reduction_case_t), intent(inout) :: red
+        !> The full sparse matrices.
+        type(sparse_system_t), intent(in) :: sparse
+        !> &hbm harmonics.
+        integer, intent(in) :: harmonics
+        !> In: ndof = N, contacts and forcing in full numbering; out: the reduced dense model.
+        type(model_t), intent(inout) :: model
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        type(reduction_options_t) :: opts
+        type(reduced_model_t) :: rm
+        integer, allocatable :: bset(:), d2(:)
+        real(dp), allocatable :: freqs(:)
+        real(dp) :: omega_max, start, stop, err
+        character(len=:), allocatable :: parameter
+        logical :: found_start, found_stop
+        integer :: n, k, h
+
+        n = model%ndof
+        call check_range("&forcing force_dof", model%force_dof)
+        if (allocated(error)) return
+        call check_range("&friction contact_dof", model%contact_dof)
+        if (allocated(error)) return
+        call check_range("&friction contact_dof2", pack(model%contact_dof2, &
+                                                        model%contact_dof2 /= 0))
+        if (allocated(error)) return
+        bset = [model%contact_dof, pack(model%contact_dof2, model%contact_dof2 > 0), &
+                model%force_dof]
+
+        ! the run's highest harmonic frequency
+        omega_max = abs(model%omega)
+        parameter = ""
+        call get_string(nml, "sweep", "parameter", parameter, error)
+        if (allocated(error)) return
+        if (trim(parameter) == "omega" .or. (nml%find("sweep") > 0 .and. &
+                                             len_trim(parameter) == 0)) then
+            start = 0.0_dp
+            stop = 0.0_dp
+            call get_real(nml, "sweep", "start", start, error, found_start)
+            if (allocated(error)) return
+            call get_real(nml, "sweep", "stop", stop, error, found_stop)
+            if (allocated(error)) return
+            omega_max = max(omega_max, abs(start), abs(stop))
+        end if
+        h = max(harmonics, maxval([1, model%force_harmonic]))
+        opts = reduction_options_t(modes=red%modes, max_frequency=red%max_frequency, &
+                                   highest_frequency=h*omega_max, &
+                                   damping_ratio=red%damping_ratio)
+        if (sparse%has_damping) then
+            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
+                               error, cmat=sparse%damping)
+        else
+            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, error)
+        end if
+        if (allocated(error)) then
+            error%message = nml%path//": &reduction method = '"//trim(red%method)//"': "// &
+                            error%message
+            return
+        end if
+
+        ! the error measure at the forcing harmonics (distinct h omega, at most 4)
+        allocate (freqs(0))
+        do k = 1, size(model%force_harmonic)
+            if (size(freqs) >= 4) exit
+            if (any(abs(freqs - model%force_harmonic(k)*model%omega) <= 0.0_dp)) cycle
+            freqs = [freqs, model%force_harmonic(k)*model%omega]
+        end do
+        d2 = model%contact_dof2
+        if (size(model%contact_dof) > 0 .and. size(freqs) > 0) then
+            if (sparse%has_damping) then
+                call receptance_error(sparse%stiffness, sparse%mass, rm, model%contact_dof, d2, &
+                                      freqs, err, error, cmat=sparse%damping)
+            else
+                call receptance_error(sparse%stiffness, sparse%mass, rm, model%contact_dof, d2, &
+                                      freqs, err, error)
+            end if
+            if (allocated(error)) then
+                error%message = nml%path//": &reduction: reduction error measure: "// &
+                                error%message
+                return
+            end if
+            red%report%error = err
+        end if
+
+        ! the reduced dense model, DOFs remapped
+        red%contact_dof = model%contact_dof
+        red%contact_dof2 = model%contact_dof2
+        red%force_dof = model%force_dof
+        do k = 1, size(model%contact_dof)
+            model%contact_dof(k) = reduced_dof_of(rm, model%contact_dof(k))
+            if (model%contact_dof2(k) > 0) model%contact_dof2(k) = &
+                reduced_dof_of(rm, model%contact_dof2(k))
+        end do
+        do k = 1, size(model%force_dof)
+            model%force_dof(k) = reduced_dof_of(rm, model%force_dof(k))
+        end do
+        model%ndof = rm%nr
+        call move_alloc(rm%mass, model%mass)
+        call move_alloc(rm%stiffness, model%stiffness)
+        call move_alloc(rm%damping, model%damping)
+
+    contains
+
+        subroutine check_range(what, dofs)
+            character(len=*), intent(in) :: what
+            integer, intent(in) :: dofs(:)
+            integer :: j
+            do j = 1, size(dofs)
+                if (dofs(j) < 1 .or. dofs(j) > n) then
+                    call group_error(nml, error, what//"("//itoa(j)//") = "//itoa(dofs(j))// &
+                                     ": must be in 1.."//itoa(n)//" (the model from files "// &
+                                     "has N = "//itoa(n)//" DOFs)")
+                    return
+                end if
+            end do
+        end subroutine check_range
+    end subroutine reduce_case_model
+end module stickslip_case_reduction

@@ -1,0 +1,722 @@
+!> Craig-Bampton reduction of a sparse structure (M, K, optional C) to a small dense model.
+!>
+!> The DOFs split into boundary DOFs b (given: every DOF a contact or a force touches) and
+!> interior DOFs i (the rest). The basis is T = [I 0; Phi_c Phi_n] (rows in the order b, i):
+!> the static constraint modes Phi_c = -K_ii^-1 K_ib (one sparse LU of K_ii, nb right-hand
+!> sides) and the fixed-interface normal modes Phi_n of K_ii phi = w^2 M_ii phi (shift-invert
+!> Lanczos at sigma = 0 on the sparse LU of K_ii, or LAPACK dsygv when the interior is small),
+!> M_ii-orthonormal. The reduced matrices M_r = T^T M T, K_r = T^T K T, C_r = T^T C T are
+!> formed from sparse products with the N x (nb + nm) basis (no dense N x N matrix).
+!> Reduced DOF j <= nb is full DOF boundary(j) (boundary DOFs ascending); reduced DOF nb + k
+!> is the amplitude of fixed-interface mode k.
+!>
+!> Mode-count rule (options%modes = 0): keep every fixed-interface mode with frequency below
+!> cutoff_factor x the highest excitation frequency (options%highest_frequency = H omega_max),
+!> cutoff_factor = 3 by default; options%max_frequency > 0 overrides the limit. Why: an
+!> interior mode far above the band of the excitation responds quasi-statically, and the
+!> quasi-static response of the interior to the boundary is exactly what the constraint modes
+!> carry, so leaving it out costs an error of order (w / w_k)^2 (<= 1/9 of that mode's share at
+!> the factor 3 and falling fast above). Damped models: a mode whose damping force at the
+!> excitation frequency is comparable to its stiffness does not respond quasi-statically, so
+!> (without max_frequency) mode k is also kept when w_k^2 <= cutoff_factor^2 w_h c_k, with
+!> w_h = highest_frequency and c_k = phi_k^T C_ii phi_k + 2 zeta w_k its modal damping
+!> coefficient (heavy mass-proportional damping then keeps more modes); the count is the last
+!> mode kept by either test. The modes are requested in batches (20, 40, 80, ...)
+!> until the largest found exceeds the limit, capped at max_modes (report%capped then).
+!> options%modes > 0 keeps exactly that many (at most the number of interior DOFs).
+!>
+!> Damping: C given on the full model is projected (C_r = T^T C T); options%damping_ratio > 0
+!> adds modal damping 2 zeta w_k on the diagonal of the fixed-interface modes (unit modal mass).
+!>
+!> Reduction error (receptance_error): the contact receptance G = W^T Z^-1 W with
+!> Z = K - w^2 M + i w C and W the contact directions (e_dof1 - e_dof2), of the reduced model
+!> against the full sparse model (complex sparse LU, UMFPACK) at given frequencies:
+!> max over the frequencies of max|G_r - G| / max|G|.
+module stickslip_reduction
+    use, intrinsic :: iso_fortran_env, only: int64
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
+    use stickslip_umfpack, only: sparse_lu_t, sparse_zlu_t
+    use stickslip_arpack, only: eigen_options_t, eigen_report_t
+    use stickslip_sparse_eigen, only: sparse_eigenpairs
+    use stickslip_lapack, only: dsygv, zgesv
+    implicit none
+    private
+    public :: reduction_options_t, reduction_report_t, reduced_model_t, craig_bampton, &
+        recover_dofs, receptance_error, default_cutoff_factor, reduced_dof_of
+
+    !> Default factor of the mode-count rule: modes below 3 H omega_max are kept.
+    real(dp), parameter :: default_cutoff_factor = 3.0_dp
+    !> Interiors up to this size use a dense eigensolver (LAPACK dsygv).
+    integer, parameter :: dense_interior = 400
+
+    !> What to keep in a Craig-Bampton reduction.
+    type :: reduction_options_t
+        !> Number of fixed-interface modes; 0: the rule (see the module header).
+        integer :: modes = 0
+        !> Keep the modes below this frequency [rad/s]; 0: cutoff_factor x highest_frequency.
+        real(dp) :: max_frequency = 0.0_dp
+        !> Highest excitation frequency H omega_max [rad/s] (for the rule).
+        real(dp) :: highest_frequency = 0.0_dp
+        !> Factor of the rule.
+        real(dp) :: cutoff_factor = default_cutoff_factor
+        !> Modal damping ratio added to the fixed-interface modes (0: none).
+        real(dp) :: damping_ratio = 0.0_dp
+        !> Most fixed-interface modes the rule may take.
+        integer :: max_modes = 500
+    end type reduction_options_t
+
+    !> What a reduction did (echoed in summary.nml).
+    type :: reduction_report_t
+        !> 'none' or 'craig-bampton'.
+        character(len=16) :: method = 'none'
+        !> DOFs of the full model, of the reduced model, boundary DOFs, fixed-interface modes.
+        integer :: full_dof = 0
+        integer :: reduced_dof = 0
+        integer :: boundary_dof = 0
+        integer :: modes = 0
+        !> Wall time of the reduction [s].
+        real(dp) :: seconds = 0.0_dp
+        !> Frequency of the highest kept fixed-interface mode [rad/s] (0: none kept).
+        real(dp) :: highest_mode_frequency = 0.0_dp
+        !> The frequency limit the rule used [rad/s] (0: a fixed mode count).
+        real(dp) :: frequency_limit = 0.0_dp
+        !> The rule hit max_modes before passing the limit.
+        logical :: capped = .false.
+        !> Receptance error (receptance_error) at the run's frequencies; -1: not measured.
+        real(dp) :: error = -1.0_dp
+    end type reduction_report_t
+
+    !> A Craig-Bampton reduced model and its basis.
+    type :: reduced_model_t
+        !> Full DOFs, boundary DOFs, fixed-interface modes, reduced DOFs (nb + nm).
+        integer :: n = 0
+        integer :: nb = 0
+        integer :: nm = 0
+        integer :: nr = 0
+        !> Full DOF of boundary DOF j (ascending), size nb.
+        integer, allocatable :: boundary(:)
+        !> Full DOF of interior DOF p (ascending), size n - nb.
+        integer, allocatable :: interior(:)
+        !> Reduced mass, stiffness and damping, nr x nr (damping zero when none).
+        real(dp), allocatable :: mass(:, :), stiffness(:, :), damping(:, :)
+        !> Static constraint modes Phi_c, (n - nb) x nb.
+        real(dp), allocatable :: constraint(:, :)
+        !> Fixed-interface modes Phi_n, (n - nb) x nm, M_ii-orthonormal.
+        real(dp), allocatable :: modes(:, :)
+        !> Their frequencies [rad/s], ascending.
+        real(dp), allocatable :: frequencies(:)
+    end type reduced_model_t
+
+    interface recover_dofs
+        module procedure recover_real, recover_complex
+    end interface recover_dofs
+
+contains
+
+    !> Craig-Bampton reduction of (M, K, C) with the boundary DOFs `boundary_dofs` (any
+    !> order, duplicates ignored). Errors (input): sizes that disagree, a DOF out of range, no
+    !> boundary or no interior DOF, options out of range; (numerical): K_ii singular (the
+    !> interior moves as a rigid body when the boundary is fixed), the eigensolver failing.
+    subroutine craig_bampton(kmat, mmat, boundary_dofs, options, reduced, report, error, cmat)
+        !> Stiffness K, N x N (full storage).
+        type(sparse_matrix_t), intent(in) :: kmat
+        !> Mass M, N x N.
+        type(sparse_matrix_t), intent(in) :: mmat
+        !> Boundary DOFs (1..N).
+        integer, intent(in) :: boundary_dofs(:)
+        !> Mode count or frequency limit, damping ratio.
+        type(reduction_options_t), intent(in) :: options
+        !> The reduced model.
+        type(reduced_model_t), intent(out) :: reduced
+        !> Sizes, time, modes.
+        type(reduction_report_t), intent(out) :: report
+        !> Error (last non-optional).
+        type(error_type), allocatable, intent(out) :: error
+        !> Damping C, N x N (optional: projected).
+        type(sparse_matrix_t), intent(in), optional :: cmat
+        integer, allocatable :: loc(:)
+        integer :: n, nb, ni, j, p, r, q, nm, nev, nr
+        integer(int64) :: t0, t1, rate
+        type(sparse_matrix_t) :: kii, mii, kiit, miit, cii
+        type(sparse_lu_t) :: lu
+        real(dp), allocatable :: rhs(:, :), lam(:), vec(:, :), t(:, :), at(:, :)
+        real(dp) :: limit
+        type(eigen_options_t) :: eopts
+        type(eigen_report_t) :: erep
+
+        call system_clock(t0, rate)
+        n = kmat%nrows
+        if (kmat%ncols /= n .or. mmat%nrows /= n .or. mmat%ncols /= n) then
+            call fatal_error(error, "craig_bampton: K and M must be square of equal size", &
+                             stickslip_stat%input)
+            return
+        end if
+        if (present(cmat)) then
+            if (cmat%nrows /= n .or. cmat%ncols /= n) then
+                call fatal_error(error, "craig_bampton: C must be "//itoa(n)//" x "//itoa(n), &
+                                 stickslip_stat%input)
+                return
+            end if
+        end if
+        if (options%modes < 0 .or. .not. (options%max_frequency >= 0.0_dp) .or. &
+            .not. (options%damping_ratio >= 0.0_dp) .or. &
+            .not. (options%cutoff_factor > 0.0_dp)) then
+            call fatal_error(error, "craig_bampton: modes, max_frequency, damping_ratio must "// &
+                             "be >= 0", stickslip_stat%input)
+            return
+        end if
+        allocate (loc(n))
+        loc = 0
+        do j = 1, size(boundary_dofs)
+            if (boundary_dofs(j) < 1 .or. boundary_dofs(j) > n) then
+                call fatal_error(error, "craig_bampton: boundary DOF "//itoa(boundary_dofs(j)) &
+                                 //" out of range 1.."//itoa(n), stickslip_stat%input)
+                return
+            end if
+            loc(boundary_dofs(j)) = -1
+        end do
+        nb = count(loc < 0)
+        ni = n - nb
+        if (nb == 0 .or. ni == 0) then
+            call fatal_error(error, "craig_bampton: "//itoa(nb)//" boundary and "//itoa(ni)// &
+                             " interior DOFs: both must be nonzero", stickslip_stat%input)
+            return
+        end if
+        reduced%n = n
+        reduced%nb = nb
+        allocate (reduced%boundary(nb), reduced%interior(ni))
+        q = 0
+        p = 0
+        do j = 1, n
+            if (loc(j) < 0) then
+                q = q + 1
+                reduced%boundary(q) = j
+                loc(j) = -q
+            else
+                p = p + 1
+                reduced%interior(p) = j
+                loc(j) = p
+            end if
+        end do
+
+        ! K_ii, M_ii (their transposes in CSR = the matrices in CSC) and K_ib
+        call submatrix(kmat, kii)
+        call submatrix(mmat, mii)
+        if (allocated(error)) return
+        if (present(cmat)) then
+            call submatrix(cmat, cii)
+            if (allocated(error)) return
+        end if
+        call sparse_transpose(kii, kiit)
+        call sparse_transpose(mii, miit)
+        allocate (rhs(ni, nb))
+        rhs = 0.0_dp
+        do r = 1, n
+            if (loc(r) <= 0) cycle
+            do p = kmat%row_start(r), kmat%row_start(r + 1) - 1
+                if (loc(kmat%col(p)) < 0) rhs(loc(r), -loc(kmat%col(p))) = &
+                    rhs(loc(r), -loc(kmat%col(p))) - kmat%val(p)
+            end do
+        end do
+        call lu%factorize(ni, kiit%row_start, kiit%col, kiit%val, error)
+        if (allocated(error)) then
+            error%message = "craig_bampton: the interior stiffness K_ii ("//itoa(ni)// &
+                            " DOFs) cannot be factorized (is the interior held by the "// &
+                            "boundary DOFs?): "//error%message
+            return
+        end if
+        allocate (reduced%constraint(ni, nb))
+        call lu%solve(rhs, reduced%constraint, error)
+        call lu%release()
+        if (allocated(error)) return
+
+        ! fixed-interface modes
+        limit = 0.0_dp
+        if (options%modes == 0) then
+            limit = options%max_frequency
+            if (limit == 0.0_dp) limit = options%cutoff_factor*options%highest_frequency
+        end if
+        report%frequency_limit = limit
+        if (options%modes > 0) then
+            nm = min(options%modes, ni)
+            call eigen(nm, lam, vec)
+            if (allocated(error)) return
+        else if (limit > 0.0_dp) then
+            if (ni <= dense_interior) then
+                call eigen(ni, lam, vec)
+                if (allocated(error)) return
+                nm = last_kept(lam, vec)
+                if (nm > options%max_modes) then
+                    nm = options%max_modes
+                    report%capped = .true.
+                end if
+            else
+                nev = min(20, ni - 1, options%max_modes)
+                do
+                    call eigen(nev, lam, vec)
+                    if (allocated(error)) return
+                    if (last_kept(lam, vec) < nev) exit
+                    if (nev >= min(ni - 1, options%max_modes)) then
+                        report%capped = .true.
+                        exit
+                    end if
+                    nev = min(2*nev, ni - 1, options%max_modes)
+                end do
+                nm = min(last_kept(lam, vec), options%max_modes)
+            end if
+        else
+            nm = 0
+        end if
+        reduced%nm = nm
+        nr = nb + nm
+        reduced%nr = nr
+        allocate (reduced%modes(ni, nm), reduced%frequencies(nm))
+        if (nm > 0) then
+            reduced%modes = vec(:, 1:nm)
+            reduced%frequencies = sqrt(max(lam(1:nm), 0.0_dp))
+        end if
+
+        ! T (N x nr) and the projections
+        allocate (t(n, nr))
+        t = 0.0_dp
+        do j = 1, nb
+            t(reduced%boundary(j), j) = 1.0_dp
+        end do
+        do p = 1, ni
+            t(reduced%interior(p), 1:nb) = reduced%constraint(p, :)
+            if (nm > 0) t(reduced%interior(p), nb + 1:nr) = reduced%modes(p, :)
+        end do
+        call project(mmat, reduced%mass)
+        call project(kmat, reduced%stiffness)
+        if (present(cmat)) then
+            call project(cmat, reduced%damping)
+        else
+            allocate (reduced%damping(nr, nr))
+            reduced%damping = 0.0_dp
+        end if
+        do j = 1, nm
+            reduced%damping(nb + j, nb + j) = reduced%damping(nb + j, nb + j) + &
+                2.0_dp*options%damping_ratio*reduced%frequencies(j)
+        end do
+
+        call system_clock(t1)
+        report%method = 'craig-bampton'
+        report%full_dof = n
+        report%reduced_dof = nr
+        report%boundary_dof = nb
+        report%modes = nm
+        report%seconds = real(t1 - t0, dp)/real(max(rate, 1_int64), dp)
+        if (nm > 0) report%highest_mode_frequency = reduced%frequencies(nm)
+
+    contains
+
+        !> The last mode the rule keeps (0: none): w_k <= limit, or (damped, no max_frequency)
+        !> w_k^2 <= cutoff_factor^2 highest_frequency c_k.
+        integer function last_kept(lam, vec) result(last)
+            real(dp), intent(in) :: lam(:), vec(:, :)
+            real(dp), allocatable :: cphi(:, :)
+            real(dp) :: ck, wh
+            integer :: kk
+            logical :: damped
+            wh = options%highest_frequency
+            damped = options%max_frequency == 0.0_dp .and. wh > 0.0_dp .and. &
+                     (present(cmat) .or. options%damping_ratio > 0.0_dp)
+            if (damped .and. present(cmat)) then
+                allocate (cphi(ni, size(lam)))
+                call csr_times_dense(cii, vec, cphi)
+            end if
+            last = 0
+            do kk = 1, size(lam)
+                if (lam(kk) <= limit**2) then
+                    last = kk
+                else if (damped) then
+                    ck = 2.0_dp*options%damping_ratio*sqrt(max(lam(kk), 0.0_dp))
+                    if (present(cmat)) ck = ck + dot_product(vec(:, kk), cphi(:, kk))
+                    if (lam(kk) <= options%cutoff_factor**2*wh*ck) last = kk
+                end if
+            end do
+        end function last_kept
+
+        !> The interior-interior block of a.
+        subroutine submatrix(a, s)
+            type(sparse_matrix_t), intent(in) :: a
+            type(sparse_matrix_t), intent(out) :: s
+            integer, allocatable :: ri(:), ci(:)
+            real(dp), allocatable :: vi(:)
+            integer :: row, k, m
+            m = 0
+            do row = 1, n
+                if (loc(row) <= 0) cycle
+                do k = a%row_start(row), a%row_start(row + 1) - 1
+                    if (loc(a%col(k)) > 0) m = m + 1
+                end do
+            end do
+            allocate (ri(m), ci(m), vi(m))
+            m = 0
+            do row = 1, n
+                if (loc(row) <= 0) cycle
+                do k = a%row_start(row), a%row_start(row + 1) - 1
+                    if (loc(a%col(k)) > 0) then
+                        m = m + 1
+                        ri(m) = loc(row)
+                        ci(m) = loc(a%col(k))
+                        vi(m) = a%val(k)
+                    end if
+                end do
+            end do
+            call new_sparse_from_triplets(s, ni, ni, ri, ci, vi, error)
+        end subroutine submatrix
+
+        !> The nev lowest fixed-interface eigenpairs (lam ascending, vec M_ii-orthonormal).
+        subroutine eigen(nev, lam, vec)
+            integer, intent(in) :: nev
+            real(dp), allocatable, intent(out) :: lam(:), vec(:, :)
+            real(dp), allocatable :: a(:, :), b(:, :), w(:), work(:)
+            real(dp) :: wq(1)
+            integer :: info, row, k
+            if (ni <= dense_interior .or. nev >= ni - 1) then
+                allocate (a(ni, ni), b(ni, ni), w(ni))
+                a = 0.0_dp
+                b = 0.0_dp
+                do row = 1, ni
+                    do k = kii%row_start(row), kii%row_start(row + 1) - 1
+                        a(row, kii%col(k)) = kii%val(k)
+                    end do
+                    do k = mii%row_start(row), mii%row_start(row + 1) - 1
+                        b(row, mii%col(k)) = mii%val(k)
+                    end do
+                end do
+                call dsygv(1, 'V', 'U', ni, a, ni, b, ni, w, wq, -1, info)
+                allocate (work(max(1, int(wq(1)))))
+                call dsygv(1, 'V', 'U', ni, a, ni, b, ni, w, work, size(work), info)
+                if (info /= 0) then
+                    call fatal_error(error, "craig_bampton: dense fixed-interface "// &
+                                     "eigenproblem failed (dsygv info "//itoa(info)//"; "// &
+                                     "is M_ii positive definite?)", stickslip_stat%numerical)
+                    return
+                end if
+                lam = w(1:nev)
+                vec = a(:, 1:nev)
+            else
+                call sparse_eigenpairs(ni, kiit%row_start, kiit%col, kiit%val, &
+                                       miit%row_start, miit%col, miit%val, nev, 0.0_dp, &
+                                       eopts, lam, vec, erep, error)
+                if (allocated(error)) error%message = "craig_bampton: fixed-interface "// &
+                    "modes: "//error%message
+            end if
+        end subroutine eigen
+
+        !> T^T A T (nr x nr) by sparse products with the columns of T.
+        subroutine project(a, r)
+            type(sparse_matrix_t), intent(in) :: a
+            real(dp), allocatable, intent(out) :: r(:, :)
+            allocate (at(n, nr))
+            call csr_times_dense(a, t, at)
+            r = matmul(transpose(t), at)
+            r = 0.5_dp*(r + transpose(r))
+            deallocate (at)
+        end subroutine project
+    end subroutine craig_bampton
+
+    !> y = A x for a CSR matrix A and a dense block x.
+    pure subroutine csr_times_dense(a, x, y)
+        type(sparse_matrix_t), intent(in) :: a
+        real(dp), intent(in) :: x(:, :)
+        real(dp), intent(out) :: y(:, :)
+        integer :: row, k, j
+        real(dp) :: acc
+        do j = 1, size(x, 2)
+            do row = 1, a%nrows
+                acc = 0.0_dp
+                do k = a%row_start(row), a%row_start(row + 1) - 1
+                    acc = acc + a%val(k)*x(a%col(k), j)
+                end do
+                y(row, j) = acc
+            end do
+        end do
+    end subroutine csr_times_dense
+
+    !> The reduced DOF of full DOF `dof`: its position among the boundary DOFs, 0 if `dof`
+    !> is not a boundary DOF (dof = 0, the ground, gives 0).
+    pure integer function reduced_dof_of(reduced, dof) result(j)
+        !> The reduced model.
+        type(reduced_model_t), intent(in) :: reduced
+        !> A full-model DOF.
+        integer, intent(in) :: dof
+        integer :: k
+        j = 0
+        do k = 1, reduced%nb
+            if (reduced%boundary(k) == dof) then
+                j = k
+                return
+            end if
+        end do
+    end function reduced_dof_of
+
+    !> Recover full-model DOFs from reduced coordinates: x(k) = T(dofs(k), :) q.
+    !> Errors (input): wrong size of q or x, a DOF out of range.
+    subroutine recover_real(reduced, dofs, q, x, error)
+        !> The reduced model.
+        type(reduced_model_t), intent(in) :: reduced
+        !> Full-model DOFs wanted (1..n).
+        integer, intent(in) :: dofs(:)
+        !> Reduced coordinates, size nr.
+        real(dp), intent(in) :: q(:)
+        !> Full-model values, size(dofs).
+        real(dp), intent(out) :: x(:)
+        !> Error (last).
+        type(error_type), allocatable, intent(out) :: error
+        integer :: k, j, p
+        call check_recover(reduced, dofs, size(q), size(x), error)
+        if (allocated(error)) return
+        do k = 1, size(dofs)
+            j = reduced_dof_of(reduced, dofs(k))
+            if (j > 0) then
+                x(k) = q(j)
+            else
+                p = interior_position(reduced, dofs(k))
+                x(k) = dot_product(reduced%constraint(p, :), q(1:reduced%nb))
+                if (reduced%nm > 0) x(k) = x(k) + dot_product(reduced%modes(p, :), &
+                                                              q(reduced%nb + 1:reduced%nr))
+            end if
+        end do
+    end subroutine recover_real
+
+    !> Recover complex full-model DOFs (harmonic coefficients): x(k) = T(dofs(k), :) q.
+    subroutine recover_complex(reduced, dofs, q, x, error)
+        !> The reduced model.
+        type(reduced_model_t), intent(in) :: reduced
+        !> Full-model DOFs wanted (1..n).
+        integer, intent(in) :: dofs(:)
+        !> Reduced coordinates, size nr.
+        complex(dp), intent(in) :: q(:)
+        !> Full-model values, size(dofs).
+        complex(dp), intent(out) :: x(:)
+        !> Error (last).
+        type(error_type), allocatable, intent(out) :: error
+        integer :: k, j, p
+        call check_recover(reduced, dofs, size(q), size(x), error)
+        if (allocated(error)) return
+        do k = 1, size(dofs)
+            j = reduced_dof_of(reduced, dofs(k))
+            if (j > 0) then
+                x(k) = q(j)
+            else
+                p = interior_position(reduced, dofs(k))
+                x(k) = sum(reduced%constraint(p, :)*q(1:reduced%nb))
+                if (reduced%nm > 0) x(k) = x(k) + sum(reduced%modes(p, :)* &
+                                                      q(reduced%nb + 1:reduced%nr))
+            end if
+        end do
+    end subroutine recover_complex
+
+    subroutine check_recover(reduced, dofs, nq, nx, error)
+        type(reduced_model_t), intent(in) :: reduced
+        integer, intent(in) :: dofs(:), nq, nx
+        type(error_type), allocatable, intent(out) :: error
+        if (nq /= reduced%nr .or. nx /= size(dofs)) then
+            call fatal_error(error, "recover_dofs: size(q) = "//itoa(nq)//" (must be "// &
+                             itoa(reduced%nr)//"), size(x) = "//itoa(nx)//" (must be "// &
+                             itoa(size(dofs))//")", stickslip_stat%input)
+            return
+        end if
+        if (size(dofs) > 0) then
+            if (minval(dofs) < 1 .or. maxval(dofs) > reduced%n) call fatal_error(error, &
+                "recover_dofs: a DOF out of range 1.."//itoa(reduced%n), stickslip_stat%input)
+        end if
+    end subroutine check_recover
+
+    !> Position of full DOF `dof` among the interior DOFs (binary search; 0: not interior).
+    pure integer function interior_position(reduced, dof) result(p)
+        type(reduced_model_t), intent(in) :: reduced
+        integer, intent(in) :: dof
+        integer :: lo, hi, mid
+        p = 0
+        lo = 1
+        hi = size(reduced%interior)
+        do while (lo <= hi)
+            mid = (lo + hi)/2
+            if (reduced%interior(mid) == dof) then
+                p = mid
+                return
+            else if (reduced%interior(mid) < dof) then
+                lo = mid + 1
+            else
+                hi = mid - 1
+            end if
+        end do
+    end function interior_position
+
+    !> Reduction error: max over `frequencies` of max|G_r - G| / max|G|, G = W^T Z^-1 W the
+    !> receptance of the contact directions W (column j: e_dof1(j) - e_dof2(j), dof2 = 0 the
+    !> ground) of the full sparse model (complex sparse LU of Z = K - w^2 M + i w C per
+    !> frequency) and G_r that of the reduced model. Errors (input): a contact DOF that is not
+    !> a boundary DOF, sizes; (numerical): Z singular at a frequency (named).
+    subroutine receptance_error(kmat, mmat, reduced, dof1, dof2, frequencies, max_error, &
+                                error, cmat)
+        !> Full stiffness K.
+        type(sparse_matrix_t), intent(in) :: kmat
+        !> Full mass M.
+        type(sparse_matrix_t), intent(in) :: mmat
+        !> The reduced model of (K, M, C).
+        type(reduced_model_t), intent(in) :: reduced
+        !> Contact DOFs (1..n) and their second DOFs (0: ground), one per contact.
+        integer, intent(in) :: dof1(:), dof2(:)
+        !> Frequencies w [rad/s].
+        real(dp), intent(in) :: frequencies(:)
+        !> The error measure (0 when there are no contacts or frequencies).
+        real(dp), intent(out) :: max_error
+        !> Error (last non-optional).
+        type(error_type), allocatable, intent(out) :: error
+        !> Full damping C (optional).
+        type(sparse_matrix_t), intent(in), optional :: cmat
+        integer :: n, nc, nr, k, j, f, row, m, info, pk, pm, pc
+        type(sparse_matrix_t) :: pattern
+        integer, allocatable :: ri(:), ci(:), posk(:), posm(:), posc(:), ipiv(:)
+        real(dp), allocatable :: ones(:)
+        complex(dp), allocatable :: zval(:), b(:, :), x(:, :), zr(:, :), br(:, :), g(:, :), &
+                                    gr(:, :)
+        type(sparse_zlu_t) :: zlu
+        real(dp) :: w
+
+        max_error = 0.0_dp
+        n = reduced%n
+        nr = reduced%nr
+        nc = size(dof1)
+        if (size(dof2) /= nc) then
+            call fatal_error(error, "receptance_error: dof1 and dof2 differ in size", &
+                             stickslip_stat%input)
+            return
+        end if
+        if (nc == 0 .or. size(frequencies) == 0) return
+        do k = 1, nc
+            if (reduced_dof_of(reduced, dof1(k)) == 0 .or. (dof2(k) /= 0 .and. &
+                                                              reduced_dof_of(reduced, dof2(k)) == 0)) then
+                call fatal_error(error, "receptance_error: contact "//itoa(k)//" (DOFs "// &
+                                 itoa(dof1(k))//", "//itoa(dof2(k))//") is not on the "// &
+                                 "boundary", stickslip_stat%input)
+                return
+            end if
+        end do
+        ! pattern of Z^T in CSR (= Z in CSC): triplets (col, row) of K, M, C
+        m = kmat%nnz() + mmat%nnz()
+        if (present(cmat)) m = m + cmat%nnz()
+        allocate (ri(m), ci(m), ones(m))
+        m = 0
+        call add_pattern(kmat)
+        call add_pattern(mmat)
+        if (present(cmat)) call add_pattern(cmat)
+        ones = 1.0_dp
+        call new_sparse_from_triplets(pattern, n, n, ri, ci, ones, error)
+        if (allocated(error)) return
+        call positions(kmat, posk)
+        call positions(mmat, posm)
+        if (present(cmat)) call positions(cmat, posc)
+
+        allocate (b(n, nc), x(n, nc), br(nr, nc), zr(nr, nr), ipiv(nr), zval(pattern%nnz()))
+        b = (0.0_dp, 0.0_dp)
+        br = (0.0_dp, 0.0_dp)
+        do k = 1, nc
+            b(dof1(k), k) = (1.0_dp, 0.0_dp)
+            br(reduced_dof_of(reduced, dof1(k)), k) = (1.0_dp, 0.0_dp)
+            if (dof2(k) > 0) then
+                b(dof2(k), k) = b(dof2(k), k) - (1.0_dp, 0.0_dp)
+                j = reduced_dof_of(reduced, dof2(k))
+                br(j, k) = br(j, k) - (1.0_dp, 0.0_dp)
+            end if
+        end do
+        do f = 1, size(frequencies)
+            w = frequencies(f)
+            zval = (0.0_dp, 0.0_dp)
+            do pk = 1, size(posk)
+                zval(posk(pk)) = zval(posk(pk)) + kmat%val(pk)
+            end do
+            do pm = 1, size(posm)
+                zval(posm(pm)) = zval(posm(pm)) - w**2*mmat%val(pm)
+            end do
+            if (present(cmat)) then
+                do pc = 1, size(posc)
+                    zval(posc(pc)) = zval(posc(pc)) + cmplx(0.0_dp, w*cmat%val(pc), dp)
+                end do
+            end if
+            if (f == 1) then
+                call zlu%factorize(n, pattern%row_start, pattern%col, zval, error)
+            else
+                call zlu%refactorize(zval, error)
+            end if
+            if (allocated(error)) then
+                error%message = "receptance_error: full model at w = "//rtext(w)//" rad/s: "// &
+                                error%message
+                call zlu%release()
+                return
+            end if
+            call zlu%solve(b, x, error)
+            if (allocated(error)) then
+                call zlu%release()
+                return
+            end if
+            g = matmul(transpose(b), x)
+            zr = cmplx(reduced%stiffness - w**2*reduced%mass, w*reduced%damping, dp)
+            gr = br
+            call zgesv(nr, nc, zr, nr, ipiv, gr, nr, info)
+            if (info /= 0) then
+                call fatal_error(error, "receptance_error: reduced model singular at w = "// &
+                                 rtext(w)//" rad/s", stickslip_stat%numerical)
+                call zlu%release()
+                return
+            end if
+            gr = matmul(transpose(br), gr)
+            if (maxval(abs(g)) > 0.0_dp) max_error = max(max_error, &
+                                                         maxval(abs(gr - g))/maxval(abs(g)))
+        end do
+        call zlu%release()
+
+    contains
+
+        subroutine add_pattern(a)
+            type(sparse_matrix_t), intent(in) :: a
+            integer :: kk
+            do row = 1, n
+                do kk = a%row_start(row), a%row_start(row + 1) - 1
+                    m = m + 1
+                    ri(m) = a%col(kk)
+                    ci(m) = row
+                end do
+            end do
+        end subroutine add_pattern
+
+        !> Position in `pattern` (CSR of Z^T) of each entry of a.
+        subroutine positions(a, pos)
+            type(sparse_matrix_t), intent(in) :: a
+            integer, allocatable, intent(out) :: pos(:)
+            integer :: kk, lo, hi, mid, c
+            allocate (pos(a%nnz()))
+            do row = 1, n
+                do kk = a%row_start(row), a%row_start(row + 1) - 1
+                    c = a%col(kk)
+                    lo = pattern%row_start(c)
+                    hi = pattern%row_start(c + 1) - 1
+                    do while (lo < hi)
+                        mid = (lo + hi)/2
+                        if (pattern%col(mid) < row) then
+                            lo = mid + 1
+                        else
+                            hi = mid
+                        end if
+                    end do
+                    pos(kk) = lo
+                end do
+            end do
+        end subroutine positions
+    end subroutine receptance_error
+
+    pure function rtext(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=32) :: buf
+        write (buf, '(es12.5)') x
+        s = trim(adjustl(buf))
+    end function rtext
+end module stickslip_reduction

@@ -37,6 +37,7 @@ module stickslip_truncation
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_friction, only: psi, psi_stick
     use stickslip_hbm, only: solve_periodic
+    use stickslip_dynamics, only: dynamics_t
     implicit none
     private
     public :: truncation_t, estimate_truncation, solve_to_tolerance, coarse_harmonics
@@ -145,7 +146,9 @@ contains
     !> unconverged coarse solve (est%coarse_harmonics = 0) are outcomes, told in est%note.
     !> Errors: stat input when sol was not solved with opts (harmonics, odd_only, samples)
     !> or holds no coefficients; the errors of solve_periodic on the coarse set.
-    subroutine estimate_truncation(model, opts, sol, est, error)
+    !> With `dyn` (the condensed dynamics sol was solved with, e.g. a continuation's), the
+    !> coarse solve restricts them instead of factorizing Z_h again.
+    subroutine estimate_truncation(model, opts, sol, est, error, dyn)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> The options sol was solved with.
@@ -156,6 +159,8 @@ contains
         type(truncation_t), intent(out) :: est
         !> Set on misuse or numerical breakdown.
         type(error_type), allocatable, intent(out) :: error
+        !> The condensed dynamics of `model` on the basis of `opts`, already built.
+        type(dynamics_t), intent(in), optional :: dyn
         type(hbm_options_t) :: copts
         type(hbm_solution_t) :: coarse
         integer(int64) :: c0, c1, rate
@@ -173,7 +178,8 @@ contains
             copts%rho = sol%rho      ! the same weight as the fine solution
             copts%want_samples = .false.
             nbc = count(sol%harmonic <= hc)
-            call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :))
+            call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :), &
+                                dyn=dyn)
             if (allocated(error)) then
                 error%message = "truncation estimate, coarse solve at H = "//itoa(hc)// &
                                 ": "//error%message

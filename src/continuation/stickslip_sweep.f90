@@ -106,6 +106,9 @@ module stickslip_sweep
         real(dp) :: seconds = 0.0_dp, stability_seconds = 0.0_dp
         !> Turning points passed (sign changes of the parameter's tangent component).
         integer :: folds = 0
+        !> Factorizations of the dynamic stiffnesses by the continuation of this run (see
+        !> friction_family_t%factorizations; the points' own solves reuse them).
+        integer :: factorizations = 0
         !> Warnings about the curve ('' when none): undamped_resonance_notes.
         character(len=:), allocatable :: notes
         !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
@@ -452,6 +455,7 @@ contains
             end if
         end do
         call fam%prob%destroy()
+        res%factorizations = fam%factorizations
         if (allocated(error)) return
         res%complete = res%state%reason == reason_end
         if (opts%parameter == 'omega') then

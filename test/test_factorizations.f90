@@ -12,6 +12,7 @@ module test_factorizations
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step
     use stickslip_sweep, only: friction_family_t, new_friction_family, dynamics_cache_size
@@ -29,7 +30,37 @@ contains
         call test_cache(t)
         call test_restrict(t)
         call test_solve_with_dynamics(t)
+        call test_truncation_with_dynamics(t)
     end subroutine run_factorizations_tests
+
+    !> The truncation estimate given the solve's dynamics (dyn_out) equals the one that
+    !> factorizes the coarse basis itself.
+    subroutine test_truncation_with_dynamics(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(dynamics_t) :: dyn
+        type(truncation_t) :: a, b
+        type(error_type), allocatable :: error
+        m = chain_model()
+        ho%harmonics = 20
+        ho%samples = 256
+        ho%rho = 0.2_dp
+        call solve_periodic(m, ho, sol, error, dyn_out=dyn)
+        call check_error(t, error, "truncation with dynamics: solve", .false.)
+        if (allocated(error)) return
+        call check(t, sol%converged .and. allocated(dyn%v0), &
+                   "truncation with dynamics: dyn_out set")
+        call estimate_truncation(m, ho, sol, a, error)
+        call check_error(t, error, "truncation with dynamics: plain", .false.)
+        call estimate_truncation(m, ho, sol, b, error, dyn=dyn)
+        call check_error(t, error, "truncation with dynamics: given", .false.)
+        if (allocated(error)) return
+        call check(t, a%available .and. a%coarse_harmonics > 0 .and. &
+                   a%estimate == b%estimate .and. a%coarse_harmonics == b%coarse_harmonics, &
+                   "truncation with dynamics: the same estimate, bit for bit")
+    end subroutine test_truncation_with_dynamics
 
     !> Continuation steps of the chain in mu, the normal load and the force amplitude leave
     !> Z_h alone; a step in omega factorizes at least once and at most once per evaluation.

@@ -228,6 +228,7 @@ contains
         real(dp), allocatable :: hist_e(:)
         integer :: h
         logical :: have_prev
+        type(dynamics_t) :: dyn
         integer(int64) :: c0, c1, rate
         character(len=200) :: buf
 
@@ -250,9 +251,9 @@ contains
             lopts%harmonics = h
             lopts%samples = max(opts%samples, power_of_two_at_least(4*h))
             if (have_prev) then
-                call solve_periodic(model, lopts, cur, error, r_start=prev%rcoef)
+                call solve_periodic(model, lopts, cur, error, r_start=prev%rcoef, dyn_out=dyn)
             else
-                call solve_periodic(model, lopts, cur, error)
+                call solve_periodic(model, lopts, cur, error, dyn_out=dyn)
             end if
             if (allocated(error)) return
             if (have_prev .and. cur%converged .and. prev%samples == cur%samples .and. &
@@ -265,7 +266,7 @@ contains
                 call system_clock(c1)
                 lest%seconds = real(c1 - c0, dp)/real(rate, dp)
             else
-                call estimate_truncation(model, lopts, cur, lest, error)
+                call estimate_truncation(model, lopts, cur, lest, error, dyn=dyn)
                 if (allocated(error)) return
             end if
             hist_h = [hist_h, h]

@@ -102,8 +102,9 @@ contains
     !> (singular dynamic stiffness: "undamped resonance at harmonic h ...", NaN in the
     !> residual).
     !> With `dyn` (the condensed dynamics of `model` on the basis of `opts`, as a
-    !> continuation keeps them), Z_h is not factorized again (see new_hb_problem).
-    subroutine solve_periodic(model, opts, sol, error, r_start, dyn)
+    !> continuation keeps them), Z_h is not factorized again (see new_hb_problem); `dyn_out`
+    !> returns the dynamics the solve used (for a truncation estimate of the solution).
+    subroutine solve_periodic(model, opts, sol, error, r_start, dyn, dyn_out)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Solver options.
@@ -116,6 +117,8 @@ contains
         real(dp), intent(in), optional :: r_start(:, :)
         !> The condensed dynamics of `model` on this basis, already built.
         type(dynamics_t), intent(in), optional :: dyn
+        !> The condensed dynamics of the solve (set unless an error occurred).
+        type(dynamics_t), intent(out), optional :: dyn_out
         type(hbm_options_t) :: o
         type(hb_problem_t) :: prob
         real(dp), allocatable :: y(:), vzero(:, :)
@@ -205,6 +208,7 @@ contains
 
         call finish_solution(model, opts, prob, y, sol)
         call check_solution(model, o, prob, sol)
+        if (present(dyn_out)) dyn_out = prob%dyn
         call prob%destroy()
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)

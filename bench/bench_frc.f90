@@ -3,6 +3,11 @@
 !> [0.2, 6] with the step set for about 400 points, with and without the Floquet stability
 !> of every point, and with and without the truncation estimate; total CPU time, time per
 !> point, points, folds, rejected steps. Medians over repeats; all variants in one process.
+!> Then the cost of a sweep point against a cold solve (no stability, no truncation):
+!> the seed case, the 4-DOF chain (examples/chain4.nml, omega 0.2 -> 2, step 0.0045) and
+!> the 80-DOF beam (examples/beam_mm/beam.nml, omega 30 -> 60, step 0.1): the cold solve at
+!> the start of the range (median of 7), ms per point, points per second, their ratio and
+!> the factorizations of Z_h (sets over the basis) per point.
 !> Run from the project root: fpm run --example bench_frc --profile release [-- repeats]
 program bench_frc
     use, intrinsic :: iso_fortran_env, only: output_unit
@@ -11,6 +16,8 @@ program bench_frc
     use stickslip_case, only: case_t, read_case
     use stickslip_study, only: median
     use stickslip_sweep, only: sweep_result_t, run_sweep
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_solution, only: hbm_solution_t
     implicit none
     type(case_t) :: c
     type(error_type), allocatable :: error
@@ -39,8 +46,62 @@ program bench_frc
     do k = 1, nvar
         call measure(k)
     end do
+    write (output_unit, '(/,a)') "case                    points  cold solve [ms]  per point [ms]"// &
+        "  points/s  point/cold  factorizations/point"
+    call point_cost("seed_frc", "examples/seed_frc.nml", 0.0_dp, 0.0_dp, 0.0_dp)
+    call point_cost("chain4", "examples/chain4.nml", 0.2_dp, 2.0_dp, 0.0045_dp)
+    call point_cost("beam_mm (80 DOFs)", "examples/beam_mm/beam.nml", 30.0_dp, 60.0_dp, 0.1_dp)
 
 contains
+
+    !> A sweep point against a cold solve at the start of the range (step = 0: the case's
+    !> own &sweep).
+    subroutine point_cost(name, file, start, stop, step)
+        character(len=*), intent(in) :: name, file
+        real(dp), intent(in) :: start, stop, step
+        type(case_t) :: cv
+        type(sweep_result_t) :: res
+        type(hbm_solution_t) :: sol
+        real(dp) :: t0, t1, cold(7), times(repeats)
+        integer :: r
+        call read_case(file, cv, error)
+        if (allocated(error)) then
+            write (output_unit, '(a)') name//": error: "//error%message
+            return
+        end if
+        if (step > 0.0_dp) then
+            cv%sweep%parameter = 'omega'
+            cv%sweep%start = start
+            cv%sweep%stop = stop
+            cv%sweep%step = step
+            cv%sweep%max_step = step
+        end if
+        cv%sweep%stability = .false.
+        cv%sweep%truncation = .false.
+        cv%sweep%max_points = 20000
+        cv%model%omega = cv%sweep%start
+        do r = 1, size(cold)
+            call cpu_time(t0)
+            call solve_periodic(cv%model, cv%hbm, sol, error)
+            call cpu_time(t1)
+            cold(r) = t1 - t0
+        end do
+        do r = 1, repeats
+            call cpu_time(t0)
+            call run_sweep(cv%model, cv%hbm, cv%reference%reference_options_t, &
+                           cv%sweep%sweep_options_t, res, error)
+            call cpu_time(t1)
+            if (allocated(error)) then
+                write (output_unit, '(a)') name//": error: "//error%message
+                return
+            end if
+            times(r) = t1 - t0
+        end do
+        write (output_unit, '(a22,i8,f17.3,f16.3,f10.1,f12.2,f22.2)') name, res%npoints, &
+            1.0e3_dp*median(cold), 1.0e3_dp*median(times)/res%npoints, &
+            res%npoints/median(times), median(times)/res%npoints/median(cold), &
+            real(res%factorizations, dp)/res%npoints
+    end subroutine point_cost
 
     subroutine measure(variant)
         integer, intent(in) :: variant

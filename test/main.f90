@@ -11,6 +11,7 @@ program tester
     use test_stability, only: run_stability_tests
     use test_robustness, only: run_robustness_tests
     use test_continuation, only: run_continuation_tests
+    use test_factorizations, only: run_factorizations_tests
     use test_sweep_files, only: run_sweep_file_tests
     use test_truncation, only: run_truncation_tests
     use test_namelist, only: run_namelist_tests
@@ -56,6 +57,7 @@ program tester
     if (selected("stability")) call run_stability_tests(t)
     if (selected("robustness")) call run_robustness_tests(t)
     if (selected("continuation")) call run_continuation_tests(t)
+    if (selected("factorizations")) call run_factorizations_tests(t)
     if (selected("sweep_files")) call run_sweep_file_tests(t)
     if (selected("truncation")) call run_truncation_tests(t)
     if (selected("namelist")) call run_namelist_tests(t)

@@ -10,6 +10,7 @@ module stickslip_checks
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_dynamics, only: dynamics_t
     use stickslip_hbm, only: hbm_max_harmonics
     use stickslip_reference, only: reference_options_t
     use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance
@@ -114,6 +115,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         integer :: hmax
         character(len=300) :: buf
+        type(dynamics_t) :: dyn
         checks%notes = ""
         if (copts%harmonics_tol > 0.0_dp) then
             hmax = copts%max_harmonics
@@ -122,10 +124,11 @@ contains
                                     checks%truncation, error)
             if (allocated(error)) return
         else
-            call solve_periodic(model, opts, sol, error)
+            ! the estimate's coarse solve restricts the solve's dynamics (no refactorization)
+            call solve_periodic(model, opts, sol, error, dyn_out=dyn)
             if (allocated(error)) return
             if (sol%converged) then
-                call estimate_truncation(model, opts, sol, checks%truncation, error)
+                call estimate_truncation(model, opts, sol, checks%truncation, error, dyn=dyn)
                 if (allocated(error)) return
             end if
         end if

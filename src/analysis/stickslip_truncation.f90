@@ -37,6 +37,7 @@ module stickslip_truncation
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_friction, only: psi, psi_stick
     use stickslip_hbm, only: solve_periodic
+    use stickslip_dynamics, only: dynamics_t
     implicit none
     private
     public :: truncation_t, estimate_truncation, solve_to_tolerance, coarse_harmonics
@@ -145,7 +146,9 @@ contains
     !> unconverged coarse solve (est%coarse_harmonics = 0) are outcomes, told in est%note.
     !> Errors: stat input when sol was not solved with opts (harmonics, odd_only, samples)
     !> or holds no coefficients; the errors of solve_periodic on the coarse set.
-    subroutine estimate_truncation(model, opts, sol, est, error)
+    !> With `dyn` (the condensed dynamics sol was solved with, e.g. a continuation's), the
+    !> coarse solve restricts them instead of factorizing Z_h again.
+    subroutine estimate_truncation(model, opts, sol, est, error, dyn)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> The options sol was solved with.
@@ -156,6 +159,8 @@ contains
         type(truncation_t), intent(out) :: est
         !> Set on misuse or numerical breakdown.
         type(error_type), allocatable, intent(out) :: error
+        !> The condensed dynamics of `model` on the basis of `opts`, already built.
+        type(dynamics_t), intent(in), optional :: dyn
         type(hbm_options_t) :: copts
         type(hbm_solution_t) :: coarse
         integer(int64) :: c0, c1, rate
@@ -173,7 +178,8 @@ contains
             copts%rho = sol%rho      ! the same weight as the fine solution
             copts%want_samples = .false.
             nbc = count(sol%harmonic <= hc)
-            call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :))
+            call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :), &
+                                dyn=dyn)
             if (allocated(error)) then
                 error%message = "truncation estimate, coarse solve at H = "//itoa(hc)// &
                                 ": "//error%message
@@ -222,6 +228,7 @@ contains
         real(dp), allocatable :: hist_e(:)
         integer :: h
         logical :: have_prev
+        type(dynamics_t) :: dyn
         integer(int64) :: c0, c1, rate
         character(len=200) :: buf
 
@@ -244,9 +251,9 @@ contains
             lopts%harmonics = h
             lopts%samples = max(opts%samples, power_of_two_at_least(4*h))
             if (have_prev) then
-                call solve_periodic(model, lopts, cur, error, r_start=prev%rcoef)
+                call solve_periodic(model, lopts, cur, error, r_start=prev%rcoef, dyn_out=dyn)
             else
-                call solve_periodic(model, lopts, cur, error)
+                call solve_periodic(model, lopts, cur, error, dyn_out=dyn)
             end if
             if (allocated(error)) return
             if (have_prev .and. cur%converged .and. prev%samples == cur%samples .and. &
@@ -259,7 +266,7 @@ contains
                 call system_clock(c1)
                 lest%seconds = real(c1 - c0, dp)/real(rate, dp)
             else
-                call estimate_truncation(model, lopts, cur, lest, error)
+                call estimate_truncation(model, lopts, cur, lest, error, dyn=dyn)
                 if (allocated(error)) return
             end if
             hist_h = [hist_h, h]

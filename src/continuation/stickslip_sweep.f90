@@ -39,6 +39,9 @@ module stickslip_sweep
     public :: continuation_options_of, reason_text, friction_family_t, new_friction_family
     public :: undamped_resonance_notes
 
+    !> Dynamics kept by a friction family in omega (distinct omega values).
+    integer, parameter, public :: dynamics_cache_size = 4
+
     !> Options of a sweep (&sweep).
     type :: sweep_options_t
         !> The parameter: 'omega' [rad/s], 'force_amplitude' [N] (every forcing term scaled
@@ -103,6 +106,9 @@ module stickslip_sweep
         real(dp) :: seconds = 0.0_dp, stability_seconds = 0.0_dp
         !> Turning points passed (sign changes of the parameter's tangent component).
         integer :: folds = 0
+        !> Factorizations of the dynamic stiffnesses by the continuation of this run (see
+        !> friction_family_t%factorizations; the points' own solves reuse them).
+        integer :: factorizations = 0
         !> Warnings about the curve ('' when none): undamped_resonance_notes.
         character(len=:), allocatable :: notes
         !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
@@ -148,6 +154,19 @@ module stickslip_sweep
         type(dynamics_t) :: unit
         real(dp) :: current = 0.0_dp
         logical :: have_current = .false.
+        !> How many times the family factorized the dynamic stiffnesses Z_h of its basis
+        !> (new_dynamics calls, the unit dynamics of 'force_amplitude' included): once per
+        !> distinct omega met ('omega'), once at the start otherwise.
+        integer :: factorizations = 0
+        !> The dynamics at the last few omega values met ('omega'): the corrector, the
+        !> tangent and the residual scale come back to an omega already seen; a value is
+        !> looked up exactly (==), the oldest entry is replaced.
+        type(dynamics_t) :: cached(dynamics_cache_size)
+        real(dp) :: cached_omega(dynamics_cache_size) = 0.0_dp
+        integer :: cached_age(dynamics_cache_size) = 0
+        integer :: clock = 0
+        !> s(K), s(M) of the model (see dynamics_t%smin_k; -1: not yet known).
+        real(dp) :: singular_values(2) = -1.0_dp
         real(dp), allocatable :: amplitude0(:), rs(:, :), vs(:, :), ss(:, :), dv(:, :), &
                                  dvs(:)
         complex(dp), allocatable :: cw(:)
@@ -436,6 +455,7 @@ contains
             end if
         end do
         call fam%prob%destroy()
+        res%factorizations = fam%factorizations
         if (allocated(error)) return
         res%complete = res%state%reason == reason_end
         if (opts%parameter == 'omega') then
@@ -467,13 +487,22 @@ contains
             type(frc_point_t), allocatable :: grown(:)
             real(dp) :: s0, s1
             integer :: k
+            logical :: at_point
             m = fam%model
             call set_sweep_parameter(m, opts%parameter, res%state%lambda, fam%amplitude0)
             po = fam%opts
             po%want_samples = .true.
             po%start = 'direct'
-            call solve_periodic(m, po, ps, error, &
-                                r_start=reshape(res%state%y, [nb, nc]))
+            ! the family's dynamics are at this parameter (the tangent was just computed
+            ! there): the point and its truncation estimate need no new factorization
+            at_point = fam%have_current .and. fam%current == res%state%lambda
+            if (at_point) then
+                call solve_periodic(m, po, ps, error, &
+                                    r_start=reshape(res%state%y, [nb, nc]), dyn=fam%prob%dyn)
+            else
+                call solve_periodic(m, po, ps, error, &
+                                    r_start=reshape(res%state%y, [nb, nc]))
+            end if
             if (allocated(error)) return
             pt%parameter = res%state%lambda
             pt%arclength = res%state%arclength
@@ -491,7 +520,11 @@ contains
             pt%stable = -1
             pt%truncation = ieee_value(1.0_dp, ieee_quiet_nan)
             if (opts%truncation) then
-                call estimate_truncation(m, po, ps, est, error)
+                if (at_point) then
+                    call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn)
+                else
+                    call estimate_truncation(m, po, ps, est, error)
+                end if
                 if (allocated(error)) return
                 if (est%available) pt%truncation = est%estimate
             end if
@@ -619,6 +652,7 @@ contains
         call set_sweep_parameter(fam%model, parameter, p, fam%amplitude0)
         call new_hb_problem(fam%prob, fam%model, hbm%harmonics, hbm%odd_only, hbm%samples, &
                             rho, error)
+        fam%factorizations = 1
         if (allocated(error)) return
         nb = fam%prob%basis%nb
         nc = fam%prob%nc
@@ -630,6 +664,7 @@ contains
                 m1 = fam%model
                 m1%force_amplitude = fam%amplitude0/fam%amplitude0(1)
                 call new_dynamics(fam%unit, m1, fam%prob%basis, error)
+                fam%factorizations = fam%factorizations + 1
                 if (allocated(error)) return
             end block
         end if
@@ -722,7 +757,6 @@ contains
         class(friction_family_t), intent(inout) :: self
         real(dp), intent(in) :: p
         integer, intent(inout) :: stat
-        type(error_type), allocatable :: error
         if (self%have_current .and. p == self%current) return
         if (.not. ieee_is_finite(p)) then
             stat = 1
@@ -735,14 +769,8 @@ contains
                 return
             end if
             self%model%omega = p
-            call new_dynamics(self%prob%dyn, self%model, self%prob%basis, error, &
-                              with_omega_derivative=.true.)
-            if (allocated(error)) then
-                ! a singular dynamic stiffness (undamped resonance at h omega): no point here
-                stat = 1
-                self%have_current = .false.
-                return
-            end if
+            call set_omega_dynamics(self, p, stat)
+            if (stat /= 0) return
         case ('force_amplitude')
             self%prob%dyn%v0 = p*self%unit%v0
             self%prob%dyn%x0 = p*self%unit%x0
@@ -758,6 +786,46 @@ contains
         self%current = p
         self%have_current = .true.
     end subroutine family_set
+
+    !> The dynamics of a family in omega at omega = p (self%model%omega already p): from
+    !> the cache when p was met before (exactly), else factorized and cached. stat = 1 when
+    !> Z_h is singular there.
+    subroutine set_omega_dynamics(self, p, stat)
+        class(friction_family_t), intent(inout) :: self
+        real(dp), intent(in) :: p
+        integer, intent(inout) :: stat
+        type(error_type), allocatable :: error
+        integer :: k
+        self%clock = self%clock + 1
+        do k = 1, dynamics_cache_size
+            if (self%cached_age(k) > 0 .and. self%cached_omega(k) == p) then
+                self%prob%dyn = self%cached(k)
+                self%cached_age(k) = self%clock
+                return
+            end if
+        end do
+        ! K and M do not change along the family: their smallest singular values neither
+        if (self%singular_values(1) >= 0.0_dp) then
+            call new_dynamics(self%prob%dyn, self%model, self%prob%basis, error, &
+                              with_omega_derivative=.true., &
+                              singular_values=self%singular_values)
+        else
+            call new_dynamics(self%prob%dyn, self%model, self%prob%basis, error, &
+                              with_omega_derivative=.true.)
+        end if
+        self%singular_values = [self%prob%dyn%smin_k, self%prob%dyn%smin_m]
+        self%factorizations = self%factorizations + 1
+        if (allocated(error)) then
+            ! a singular dynamic stiffness (undamped resonance at h omega): no point here
+            stat = 1
+            self%have_current = .false.
+            return
+        end if
+        k = minloc(self%cached_age, 1)
+        self%cached(k) = self%prob%dyn
+        self%cached_omega(k) = p
+        self%cached_age(k) = self%clock
+    end subroutine set_omega_dynamics
 
     !> ||V0||_2 at lambda, the contact velocities without friction (as solve_periodic's
     !> fscale): near a resonance the residual cannot be computed more accurately than that

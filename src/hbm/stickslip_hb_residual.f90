@@ -13,7 +13,7 @@ module stickslip_hb_residual
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_basis, only: basis_t, new_basis
-    use stickslip_dynamics, only: dynamics_t, new_dynamics
+    use stickslip_dynamics, only: dynamics_t, new_dynamics, restrict_dynamics
     use stickslip_friction, only: psi, psi_stick
     use stickslip_nonlinear, only: nonlinear_system_t
     implicit none
@@ -50,7 +50,11 @@ contains
     !> only) with `samples` quadrature points and weight `rho` > 0. Errors: stat input for
     !> bad sizes or rho, a forcing harmonic outside the basis; stat numerical for a singular
     !> dynamic stiffness (see new_dynamics).
-    subroutine new_hb_problem(self, model, harmonics, odd_only, samples, rho, error)
+    !> With `dyn` (the condensed dynamics of this model at its omega on this basis or on a
+    !> larger one, e.g. kept by a continuation at the same omega, or the full basis of a
+    !> harmonic ladder), nothing is factorized: the dynamics are copied or restricted
+    !> (restrict_dynamics; stat input when its sizes, omega or harmonics do not fit).
+    subroutine new_hb_problem(self, model, harmonics, odd_only, samples, rho, error, dyn)
         !> The problem.
         type(hb_problem_t), intent(out) :: self
         !> A validated model.
@@ -65,6 +69,8 @@ contains
         real(dp), intent(in) :: rho
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> Dynamics already built for `model` on this basis (not refactorized).
+        type(dynamics_t), intent(in), optional :: dyn
         integer :: nb, nc, nt
         character(len=100) :: buf
 
@@ -75,7 +81,19 @@ contains
         end if
         call new_basis(self%basis, harmonics, odd_only, samples, error)
         if (allocated(error)) return
-        call new_dynamics(self%dyn, model, self%basis, error)
+        if (present(dyn)) then
+            if (dyn%ndof /= model%ndof .or. dyn%ncontact /= model%ncontact() .or. &
+                .not. allocated(dyn%v0) .or. .not. (dyn%omega == model%omega)) then
+                call fatal_error(error, "new_hb_problem: dyn was not built for this model "// &
+                                 "(sizes or omega differ)", stickslip_stat%input)
+            else if (same_harmonics(dyn, self%basis)) then
+                self%dyn = dyn
+            else
+                call restrict_dynamics(dyn, model, self%basis, self%dyn, error)
+            end if
+        else
+            call new_dynamics(self%dyn, model, self%basis, error)
+        end if
         if (allocated(error)) then
             call self%basis%destroy()
             return
@@ -90,6 +108,17 @@ contains
         allocate (self%rs(nt), self%vs(nt), self%ps(nt), self%cw(nt/2 + 1))
         allocate (self%rc(nb, nc), self%vc(nb, nc), self%a(nb, nb))
     end subroutine new_hb_problem
+
+    !> Whether `dyn` holds exactly the harmonics (and constant) of `basis`.
+    pure logical function same_harmonics(dyn, basis)
+        type(dynamics_t), intent(in) :: dyn
+        type(basis_t), intent(in) :: basis
+        same_harmonics = .false.
+        if (.not. allocated(dyn%harm)) return
+        if (size(dyn%harm) /= basis%nharm) return
+        if (basis%has_zero .neqv. allocated(dyn%x0_static)) return
+        same_harmonics = all(dyn%harm == basis%harm(1:basis%nharm))
+    end function same_harmonics
 
     !> F(R): projections of Psi(r_j, v_j) for every contact [m/s]. stat is left unchanged
     !> unless a NaN appears (stat = 1).

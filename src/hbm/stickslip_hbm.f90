@@ -14,7 +14,7 @@ module stickslip_hbm
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
-    use stickslip_dynamics, only: near_singular_threshold
+    use stickslip_dynamics, only: dynamics_t, near_singular_threshold
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_rho, only: automatic_rho, rho_fraction
     implicit none
@@ -101,7 +101,10 @@ contains
     !> method fails"). Errors: stat input (invalid model or options), stat numerical
     !> (singular dynamic stiffness: "undamped resonance at harmonic h ...", NaN in the
     !> residual).
-    subroutine solve_periodic(model, opts, sol, error, r_start)
+    !> With `dyn` (the condensed dynamics of `model` on the basis of `opts`, as a
+    !> continuation keeps them), Z_h is not factorized again (see new_hb_problem); `dyn_out`
+    !> returns the dynamics the solve used (for a truncation estimate of the solution).
+    subroutine solve_periodic(model, opts, sol, error, r_start, dyn, dyn_out)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Solver options.
@@ -112,6 +115,10 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Optional start for the friction-force coefficients [N].
         real(dp), intent(in), optional :: r_start(:, :)
+        !> The condensed dynamics of `model` on this basis, already built.
+        type(dynamics_t), intent(in), optional :: dyn
+        !> The condensed dynamics of the solve (set unless an error occurred).
+        type(dynamics_t), intent(out), optional :: dyn_out
         type(hbm_options_t) :: o
         type(hb_problem_t) :: prob
         real(dp), allocatable :: y(:), vzero(:, :)
@@ -127,7 +134,8 @@ contains
         ! the options in effect: rho = 0 asks for the automatic weight
         o = opts
         if (o%rho == 0.0_dp) o%rho = automatic_rho(model)
-        call new_hb_problem(prob, model, o%harmonics, o%odd_only, o%samples, o%rho, error)
+        call new_hb_problem(prob, model, o%harmonics, o%odd_only, o%samples, o%rho, error, &
+                            dyn)
         if (allocated(error)) return
 
         nb = prob%basis%nb
@@ -200,6 +208,7 @@ contains
 
         call finish_solution(model, opts, prob, y, sol)
         call check_solution(model, o, prob, sol)
+        if (present(dyn_out)) dyn_out = prob%dyn
         call prob%destroy()
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
@@ -296,7 +305,9 @@ contains
         rfull = reshape(y, [nb, nc])
         h = ladder_first
         do while (h < opts%harmonics)
-            call new_hb_problem(low, model, h, opts%odd_only, opts%samples, opts%rho, error)
+            ! the lower basis is a subset of prob's: its dynamics without a factorization
+            call new_hb_problem(low, model, h, opts%odd_only, opts%samples, opts%rho, error, &
+                                dyn=prob%dyn)
             if (allocated(error)) return
             nbl = low%basis%nb
             rlow = rfull(1:nbl, :)

@@ -15,7 +15,7 @@ module stickslip_dynamics
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     implicit none
     private
-    public :: dynamics_t, new_dynamics
+    public :: dynamics_t, new_dynamics, restrict_dynamics
 
     !> Condensed linear dynamics on a basis.
     type :: dynamics_t
@@ -53,6 +53,15 @@ module stickslip_dynamics
         real(dp) :: relative_conditioning = huge(1.0_dp)
         !> Harmonic where relative_conditioning is reached (-1 before new_dynamics).
         integer :: worst_harmonic = -1
+        !> The smallest singular values of K and M (1-norm estimates, 0 when singular; -1
+        !> before new_dynamics): they do not depend on omega, so a caller building the
+        !> dynamics at another omega of the same model passes them back (`singular_values`)
+        !> instead of factorizing K and M again.
+        real(dp) :: smin_k = -1.0_dp, smin_m = -1.0_dp
+        !> The harmonics h > 0 of the columns of x0, y, v0, g (those of the basis).
+        integer, allocatable :: harm(:)
+        !> Relative conditioning of Z_h per harmonic of `harm` (see relative_conditioning).
+        real(dp), allocatable :: rel(:)
     contains
         procedure :: contact_velocity
         procedure :: contact_velocity_derivative
@@ -81,7 +90,9 @@ contains
     !> With `with_omega_derivative`, also d V0_h / d omega and d G_h / d omega (for the
     !> continuation in omega): with X = Z_h^{-1} [F_h, W] and dZ_h/domega = -2 h^2 omega M
     !> + i h C, d(i h omega W^T X)/domega = i h W^T X - i h omega W^T Z_h^{-1} (dZ_h/domega) X.
-    subroutine new_dynamics(self, model, basis, error, with_omega_derivative)
+    !> `singular_values` = [smin_k, smin_m] of a dynamics of the same model (another omega)
+    !> skips the two factorizations of K and M that estimate them.
+    subroutine new_dynamics(self, model, basis, error, with_omega_derivative, singular_values)
         !> The condensed dynamics.
         type(dynamics_t), intent(out) :: self
         !> A validated model.
@@ -92,6 +103,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Also compute dv0 and dg (default .false.).
         logical, intent(in), optional :: with_omega_derivative
+        !> [smin_k, smin_m] from a dynamics of the same M and K (see dynamics_t).
+        real(dp), intent(in), optional :: singular_values(2)
         integer :: n, nc, ih, h, j, i, info
         complex(dp), allocatable :: z(:, :), rhs(:, :), work(:), drhs(:, :)
         logical :: deriv
@@ -100,7 +113,6 @@ contains
         real(dp) :: anorm, rcond, w(model%ndof), knorm, mnorm, zscale, rel, smin_k, smin_m
         complex(dp) :: ihw
         character(len=512) :: buf
-        logical :: placed
 
         n = model%ndof
         nc = model%ncontact()
@@ -108,20 +120,10 @@ contains
         self%ncontact = nc
         self%omega = model%omega
 
-        do i = 1, model%nforce()
-            h = model%force_harmonic(i)
-            if (h == 0) then
-                placed = basis%has_zero
-            else
-                placed = any(basis%harm == h)
-            end if
-            if (.not. placed) then
-                write (buf, '(a,i0,a,i0,a)') "model%force_harmonic(", i, ") = ", h, &
-                    ": not in the harmonic basis (check basis%harmonics and basis%odd_only)"
-                call fatal_error(error, trim(buf), stickslip_stat%input)
-                return
-            end if
-        end do
+        call check_forcing_in_basis(model, basis, error)
+        if (allocated(error)) return
+        self%harm = basis%harm(1:basis%nharm)
+        allocate (self%rel(basis%nharm))
 
         allocate (self%x0(n, basis%nharm), self%y(n, nc, basis%nharm))
         allocate (self%v0(nc, basis%nharm), self%g(nc, nc, basis%nharm))
@@ -134,8 +136,15 @@ contains
         knorm = maxval(sum(abs(model%stiffness), dim=1))
         mnorm = maxval(sum(abs(model%mass), dim=1))
         ! the smallest singular values of K and M (1-norm estimates; 0 when singular)
-        smin_k = smallest_singular(model%stiffness, knorm)
-        smin_m = smallest_singular(model%mass, mnorm)
+        if (present(singular_values)) then
+            smin_k = singular_values(1)
+            smin_m = singular_values(2)
+        else
+            smin_k = smallest_singular(model%stiffness, knorm)
+            smin_m = smallest_singular(model%mass, mnorm)
+        end if
+        self%smin_k = smin_k
+        self%smin_m = smin_m
         self%relative_conditioning = 1.0_dp
         do ih = 0, basis%nharm
             if (ih == 0) then
@@ -163,6 +172,7 @@ contains
                 zscale = smin_k + (h*model%omega)**2*smin_m
                 rel = 0.0_dp
                 if (zscale > 0.0_dp) rel = rcond*anorm/zscale
+                self%rel(ih) = rel
                 if (rel < self%relative_conditioning) then
                     self%relative_conditioning = rel
                     self%worst_harmonic = h
@@ -228,6 +238,92 @@ contains
             end if
         end do
     end subroutine new_dynamics
+
+    !> The dynamics of the same model at the same omega on `basis`, a subset of the
+    !> harmonics of `self` (a lower rung of a harmonic ladder, the coarse set of a
+    !> truncation estimate): the columns of those harmonics, copied, with no new
+    !> factorization; equal to new_dynamics on `basis` (relative_conditioning and
+    !> worst_harmonic over the subset). Errors: stat input when a harmonic of `basis` (or
+    !> its constant) is not in `self`, or a forcing harmonic is not in `basis`.
+    subroutine restrict_dynamics(self, model, basis, sub, error)
+        !> Dynamics on a larger basis.
+        class(dynamics_t), intent(in) :: self
+        !> The model they were built for.
+        type(model_t), intent(in) :: model
+        !> The smaller basis.
+        type(basis_t), intent(in) :: basis
+        !> The dynamics on `basis`.
+        type(dynamics_t), intent(out) :: sub
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: ih, k, nh
+        integer :: pick(basis%nharm)
+        call check_forcing_in_basis(model, basis, error)
+        if (allocated(error)) return
+        if (.not. allocated(self%harm)) then
+            call fatal_error(error, "restrict_dynamics: the dynamics were not built", &
+                             stickslip_stat%input)
+            return
+        end if
+        nh = basis%nharm
+        do ih = 1, nh
+            pick(ih) = findloc(self%harm, basis%harm(ih), 1)
+        end do
+        if (any(pick == 0) .or. (basis%has_zero .and. .not. allocated(self%x0_static))) then
+            call fatal_error(error, "restrict_dynamics: the basis holds a harmonic the "// &
+                             "dynamics were not built for", stickslip_stat%input)
+            return
+        end if
+        sub%ndof = self%ndof
+        sub%ncontact = self%ncontact
+        sub%omega = self%omega
+        sub%smin_k = self%smin_k
+        sub%smin_m = self%smin_m
+        sub%harm = self%harm(pick)
+        sub%rel = self%rel(pick)
+        sub%x0 = self%x0(:, pick)
+        sub%y = self%y(:, :, pick)
+        sub%v0 = self%v0(:, pick)
+        sub%g = self%g(:, :, pick)
+        if (allocated(self%dv0)) sub%dv0 = self%dv0(:, pick)
+        if (allocated(self%dg)) sub%dg = self%dg(:, :, pick)
+        if (basis%has_zero) then
+            sub%x0_static = self%x0_static
+            sub%y_static = self%y_static
+        end if
+        ! as new_dynamics: the first harmonic where the smallest value is reached
+        sub%relative_conditioning = 1.0_dp
+        do k = 1, nh
+            if (sub%rel(k) < sub%relative_conditioning) then
+                sub%relative_conditioning = sub%rel(k)
+                sub%worst_harmonic = sub%harm(k)
+            end if
+        end do
+    end subroutine restrict_dynamics
+
+    !> Error (stat input) when a forcing term's harmonic is not in `basis`.
+    subroutine check_forcing_in_basis(model, basis, error)
+        type(model_t), intent(in) :: model
+        type(basis_t), intent(in) :: basis
+        type(error_type), allocatable, intent(out) :: error
+        integer :: i, h
+        logical :: placed
+        character(len=200) :: buf
+        do i = 1, model%nforce()
+            h = model%force_harmonic(i)
+            if (h == 0) then
+                placed = basis%has_zero
+            else
+                placed = any(basis%harm == h)
+            end if
+            if (.not. placed) then
+                write (buf, '(a,i0,a,i0,a)') "model%force_harmonic(", i, ") = ", h, &
+                    ": not in the harmonic basis (check basis%harmonics and basis%odd_only)"
+                call fatal_error(error, trim(buf), stickslip_stat%input)
+                return
+            end if
+        end do
+    end subroutine check_forcing_in_basis
 
     !> Contact slip-velocity coefficients V = V0 + G R (nb x n_c) for friction-force
     !> coefficients R (nb x n_c), in the real coefficient layout of `basis`.

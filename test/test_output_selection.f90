@@ -183,11 +183,76 @@ contains
             call check(t, .false., "chain: coefficients.csv shapes")
         end if
 
-        ! with a reduction the result files hold reduced DOFs: a selection is refused for now
-        call chain_case("chain_reduced", "dofs = 3 / &reduction method = 'craig-bampton'")
+        ! with an exact reduction (every interior mode) the files hold FULL-model DOFs, named
+        ! by their full numbers, with the unreduced solution's values: 3 interior, 70 contact
+        call chain_case("chain_reduced", "dofs = 3, 70 / &reduction method = 'craig-bampton', "// &
+                        "modes = 66")
         call read_case(dir//"/chain_reduced.nml", c, error)
-        call check_error(t, error, "chain reduced with dofs: refused", .true., &
-                         [character(len=60) :: "&output dofs: not available yet with a reduction"])
+        call check_error(t, error, "chain reduced, dofs = 3, 70: reads", .false.)
+        if (allocated(error)) return
+        call check(t, c%model%ndof == 4 + 66 .and. same(c%output_dofs, [3, 70]) .and. &
+                   c%output_dofs_given, "chain reduced: 70 reduced DOFs, dofs in full numbers")
+        call cli([character(len=200) :: dir//"/chain_reduced.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "chain reduced, dofs = 3, 70: runs", err)
+        call check(t, first_line(dir//"/chain_reduced/hbm.csv") == "t,x3,x70,v3,v70,r1,r2", &
+                   "chain reduced: hbm.csv columns named by full numbers", &
+                   first_line(dir//"/chain_reduced/hbm.csv"))
+        call check(t, first_line(dir//"/chain_reduced/coefficients.csv") == &
+                   "harmonic,kind,x3,x70,r1,r2", "chain reduced: coefficients.csv columns", &
+                   first_line(dir//"/chain_reduced/coefficients.csv"))
+        b = read_numbers(dir//"/chain_reduced/hbm.csv")
+        if (size(b, 1) == size(full, 1) .and. size(b, 2) == 7) then
+            call check(t, close_to(b(:, 2:3), full(:, 1 + [3, 70])) .and. &
+                       close_to(b(:, 4:5), full(:, 1 + nchain + [3, 70])) .and. &
+                       close_to(b(:, 6:7), full(:, 2 + 2*nchain:3 + 2*nchain)), &
+                       "chain reduced: x3, x70, v3, v70, r equal the unreduced solution's")
+        else
+            call check(t, .false., "chain reduced: hbm.csv shape")
+        end if
+        ca = read_numbers(dir//"/chain_reduced/coefficients.csv", 2)
+        if (size(ca, 1) == size(cfull, 1) .and. size(ca, 2) == 4) then
+            call check(t, close_to(ca(:, 1:2), cfull(:, [3, 70])), &
+                       "chain reduced: coefficients of x3, x70 equal the unreduced ones")
+        else
+            call check(t, .false., "chain reduced: coefficients.csv shape")
+        end if
+        call check(t, has_line_starting(dir//"/chain_reduced/summary.nml", "dofs = 3, 70"), &
+                   "chain reduced: dofs echoed in full numbers")
+        call read_case(dir//"/chain_reduced/summary.nml", back, error)
+        call check_error(t, error, "chain reduced: summary.nml reads back", .false.)
+        if (.not. allocated(error)) call check(t, same(back%output_dofs, [3, 70]) .and. &
+            back%output_dofs_given .and. back%model%ndof == 70 .and. &
+            back%reduction%report%full_dof == nchain, &
+            "chain reduced: summary.nml gives the list and the reduction")
+
+        ! the default with a reduction: the contact and forced DOFs, full numbers
+        call chain_case("chain_reduced_default", "/ &reduction method = 'craig-bampton', "// &
+                        "modes = 66")
+        call cli([character(len=200) :: dir//"/chain_reduced_default.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "chain reduced default: runs", err)
+        call check(t, first_line(dir//"/chain_reduced_default/hbm.csv") == sel_header, &
+                   "chain reduced default: contact and forced DOFs, full numbers", &
+                   first_line(dir//"/chain_reduced_default/hbm.csv"))
+        b = read_numbers(dir//"/chain_reduced_default/hbm.csv")
+        if (size(b, 1) == size(full, 1) .and. size(b, 2) == 11) then
+            call check(t, close_to(b(:, 2:5), full(:, 1 + [11, 12, 40, 70])) .and. &
+                       close_to(b(:, 6:9), full(:, 1 + nchain + [11, 12, 40, 70])), &
+                       "chain reduced default: values equal the unreduced solution's")
+        else
+            call check(t, .false., "chain reduced default: hbm.csv shape")
+        end if
+
+        ! a DOF beyond the full N, and an interior DOF in a sweep, rejected
+        call chain_case("chain_reduced_bad", "dofs = 3, 71 / &reduction method = "// &
+                        "'craig-bampton', modes = 66")
+        call read_case(dir//"/chain_reduced_bad.nml", c, error)
+        call check_error(t, error, "chain reduced, dofs = 3, 71: rejected", .true., &
+                         [character(len=60) :: "&output dofs(2) = 71", "1..70"])
+        call chain_case("chain_reduced_sweep", "dofs = 70, 3 / &reduction method = "// &
+                        "'craig-bampton', modes = 66 / &sweep start = 1, stop = 2")
+        call read_case(dir//"/chain_reduced_sweep.nml", c, error)
+        call check_error(t, error, "chain reduced sweep, interior DOF: rejected", .true., &
+                         [character(len=60) :: "&output dofs(2) = 3", "interior"])
 
     contains
 
@@ -341,6 +406,12 @@ contains
         if (allocated(error)) return
         call write_matrix_market(dir//"/chain_k.mtx", k, .true., error)
     end subroutine write_chain
+
+    !> a and b agree to 1e-9 of the largest |b| (two converged solves of the same problem).
+    logical function close_to(a, b)
+        real(dp), intent(in) :: a(:, :), b(:, :)
+        close_to = maxval(abs(a - b)) <= 1.0e-9_dp*max(maxval(abs(b)), tiny(1.0_dp))
+    end function close_to
 
     logical function same(a, b)
         integer, allocatable, intent(in) :: a(:)

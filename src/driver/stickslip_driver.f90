@@ -14,10 +14,12 @@
 !> run_*_case procedures put it in case-file words ("&sweep tol = ...", "&friction mu(1)"),
 !> an input error with the case file's path.
 module stickslip_driver
+    use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t, selected_dofs
+    use stickslip_case_reduction, only: recover_outputs
     use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t, solve_and_check
@@ -229,9 +231,11 @@ contains
         if (sol%converged) then
             call remove_stale_results(case%directory, [character(len=24) :: "hbm.csv", &
                                       "coefficients.csv"])
-            call write_hbm_csv(case%directory, sol, error, selected_dofs(case))
+            call write_hbm_csv(case%directory, output_solution(case, sol), error, &
+                               output_columns(case), selected_dofs(case))
             if (allocated(error)) return
-            call write_coefficients_csv(case%directory, sol, error, selected_dofs(case))
+            call write_coefficients_csv(case%directory, output_solution(case, sol), error, &
+                                        output_columns(case), selected_dofs(case))
             if (allocated(error)) return
         else
             call remove_stale_results(case%directory, [character(len=24) ::])
@@ -284,8 +288,9 @@ contains
         if (.not. wanted) return
         if (res%periodic) then
             call remove_stale_results(case%directory, [character(len=24) :: "euler.csv"])
-            call write_samples_csv(case%directory, "euler.csv", res%t, res%x, res%v, res%r, &
-                                   error, selected_dofs(case))
+            call write_samples_csv(case%directory, "euler.csv", res%t, &
+                                   output_values(case, res%x), output_values(case, res%v), &
+                                   res%r, error, output_columns(case), selected_dofs(case))
             if (allocated(error)) return
         else
             call remove_stale_results(case%directory, [character(len=24) ::])
@@ -383,14 +388,18 @@ contains
                                               "events.csv"]
         call remove_stale_results(case%directory, files)
         if (res%hbm%converged) then
-            call write_hbm_csv(case%directory, res%hbm, error, selected_dofs(case))
+            call write_hbm_csv(case%directory, output_solution(case, res%hbm), error, &
+                               output_columns(case), selected_dofs(case))
             if (allocated(error)) return
-            call write_coefficients_csv(case%directory, res%hbm, error, selected_dofs(case))
+            call write_coefficients_csv(case%directory, output_solution(case, res%hbm), &
+                                        error, output_columns(case), selected_dofs(case))
             if (allocated(error)) return
         end if
         if (res%euler%periodic) then
-            call write_samples_csv(case%directory, "euler.csv", res%euler%t, res%euler%x, &
-                                   res%euler%v, res%euler%r, error, selected_dofs(case))
+            call write_samples_csv(case%directory, "euler.csv", res%euler%t, &
+                                   output_values(case, res%euler%x), &
+                                   output_values(case, res%euler%v), res%euler%r, error, &
+                                   output_columns(case), selected_dofs(case))
             if (allocated(error)) return
         end if
         if (res%reference%converged) then
@@ -457,7 +466,7 @@ contains
         call remove_stale_results(case%directory, [character(len=24) :: "study.csv", &
                                   "reference.csv", "events.csv"])
         call write_study_csv(case%directory, res, case%model%ndof, case%model%ncontact(), error, &
-                             selected_dofs(case))
+                             boundary_columns(case), selected_dofs(case))
         if (allocated(error)) return
         call write_reference_files(case, res%reference, error)
         if (allocated(error)) return
@@ -520,10 +529,12 @@ contains
         call after_method(case, error, wanted)
         if (.not. wanted) return
         call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
-        call write_frc_csv(case%directory, res, error, selected_dofs(case))
+        call write_frc_csv(case%directory, res, error, boundary_columns(case), &
+                           selected_dofs(case))
         if (allocated(error)) return
         call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
-                                   case%model%ndof, error, selected_dofs(case))
+                                   case%model%ndof, error, boundary_columns(case), &
+                                   selected_dofs(case))
         if (allocated(error)) return
         call write_sweep_summary(case%directory, case, res, error)
         if (allocated(error)) return
@@ -584,8 +595,9 @@ contains
         type(case_t), intent(in) :: case
         type(reference_result_t), intent(in) :: res
         type(error_type), allocatable, intent(out) :: error
-        call write_samples_csv(case%directory, "reference.csv", res%t, res%x, res%v, res%r, &
-                               error, selected_dofs(case))
+        call write_samples_csv(case%directory, "reference.csv", res%t, &
+                               output_values(case, res%x), output_values(case, res%v), res%r, &
+                               error, output_columns(case), selected_dofs(case))
         if (allocated(error)) return
         call write_events_csv(case%directory, res, error)
     end subroutine write_reference_files
@@ -643,4 +655,62 @@ contains
         if (index(error%message, case%path//": ") == 1) return
         error%message = case%path//": "//error%message
     end subroutine name_case_file
+    !> Whether the case's model was reduced with output rows kept (the result files then hold
+    !> recovered full-model DOFs).
+    pure logical function recovers(case)
+        type(case_t), intent(in) :: case
+        recovers = allocated(case%reduction%output_rows)
+    end function recovers
+
+    !> The columns of the values given to the writers that hold the selected DOFs: the DOF
+    !> numbers themselves, or 1..nsel for recovered values (output_values).
+    function output_columns(case) result(cols)
+        type(case_t), intent(in) :: case
+        integer, allocatable :: cols(:)
+        integer :: k
+        if (recovers(case)) then
+            cols = [(k, k=1, size(case%reduction%output_dofs))]
+        else
+            cols = selected_dofs(case)
+        end if
+    end function output_columns
+
+    !> The columns of per-DOF values of the model's own DOFs (frc amplitudes, study errors):
+    !> the selected DOFs, or with a reduction their reduced DOFs (read_case admits only
+    !> contact and forced DOFs then).
+    function boundary_columns(case) result(cols)
+        type(case_t), intent(in) :: case
+        integer, allocatable :: cols(:)
+        if (recovers(case)) then
+            cols = case%reduction%output_reduced
+        else
+            cols = selected_dofs(case)
+        end if
+    end function boundary_columns
+
+    !> Samples (instants x ndof) as the writers take them: unchanged, or with a reduction the
+    !> selected full-model DOFs recovered (instants x nsel).
+    function output_values(case, x) result(y)
+        type(case_t), intent(in) :: case
+        real(dp), intent(in) :: x(:, :)
+        real(dp), allocatable :: y(:, :)
+        if (recovers(case)) then
+            y = recover_outputs(case%reduction, x)
+        else
+            y = x
+        end if
+    end function output_values
+
+    !> A solution as the writers take it: unchanged, or with its samples and coefficients of
+    !> the selected full-model DOFs recovered.
+    function output_solution(case, sol) result(out)
+        type(case_t), intent(in) :: case
+        type(hbm_solution_t), intent(in) :: sol
+        type(hbm_solution_t) :: out
+        out = sol
+        if (.not. recovers(case)) return
+        if (allocated(sol%x)) out%x = recover_outputs(case%reduction, sol%x)
+        if (allocated(sol%v)) out%v = recover_outputs(case%reduction, sol%v)
+        if (allocated(sol%xcoef)) out%xcoef = recover_outputs(case%reduction, sol%xcoef)
+    end function output_solution
 end module stickslip_driver

@@ -109,6 +109,7 @@ contains
         character(len=:), allocatable :: method
         logical :: method_given
         type(sparse_system_t) :: sparse
+        integer :: k, j
 
         case%path = path
         call read_namelist_file(path, nml, error)
@@ -128,8 +129,12 @@ contains
         call read_hbm_group(nml, case%hbm, case%checks, error)
         if (allocated(error)) return
         if (sparse%read) then
+            ! &output dofs in full numbers, checked against the full N before the reduction
+            call read_output_group(nml, case%model, case%directory, case%output_dofs, &
+                                   case%output_dofs_given, error)
+            if (allocated(error)) return
             call reduce_case_model(nml, case%reduction, sparse, case%hbm%harmonics, &
-                                   case%model, error)
+                                   case%model, case%output_dofs, case%output_dofs_given, error)
             if (allocated(error)) return
         end if
         call validate_model(case%model, error)
@@ -141,16 +146,10 @@ contains
             return
         end if
 
-        call read_output_group(nml, case%model, case%directory, case%output_dofs, &
-                               case%output_dofs_given, error)
-        if (allocated(error)) return
-        if (sparse%read .and. case%output_dofs_given) then
-            call group_error(nml, error, "&output dofs: not available yet with a reduction "// &
-                             "(the result files then hold the reduced DOFs: the contact and "// &
-                             "forced DOFs in increasing order of their full numbers, then "// &
-                             "the modal amplitudes); leave dofs out or set &reduction method "// &
-                             "= 'none'")
-            return
+        if (.not. sparse%read) then
+            call read_output_group(nml, case%model, case%directory, case%output_dofs, &
+                                   case%output_dofs_given, error)
+            if (allocated(error)) return
         end if
         if (allocated(error)) return
         call read_run_group(nml, method, method_given, error)
@@ -175,6 +174,24 @@ contains
             return
         end if
         call check_sizes(nml, case, error)
+        if (allocated(error)) return
+        if (allocated(case%reduction%output_reduced)) then
+            if (method == 'sweep' .or. method == 'study') then
+                do k = 1, size(case%reduction%output_reduced)
+                    if (case%reduction%output_reduced(k) == 0) then
+                        call group_error(nml, error, "&output dofs("//itoa(k)//") = "// &
+                                         itoa(case%reduction%output_dofs(k))//": an "// &
+                                         "interior DOF of the reduced model; method = '"// &
+                                         method//"' with a reduction writes only contact "// &
+                                         "and forced DOFs ("// &
+                                         ilist(case%reduction%output_dofs(pack([(j, j=1, &
+                                         size(case%reduction%output_reduced))], &
+                                         case%reduction%output_reduced > 0)))//" here)")
+                        return
+                    end if
+                end do
+            end if
+        end if
     end subroutine read_case
 
     !> A model message about &system `name` names the file the matrix came from.

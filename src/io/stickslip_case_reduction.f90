@@ -8,7 +8,10 @@
 !> > 0) and every forced DOF; the reduced model numbers them 1..nb in ascending order of
 !> their full-model numbers, then the nm fixed-interface modes. The contact and force DOF
 !> numbers of the case's model_t are remapped to that numbering (the full-model numbers are
-!> kept in reduction_case_t for the echo). The results (hbm.csv, ...) then hold REDUCED DOFs.
+!> kept in reduction_case_t for the echo). The result files hold the &output dofs, given in
+!> FULL-model numbers (default: the contact and forced DOFs): reduce_case_model keeps the rows
+!> of the basis T for them (output_rows, nsel x nr; never the whole basis) and recover_outputs
+!> gives their values from reduced samples or coefficients, x_full = T(dof, :) q.
 !> modes = 0 chooses the mode count by the rule of stickslip_reduction: every fixed-interface
 !> mode below 3 x the highest harmonic frequency of the run, H_max omega_max, with H_max the
 !> larger of &hbm harmonics and the forcing harmonics and omega_max the larger of &forcing
@@ -23,10 +26,10 @@ module stickslip_case_reduction
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_string
     use stickslip_case_model, only: group_error, sparse_system_t
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
-        craig_bampton, receptance_error, reduced_dof_of
+        craig_bampton, receptance_error, reduced_dof_of, recover_dofs
     implicit none
     private
-    public :: reduction_case_t, read_reduction_group, reduce_case_model
+    public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs
 
     !> The &reduction group as read, what the reduction did, and the full-model DOF numbers.
     type :: reduction_case_t
@@ -43,6 +46,11 @@ module stickslip_case_reduction
         !> The model's contact_dof, contact_dof2, force_dof in FULL-model numbering (allocated
         !> only when the model was reduced; write_case echoes these).
         integer, allocatable :: contact_dof(:), contact_dof2(:), force_dof(:)
+        !> The &output dofs (full numbers) and, for each, its reduced DOF (0: an interior DOF)
+        !> and its row of the basis T (output_rows(k, :), size nr), allocated only when the
+        !> model was reduced.
+        integer, allocatable :: output_dofs(:), output_reduced(:)
+        real(dp), allocatable :: output_rows(:, :)
     end type reduction_case_t
 
 contains
@@ -97,7 +105,10 @@ contains
     !> boundary = contact and forced DOFs, remapped; report and error measure in red%report.
     !> `harmonics` is &hbm harmonics. Errors (input): a contact or force DOF outside 1..N
     !> (named), no boundary DOF; (numerical): the reduction failing; all start "<path>: ".
-    subroutine reduce_case_model(nml, red, sparse, harmonics, model, error)
+    !> `output_dofs` (full numbers, checked in 1..N by the caller) are the DOFs the result
+    !> files hold; not `output_given`: set here to the contact and forced DOFs.
+    subroutine reduce_case_model(nml, red, sparse, harmonics, model, output_dofs, output_given, &
+                                 error)
         !> The parsed case file (its path, and &sweep for the frequency range).
         type(nml_file_t), intent(in) :: nml
         !> The options; on return the report and the full-model DOF numbers.
@@ -108,9 +119,14 @@ contains
         integer, intent(in) :: harmonics
         !> In: ndof = N, contacts and forcing in full numbering; out: the reduced dense model.
         type(model_t), intent(inout) :: model
+        !> &output dofs in full numbers; the default selection on return when not given.
+        integer, allocatable, intent(inout) :: output_dofs(:)
+        !> &output dofs was given.
+        logical, intent(in) :: output_given
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         type(reduction_options_t) :: opts
+        real(dp), allocatable :: unit_q(:), column(:)
         type(reduced_model_t) :: rm
         integer, allocatable :: bset(:), d2(:)
         real(dp), allocatable :: freqs(:)
@@ -197,6 +213,25 @@ contains
         do k = 1, size(model%force_dof)
             model%force_dof(k) = reduced_dof_of(rm, model%force_dof(k))
         end do
+        ! the rows of T for the output DOFs: column r of them is T(dofs, :) e_r
+        if (.not. output_given) output_dofs = rm%boundary
+        red%output_dofs = output_dofs
+        allocate (red%output_reduced(size(output_dofs)), &
+                  red%output_rows(size(output_dofs), rm%nr), unit_q(rm%nr), &
+                  column(size(output_dofs)))
+        do k = 1, size(output_dofs)
+            red%output_reduced(k) = reduced_dof_of(rm, output_dofs(k))
+        end do
+        do k = 1, rm%nr
+            unit_q = 0.0_dp
+            unit_q(k) = 1.0_dp
+            call recover_dofs(rm, output_dofs, unit_q, column, error)
+            if (allocated(error)) then
+                error%message = nml%path//": &output dofs: "//error%message
+                return
+            end if
+            red%output_rows(:, k) = column
+        end do
         model%ndof = rm%nr
         call move_alloc(rm%mass, model%mass)
         call move_alloc(rm%stiffness, model%stiffness)
@@ -218,4 +253,16 @@ contains
             end do
         end subroutine check_range
     end subroutine reduce_case_model
+
+    !> The values of the output DOFs from reduced values: y(:, k) = sum_r q(:, r) T(dofs(k), r)
+    !> for every row (sample or basis function) of `q` (rows x nr) — exact, the recovery is
+    !> linear. Result rows x size(red%output_dofs).
+    pure function recover_outputs(red, q) result(y)
+        !> A reduction with output rows (the model was reduced).
+        type(reduction_case_t), intent(in) :: red
+        !> Reduced values, rows x nr.
+        real(dp), intent(in) :: q(:, :)
+        real(dp), allocatable :: y(:, :)
+        y = matmul(q, transpose(red%output_rows))
+    end function recover_outputs
 end module stickslip_case_reduction

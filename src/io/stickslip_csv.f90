@@ -32,7 +32,7 @@ contains
     !> Write `dir`/hbm.csv: header t,x1..xN,v1..vN,r1..rC (with `dofs`: t,x<d>..,v<d>..,
     !> r1..rC for the DOFs d selected, in their order) and one row per sample
     !> t_k = k T / nt, full double precision. Needs the solution's samples. Error: stat io.
-    subroutine write_hbm_csv(dir, sol, error, dofs)
+    subroutine write_hbm_csv(dir, sol, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> A solution with samples.
@@ -41,13 +41,16 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The DOFs written (each in 1..N); absent: all.
         integer, intent(in), optional :: dofs(:)
-        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error, dofs)
+        !> Column numbers of the selected DOFs (size of the selection; default: the DOF
+        !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
+        integer, intent(in), optional :: labels(:)
+        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error, dofs, labels)
     end subroutine write_hbm_csv
 
     !> Write `dir`/`name`: header t,x1..xN,v1..vN,r1..rC (with `dofs`: t,x<d>..,v<d>..,r1..rC
     !> for the DOFs d selected, in their order) and one row per instant, full double
     !> precision (the format of hbm.csv, also used for euler.csv). Error: stat io.
-    subroutine write_samples_csv(dir, name, t, x, v, r, error, dofs)
+    subroutine write_samples_csv(dir, name, t, x, v, r, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> File name.
@@ -64,21 +67,25 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The DOFs written (each in 1..N); absent: all.
         integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (size of the selection; default: the DOF
+        !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
+        integer, intent(in), optional :: labels(:)
         integer :: u, k, i, n, nc, stat
         character(len=512) :: msg
         character(len=:), allocatable :: header
         character(len=80) :: fmt
-        integer, allocatable :: sel(:)
+        integer, allocatable :: sel(:), numbers(:)
 
         sel = selection(size(x, 2), dofs)
+        numbers = column_numbers(sel, labels)
         n = size(sel)
         nc = size(r, 2)
         header = "t"
         do i = 1, n
-            header = header//",x"//itoa(sel(i))
+            header = header//",x"//itoa(numbers(i))
         end do
         do i = 1, n
-            header = header//",v"//itoa(sel(i))
+            header = header//",v"//itoa(numbers(i))
         end do
         do i = 1, nc
             header = header//",r"//itoa(i)
@@ -97,7 +104,7 @@ contains
     !> Write `dir`/coefficients.csv: header harmonic,kind,x1..xN,r1..rC (with `dofs`:
     !> x<d>.. for the DOFs d selected, in their order) and one row per basis function, kind
     !> c0 (constant), cos or sin; u(t) = c0 + sum a cos(h omega t) + b sin(...). Error: io.
-    subroutine write_coefficients_csv(dir, sol, error, dofs)
+    subroutine write_coefficients_csv(dir, sol, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The solution.
@@ -106,18 +113,22 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The DOFs written (each in 1..N); absent: all.
         integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (size of the selection; default: the DOF
+        !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
+        integer, intent(in), optional :: labels(:)
         integer :: u, k, i, n, nc, stat
         character(len=512) :: msg
         character(len=:), allocatable :: header, kind
         character(len=80) :: fmt
-        integer, allocatable :: sel(:)
+        integer, allocatable :: sel(:), numbers(:)
 
         sel = selection(size(sol%xcoef, 2), dofs)
+        numbers = column_numbers(sel, labels)
         n = size(sel)
         nc = size(sol%rcoef, 2)
         header = "harmonic,kind"
         do i = 1, n
-            header = header//",x"//itoa(sel(i))
+            header = header//",x"//itoa(numbers(i))
         end do
         do i = 1, nc
             header = header//",r"//itoa(i)
@@ -174,7 +185,7 @@ contains
     !> order, then r1..); one row per run. err_* are max errors relative to the reference
     !> amplitude of each quantity (err_x: the worst of all DOFs, selected or not), rms_* the
     !> RMS ones; NaN when the run produced no solution. Error: stat io.
-    subroutine write_study_csv(dir, study, n, nc, error, dofs)
+    subroutine write_study_csv(dir, study, n, nc, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The study.
@@ -185,6 +196,9 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The DOFs whose err_x<d>, err_v<d> columns are written (each in 1..n); absent: all.
         integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (size of the selection; default: the DOF
+        !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
+        integer, intent(in), optional :: labels(:)
         integer :: u, k, i, stat
         character(len=512) :: msg
         character(len=12), allocatable :: names(:)
@@ -199,6 +213,12 @@ contains
         columns = [sel, n + sel, (2*n + i, i=1, nc)]
         names = quantity_names(n, nc)
         names = names(columns)
+        if (present(labels)) then
+            do i = 1, size(sel)
+                names(i) = "x"//itoa(labels(i))
+                names(size(sel) + i) = "v"//itoa(labels(i))
+            end do
+        end if
         header = "method,parameter,samples,converged,cpu_seconds,repeats,iterations," // &
                  "err_x,err_v,err_r,rms_x,rms_v,rms_r"
         do i = 1, size(names)
@@ -235,7 +255,7 @@ contains
     !> multiplier modulus, NaN when not computed), stable (1 stable, 0 unstable, -1 unknown),
     !> truncation (relative harmonic truncation error estimate, NaN when not computed), then
     !> arclength, diss_friction, diss_damping [J], nfev. Error: stat io.
-    subroutine write_frc_csv(dir, res, error, dofs)
+    subroutine write_frc_csv(dir, res, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The curve.
@@ -244,11 +264,14 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The DOFs written (each in 1..N); absent: all.
         integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (size of the selection; default: the DOF
+        !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
+        integer, intent(in), optional :: labels(:)
         integer :: u, k, i, stat, n, nc
         character(len=512) :: msg
         character(len=:), allocatable :: header
         character(len=160) :: fmt
-        integer, allocatable :: sel(:)
+        integer, allocatable :: sel(:), numbers(:)
         stat = 0
         msg = ''
         n = 0
@@ -263,10 +286,11 @@ contains
         else
             sel = selection(n)
         end if
+        numbers = column_numbers(sel, labels)
         n = size(sel)
         header = "parameter"
         do i = 1, n
-            header = header//",amp_"//itoa(sel(i))
+            header = header//",amp_"//itoa(numbers(i))
         end do
         header = header//",dissipation"
         do i = 1, nc
@@ -330,13 +354,25 @@ contains
         call close_and_rename(dir, "robustness.csv", u, stat, msg, error)
     end subroutine write_robustness_csv
 
+    !> The numbers naming the columns of the DOFs `sel`: `labels` when present, else `sel`.
+    pure function column_numbers(sel, labels) result(numbers)
+        integer, intent(in) :: sel(:)
+        integer, intent(in), optional :: labels(:)
+        integer, allocatable :: numbers(:)
+        if (present(labels)) then
+            numbers = labels
+        else
+            numbers = sel
+        end if
+    end function column_numbers
+
     !> The DOFs selected: `dofs` when present, otherwise 1..n.
     pure function selection(n, dofs) result(sel)
         !> Number of DOFs.
         integer, intent(in) :: n
         !> The selection (each in 1..n).
         integer, intent(in), optional :: dofs(:)
-        integer, allocatable :: sel(:)
+        integer, allocatable :: sel(:), numbers(:)
         integer :: i
         if (present(dofs)) then
             sel = dofs

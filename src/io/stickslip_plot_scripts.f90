@@ -20,7 +20,7 @@ contains
     !> amplitude of every DOF of frc.csv (all N, or the `dofs` selected, the columns amp_<d>
     !> in their order) against the parameter (log scale), unstable points marked with red
     !> crosses. `parameter` labels the axis. Error: stat io.
-    subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs)
+    subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> Name of the swept parameter.
@@ -31,6 +31,9 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The DOFs of frc.csv (its columns amp_<d>, in this order); absent: 1..ndof.
         integer, intent(in), optional :: dofs(:)
+        !> The numbers in the column titles amp_<d> (default: `dofs`), e.g. full-model
+        !> numbers of a reduced model.
+        integer, intent(in), optional :: labels(:)
         integer :: u, stat, k, nsel
         character(len=512) :: msg
         integer, allocatable :: sel(:)
@@ -39,6 +42,7 @@ contains
         else
             sel = [(k, k=1, ndof)]
         end if
+        if (present(labels)) sel = labels
         nsel = size(sel)
         stat = 0
         msg = ''

@@ -2,7 +2,8 @@
 !> its files are unchanged; the contact and forced DOFs of a model above 64 DOFs), an
 !> explicit list (columns in the order given, named by DOF number, values those of the full
 !> solution), the echo in summary.nml, frc.csv and frc.gp, euler.csv, reference.csv and
-!> study.csv, and bad lists rejected with a message naming &output dofs(k).
+!> study.csv, and bad lists rejected with a message naming &output dofs(k); with a
+!> Craig-Bampton reduction, columns named by full-model numbers with the unreduced values.
 module test_output_selection
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
@@ -344,6 +345,22 @@ contains
                    .and. index(script, "amp_1") == 0 .and. index(script, "amp_3") == 0 .and. &
                    index(script, "amp_5") == 0 .and. index(script, "do for [k=2:3]") > 0 .and. &
                    index(script, "using 1:4 ") == 0, "frc unit: frc.gp draws amp_4, amp_2 only")
+        ! labels (a reduced model: reduced DOFs 4, 2 are full DOFs 70, 40)
+        call write_frc_csv(frc_dir, res, error, [4, 2], [70, 40])
+        call check_error(t, error, "frc unit, labels: written", .false.)
+        if (allocated(error)) return
+        call check(t, index(first_line(frc_dir//"/frc.csv"), "parameter,amp_70,amp_40,"// &
+                   "dissipation,") == 1, "frc unit, labels: header", first_line(frc_dir//"/frc.csv"))
+        v = read_numbers(frc_dir//"/frc.csv", 0, 3)
+        if (size(v, 1) == 2) call check(t, all(v(:, 2) == [4.0_dp, 8.0_dp]) .and. &
+            all(v(:, 3) == [2.0_dp, 4.0_dp]), "frc unit, labels: values of DOFs 4, 2")
+        call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2], [70, 40])
+        call check_error(t, error, "frc unit, labels: frc.gp written", .false.)
+        if (allocated(error)) return
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "title 'amp_70'") > 0 .and. &
+                   index(script, "title 'amp_40'") > 0 .and. index(script, "amp_4'") == 0, &
+                   "frc unit, labels: frc.gp titles amp_70, amp_40")
 
         call write_lines(dir//"/seed_sweep.nml", [character(len=120) :: sweep_case, &
             "&output directory = '"//sweep_dir//"', dofs = 2 /"])

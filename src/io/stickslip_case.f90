@@ -97,7 +97,10 @@ contains
     !> study groups given. Every message starts with "<path>: " or "<path>:<line>: " and
     !> names the group and the variable. A model from Matrix Market files is reduced here
     !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
-    !> model and case%reduction holds the report and the full-model DOF numbers.
+    !> model and case%reduction holds the report, the full-model DOF numbers and the rows of
+    !> the basis for &output dofs (full-model numbers, checked against the full N; with
+    !> method 'sweep' or 'study' only contact and forced DOFs: an interior one is an error
+    !> naming &output dofs(k)).
     subroutine read_case(path, case, error)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path

@@ -15,8 +15,9 @@
 !> itself (named critical section `stickslip_arpack` around the ARPACK calls; the operator's
 !> callbacks run inside it, so they must not start another eigensolve); built without
 !> OpenMP it must be called from one thread at a time. Each call starts ARPACK afresh
-!> (ido = 0), so calls one after another are independent, also after an aborted one. The start vector is a fixed pseudo-random sequence, so results
-!> do not depend on earlier calls or on the caller's random_number state.
+!> (ido = 0), so calls one after another are independent, also after an aborted one. The
+!> start vector is a fixed pseudo-random sequence, so results do not depend on earlier calls
+!> or on the caller's random_number state.
 module stickslip_arpack
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa

@@ -13,7 +13,7 @@ module fixtures
     private
     public :: seed_model, damped_seed, chain_model, one_dof_model
     public :: scratch_dir, project_path, project_root, enter_project_root
-    public :: scratch, write_lines, good_system, good_forcing, good_friction, sweep_case
+    public :: scratch, write_lines, first_line, good_system, good_forcing, good_friction, sweep_case
 
     !> Scratch directory of the suites that write files, relative to the project root that
     !> they enter first (enter_project_root). A constant: gfortran 12 corrupts memory on
@@ -290,4 +290,18 @@ contains
         end do
         close (u)
     end subroutine write_lines
+
+    !> The first line of a file ('' when it cannot be read).
+    function first_line(path) result(line)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: line
+        character(len=4000) :: buf
+        integer :: u, stat
+        line = ''
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat) buf
+        close (u)
+        if (stat == 0) line = trim(buf)
+    end function first_line
 end module fixtures

@@ -5,7 +5,7 @@
 !> temporaries; a damaged sweep checkpoint; gnuplot started without a shell.
 module test_cli
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_error, only: error_type, stickslip_stat, itoa
     use stickslip_case, only: case_t, read_case
     use stickslip_cli, only: string_t, run_cli, report_run
     use stickslip_files, only: make_directory, open_temporary, close_and_rename, lock_name, &
@@ -15,8 +15,8 @@ module test_cli
     use stickslip_progress, only: progress_t
     use stickslip_summary, only: write_summary
     use testing, only: test_counter_t, check, check_close, check_error
-    use fixtures, only: enter_project_root, project_path, scratch, write_lines, good_system, &
-        good_forcing, good_friction, sweep_case
+    use fixtures, only: enter_project_root, first_line, project_path, scratch, write_lines, &
+        good_system, good_forcing, good_friction, sweep_case
     implicit none
     private
     public :: run_cli_tests, cli, summary_value, count_lines
@@ -159,7 +159,7 @@ contains
         character(len=1000) :: n1, n2, line
         type(error_type), allocatable :: error
         call make_directory(dir, error)
-        call write_lines(dir//"/a.csv."//itoa_(process_id())//".1.tmp", &
+        call write_lines(dir//"/a.csv."//itoa(process_id())//".1.tmp", &
                          [character(len=20) :: "leftover"])
         call open_temporary(dir, "a.csv", u1, error)
         call check_error(t, error, "temporaries: first opened", .false.)
@@ -357,14 +357,6 @@ contains
             if (start > len(s)) exit
         end do
     end function count_substring
-
-    function itoa_(i) result(s)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=24) :: b
-        write (b, '(i0)') i
-        s = trim(b)
-    end function itoa_
 
     !> Run the CLI in-process; return its exit code and what it wrote to each unit.
     subroutine cli(args, code, out, err, progress_interval)
@@ -708,19 +700,6 @@ contains
         close (u)
     end function csv_rows
 
-    !> The first line of a file ('' if it cannot be read).
-    function first_line(path) result(line)
-        character(len=*), intent(in) :: path
-        character(len=:), allocatable :: line
-        character(len=1000) :: buf
-        integer :: u, stat
-        line = ""
-        open (newunit=u, file=path, status='old', action='read', iostat=stat)
-        if (stat /= 0) return
-        read (u, '(a)', iostat=stat) buf
-        if (stat == 0) line = trim(buf)
-        close (u)
-    end function first_line
 
     !> The numeric rows of a CSV file with a header: rows x cols (0 rows on failure).
     function read_csv(path, rows, cols) result(a)

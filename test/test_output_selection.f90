@@ -6,7 +6,7 @@
 !> Craig-Bampton reduction, columns named by full-model numbers with the unreduced values.
 module test_output_selection
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_error, only: error_type, stickslip_stat, itoa
     use stickslip_case, only: case_t, read_case, selected_dofs, default_output_dofs
     use stickslip_model, only: model_t
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets
@@ -17,8 +17,8 @@ module test_output_selection
     use stickslip_files, only: make_directory
     use test_cli, only: cli
     use testing, only: test_counter_t, check, check_error
-    use fixtures, only: enter_project_root, scratch, write_lines, good_system, good_forcing, &
-        good_friction, sweep_case, seed_model
+    use fixtures, only: enter_project_root, first_line, scratch, write_lines, good_system, &
+        good_forcing, good_friction, sweep_case, seed_model
     implicit none
     private
     public :: run_output_selection_tests
@@ -146,7 +146,7 @@ contains
         ! every DOF, given explicitly: the full solution
         all_dofs = "dofs = "
         do i = 1, nchain
-            all_dofs = all_dofs//itoa_(i)
+            all_dofs = all_dofs//itoa(i)
             if (i < nchain) all_dofs = all_dofs//", "
         end do
         call chain_case("chain_all", all_dofs)
@@ -439,27 +439,6 @@ contains
         same = all(a == b)
     end function same
 
-    function itoa_(i) result(s)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=12) :: buf
-        write (buf, '(i0)') i
-        s = trim(buf)
-    end function itoa_
-
-    !> The first line of a file ('' when it cannot be read).
-    function first_line(path) result(line)
-        character(len=*), intent(in) :: path
-        character(len=:), allocatable :: line
-        character(len=4000) :: buf
-        integer :: u, stat
-        line = ''
-        open (newunit=u, file=path, status='old', action='read', iostat=stat)
-        if (stat /= 0) return
-        read (u, '(a)', iostat=stat) buf
-        close (u)
-        if (stat == 0) line = trim(buf)
-    end function first_line
 
     !> The whole text of a file ('' when it cannot be read).
     function slurp_file(path) result(text)

@@ -6,7 +6,7 @@ node, cubic Hermite shape functions, consistent mass), clamped at x = 0: the cla
 removed, so DOF 2k-1 is w and DOF 2k is theta of node k = 1..ne (node ne is the free tip).
 Steel strip 1 m x 40 mm x 10 mm, bending about the thin axis: EI = 700 N m^2, rho A =
 3.12 kg/m, first bending mode 52.7 rad/s (8.4 Hz), second 330 rad/s. Forty elements by default
-(cond(K) about 1e9: the check of the dynamic stiffness measures the distance to a resonance,
+(cond(K) = 6e7: the check of the dynamic stiffness measures the distance to a resonance,
 not the mesh's conditioning).
 
 Usage: python3 make_beam.py [elements]   (default 40: 80 DOFs; writes mass.mtx and

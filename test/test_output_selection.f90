@@ -10,7 +10,8 @@ module test_output_selection
     use stickslip_case, only: case_t, read_case, selected_dofs, default_output_dofs
     use stickslip_model, only: model_t
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets
-    use stickslip_matrix_market, only: write_matrix_market
+    use stickslip_matrix_market, only: write_matrix_market, read_matrix_market
+    use stickslip_sparse, only: sparse_to_dense
     use stickslip_sweep, only: sweep_result_t
     use stickslip_csv, only: write_frc_csv
     use stickslip_plot_scripts, only: write_frc_plot_script
@@ -39,6 +40,7 @@ contains
         call test_small_model_unchanged(t)
         call test_default_rule(t)
         call test_chain(t)
+        call test_full_field(t)
         call test_seed_selected(t)
         call test_frc(t)
         call test_bad_dofs(t)
@@ -270,6 +272,99 @@ contains
             call write_lines(dir//"/"//name//".nml", lines)
         end subroutine chain_case
     end subroutine test_chain
+
+    !> &output full_field on the 70-DOF chain (after test_chain, whose chain_all run holds
+    !> every DOF's coefficients): unreduced, full_field.mtx is coefficients.csv transposed
+    !> (70 x nb, the same digits); reduced exactly (every interior mode) the recovered field
+    !> equals it to 1e-9; reduced with 10 modes it differs (the recovery uses the basis, not
+    !> the unreduced values) but by less than 5% at the largest entry; removed by a run
+    !> without it; refused with another method.
+    subroutine test_full_field(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: out, err
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: cfull(:, :), f(:, :), fr(:, :), f10(:, :)
+        type(case_t) :: c
+        integer :: code
+        logical :: there
+        cfull = read_numbers(dir//"/chain_all/coefficients.csv", 2)
+        call full_case("full_plain", "")
+        call cli([character(len=200) :: dir//"/full_plain.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "full field unreduced: runs", err)
+        call read_field(dir//"/full_plain/full_field.mtx", f)
+        call check(t, first_line(dir//"/full_plain/full_field.mtx") == &
+                   "%%MatrixMarket matrix array real general", "full field: Matrix Market header")
+        if (size(f, 1) /= nchain .or. size(cfull, 2) < nchain .or. &
+            size(f, 2) /= size(cfull, 1)) then
+            call check(t, .false., "full field unreduced: 70 x nb", itoa(size(f, 1))//" x "// &
+                       itoa(size(f, 2)))
+            return
+        end if
+        call check(t, all(f == transpose(cfull(:, 1:nchain))), &
+                   "full field unreduced: equals coefficients.csv of every DOF")
+        call full_case("full_exact", "/ &reduction method = 'craig-bampton', modes = 66")
+        call cli([character(len=200) :: dir//"/full_exact.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "full field exact reduction: runs", err)
+        call read_field(dir//"/full_exact/full_field.mtx", fr)
+        call check(t, same_shape(fr, f), "full field exact reduction: 70 x nb")
+        if (same_shape(fr, f)) call check(t, close_to(fr, f), &
+                                          "full field exact reduction: equals the unreduced one")
+        call full_case("full_10", "/ &reduction method = 'craig-bampton', modes = 10")
+        call cli([character(len=200) :: dir//"/full_10.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "full field 10 modes: runs", err)
+        call read_field(dir//"/full_10/full_field.mtx", f10)
+        call check(t, same_shape(f10, f), "full field 10 modes: 70 x nb")
+        if (same_shape(f10, f)) call check(t, .not. close_to(f10, f) .and. &
+            maxval(abs(f10 - f)) < 0.05_dp*maxval(abs(f)), &
+            "full field 10 modes: near the unreduced one, not equal")
+        ! a later run without full_field into the same directory removes the stale file
+        call full_case("full_10", "/ &reduction method = 'craig-bampton', modes = 10", .false.)
+        call cli([character(len=200) :: dir//"/full_10.nml"], code, out, err)
+        inquire (file=dir//"/full_10/full_field.mtx", exist=there)
+        call check(t, .not. there, "full field: a run without it removes the stale file")
+        call full_case("full_sweep", "/ &sweep start = 1, stop = 2")
+        call read_case(dir//"/full_sweep.nml", c, error)
+        call check_error(t, error, "full field with a sweep: rejected", .true., &
+                         [character(len=60) :: "&output full_field", "method = 'hbm'"])
+
+    contains
+
+        subroutine full_case(name, extra, wanted)
+            character(len=*), intent(in) :: name, extra
+            logical, intent(in), optional :: wanted
+            character(len=400) :: lines(5)
+            character(len=20) :: flag
+            flag = "full_field = T"
+            if (present(wanted)) then
+                if (.not. wanted) flag = ""
+            end if
+            lines(1) = "&system mass_file = 'chain_m.mtx', stiffness_file = 'chain_k.mtx', "// &
+                       "rayleigh_alpha = 0.05, rayleigh_beta = 0.002 /"
+            lines(2) = "&forcing omega = 1.3, force_dof = 40, force_amplitude = 5.0 /"
+            lines(3) = "&friction contact_dof = 70, 12, contact_dof2 = 0, 11, mu = 0.5, 0.3, "// &
+                       "normal_load = 1.0, 0.5 /"
+            lines(4) = "&hbm harmonics = 5, samples = 32 /"
+            lines(5) = "&output directory = '"//dir//"/"//name//"' "//trim(flag)//" "// &
+                       extra//" /"
+            call write_lines(dir//"/"//name//".nml", lines)
+        end subroutine full_case
+
+        subroutine read_field(path, a)
+            character(len=*), intent(in) :: path
+            real(dp), allocatable, intent(out) :: a(:, :)
+            type(sparse_matrix_t) :: s
+            type(error_type), allocatable :: e
+            call read_matrix_market(path, s, e)
+            if (.not. allocated(e)) call sparse_to_dense(s, a, e)
+            call check_error(t, e, "full field: "//path//" reads", .false.)
+            if (.not. allocated(a)) allocate (a(0, 0))
+        end subroutine read_field
+
+        logical function same_shape(a, b)
+            real(dp), intent(in) :: a(:, :), b(:, :)
+            same_shape = all(shape(a) == shape(b))
+        end function same_shape
+    end subroutine test_full_field
 
     !> The seed case with dofs = 2: hbm.csv, euler.csv, reference.csv (method 'all') and
     !> study.csv hold x2, v2 only (and every contact force).

@@ -19,7 +19,8 @@ module stickslip_driver
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t, selected_dofs
-    use stickslip_case_reduction, only: recover_outputs
+    use stickslip_case_reduction, only: recover_outputs, recover_full_field
+    use stickslip_full_field, only: write_full_field
     use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t, solve_and_check
@@ -230,13 +231,23 @@ contains
         if (.not. wanted) return
         if (sol%converged) then
             call remove_stale_results(case%directory, [character(len=24) :: "hbm.csv", &
-                                      "coefficients.csv"])
+                                      "coefficients.csv", &
+                                      merge("full_field.mtx", "hbm.csv       ", case%full_field)])
             call write_hbm_csv(case%directory, output_solution(case, sol), error, &
                                output_columns(case), selected_dofs(case))
             if (allocated(error)) return
             call write_coefficients_csv(case%directory, output_solution(case, sol), error, &
                                         output_columns(case), selected_dofs(case))
             if (allocated(error)) return
+            if (case%full_field) then
+                block
+                    real(dp), allocatable :: coef(:, :)
+                    call recover_full_field(case%reduction, sol%xcoef, coef, error)
+                    if (allocated(error)) return
+                    call write_full_field(case%directory, coef, sol, error)
+                    if (allocated(error)) return
+                end block
+            end if
         else
             call remove_stale_results(case%directory, [character(len=24) ::])
         end if

@@ -86,6 +86,10 @@ module stickslip_case
         integer, allocatable :: output_dofs(:)
         !> &output dofs was given (write_case echoes it).
         logical :: output_dofs_given = .false.
+        !> &output full_field: method 'hbm' also writes full_field.mtx, the harmonic
+        !> coefficients of every DOF of the model (of the full model from files, recovered
+        !> through the reduction basis when it was reduced).
+        logical :: full_field = .false.
     end type case_t
 
 contains
@@ -134,8 +138,9 @@ contains
         if (sparse%read) then
             ! &output dofs in full numbers, checked against the full N before the reduction
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
-                                   case%output_dofs_given, error)
+                                   case%output_dofs_given, case%full_field, error)
             if (allocated(error)) return
+            case%reduction%keep_basis = case%full_field
             call reduce_case_model(nml, case%reduction, sparse, case%hbm%harmonics, &
                                    case%model, case%output_dofs, case%output_dofs_given, error)
             if (allocated(error)) return
@@ -151,7 +156,7 @@ contains
 
         if (.not. sparse%read) then
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
-                                   case%output_dofs_given, error)
+                                   case%output_dofs_given, case%full_field, error)
             if (allocated(error)) return
         end if
         if (allocated(error)) return
@@ -178,6 +183,11 @@ contains
         end if
         call check_sizes(nml, case, error)
         if (allocated(error)) return
+        if (case%full_field .and. method /= 'hbm') then
+            call group_error(nml, error, "&output full_field = T: only method = 'hbm' "// &
+                             "writes full_field.mtx (this case runs method = '"//method//"')")
+            return
+        end if
         if (allocated(case%reduction%output_reduced)) then
             if (method == 'sweep' .or. method == 'study') then
                 do k = 1, size(case%reduction%output_reduced)
@@ -473,6 +483,7 @@ contains
             call put(unit, "  directory = '"//case%directory//"'", stat, msg)
             if (case%output_dofs_given .and. allocated(case%output_dofs)) &
                 call put(unit, "  dofs = "//ilist(case%output_dofs), stat, msg)
+            if (case%full_field) call put(unit, "  full_field = T", stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&run", stat, msg)
             call put(unit, "  method = '"//trim(case%method)//"'", stat, msg)

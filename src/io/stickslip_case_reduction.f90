@@ -29,7 +29,8 @@ module stickslip_case_reduction
         craig_bampton, receptance_error, reduced_dof_of, recover_dofs
     implicit none
     private
-    public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs
+    public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs, &
+        recover_full_field
 
     !> The &reduction group as read, what the reduction did, and the full-model DOF numbers.
     type :: reduction_case_t
@@ -51,6 +52,11 @@ module stickslip_case_reduction
         !> model was reduced.
         integer, allocatable :: output_dofs(:), output_reduced(:)
         real(dp), allocatable :: output_rows(:, :)
+        !> Keep the whole reduction basis (set by read_case for &output full_field).
+        logical :: keep_basis = .false.
+        !> The reduction basis T (its reduced matrices dropped), allocated only when the model
+        !> was reduced with keep_basis: recover_full_field reads it.
+        type(reduced_model_t), allocatable :: basis
     end type reduction_case_t
 
 contains
@@ -233,6 +239,18 @@ contains
             red%output_rows(:, k) = column
         end do
         model%ndof = rm%nr
+        if (red%keep_basis) then
+            allocate (red%basis)
+            red%basis%n = rm%n
+            red%basis%nb = rm%nb
+            red%basis%nm = rm%nm
+            red%basis%nr = rm%nr
+            red%basis%boundary = rm%boundary
+            red%basis%interior = rm%interior
+            red%basis%constraint = rm%constraint
+            red%basis%modes = rm%modes
+            red%basis%frequencies = rm%frequencies
+        end if
         call move_alloc(rm%mass, model%mass)
         call move_alloc(rm%stiffness, model%stiffness)
         call move_alloc(rm%damping, model%damping)
@@ -265,4 +283,39 @@ contains
         real(dp), allocatable :: y(:, :)
         y = matmul(q, transpose(red%output_rows))
     end function recover_outputs
+
+    !> The full-field harmonic coefficients, N x nb (row i: DOF i of the full model; column k:
+    !> basis function k of the solution) from the reduced coefficients `qcoef` (nb x nr, the
+    !> layout of hbm_solution_t%xcoef): x_full = T q, exact for the reduced model. Without a
+    !> kept basis (the model was not reduced) qcoef is returned transposed. Error (stat
+    !> input): the columns of qcoef are not the reduced DOFs.
+    subroutine recover_full_field(red, qcoef, coef, error)
+        !> The reduction of the case (its basis kept: keep_basis).
+        type(reduction_case_t), intent(in) :: red
+        !> Reduced (or, unreduced, full) coefficients, nb x nr.
+        real(dp), intent(in) :: qcoef(:, :)
+        !> Full-field coefficients, N x nb [m].
+        real(dp), allocatable, intent(out) :: coef(:, :)
+        !> Set on a size mismatch.
+        type(error_type), allocatable, intent(out) :: error
+        if (.not. allocated(red%basis)) then
+            coef = transpose(qcoef)
+            return
+        end if
+        if (size(qcoef, 2) /= red%basis%nr) then
+            call fatal_error(error, "recover_full_field: the coefficients have "// &
+                             itoa(size(qcoef, 2))//" columns, the reduced model "// &
+                             itoa(red%basis%nr)//" DOFs", stickslip_stat%input)
+            return
+        end if
+        associate (b => red%basis)
+            allocate (coef(b%n, size(qcoef, 1)))
+            coef(b%boundary, :) = transpose(qcoef(:, 1:b%nb))
+            if (size(b%interior) > 0) then
+                coef(b%interior, :) = matmul(b%constraint, transpose(qcoef(:, 1:b%nb)))
+                if (b%nm > 0) coef(b%interior, :) = coef(b%interior, :) + &
+                    matmul(b%modes, transpose(qcoef(:, b%nb + 1:b%nr)))
+            end if
+        end associate
+    end subroutine recover_full_field
 end module stickslip_case_reduction

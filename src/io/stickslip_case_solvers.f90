@@ -169,7 +169,7 @@ contains
     !> the DOFs the result files hold, in the order given (each in 1..N, no duplicates;
     !> absent: default_output_dofs(model)). Errors (stat input) name &output and the
     !> variable, for dofs its element: "&output dofs(2) = 0: ...".
-    subroutine read_output_group(nml, model, directory, dofs, dofs_given, error)
+    subroutine read_output_group(nml, model, directory, dofs, dofs_given, full_field, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model read (its ndof, contacts and forcing give the default selection).
@@ -180,12 +180,18 @@ contains
         integer, allocatable, intent(out) :: dofs(:)
         !> &output dofs was given.
         logical, intent(out) :: dofs_given
+        !> &output full_field: write the harmonic coefficients of every DOF (full_field.mtx).
+        logical, intent(out) :: full_field
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         integer :: k
         directory = 'out'
         dofs_given = .false.
-        call check_names(nml, "output", [character(len=9) :: "directory", "dofs"], error)
+        full_field = .false.
+        call check_names(nml, "output", [character(len=10) :: "directory", "dofs", &
+                                          "full_field"], error)
+        if (allocated(error)) return
+        call get_logical(nml, "output", "full_field", full_field, error)
         if (allocated(error)) return
         call get_string(nml, "output", "directory", directory, error)
         if (allocated(error)) return

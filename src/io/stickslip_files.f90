@@ -21,8 +21,8 @@ module stickslip_files
     !> Every result file stickslip writes into an output directory (README, "Outputs"):
     !> the files that a run removes when it does not write them itself. Never the case
     !> file, the sweep checkpoint or anything else.
-    character(len=*), parameter :: result_file_names(14) = [character(len=24) :: &
-        "hbm.csv", "coefficients.csv", "euler.csv", "reference.csv", "events.csv", &
+    character(len=*), parameter :: result_file_names(15) = [character(len=24) :: &
+        "hbm.csv", "coefficients.csv", "full_field.mtx", "euler.csv", "reference.csv", "events.csv", &
         "study.csv", "frc.csv", "frc.gp", "frc.png", "robustness.csv", "robustness.gp", &
         "robustness_cold.png", "robustness_warm.png", "summary.nml"]
 

@@ -251,10 +251,35 @@ contains
         call read_case(dir//"/chain_reduced_bad.nml", c, error)
         call check_error(t, error, "chain reduced, dofs = 3, 71: rejected", .true., &
                          [character(len=60) :: "&output dofs(2) = 71", "1..70"])
+        ! a sweep of the reduced chain writes the amplitudes of the selected full-model
+        ! DOFs, interior ones too: those of the unreduced sweep (exact reduction)
+        call chain_case("chain_sweep_full", "dofs = 70, 3 / &sweep start = 1.2, stop = 1.4, "// &
+                        "stability = F, truncation = F, max_points = 12")
+        call cli([character(len=200) :: dir//"/chain_sweep_full.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "chain sweep unreduced: runs", err)
         call chain_case("chain_reduced_sweep", "dofs = 70, 3 / &reduction method = "// &
-                        "'craig-bampton', modes = 66 / &sweep start = 1, stop = 2")
-        call read_case(dir//"/chain_reduced_sweep.nml", c, error)
-        call check_error(t, error, "chain reduced sweep, interior DOF: rejected", .true., &
+                        "'craig-bampton', modes = 66 / &sweep start = 1.2, stop = 1.4, "// &
+                        "stability = F, truncation = F, max_points = 12")
+        call cli([character(len=200) :: dir//"/chain_reduced_sweep.nml"], code, out, err)
+        call check(t, code == 0 .or. code == 2, "chain reduced sweep: runs", err)
+        call check(t, index(first_line(dir//"/chain_reduced_sweep/frc.csv"), &
+                            ",amp_70,amp_3,") > 0, "chain reduced sweep: amp_70, amp_3 columns", &
+                   first_line(dir//"/chain_reduced_sweep/frc.csv"))
+        a = read_numbers(dir//"/chain_sweep_full/frc.csv", keep=3)
+        b = read_numbers(dir//"/chain_reduced_sweep/frc.csv", keep=3)
+        if (all(shape(a) == shape(b)) .and. size(a, 1) > 3) then
+            call check(t, close_to(b(:, 1:1), a(:, 1:1)) .and. &
+                       maxval(abs(b(:, 2:3) - a(:, 2:3))) <= 1.0e-7_dp*maxval(abs(a(:, 2:3))), &
+                       "chain reduced sweep: amplitudes of DOFs 70 and 3 = unreduced sweep's")
+        else
+            call check(t, .false., "chain reduced sweep: frc.csv shapes", &
+                       itoa(size(a, 1))//"x"//itoa(size(a, 2))//" vs "//itoa(size(b, 1))// &
+                       "x"//itoa(size(b, 2)))
+        end if
+        call chain_case("chain_reduced_study", "dofs = 70, 3 / &reduction method = "// &
+                        "'craig-bampton', modes = 66 / &study harmonics = 3, 5")
+        call read_case(dir//"/chain_reduced_study.nml", c, error)
+        call check_error(t, error, "chain reduced study, interior DOF: rejected", .true., &
                          [character(len=60) :: "&output dofs(2) = 3", "interior"])
 
     contains

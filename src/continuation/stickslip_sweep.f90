@@ -59,6 +59,10 @@ module stickslip_sweep
         logical :: stability = .true.
         !> Harmonic truncation error estimate of every point (stickslip_truncation).
         logical :: truncation = .true.
+        !> Observed combinations of DOFs, nobs x ndof (optional): when allocated, the
+        !> amplitudes of a point are max_t |observe(i, :) x(t)|, i = 1..nobs, instead of one
+        !> per DOF (e.g. the rows of a reduction basis: full-model DOFs of a reduced model).
+        real(dp), allocatable :: observe(:, :)
     end type sweep_options_t
 
     !> One point of a forced-response curve.
@@ -221,6 +225,14 @@ contains
         if (len_trim(buf) == 0 .and. opts%max_points > max_points) &
             write (buf, '(a,i0,a,i0)') "opts%max_points = ", opts%max_points, &
             ": must be <= ", max_points
+        if (len_trim(buf) == 0 .and. allocated(opts%observe)) then
+            if (size(opts%observe, 2) /= model%ndof) then
+                write (buf, '(a,i0,a,i0,a)') "opts%observe: has ", size(opts%observe, 2), &
+                    " columns, the model ", model%ndof, " DOFs"
+            else if (.not. all(ieee_is_finite(opts%observe))) then
+                buf = "opts%observe: not finite"
+            end if
+        end if
         if (len_trim(buf) > 0) then
             call fatal_error(error, trim(buf), stickslip_stat%input)
             return
@@ -506,7 +518,11 @@ contains
             if (allocated(error)) return
             pt%parameter = res%state%lambda
             pt%arclength = res%state%arclength
-            pt%amplitude = [(maxval(abs(ps%x(:, k))), k=1, m%ndof)]
+            if (allocated(opts%observe)) then
+                pt%amplitude = maxval(abs(matmul(ps%x, transpose(opts%observe))), dim=1)
+            else
+                pt%amplitude = [(maxval(abs(ps%x(:, k))), k=1, m%ndof)]
+            end if
             pt%diss_friction = ps%diss_friction
             pt%diss_damping = ps%diss_damping
             pt%dissipation = ps%diss_friction + ps%diss_damping

@@ -29,7 +29,7 @@ module stickslip_driver
     use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
     use stickslip_study, only: study_options_t, study_result_t, run_study, default_study_options
-    use stickslip_sweep, only: sweep_result_t, run_sweep
+    use stickslip_sweep, only: sweep_result_t, run_sweep, sweep_options_t
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         default_robustness_options
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, read_checkpoint, &
@@ -520,32 +520,39 @@ contains
         logical :: found
         logical :: wanted
 
+        type(sweep_options_t) :: opts
+        integer :: namp
+
+        ! a reduced model's amplitudes are those of the selected full-model DOFs
+        opts = case%sweep%sweep_options_t
+        namp = case%model%ndof
+        if (recovers(case)) then
+            opts%observe = case%reduction%output_rows
+            namp = size(opts%observe, 1)
+        end if
         writer%directory = case%directory
         writer%fingerprint = case_fingerprint(case)
         found = .false.
         if (case%sweep%resume) then
-            call read_checkpoint(case%directory, writer%fingerprint, case%model%ndof, &
+            call read_checkpoint(case%directory, writer%fingerprint, namp, &
                                  case%model%ncontact(), saved, found, error)
             if (allocated(error)) return
         end if
         if (found) then
             call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
-                           case%sweep%sweep_options_t, res, error, &
-                           observer=writer, resume=saved, progress=progress)
+                           opts, res, error, observer=writer, resume=saved, progress=progress)
         else
             call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
-                           case%sweep%sweep_options_t, res, error, &
-                           observer=writer, progress=progress)
+                           opts, res, error, observer=writer, progress=progress)
         end if
         call after_method(case, error, wanted)
         if (.not. wanted) return
         call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
-        call write_frc_csv(case%directory, res, error, boundary_columns(case), &
+        call write_frc_csv(case%directory, res, error, output_columns(case), &
                            selected_dofs(case))
         if (allocated(error)) return
         call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
-                                   case%model%ndof, error, boundary_columns(case), &
-                                   selected_dofs(case))
+                                   namp, error, output_columns(case), selected_dofs(case))
         if (allocated(error)) return
         call write_sweep_summary(case%directory, case, res, error)
         if (allocated(error)) return

@@ -103,8 +103,8 @@ contains
     !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
     !> model and case%reduction holds the report, the full-model DOF numbers and the rows of
     !> the basis for &output dofs (full-model numbers, checked against the full N; with
-    !> method 'sweep' or 'study' only contact and forced DOFs: an interior one is an error
-    !> naming &output dofs(k)).
+    !> method 'study' only contact and forced DOFs: an interior one is an error naming
+    !> &output dofs(k)).
     subroutine read_case(path, case, error)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path
@@ -189,13 +189,13 @@ contains
             return
         end if
         if (allocated(case%reduction%output_reduced)) then
-            if (method == 'sweep' .or. method == 'study') then
+            if (method == 'study') then
                 do k = 1, size(case%reduction%output_reduced)
                     if (case%reduction%output_reduced(k) == 0) then
                         call group_error(nml, error, "&output dofs("//itoa(k)//") = "// &
                                          itoa(case%reduction%output_dofs(k))//": an "// &
                                          "interior DOF of the reduced model; method = '"// &
-                                         method//"' with a reduction writes only contact "// &
+                                         method//"' with a reduction compares only contact "// &
                                          "and forced DOFs ("// &
                                          ilist(case%reduction%output_dofs(pack([(j, j=1, &
                                          size(case%reduction%output_reduced))], &

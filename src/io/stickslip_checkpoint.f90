@@ -45,7 +45,8 @@ contains
     !> A hash (16 hexadecimal digits: two 32-bit FNV-1a hashes with different offsets, in
     !> exact integer arithmetic) of the effective case as written by write_case, without the
     !> variables that may change between a run and its resumption (&output directory, dofs, &sweep
-    !> max_points, max_failures, resume, plot). A model read from Matrix Market files is
+    !> max_points, max_failures, resume, plot; dofs is kept for a reduced model, whose points
+    !> hold the amplitudes of the selected DOFs only). A model read from Matrix Market files is
     !> echoed by its file names only, so its M, K and C values are hashed too (a file changed
     !> between a run and its resumption gives another fingerprint).
     function case_fingerprint(case) result(fp)
@@ -71,7 +72,10 @@ contains
             line = adjustl(line)
             if (index(line, 'directory') == 1 .or. index(line, 'max_points') == 1 .or. &
                 index(line, 'max_failures') == 1 .or. index(line, 'resume') == 1 .or. &
-                index(line, 'plot') == 1 .or. index(line, 'dofs') == 1) cycle
+                index(line, 'plot') == 1) cycle
+            ! the amplitudes of a reduced model's points are those of the selected DOFs
+            if (index(line, 'dofs') == 1 .and. .not. allocated(case%reduction%output_rows)) &
+                cycle
             do i = 1, len_trim(line)
                 h = modulo(ieor(h, int(ichar(line(i:i)), int64))*prime, modulus)
             end do

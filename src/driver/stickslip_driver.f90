@@ -389,7 +389,13 @@ contains
         type(error_type), allocatable :: io_error
         character(len=24), allocatable :: files(:)
         logical :: wanted
-        call solve_side_by_side(case%model, case%hbm, case%euler, case%reference, res, error)
+        if (recovers(case)) then
+            call solve_side_by_side(case%model, case%hbm, case%euler, case%reference, res, &
+                                    error, observe=case%reduction%output_rows)
+        else
+            call solve_side_by_side(case%model, case%hbm, case%euler, case%reference, res, &
+                                    error)
+        end if
         call after_method(case, error, wanted)
         if (.not. wanted) return
         files = [character(len=24) ::]

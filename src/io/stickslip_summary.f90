@@ -320,7 +320,16 @@ contains
         call put(u, "  euler_cpu_seconds = "//rtoa(res%euler_seconds), stat, msg)
         call put(u, "  reference_cpu_seconds = "//rtoa(res%reference_seconds), stat, msg)
         call put(u, "  grid = "//itoa(res%grid), stat, msg)
-        names = quantity_names(case%model%ndof, case%model%ncontact())
+        if (allocated(case%reduction%output_rows)) then
+            ! a reduced model is compared on the selected full-model DOFs
+            names = [character(len=12) :: ("x"//itoa(case%reduction%output_dofs(k)), &
+                                            k=1, size(case%reduction%output_dofs)), &
+                     ("v"//itoa(case%reduction%output_dofs(k)), &
+                      k=1, size(case%reduction%output_dofs)), &
+                     ("r"//itoa(k), k=1, case%model%ncontact())]
+        else
+            names = quantity_names(case%model%ndof, case%model%ncontact())
+        end if
         line = "  quantities = "
         do k = 1, size(names)
             line = line//"'"//trim(names(k))//"'"

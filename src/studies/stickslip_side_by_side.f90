@@ -4,7 +4,7 @@
 module stickslip_side_by_side
     use stickslip_kinds, only: dp
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
-    use stickslip_error, only: error_type
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -48,8 +48,10 @@ contains
     !> Solve `model` with the three methods and compare them. A method that does not
     !> converge is an outcome (its flag, its diagnosis and res%diagnosis). Errors: stat
     !> input (invalid model or options), stat numerical (singular dynamic stiffness or
-    !> iteration matrix), from whichever method meets it first.
-    subroutine solve_side_by_side(model, hbm, euler, ref, res, error)
+    !> iteration matrix), from whichever method meets it first. With `observe` (nobs x N), the
+    !> differences are those of the observed combinations observe x, observe v (e.g. the
+    !> full-model DOFs of a reduced model: rows of its basis) instead of the model's DOFs.
+    subroutine solve_side_by_side(model, hbm, euler, ref, res, error, observe)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Weighted-residual options.
@@ -62,9 +64,12 @@ contains
         type(side_by_side_t), intent(out) :: res
         !> Set on invalid input or numerical breakdown.
         type(error_type), allocatable, intent(out) :: error
+        !> Observed combinations of DOFs, nobs x N (optional).
+        real(dp), intent(in), optional :: observe(:, :)
         type(hbm_options_t) :: ho
         type(comparison_t) :: cmp
-        real(dp), allocatable :: xh(:, :), vh(:, :), rh(:, :), xr(:, :), vr(:, :), rr(:, :)
+        real(dp), allocatable :: xh(:, :), vh(:, :), rh(:, :), xr(:, :), vr(:, :), rr(:, :), &
+            xe(:, :), ve(:, :)
         real(dp) :: c0, c1
         logical :: hbm_ok, euler_ok, ref_ok
 
@@ -102,13 +107,27 @@ contains
             res%grid = ho%samples
         end if
         allocate (res%comparisons(0))
+        if (present(observe)) then
+            if (size(observe, 2) /= model%ndof) then
+                call fatal_error(error, "solve_side_by_side: observe must have N columns", &
+                                 stickslip_stat%input)
+                return
+            end if
+        end if
         if (hbm_ok) then
             call evaluate_series(res%hbm, res%grid, xh, vh, rh, error)
             if (allocated(error)) return
+            call observed(xh, vh)
         end if
         if (ref_ok) then
             call sample_reference(res%reference, res%grid, xr, vr, rr, error)
             if (allocated(error)) return
+            call observed(xr, vr)
+        end if
+        if (euler_ok) then
+            xe = res%euler%x
+            ve = res%euler%v
+            call observed(xe, ve)
         end if
         if (hbm_ok .and. ref_ok) then
             call compare_samples('hbm', xh, vh, rh, 'reference', xr, vr, rr, cmp, error)
@@ -116,14 +135,13 @@ contains
             res%comparisons = [res%comparisons, cmp]
         end if
         if (euler_ok .and. ref_ok) then
-            call compare_samples('euler', res%euler%x, res%euler%v, res%euler%r, 'reference', &
-                                 xr, vr, rr, cmp, error)
+            call compare_samples('euler', xe, ve, res%euler%r, 'reference', xr, vr, rr, cmp, &
+                                 error)
             if (allocated(error)) return
             res%comparisons = [res%comparisons, cmp]
         end if
         if (hbm_ok .and. euler_ok) then
-            call compare_samples('hbm', xh, vh, rh, 'euler', res%euler%x, res%euler%v, &
-                                 res%euler%r, cmp, error)
+            call compare_samples('hbm', xh, vh, rh, 'euler', xe, ve, res%euler%r, cmp, error)
             if (allocated(error)) return
             res%comparisons = [res%comparisons, cmp]
         end if
@@ -136,6 +154,14 @@ contains
         call disagreement(res%comparisons, ref_ok, res%diagnostics)
 
     contains
+
+        !> Samples of the DOFs -> samples of the observed combinations (when observing).
+        subroutine observed(x, v)
+            real(dp), allocatable, intent(inout) :: x(:, :), v(:, :)
+            if (.not. present(observe)) return
+            x = matmul(x, transpose(observe))
+            v = matmul(v, transpose(observe))
+        end subroutine observed
 
         subroutine add(text)
             character(len=*), intent(in) :: text

@@ -276,6 +276,14 @@ contains
                        itoa(size(a, 1))//"x"//itoa(size(a, 2))//" vs "//itoa(size(b, 1))// &
                        "x"//itoa(size(b, 2)))
         end if
+        ! method 'all' on a reduced model compares the selected full-model DOFs
+        call chain_case("chain_reduced_all", "dofs = 3, 70 / &reduction method = "// &
+                        "'craig-bampton', modes = 4 / &run method = 'all'")
+        call cli([character(len=200) :: dir//"/chain_reduced_all.nml"], code, out, err)
+        call check(t, code == 0, "chain reduced, method all: trusted (exit 0)", err)
+        call check(t, has_line_starting(dir//"/chain_reduced_all/summary.nml", &
+                                        "quantities = 'x3', 'x70', 'v3', 'v70', 'r1', 'r2'"), &
+                   "chain reduced, method all: compares x3, x70 (full numbers)")
         call chain_case("chain_reduced_study", "dofs = 70, 3 / &reduction method = "// &
                         "'craig-bampton', modes = 66 / &study harmonics = 3, 5")
         call read_case(dir//"/chain_reduced_study.nml", c, error)

@@ -392,7 +392,7 @@ contains
         subroutine orthonormal_loads(raw, kept)
             real(dp), intent(in) :: raw(:, :)
             real(dp), allocatable, intent(out) :: kept(:, :)
-            real(dp), allocatable :: v(:, :), mv(:, :), basis(:, :)
+            real(dp), allocatable :: v(:, :), mv(:, :)
             real(dp) :: norm0, norm1
             integer :: c, pass, m
             allocate (kept(ni, size(raw, 2)), v(ni, 1), mv(ni, 1))
@@ -402,10 +402,13 @@ contains
                 call csr_times_dense(mii, v, mv)
                 norm0 = sqrt(max(dot_product(v(:, 1), mv(:, 1)), 0.0_dp))
                 if (.not. (norm0 > 0.0_dp)) cycle
-                basis = reshape([reduced%modes, kept(:, 1:m)], [ni, nm + m])
                 do pass = 1, 2
                     if (nm + m == 0) exit
-                    v(:, 1) = v(:, 1) - matmul(basis, matmul(transpose(basis), mv(:, 1)))
+                    ! v -= B B^T M v with B = [modes, kept(:, 1:m)] (M_ii-orthonormal columns)
+                    if (nm > 0) v(:, 1) = v(:, 1) - matmul(reduced%modes, &
+                                                           matmul(mv(:, 1), reduced%modes))
+                    if (m > 0) v(:, 1) = v(:, 1) - matmul(kept(:, 1:m), &
+                                                          matmul(mv(:, 1), kept(:, 1:m)))
                     call csr_times_dense(mii, v, mv)
                 end do
                 norm1 = sqrt(max(dot_product(v(:, 1), mv(:, 1)), 0.0_dp))

@@ -6,8 +6,9 @@
 !> distributed load on a Craig-Bampton-reduced cantilever beam: the reduced static response
 !> equals the full sparse solve, the dynamic response is within the measured reduction
 !> error and better than without load vectors; the case files (reading, echo, default
-!> outputs, a reduced beam against the unreduced one), bad files named in the messages, and
-!> the command line writing hbm.csv for a case with a direction_file.
+!> outputs, a reduced beam against the unreduced one), bad files named in the messages, the
+!> command line writing hbm.csv for a case with a direction_file, and method 'all' giving
+!> byte-identical files for the seed case inline and with direction_file/force_file.
 module test_directions
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_positive_inf
     use stickslip_kinds, only: dp
@@ -54,6 +55,7 @@ contains
         call test_bad_files(t)
         call test_reduced_case(t)
         call test_cli_run(t)
+        call test_all_methods(t)
     end subroutine run_directions_tests
 
     !> The chain (a ground contact and a relative one, forcing on DOFs 1 and 3 at harmonics 1
@@ -672,6 +674,71 @@ contains
         close (u, iostat=stat)
         call check(t, echoed, "cli: summary.nml echoes direction_file")
     end subroutine test_cli_run
+
+    !> Method 'all' (weighted residual, implicit Euler, exact reference) on the seed case
+    !> inline and with the same contact and forcing as direction_file and force_file (unit
+    !> columns): the result files are identical byte for byte.
+    subroutine test_all_methods(t)
+        type(test_counter_t), intent(inout) :: t
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: out, err
+        character(len=16), parameter :: files(3) = [character(len=16) :: "hbm.csv", &
+                                                    "euler.csv", "reference.csv"]
+        integer :: code, k
+        call write_matrix_market_array(dir//"/f_unit.mtx", reshape([1.0_dp, 0.0_dp], [2, 1]), &
+                                       .false., error)
+        call check_error(t, error, "all methods: load file written", .false.)
+        if (allocated(error)) return
+        call all_case("all_inline", "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10 /", &
+                      "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /")
+        call all_case("all_files", "&forcing omega = 4.5, force_file = 'f_unit.mtx', " // &
+                      "force_amplitude = 10 /", &
+                      "&friction direction_file = 'w_seed.mtx', mu = 0.45, normal_load = 1.0 /")
+        call cli([character(len=200) :: dir//"/all_inline.nml"], code, out, err)
+        call check(t, code == 0, "all methods: inline seed runs", err)
+        call cli([character(len=200) :: dir//"/all_files.nml"], code, out, err)
+        call check(t, code == 0, "all methods: seed with files runs", err)
+        do k = 1, size(files)
+            call check(t, same_text(dir//"/out_all_inline/"//trim(files(k)), &
+                                    dir//"/out_all_files/"//trim(files(k))), &
+                       "all methods: "//trim(files(k))//" identical")
+        end do
+
+    contains
+
+        subroutine all_case(name, forcing, friction)
+            character(len=*), intent(in) :: name, forcing, friction
+            call write_lines(dir//"/"//name//".nml", [character(len=120) :: &
+                "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", forcing, &
+                friction, "&hbm harmonics = 15, samples = 256 /", &
+                "&euler steps_per_period = 200 /", "&run method = 'all' /", &
+                "&output directory = '"//dir//"/out_"//name//"' /"])
+        end subroutine all_case
+    end subroutine test_all_methods
+
+    !> The two text files exist and have the same lines.
+    logical function same_text(a, b)
+        character(len=*), intent(in) :: a, b
+        character(len=2000) :: la, lb
+        integer :: ua, ub, sa, sb
+        same_text = .false.
+        open (newunit=ua, file=a, status='old', action='read', iostat=sa)
+        if (sa /= 0) return
+        open (newunit=ub, file=b, status='old', action='read', iostat=sb)
+        if (sb /= 0) then
+            close (ua)
+            return
+        end if
+        do
+            read (ua, '(a)', iostat=sa) la
+            read (ub, '(a)', iostat=sb) lb
+            if (sa /= 0 .or. sb /= 0) exit
+            if (la /= lb) exit
+        end do
+        same_text = sa /= 0 .and. sb /= 0 .and. sa == sb
+        close (ua)
+        close (ub)
+    end function same_text
 
     pure logical function same(a, b)
         integer, intent(in) :: a(:), b(:)

@@ -620,6 +620,44 @@ contains
         call check(t, diff <= max(10.0_dp*err_all, 1.0e-8_dp)*scale, &
                    "reduced case: tip displacement of the reduced beam = the full one", &
                    "diff/scale "//rt(diff/scale))
+        ! the command line: summary.nml counts the load vectors and reads back as the case
+        block
+            character(len=:), allocatable :: out, err
+            integer :: code, u, stat
+            character(len=400) :: line
+            logical :: counted
+            type(case_t) :: back
+            call write_lines(dir//"/beam_cli.nml", [character(len=120) :: &
+                "&system mass_file = 'beam_m.mtx', stiffness_file = 'beam_k.mtx',", &
+                "  rayleigh_alpha = 0.05, rayleigh_beta = 1e-5 /", &
+                "&forcing omega = 2.5, force_file = 'beam_f.mtx', force_amplitude = 2.0, 1.5 /", &
+                "&friction direction_file = 'beam_w.mtx', mu = 0.5, normal_load = 1.0 /", &
+                "&reduction method = 'craig-bampton' /", "&hbm harmonics = 7 /", &
+                "&output directory = '"//dir//"/out_beam' /"])
+            call cli([character(len=200) :: dir//"/beam_cli.nml"], code, out, err)
+            call check(t, code == 0, "reduced case: the command line runs", err)
+            call check(t, first_line(dir//"/out_beam/hbm.csv") == "t,x"//itoa(n - 1)//",x"// &
+                       itoa(n)//",v"//itoa(n - 1)//",v"//itoa(n)//",r1", &
+                       "reduced case: hbm.csv holds the DOFs of W", &
+                       first_line(dir//"/out_beam/hbm.csv"))
+            counted = .false.
+            open (newunit=u, file=dir//"/out_beam/summary.nml", status='old', action='read', &
+                  iostat=stat)
+            do while (stat == 0)
+                read (u, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                if (index(line, "reduction_load_vectors = 2") > 0) counted = .true.
+            end do
+            close (u, iostat=stat)
+            call check(t, counted, "reduced case: summary.nml reduction_load_vectors = 2")
+            call read_case(dir//"/out_beam/summary.nml", back, error)
+            call check_error(t, error, "reduced case: summary.nml reads back", .false.)
+            if (.not. allocated(error)) call check(t, back%model%ndof == cr%model%ndof .and. &
+                back%reduction%report%load_vectors == 2 .and. &
+                all(abs(back%model%force_shape - cr%model%force_shape) <= &
+                    1.0e-12_dp*maxval(abs(cr%model%force_shape))), &
+                "reduced case: summary.nml gives the same reduced loads")
+        end block
 
     contains
 

@@ -405,7 +405,8 @@ contains
     !> paths (the echo is read from another folder: the output directory) and the Rayleigh
     !> factors; an inline model as its matrices, the damping written in full (Rayleigh terms
     !> included, so rayleigh_alpha and rayleigh_beta are not repeated). Contact directions and
-    !> load shapes from files are echoed as direction_file and force_file (absolute paths).
+    !> load shapes from files are echoed as direction_file and force_file (absolute paths);
+    !> set in memory (no file), as a comment saying so (the echo then does not read back).
     !> I/O errors do not stop the program: stat /= 0 and msg say what failed.
     subroutine write_case(unit, case, stat, msg)
         !> An open formatted unit.
@@ -448,6 +449,11 @@ contains
             if (allocated(case%system_files%force_absolute)) then
                 call put(unit, "  force_file = "//quoted(case%system_files%force_absolute), &
                          stat, msg)
+            else if (allocated(m%force_shape)) then
+                ! a case built in memory: a matrix has no namelist form
+                call put(unit, "  ! force_shape ("//itoa(size(m%force_shape, 1))//" x "// &
+                         itoa(size(m%force_shape, 2))//") set in memory: give it as "// &
+                         "force_file", stat, msg)
             else if (allocated(case%reduction%force_dof)) then
                 call put(unit, "  force_dof = "//ilist(case%reduction%force_dof), stat, msg)
             else
@@ -462,6 +468,11 @@ contains
                 if (allocated(case%system_files%direction_absolute)) then
                     call put(unit, "  direction_file = "// &
                              quoted(case%system_files%direction_absolute), stat, msg)
+                else if (allocated(m%contact_direction)) then
+                    call put(unit, "  ! contact_direction ("// &
+                             itoa(size(m%contact_direction, 1))//" x "// &
+                             itoa(size(m%contact_direction, 2))//") set in memory: give "// &
+                             "it as direction_file", stat, msg)
                 else if (allocated(case%reduction%contact_dof)) then
                     call put(unit, "  contact_dof = "//ilist(case%reduction%contact_dof), stat, &
                              msg)

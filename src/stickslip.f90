@@ -12,12 +12,13 @@ module stickslip
     use stickslip_progress, only: progress_t
     use stickslip_version_info, only: stickslip_version, stickslip_thread_safe
     ! the model
-    use stickslip_model, only: model_t, validate_model
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
+        force_direction
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, &
         sparse_to_dense, sparse_from_dense, sparse_transpose, sparse_scaled_sum, &
         sparse_symmetry_defect
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
-        craig_bampton, recover_dofs, receptance_error, reduced_dof_of
+        craig_bampton, recover_dofs, receptance_error, reduced_dof_of, reduce_vectors
     ! the weighted residual
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
@@ -48,11 +49,11 @@ module stickslip
     public :: dp, error_type, stickslip_stat
     public :: diagnosis_t, diagnostics_t, level_note, level_warning, level_untrusted
     public :: progress_t, stickslip_version, stickslip_thread_safe
-    public :: model_t, validate_model
+    public :: model_t, validate_model, contact_velocity_direction, force_direction
     public :: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, sparse_to_dense, &
               sparse_from_dense, sparse_transpose, sparse_scaled_sum, sparse_symmetry_defect
     public :: reduction_options_t, reduction_report_t, reduced_model_t, craig_bampton, &
-              recover_dofs, receptance_error, reduced_dof_of
+              recover_dofs, receptance_error, reduced_dof_of, reduce_vectors
     public :: hbm_options_t, hbm_solution_t, solve_periodic, validate_options, automatic_rho
     public :: euler_options_t, euler_result_t, integrate_euler
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference, &

@@ -10,7 +10,8 @@ module test_output_selection
     use stickslip_case, only: case_t, read_case, selected_dofs, default_output_dofs
     use stickslip_model, only: model_t
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets
-    use stickslip_matrix_market, only: write_matrix_market, read_matrix_market
+    use stickslip_matrix_market, only: write_matrix_market, read_matrix_market, &
+        write_matrix_market_array
     use stickslip_sparse, only: sparse_to_dense
     use stickslip_sweep, only: sweep_result_t
     use stickslip_csv, only: write_frc_csv
@@ -350,6 +351,33 @@ contains
         if (same_shape(f10, f)) call check(t, .not. close_to(f10, f) .and. &
             maxval(abs(f10 - f)) < 0.05_dp*maxval(abs(f)), &
             "full field 10 modes: near the unreduced one, not equal")
+        ! a distributed load (force_file: load vectors in the basis): the full field at the
+        ! output DOFs equals the coefficients recovered for coefficients.csv (two paths)
+        block
+            real(dp) :: shape_f(nchain, 1)
+            real(dp), allocatable :: cl(:, :), fl(:, :)
+            integer :: i
+            shape_f(:, 1) = [(0.1_dp*i, i=1, nchain)]
+            call write_matrix_market_array(dir//"/chain_f.mtx", shape_f, .false., error)
+            call check_error(t, error, "full field with loads: file written", .false.)
+            call full_case("full_loads", "dofs = 3, 70 / &reduction method = "// &
+                           "'craig-bampton', modes = 10", loads=.true.)
+            call cli([character(len=200) :: dir//"/full_loads.nml"], code, out, err)
+            call check(t, code == 0 .or. code == 2, "full field with loads: runs", err)
+            call check(t, has_line_starting(dir//"/full_loads/summary.nml", &
+                                            "reduction_load_vectors = 1"), &
+                       "full field with loads: one load vector")
+            call read_field(dir//"/full_loads/full_field.mtx", fl)
+            cl = read_numbers(dir//"/full_loads/coefficients.csv", 2)
+            if (size(fl, 1) == nchain .and. size(cl, 2) >= 2 .and. &
+                size(fl, 2) == size(cl, 1)) then
+                call check(t, maxval(abs(fl([3, 70], :) - transpose(cl(:, 1:2)))) <= &
+                           1.0e-12_dp*maxval(abs(cl(:, 1:2))), &
+                           "full field with loads: = recovered coefficients of x3, x70")
+            else
+                call check(t, .false., "full field with loads: shapes")
+            end if
+        end block
         ! a later run without full_field into the same directory removes the stale file
         call full_case("full_10", "/ &reduction method = 'craig-bampton', modes = 10", .false.)
         call cli([character(len=200) :: dir//"/full_10.nml"], code, out, err)
@@ -362,9 +390,9 @@ contains
 
     contains
 
-        subroutine full_case(name, extra, wanted)
+        subroutine full_case(name, extra, wanted, loads)
             character(len=*), intent(in) :: name, extra
-            logical, intent(in), optional :: wanted
+            logical, intent(in), optional :: wanted, loads
             character(len=400) :: lines(5)
             character(len=20) :: flag
             flag = "full_field = T"
@@ -379,6 +407,10 @@ contains
             lines(4) = "&hbm harmonics = 5, samples = 32 /"
             lines(5) = "&output directory = '"//dir//"/"//name//"' "//trim(flag)//" "// &
                        extra//" /"
+            if (present(loads)) then
+                if (loads) lines(2) = "&forcing omega = 1.3, force_file = 'chain_f.mtx', "// &
+                                      "force_amplitude = 5.0 /"
+            end if
             call write_lines(dir//"/"//name//".nml", lines)
         end subroutine full_case
 

@@ -32,7 +32,7 @@ module stickslip_truncation
     use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp, pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_model, only: model_t, contact_velocity_direction, force_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_friction, only: psi, psi_stick
@@ -391,7 +391,7 @@ contains
         real(dp), allocatable :: xt(:), xc(:)
         complex(dp), allocatable :: cw(:)
         real(dp) :: amax, floor_amp, energy, floor_energy
-        integer :: nf, nbc, p
+        integer :: nf, nbc, p, i
 
         if (.not. coarse%converged) then
             est%note = "the coarse solve at H = "//itoa(coarse%harmonics)//" did not "// &
@@ -426,7 +426,12 @@ contains
 
         est%dissipation_change = abs(fine%diss_friction - coarse%diss_friction)
         floor_energy = 0.0_dp
-        if (model%nforce() > 0) floor_energy = 1.0e-12_dp*pi*sum(abs(model%force_amplitude))*amax
+        do i = 1, model%nforce()
+            ! |amplitude| x the largest entry of the load shape (1 for a forced DOF)
+            floor_energy = floor_energy + abs(model%force_amplitude(i))* &
+                           maxval(abs(force_direction(model, i)))
+        end do
+        floor_energy = 1.0e-12_dp*pi*floor_energy*amax
         energy = max(abs(fine%work_forcing), fine%diss_friction + fine%diss_damping, &
                      floor_energy, tiny(1.0_dp))
         est%dissipation_change_rel = est%dissipation_change/energy

@@ -30,7 +30,7 @@ module stickslip_flow
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, pi, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
-    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_model, only: model_t, contact_velocity_direction, force_direction
     use stickslip_lapack, only: dpotrf, dpotrs
     use stickslip_expm, only: expm
     use stickslip_contact_solve, only: contact_forces
@@ -129,8 +129,8 @@ contains
         real(dp), intent(in) :: vref(:)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer :: n, nc, i, j, k, info, p
-        real(dp), allocatable :: chol(:, :)
+        integer :: n, nc, i, j, k, info
+        real(dp), allocatable :: chol(:, :), fdir(:)
         integer, allocatable :: hs(:)
 
         n = model%ndof
@@ -181,14 +181,14 @@ contains
         self%hf(:, 1:n) = -model%stiffness
         self%hf(:, n + 1:2*n) = -model%damping
         do i = 1, model%nforce()
-            p = model%force_dof(i)
+            fdir = force_direction(model, i)
             associate (a => model%force_amplitude(i), ph => model%force_phase(i))
                 if (model%force_harmonic(i) == 0) then
-                    self%hf(p, 2*n + 1) = self%hf(p, 2*n + 1) + a*cos(ph)
+                    self%hf(:, 2*n + 1) = self%hf(:, 2*n + 1) + a*cos(ph)*fdir
                 else
                     k = findloc(hs, model%force_harmonic(i), 1)
-                    self%hf(p, 2*n + 2*k) = self%hf(p, 2*n + 2*k) + a*cos(ph)
-                    self%hf(p, 2*n + 2*k + 1) = self%hf(p, 2*n + 2*k + 1) - a*sin(ph)
+                    self%hf(:, 2*n + 2*k) = self%hf(:, 2*n + 2*k) + a*cos(ph)*fdir
+                    self%hf(:, 2*n + 2*k + 1) = self%hf(:, 2*n + 2*k + 1) - a*sin(ph)*fdir
                 end if
             end associate
         end do

@@ -11,7 +11,8 @@ module stickslip_hbm
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_diagnostics, only: level_warning, level_untrusted
-    use stickslip_model, only: model_t, validate_model, contact_velocity_direction
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
+        force_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_dynamics, only: dynamics_t, near_singular_threshold
@@ -332,7 +333,8 @@ contains
         type(hb_problem_t), intent(inout) :: prob
         real(dp), intent(inout) :: y(:)
         type(hbm_solution_t), intent(inout) :: sol
-        real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:)
+        real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:), &
+                                 fdir(:)
         complex(dp), allocatable :: cw(:)
         integer :: nb, nc, nt, n, j, i, k, p, q, i0
         real(dp) :: period, lo, hi, shift, coulomb_slip, max_force_ratio
@@ -382,13 +384,14 @@ contains
         allocate (fcoef(nb, n), vc(nb, nc))
         fcoef = 0.0_dp
         do i = 1, model%nforce()
-            p = model%force_dof(i)
+            fdir = force_direction(model, i)
             if (model%force_harmonic(i) == 0) then
-                fcoef(i0, p) = fcoef(i0, p) + model%force_amplitude(i)*cos(model%force_phase(i))
+                fcoef(i0, :) = fcoef(i0, :) + model%force_amplitude(i)*cos(model%force_phase(i))*fdir
             else
                 k = prob%basis%icos(findloc(prob%basis%harm, model%force_harmonic(i), 1))
-                fcoef(k, p) = fcoef(k, p) + model%force_amplitude(i)*cos(model%force_phase(i))
-                fcoef(k + 1, p) = fcoef(k + 1, p) - model%force_amplitude(i)*sin(model%force_phase(i))
+                fcoef(k, :) = fcoef(k, :) + model%force_amplitude(i)*cos(model%force_phase(i))*fdir
+                fcoef(k + 1, :) = fcoef(k + 1, :) - &
+                                  model%force_amplitude(i)*sin(model%force_phase(i))*fdir
             end if
         end do
         do j = 1, nc

@@ -47,7 +47,7 @@
 module stickslip_rho
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_model, only: model_t, contact_velocity_direction, force_direction
     use stickslip_lapack, only: dgetrf, dgetrs
     implicit none
     private
@@ -80,16 +80,16 @@ contains
 
     !> Resonance-free mobility of every contact, Omega w_j^T (K + Omega^2 M)^{-1} w_j
     !> [m/(N s)], at Omega = h_f omega, h_f the harmonic of the forcing term of largest
-    !> amplitude (h > 0; 1 when the forcing is static). Falls back on the mass line
-    !> w_j^T M^{-1} w_j / Omega when K + Omega^2 M is singular or the value is not positive
-    !> (an indefinite K). `model` must be valid (validate_model); no error can occur.
+    !> |amplitude| x max |load shape| (h > 0; 1 when the forcing is static). Falls back on
+    !> the mass line w_j^T M^{-1} w_j / Omega when K + Omega^2 M is singular or the value
+    !> is not positive (an indefinite K). `model` must be valid (validate_model); no error can occur.
     function contact_mobility(model) result(mob)
         !> A validated model.
         type(model_t), intent(in) :: model
         !> Mobility of each contact [m/(N s)].
         real(dp) :: mob(model%ncontact())
         real(dp) :: s(model%ndof, model%ndof), w(model%ndof, model%ncontact())
-        real(dp) :: y(model%ndof, model%ncontact()), big
+        real(dp) :: y(model%ndof, model%ncontact()), big, fsize
         integer :: ipiv(model%ndof), n, nc, j, i, info, hf
         n = model%ndof
         nc = model%ncontact()
@@ -97,8 +97,10 @@ contains
         hf = 1
         big = 0.0_dp
         do i = 1, model%nforce()
-            if (model%force_harmonic(i) > 0 .and. abs(model%force_amplitude(i)) > big) then
-                big = abs(model%force_amplitude(i))
+            ! the size of term i: |amplitude| x the largest entry of its load shape
+            fsize = abs(model%force_amplitude(i))*maxval(abs(force_direction(model, i)))
+            if (model%force_harmonic(i) > 0 .and. fsize > big) then
+                big = fsize
                 hf = model%force_harmonic(i)
             end if
         end do

@@ -129,9 +129,9 @@ contains
         call read_system_group(nml, case%model, case%system_files, error, &
                                case%reduction%method, sparse)
         if (allocated(error)) return
-        call read_forcing_group(nml, case%model, error)
+        call read_forcing_group(nml, case%model, error, case%system_files)
         if (allocated(error)) return
-        call read_friction_group(nml, case%model, error)
+        call read_friction_group(nml, case%model, error, case%system_files)
         if (allocated(error)) return
         call read_hbm_group(nml, case%hbm, case%checks, error)
         if (allocated(error)) return
@@ -151,6 +151,10 @@ contains
             call name_matrix_file(error, "mass", case%system_files%mass_path)
             call name_matrix_file(error, "stiffness", case%system_files%stiffness_path)
             call name_matrix_file(error, "damping", case%system_files%damping_path)
+            call name_column_file(error, "&friction contact_direction", "&friction "// &
+                                  "direction_file", case%system_files%direction_path)
+            call name_column_file(error, "&forcing force_shape", "&forcing force_file", &
+                                  case%system_files%force_path)
             return
         end if
 
@@ -220,6 +224,20 @@ contains
         error%message = error%message(1:k - 1)//" (from "//name//"_file '"//path//"')"// &
                         error%message(k:)
     end subroutine name_matrix_file
+
+    !> A model message about `component` (the model_t name of a matrix read from a file) is
+    !> about the file variable `variable` and names its file.
+    subroutine name_column_file(error, component, variable, path)
+        type(error_type), intent(inout) :: error
+        character(len=*), intent(in) :: component, variable
+        character(len=:), allocatable, intent(in) :: path
+        integer :: k
+        if (.not. allocated(path)) return
+        k = index(error%message, component)
+        if (k == 0) return
+        error%message = error%message(1:k - 1)//variable//" '"//path//"'"// &
+                        error%message(k + len(component):)
+    end subroutine name_column_file
 
     !> Every group known and given once (groups named summary* are the results echoed in
     !> a summary.nml: ignored). Errors name the group (and suggest the closest known one)
@@ -396,7 +414,9 @@ contains
     !> A model read from Matrix Market files is echoed as its file variables with ABSOLUTE
     !> paths (the echo is read from another folder: the output directory) and the Rayleigh
     !> factors; an inline model as its matrices, the damping written in full (Rayleigh terms
-    !> included, so rayleigh_alpha and rayleigh_beta are not repeated).
+    !> included, so rayleigh_alpha and rayleigh_beta are not repeated). Contact directions and
+    !> load shapes from files are echoed as direction_file and force_file (absolute paths);
+    !> set in memory (no file), as a comment saying so (the echo then does not read back).
     !> I/O errors do not stop the program: stat /= 0 and msg say what failed.
     subroutine write_case(unit, case, stat, msg)
         !> An open formatted unit.
@@ -436,7 +456,15 @@ contains
             call put(unit, "/", stat, msg)
             call put(unit, "&forcing", stat, msg)
             call put(unit, "  omega = "//rtoa(m%omega), stat, msg)
-            if (allocated(case%reduction%force_dof)) then
+            if (allocated(case%system_files%force_absolute)) then
+                call put(unit, "  force_file = "//quoted(case%system_files%force_absolute), &
+                         stat, msg)
+            else if (allocated(m%force_shape)) then
+                ! a case built in memory: a matrix has no namelist form
+                call put(unit, "  ! force_shape ("//itoa(size(m%force_shape, 1))//" x "// &
+                         itoa(size(m%force_shape, 2))//") set in memory: give it as "// &
+                         "force_file", stat, msg)
+            else if (allocated(case%reduction%force_dof)) then
                 call put(unit, "  force_dof = "//ilist(case%reduction%force_dof), stat, msg)
             else
                 call put(unit, "  force_dof = "//ilist(m%force_dof), stat, msg)
@@ -447,7 +475,15 @@ contains
             call put(unit, "/", stat, msg)
             call put(unit, "&friction", stat, msg)
             if (m%ncontact() > 0) then
-                if (allocated(case%reduction%contact_dof)) then
+                if (allocated(case%system_files%direction_absolute)) then
+                    call put(unit, "  direction_file = "// &
+                             quoted(case%system_files%direction_absolute), stat, msg)
+                else if (allocated(m%contact_direction)) then
+                    call put(unit, "  ! contact_direction ("// &
+                             itoa(size(m%contact_direction, 1))//" x "// &
+                             itoa(size(m%contact_direction, 2))//") set in memory: give "// &
+                             "it as direction_file", stat, msg)
+                else if (allocated(case%reduction%contact_dof)) then
                     call put(unit, "  contact_dof = "//ilist(case%reduction%contact_dof), stat, &
                              msg)
                     call put(unit, "  contact_dof2 = "//ilist(case%reduction%contact_dof2), &

@@ -31,7 +31,9 @@ module stickslip_case_model
     !> Largest number of forcing terms or contacts (and of entries of a list) in a case file.
     integer, parameter :: max_terms = 256
 
-    !> The &system file variables and Rayleigh factors of a case (unallocated: not given).
+    !> The file variables of a case's model: &system mass_file, stiffness_file,
+    !> damping_file and the Rayleigh factors, &friction direction_file and &forcing
+    !> force_file (unallocated: not given).
     type :: system_files_t
         !> mass_file, stiffness_file, damping_file as written in the case.
         character(len=:), allocatable :: mass_file, stiffness_file, damping_file
@@ -39,6 +41,10 @@ module stickslip_case_model
         character(len=:), allocatable :: mass_path, stiffness_path, damping_path
         !> The same as absolute paths (what write_case echoes).
         character(len=:), allocatable :: mass_absolute, stiffness_absolute, damping_absolute
+        !> &friction direction_file and &forcing force_file: as written, resolved against
+        !> the case file's folder, absolute.
+        character(len=:), allocatable :: direction_file, direction_path, direction_absolute
+        character(len=:), allocatable :: force_file, force_path, force_absolute
         !> C += rayleigh_alpha M + rayleigh_beta K [1/s], [s].
         real(dp) :: rayleigh_alpha = 0.0_dp
         real(dp) :: rayleigh_beta = 0.0_dp
@@ -248,22 +254,10 @@ contains
             a = reshape(values, [n, n])
         end subroutine take_matrix
 
-        !> A file variable: as written, resolved against the case file's folder, absolute.
         subroutine take_file(name, given, path, absolute)
             character(len=*), intent(in) :: name
             character(len=:), allocatable, intent(out) :: given, path, absolute
-            character(len=:), allocatable :: value
-            logical :: here
-            call get_string(nml, "system", name, value, error, here)
-            if (allocated(error) .or. .not. here) return
-            if (len_trim(value) == 0) then
-                call group_error(nml, error, "&system "//name//" = '': an empty file name")
-                return
-            end if
-            given = value
-            path = resolve_path(nml%path, value)
-            absolute = path
-            if (path(1:1) /= '/') absolute = working_directory()//"/"//path
+            call take_file_variable(nml, "system", name, given, path, absolute, error)
         end subroutine take_file
 
         subroutine take_factor(name, x)
@@ -362,6 +356,95 @@ contains
         end subroutine read_sparse
     end subroutine read_system_group
 
+    !> A file variable of `group`: as written, resolved against the case file's folder,
+    !> absolute (all unallocated when not given). Error: an empty file name.
+    subroutine take_file_variable(nml, group, name, given, path, absolute, error)
+        type(nml_file_t), intent(in) :: nml
+        character(len=*), intent(in) :: group, name
+        character(len=:), allocatable, intent(out) :: given, path, absolute
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: value
+        logical :: here
+        call get_string(nml, group, name, value, error, here)
+        if (allocated(error) .or. .not. here) return
+        if (len_trim(value) == 0) then
+            call group_error(nml, error, "&"//group//" "//name//" = '': an empty file name")
+            return
+        end if
+        given = value
+        path = resolve_path(nml%path, value)
+        absolute = path
+        if (path(1:1) /= '/') absolute = working_directory()//"/"//path
+    end subroutine take_file_variable
+
+    !> The dense N x m matrix of the Matrix Market file `path` (&`group` `name`): N rows (the
+    !> model's DOFs), 1..max_terms columns, finite; with `nonzero_columns` no zero column.
+    !> Errors (stat input; io for an unreadable file) name the case file, the group, the
+    !> variable and the file (and its line for a bad entry).
+    subroutine read_column_file(nml, group, name, path, n, nonzero_columns, a, error)
+        type(nml_file_t), intent(in) :: nml
+        character(len=*), intent(in) :: group, name, path
+        integer, intent(in) :: n
+        logical, intent(in) :: nonzero_columns
+        real(dp), allocatable, intent(out) :: a(:, :)
+        type(error_type), allocatable, intent(out) :: error
+        type(sparse_matrix_t) :: s
+        integer :: rows, cols, j
+        character(len=:), allocatable :: what
+        what = "&"//group//" "//name//" '"//path//"'"
+        call read_matrix_market_size(path, rows, cols, error)
+        if (allocated(error)) then
+            error%message = nml%path//": &"//group//" "//name//": "//error%message
+            return
+        end if
+        if (rows /= n) then
+            call group_error(nml, error, what//": a "//itoa(rows)//" x "//itoa(cols)// &
+                             " matrix, but the model has N = "//itoa(n)//" DOFs: it needs "// &
+                             "N rows (one per DOF)")
+            return
+        end if
+        if (cols < 1 .or. cols > max_terms) then
+            call group_error(nml, error, what//": "//itoa(cols)//" columns, must be 1.."// &
+                             itoa(max_terms))
+            return
+        end if
+        call read_matrix_market(path, s, error)
+        if (allocated(error)) then
+            error%message = nml%path//": &"//group//" "//name//": "//error%message
+            return
+        end if
+        call sparse_to_dense(s, a, error)
+        if (allocated(error)) then
+            error%message = nml%path//": "//what//": "//error%message
+            return
+        end if
+        if (.not. nonzero_columns) return
+        do j = 1, cols
+            if (all(a(:, j) == 0.0_dp)) then
+                call group_error(nml, error, what//": column "//itoa(j)//" is zero "// &
+                                 "(contact "//itoa(j)//" has no direction)")
+                return
+            end if
+        end do
+    end subroutine read_column_file
+
+    !> Error "&group a and b both given" when `name` is given beside `file_name`.
+    subroutine not_beside_file(nml, group, name, file_name, error)
+        type(nml_file_t), intent(in) :: nml
+        character(len=*), intent(in) :: group, name, file_name
+        type(error_type), allocatable, intent(out) :: error
+        integer :: g, k
+        g = nml%find(group)
+        if (g == 0) return
+        do k = 1, nml%groups(g)%nentries
+            if (nml%groups(g)%entries(k)%name /= name) cycle
+            call fatal_error(error, nml%path//":"//itoa(nml%groups(g)%entries(k)%line)// &
+                             ": &"//group//" "//file_name//" and "//name//" both given: "// &
+                             file_name//" replaces "//name, stickslip_stat%input)
+            return
+        end do
+    end subroutine not_beside_file
+
     !> `file` resolved against the folder of `case_path`: unchanged when absolute (starts
     !> with '/') or when the case file has no folder part; else "<folder of case>/file".
     pure function resolve_path(case_path, file) result(path)
@@ -399,24 +482,31 @@ contains
         s = trim(adjustl(buf))
     end function rtoa_short
 
-    !> Read &forcing (required): omega (required), force_dof (at least one), force_amplitude
-    !> (one per force_dof), force_harmonic (default 1), force_phase (default 0).
-    subroutine read_forcing_group(nml, model, error)
+    !> Read &forcing (required): omega (required), and either force_dof (at least one),
+    !> force_amplitude (one per force_dof, required), or force_file (a Matrix Market file, N x
+    !> n_terms, column k the load shape of term k, relative paths against the case file's
+    !> folder; force_dof not allowed beside it), force_amplitude (one per column, default 1);
+    !> force_harmonic (default 1) and force_phase (default 0) one per term.
+    subroutine read_forcing_group(nml, model, error, files)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
-        !> The model: omega and the forcing terms set.
+        !> The model (ndof set): omega and the forcing terms set.
         type(model_t), intent(inout) :: model
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> The file variables: force_file, force_path, force_absolute set when given.
+        type(system_files_t), intent(inout), optional :: files
         logical :: found
         integer :: nf
         real(dp) :: omega
+        character(len=:), allocatable :: given, path, absolute
         if (nml%find("forcing") == 0) then
             call group_error(nml, error, "&forcing: required group not found")
             return
         end if
         call check_names(nml, "forcing", [character(len=15) :: "omega", "force_dof", &
-                             "force_harmonic", "force_amplitude", "force_phase"], error)
+                             "force_harmonic", "force_amplitude", "force_phase", &
+                             "force_file"], error)
         if (allocated(error)) return
         omega = 0.0_dp
         call get_real(nml, "forcing", "omega", omega, error, found)
@@ -427,52 +517,112 @@ contains
             return
         end if
         model%omega = omega
-        call get_integers(nml, "forcing", "force_dof", model%force_dof, found, max_terms, error)
+        call take_file_variable(nml, "forcing", "force_file", given, path, absolute, error)
         if (allocated(error)) return
-        if (.not. found) then
-            call group_error(nml, error, "&forcing force_dof: missing (at least one forcing term)")
-            return
+        if (allocated(path)) then
+            call not_beside_file(nml, "forcing", "force_dof", "force_file", error)
+            if (allocated(error)) return
+            call read_column_file(nml, "forcing", "force_file", path, model%ndof, .false., &
+                                  model%force_shape, error)
+            if (allocated(error)) return
+            allocate (model%force_dof(0))
+            if (present(files)) then
+                files%force_file = given
+                files%force_path = path
+                files%force_absolute = absolute
+            end if
+            nf = size(model%force_shape, 2)
+            call take_reals(nml, "forcing", "force_amplitude", nf, .false., 1.0_dp, &
+                            model%force_amplitude, error, "column of force_file")
+            if (allocated(error)) return
+        else
+            call get_integers(nml, "forcing", "force_dof", model%force_dof, found, max_terms, &
+                              error)
+            if (allocated(error)) return
+            if (.not. found) then
+                call group_error(nml, error, "&forcing force_dof: missing (at least one "// &
+                                 "forcing term; or give force_file)")
+                return
+            end if
+            nf = size(model%force_dof)
+            call take_reals(nml, "forcing", "force_amplitude", nf, .true., 0.0_dp, &
+                            model%force_amplitude, error)
+            if (allocated(error)) return
         end if
-        nf = size(model%force_dof)
-        call take_reals(nml, "forcing", "force_amplitude", nf, .true., 0.0_dp, &
-                        model%force_amplitude, error)
-        if (allocated(error)) return
         call take_reals(nml, "forcing", "force_phase", nf, .false., 0.0_dp, &
-                        model%force_phase, error)
+                        model%force_phase, error, per_file(allocated(path)))
         if (allocated(error)) return
-        call take_integers(nml, "forcing", "force_harmonic", nf, 1, model%force_harmonic, error)
+        call take_integers(nml, "forcing", "force_harmonic", nf, 1, model%force_harmonic, &
+                           error, per_file(allocated(path)))
+    contains
+        pure function per_file(from_file) result(per)
+            logical, intent(in) :: from_file
+            character(len=:), allocatable :: per
+            per = "force_dof"
+            if (from_file) per = "column of force_file"
+        end function per_file
     end subroutine read_forcing_group
 
-    !> Read &friction (optional: no group, no contact): contact_dof, mu and normal_load (one
-    !> per contact, required with contact_dof), contact_dof2 (default 0: the ground).
-    subroutine read_friction_group(nml, model, error)
+    !> Read &friction (optional: no group, no contact): either contact_dof with contact_dof2
+    !> (default 0: the ground), or direction_file (a Matrix Market file, N x n_c, column j the
+    !> direction w_j of contact j, relative paths against the case file's folder, no zero
+    !> column; contact_dof/contact_dof2 not allowed beside it); mu and normal_load one per
+    !> contact (required when there are contacts).
+    subroutine read_friction_group(nml, model, error, files)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
-        !> The model: the contacts set (none when the group or contact_dof is absent).
+        !> The model (ndof set): the contacts set (none when the group, contact_dof and
+        !> direction_file are absent).
         type(model_t), intent(inout) :: model
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> The file variables: direction_file, direction_path, direction_absolute set when
+        !> given.
+        type(system_files_t), intent(inout), optional :: files
         logical :: found
         integer :: nc
-        call check_names(nml, "friction", [character(len=12) :: "contact_dof", "contact_dof2", &
-                                          "mu", "normal_load"], error)
+        character(len=:), allocatable :: given, path, absolute, per
+        call check_names(nml, "friction", [character(len=14) :: "contact_dof", "contact_dof2", &
+                                          "mu", "normal_load", "direction_file"], error)
         if (allocated(error)) return
-        call get_integers(nml, "friction", "contact_dof", model%contact_dof, found, max_terms, &
-                              error)
+        call take_file_variable(nml, "friction", "direction_file", given, path, absolute, error)
         if (allocated(error)) return
-        if (.not. found) allocate (model%contact_dof(0))
-        nc = size(model%contact_dof)
-        call take_reals(nml, "friction", "mu", nc, .true., 0.0_dp, model%mu, error)
+        if (allocated(path)) then
+            call not_beside_file(nml, "friction", "contact_dof", "direction_file", error)
+            if (allocated(error)) return
+            call not_beside_file(nml, "friction", "contact_dof2", "direction_file", error)
+            if (allocated(error)) return
+            call read_column_file(nml, "friction", "direction_file", path, model%ndof, .true., &
+                                  model%contact_direction, error)
+            if (allocated(error)) return
+            if (present(files)) then
+                files%direction_file = given
+                files%direction_path = path
+                files%direction_absolute = absolute
+            end if
+            nc = size(model%contact_direction, 2)
+            allocate (model%contact_dof(0), model%contact_dof2(0))
+            per = "column of direction_file"
+        else
+            call get_integers(nml, "friction", "contact_dof", model%contact_dof, found, &
+                              max_terms, error)
+            if (allocated(error)) return
+            if (.not. found) allocate (model%contact_dof(0))
+            nc = size(model%contact_dof)
+            per = "contact_dof"
+        end if
+        call take_reals(nml, "friction", "mu", nc, .true., 0.0_dp, model%mu, error, per)
         if (allocated(error)) return
         call take_reals(nml, "friction", "normal_load", nc, .true., 0.0_dp, model%normal_load, &
-                        error)
+                        error, per)
         if (allocated(error)) return
-        call take_integers(nml, "friction", "contact_dof2", nc, 0, model%contact_dof2, error)
+        if (.not. allocated(path)) call take_integers(nml, "friction", "contact_dof2", nc, 0, &
+                                                      model%contact_dof2, error)
     end subroutine read_friction_group
 
-    !> `count` reals of a per-term list (one per force_dof or contact_dof); `default` for
-    !> each when absent and not required.
-    subroutine take_reals(nml, group, name, count, required, default, a, error)
+    !> `count` reals of a per-term list (one per force_dof or contact_dof, or `per`); `default`
+    !> for each when absent and not required.
+    subroutine take_reals(nml, group, name, count, required, default, a, error, per)
         type(nml_file_t), intent(in) :: nml
         character(len=*), intent(in) :: group, name
         integer, intent(in) :: count
@@ -480,6 +630,7 @@ contains
         real(dp), intent(in) :: default
         real(dp), allocatable, intent(out) :: a(:)
         type(error_type), allocatable, intent(out) :: error
+        character(len=*), intent(in), optional :: per
         logical :: given
         call get_reals(nml, group, name, a, given, max_terms, error)
         if (allocated(error)) return
@@ -487,20 +638,21 @@ contains
             allocate (a(count))
             a = default
             if (.not. required .or. count == 0) return
-            call count_error(nml, group, name, 0, count, error)
+            call count_error(nml, group, name, 0, count, error, per)
             return
         end if
-        if (size(a) /= count) call count_error(nml, group, name, size(a), count, error)
+        if (size(a) /= count) call count_error(nml, group, name, size(a), count, error, per)
     end subroutine take_reals
 
     !> `count` integers of a per-term list; `default` for each when absent.
-    subroutine take_integers(nml, group, name, count, default, a, error)
+    subroutine take_integers(nml, group, name, count, default, a, error, per)
         type(nml_file_t), intent(in) :: nml
         character(len=*), intent(in) :: group, name
         integer, intent(in) :: count
         integer, intent(in) :: default
         integer, allocatable, intent(out) :: a(:)
         type(error_type), allocatable, intent(out) :: error
+        character(len=*), intent(in), optional :: per
         logical :: given
         call get_integers(nml, group, name, a, given, max_terms, error)
         if (allocated(error)) return
@@ -509,20 +661,25 @@ contains
             a = default
             return
         end if
-        if (size(a) /= count) call count_error(nml, group, name, size(a), count, error)
+        if (size(a) /= count) call count_error(nml, group, name, size(a), count, error, per)
     end subroutine take_integers
 
-    subroutine count_error(nml, group, name, given, count, error)
+    subroutine count_error(nml, group, name, given, count, error, per)
         type(nml_file_t), intent(in) :: nml
         character(len=*), intent(in) :: group, name
         integer, intent(in) :: given, count
         type(error_type), allocatable, intent(out) :: error
-        character(len=:), allocatable :: per
-        per = "contact_dof"
-        if (group == "forcing") per = "force_dof"
+        character(len=*), intent(in), optional :: per
+        character(len=:), allocatable :: what
+        what = "entry of contact_dof"
+        if (group == "forcing") what = "entry of force_dof"
+        if (present(per)) then
+            what = "entry of "//per
+            if (index(per, "column") == 1) what = per
+        end if
         call group_error(nml, error, "&"//group//" "//name//": "//itoa(given)// &
-                         " values given, expected "//itoa(count)//" (one per entry of "// &
-                         per//")")
+                         " values given, expected "//itoa(count)//" (one per "// &
+                         what//")")
     end subroutine count_error
 
     !> An input error "<path>: <message>".

@@ -5,10 +5,15 @@
 !> max_frequency = 0 [rad/s], damping_ratio = 0. 'auto' reduces a model from files with
 !> N > max_file_dof (2000) DOFs and keeps smaller ones unreduced; 'none' keeps the full model
 !> (dense, so N <= 2000 for now). Boundary DOFs = every contact DOF (contact_dof, contact_dof2
-!> > 0) and every forced DOF; the reduced model numbers them 1..nb in ascending order of
-!> their full-model numbers, then the nm fixed-interface modes. The contact and force DOF
-!> numbers of the case's model_t are remapped to that numbering (the full-model numbers are
-!> kept in reduction_case_t for the echo). The result files hold the &output dofs, given in
+!> > 0, or every DOF where a column of the &friction direction_file matrix W is nonzero) and
+!> every forced DOF (force_dof); the reduced model numbers them 1..nb in ascending order of
+!> their full-model numbers, then the nm fixed-interface modes, then the nl static
+!> load-correction vectors of a &forcing force_file F (one per column with a nonzero
+!> interior part, see stickslip_reduction; its DOFs are NOT boundary DOFs). The contact and
+!> force DOF numbers of the case's model_t are remapped to that numbering (the full-model
+!> numbers are kept in reduction_case_t for the echo); directions become W_r = T^T W (the
+!> boundary rows of W) and load shapes F_r = T^T F, so the reduced model's static response
+!> to F is the full one. The result files hold the &output dofs, given in
 !> FULL-model numbers (default: the contact and forced DOFs): reduce_case_model keeps the rows
 !> of the basis T for them (output_rows, nsel x nr; never the whole basis) and recover_outputs
 !> gives their values from reduced samples or coefficients, x_full = T(dof, :) q.
@@ -26,7 +31,7 @@ module stickslip_case_reduction
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_string
     use stickslip_case_model, only: group_error, sparse_system_t
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
-        craig_bampton, receptance_error, reduced_dof_of, recover_dofs
+        craig_bampton, receptance_error, reduced_dof_of, recover_dofs, reduce_vectors
     implicit none
     private
     public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs, &
@@ -108,9 +113,11 @@ contains
     end subroutine read_reduction_group
 
     !> Reduce the sparse model `sparse` (read by read_system_group) to the dense `model`:
-    !> boundary = contact and forced DOFs, remapped; report and error measure in red%report.
+    !> boundary = contact DOFs (of the DOF lists or of the directions W) and forced DOFs
+    !> (force_dof), remapped; W and the load shapes F of a force_file projected (T^T W, T^T F;
+    !> F adds load vectors to the basis); report and error measure in red%report.
     !> `harmonics` is &hbm harmonics. Errors (input): a contact or force DOF outside 1..N
-    !> (named), no boundary DOF; (numerical): the reduction failing; all start "<path>: ".
+    !> (named), no boundary DOF (e.g. a force_file without contacts); (numerical): the reduction failing; all start "<path>: ".
     !> `output_dofs` (full numbers, checked in 1..N by the caller) are the DOFs the result
     !> files hold; not `output_given`: set here to the contact and forced DOFs.
     subroutine reduce_case_model(nml, red, sparse, harmonics, model, output_dofs, output_given, &
@@ -139,7 +146,8 @@ contains
         real(dp) :: omega_max, start, stop, err
         character(len=:), allocatable :: parameter
         logical :: found_start, found_stop
-        integer :: n, k, h
+        integer :: n, k, h, i
+        real(dp), allocatable :: reduced_shape(:, :)
 
         n = model%ndof
         call check_range("&forcing force_dof", model%force_dof)
@@ -151,6 +159,15 @@ contains
         if (allocated(error)) return
         bset = [model%contact_dof, pack(model%contact_dof2, model%contact_dof2 > 0), &
                 model%force_dof]
+        if (allocated(model%contact_direction)) bset = [bset, &
+            pack([(i, i=1, n)], any(model%contact_direction /= 0.0_dp, dim=2))]
+        if (size(bset) == 0) then
+            call group_error(nml, error, "&reduction method = '"//trim(red%method)//"': no "// &
+                             "boundary DOF (no contact and no force_dof; a force_file alone "// &
+                             "gives none): give the contacts, or reduce with &reduction "// &
+                             "method = 'none'")
+            return
+        end if
 
         ! the run's highest harmonic frequency
         omega_max = abs(model%omega)
@@ -171,9 +188,15 @@ contains
         opts = reduction_options_t(modes=red%modes, max_frequency=red%max_frequency, &
                                    highest_frequency=h*omega_max, &
                                    damping_ratio=red%damping_ratio)
-        if (sparse%has_damping) then
+        if (sparse%has_damping .and. allocated(model%force_shape)) then
+            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
+                               error, cmat=sparse%damping, loads=model%force_shape)
+        else if (sparse%has_damping) then
             call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
                                error, cmat=sparse%damping)
+        else if (allocated(model%force_shape)) then
+            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
+                               error, loads=model%force_shape)
         else
             call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, error)
         end if
@@ -191,7 +214,22 @@ contains
             freqs = [freqs, model%force_harmonic(k)*model%omega]
         end do
         d2 = model%contact_dof2
-        if (size(model%contact_dof) > 0 .and. size(freqs) > 0) then
+        if (allocated(model%contact_direction) .and. size(freqs) > 0) then
+            if (sparse%has_damping) then
+                call receptance_error(sparse%stiffness, sparse%mass, rm, &
+                                      model%contact_direction, freqs, err, error, &
+                                      cmat=sparse%damping)
+            else
+                call receptance_error(sparse%stiffness, sparse%mass, rm, &
+                                      model%contact_direction, freqs, err, error)
+            end if
+            if (allocated(error)) then
+                error%message = nml%path//": &reduction: reduction error measure: "// &
+                                error%message
+                return
+            end if
+            red%report%error = err
+        else if (size(model%contact_dof) > 0 .and. size(freqs) > 0) then
             if (sparse%has_damping) then
                 call receptance_error(sparse%stiffness, sparse%mass, rm, model%contact_dof, d2, &
                                       freqs, err, error, cmat=sparse%damping)
@@ -219,6 +257,17 @@ contains
         do k = 1, size(model%force_dof)
             model%force_dof(k) = reduced_dof_of(rm, model%force_dof(k))
         end do
+        ! directions and load shapes: T^T W (the boundary rows of W), T^T F
+        if (allocated(model%contact_direction)) then
+            call reduce_vectors(rm, model%contact_direction, reduced_shape, error)
+            if (allocated(error)) return
+            call move_alloc(reduced_shape, model%contact_direction)
+        end if
+        if (allocated(model%force_shape)) then
+            call reduce_vectors(rm, model%force_shape, reduced_shape, error)
+            if (allocated(error)) return
+            call move_alloc(reduced_shape, model%force_shape)
+        end if
         ! the rows of T for the output DOFs: column r of them is T(dofs, :) e_r
         if (.not. output_given) output_dofs = rm%boundary
         red%output_dofs = output_dofs
@@ -250,6 +299,8 @@ contains
             red%basis%constraint = rm%constraint
             red%basis%modes = rm%modes
             red%basis%frequencies = rm%frequencies
+            red%basis%nl = rm%nl
+            if (allocated(rm%loads)) red%basis%loads = rm%loads
         end if
         call move_alloc(rm%mass, model%mass)
         call move_alloc(rm%stiffness, model%stiffness)
@@ -314,7 +365,9 @@ contains
             if (size(b%interior) > 0) then
                 coef(b%interior, :) = matmul(b%constraint, transpose(qcoef(:, 1:b%nb)))
                 if (b%nm > 0) coef(b%interior, :) = coef(b%interior, :) + &
-                    matmul(b%modes, transpose(qcoef(:, b%nb + 1:b%nr)))
+                    matmul(b%modes, transpose(qcoef(:, b%nb + 1:b%nb + b%nm)))
+                if (b%nl > 0) coef(b%interior, :) = coef(b%interior, :) + &
+                    matmul(b%loads, transpose(qcoef(:, b%nb + b%nm + 1:b%nr)))
             end if
         end associate
     end subroutine recover_full_field

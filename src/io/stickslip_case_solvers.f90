@@ -224,8 +224,9 @@ contains
 
     !> The DOFs the result files hold when &output dofs is absent: every DOF, 1..N, when
     !> N <= max_dof (64, the inline limit: the files of small models are unchanged);
-    !> otherwise the contact DOFs (contact_dof and the nonzero contact_dof2) and the forced
-    !> DOFs (force_dof), in increasing order without duplicates.
+    !> otherwise the contact DOFs (contact_dof and the nonzero contact_dof2, or every DOF
+    !> where a column of contact_direction is nonzero) and the forced DOFs (force_dof; none
+    !> for the load shapes of force_shape), in increasing order without duplicates.
     pure function default_output_dofs(model) result(dofs)
         !> The model.
         type(model_t), intent(in) :: model
@@ -241,6 +242,10 @@ contains
         touched = marked(touched, model%contact_dof)
         touched = marked(touched, model%contact_dof2)
         touched = marked(touched, model%force_dof)
+        if (allocated(model%contact_direction)) then
+            if (size(model%contact_direction, 1) == model%ndof) touched = touched .or. &
+                any(model%contact_direction /= 0.0_dp, dim=2)
+        end if
         dofs = pack([(i, i=1, model%ndof)], touched)
 
     contains

@@ -86,6 +86,9 @@ contains
             call mix(case%model%stiffness)
             call mix(case%model%damping)
         end if
+        ! directions and load shapes from files: the echo holds only the file names
+        if (allocated(case%model%contact_direction)) call mix(case%model%contact_direction)
+        if (allocated(case%model%force_shape)) call mix(case%model%force_shape)
         write (fp, '(2z8.8)') h
 
     contains

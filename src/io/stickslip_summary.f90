@@ -528,8 +528,9 @@ contains
     end subroutine begin_summary
 
     !> The reduction keys of &summary (only when the model was reduced): reduction_method,
-    !> reduced_dof, full_dof, reduction_modes, reduction_highest_mode_frequency [rad/s],
-    !> reduction_seconds, reduction_error (-1: not measured, e.g. no contact).
+    !> reduced_dof, full_dof, reduction_modes, reduction_load_vectors (static load-correction
+    !> vectors of a force_file), reduction_highest_mode_frequency [rad/s], reduction_seconds,
+    !> reduction_error (-1: not measured, e.g. no contact).
     subroutine put_reduction_keys(u, case, stat, msg)
         integer, intent(in) :: u
         type(case_t), intent(in) :: case
@@ -541,6 +542,7 @@ contains
                 call put(u, "  reduced_dof = "//itoa(r%reduced_dof), stat, msg)
                 call put(u, "  full_dof = "//itoa(r%full_dof), stat, msg)
                 call put(u, "  reduction_modes = "//itoa(r%modes), stat, msg)
+                call put(u, "  reduction_load_vectors = "//itoa(r%load_vectors), stat, msg)
                 call put(u, "  reduction_highest_mode_frequency = "// &
                          rtoa(r%highest_mode_frequency), stat, msg)
                 call put(u, "  reduction_seconds = "//rtoa(r%seconds), stat, msg)

@@ -10,7 +10,7 @@
 module stickslip_dynamics
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
-    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_model, only: model_t, contact_velocity_direction, force_direction
     use stickslip_basis, only: basis_t
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     implicit none
@@ -198,8 +198,9 @@ contains
             rhs = (0.0_dp, 0.0_dp)
             do i = 1, model%nforce()
                 if (model%force_harmonic(i) == h) then
-                    rhs(model%force_dof(i), 1) = rhs(model%force_dof(i), 1) + &
-                        model%force_amplitude(i)*exp(cmplx(0.0_dp, model%force_phase(i), dp))
+                    ! F_h += amplitude exp(i phase) f_i (a unit f_i adds to its DOF exactly)
+                    rhs(:, 1) = rhs(:, 1) + model%force_amplitude(i)* &
+                                exp(cmplx(0.0_dp, model%force_phase(i), dp))*force_direction(model, i)
                 end if
             end do
             do j = 1, nc

@@ -1,14 +1,20 @@
 !> The mechanical model: a linear structure M x'' + C x' + K x = f(t) + W r(t) with Coulomb
 !> friction contacts and harmonic forcing. Plain data plus validation; it knows nothing of
 !> how the periodic solution is computed nor of files.
+!>
+!> The contact directions W (N x n_c) and the load shapes F (N x n_terms) come either from
+!> DOF lists (contact_dof/contact_dof2: w_j = e_dof - e_dof2; force_dof: f_i = e_dof) or
+!> from dense matrices (contact_direction, force_shape: oblique or local-frame contacts,
+!> distributed loads). Every method reads them only through contact_velocity_direction and
+!> force_direction, so both forms give the same results (bitwise for unit columns).
 module stickslip_model
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_lapack, only: dpotrf
     implicit none
     private
-    public :: model_t, validate_model, contact_velocity_direction
+    public :: model_t, validate_model, contact_velocity_direction, force_direction
 
     !> A structure with friction contacts, forced at angular frequency `omega`.
     !> Field names follow the case-file namelist variables (README).
@@ -23,8 +29,13 @@ module stickslip_model
         real(dp), allocatable :: stiffness(:, :)
         !> Fundamental angular frequency of the forcing and of the response [rad/s].
         real(dp) :: omega = 0.0_dp
-        !> Forcing terms: amplitude * cos(harmonic * omega * t + phase) on DOF `force_dof`.
+        !> Forcing terms: amplitude * cos(harmonic * omega * t + phase) on DOF `force_dof`
+        !> (unallocated or empty when force_shape is given).
         integer, allocatable :: force_dof(:)
+        !> Load shapes, N x n_terms (optional): term i is amplitude(i) * cos(harmonic(i)
+        !> omega t + phase(i)) * force_shape(:, i) [dimensionless scale of the amplitude;
+        !> force = amplitude x shape in N]. When allocated it replaces force_dof.
+        real(dp), allocatable :: force_shape(:, :)
         !> Harmonic index of each forcing term (>= 0; 0 is a static load).
         integer, allocatable :: force_harmonic(:)
         !> Amplitude of each forcing term [N].
@@ -35,6 +46,10 @@ module stickslip_model
         integer, allocatable :: contact_dof(:)
         !> Second DOF of each contact, 0 for a contact with the ground.
         integer, allocatable :: contact_dof2(:)
+        !> Contact directions W, N x n_c (optional): contact j slips with velocity
+        !> contact_direction(:, j)^T x' and its friction force acts as contact_direction(:, j)
+        !> r_j. When allocated it replaces contact_dof and contact_dof2 (unallocated or empty).
+        real(dp), allocatable :: contact_direction(:, :)
         !> Friction coefficient of each contact (>= 0).
         real(dp), allocatable :: mu(:)
         !> Normal load of each contact (>= 0) [N].
@@ -53,7 +68,11 @@ contains
         !> The model.
         class(model_t), intent(in) :: self
         ncontact = 0
-        if (allocated(self%contact_dof)) ncontact = size(self%contact_dof)
+        if (allocated(self%contact_direction)) then
+            ncontact = size(self%contact_direction, 2)
+        else if (allocated(self%contact_dof)) then
+            ncontact = size(self%contact_dof)
+        end if
     end function ncontact
 
     !> Number of forcing terms of the model.
@@ -61,24 +80,53 @@ contains
         !> The model.
         class(model_t), intent(in) :: self
         nforce = 0
-        if (allocated(self%force_dof)) nforce = size(self%force_dof)
+        if (allocated(self%force_shape)) then
+            nforce = size(self%force_shape, 2)
+        else if (allocated(self%force_dof)) then
+            nforce = size(self%force_dof)
+        end if
     end function nforce
 
-    !> Column j of W: the direction whose velocity is contact j's slip velocity.
+    !> Column j of W: the direction whose velocity is contact j's slip velocity (and along
+    !> which its friction force acts): contact_direction(:, j) when given, else
+    !> e_{contact_dof(j)} - e_{contact_dof2(j)} (no second term for the ground, dof2 = 0).
     pure function contact_velocity_direction(model, j) result(w)
         !> The model.
         type(model_t), intent(in) :: model
-        !> Contact index.
+        !> Contact index (1..ncontact()).
         integer, intent(in) :: j
         real(dp) :: w(model%ndof)
+        if (allocated(model%contact_direction)) then
+            w = model%contact_direction(:, j)
+            return
+        end if
         w = 0.0_dp
         w(model%contact_dof(j)) = 1.0_dp
         if (model%contact_dof2(j) > 0) w(model%contact_dof2(j)) = -1.0_dp
     end function contact_velocity_direction
 
+    !> Column i of the load shapes: force term i is force_amplitude(i) * cos(force_harmonic(i)
+    !> omega t + force_phase(i)) times this vector; force_shape(:, i) when given, else
+    !> e_{force_dof(i)}.
+    pure function force_direction(model, i) result(f)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Forcing term index (1..nforce()).
+        integer, intent(in) :: i
+        real(dp) :: f(model%ndof)
+        if (allocated(model%force_shape)) then
+            f = model%force_shape(:, i)
+            return
+        end if
+        f = 0.0_dp
+        f(model%force_dof(i)) = 1.0_dp
+    end function force_direction
+
     !> Check a model for consistency: sizes, finite values, M symmetric positive definite,
     !> C and K symmetric-shaped and finite, DOF indices in range, mu >= 0, normal loads >= 0,
-    !> omega > 0. Errors (stat input) name the argument and its component, e.g.
+    !> omega > 0; contact_direction and force_shape (when given): ndof rows, finite, not
+    !> beside a non-empty contact_dof/contact_dof2 or force_dof, no zero contact direction,
+    !> one mu, normal_load (force_harmonic, force_amplitude, force_phase) per column. Errors (stat input) name the argument and its component, e.g.
     !> "model%mu(2) = -0.1: must be >= 0" (a case file reports "&friction mu(2) = ...").
     subroutine validate_model(model, error)
         !> The model to check.
@@ -121,26 +169,50 @@ contains
             return
         end if
 
-        if (.not. (allocated(model%force_dof) .and. allocated(model%force_harmonic) .and. &
-                   allocated(model%force_amplitude) .and. allocated(model%force_phase))) then
-            call fatal_error(error, "model%force_dof, model%force_harmonic, "// &
-                             "model%force_amplitude, model%force_phase: not all allocated", &
-                             stickslip_stat%input)
+        if (allocated(model%force_shape)) then
+            if (allocated(model%force_dof)) then
+                if (size(model%force_dof) > 0) then
+                    call fatal_error(error, "model%force_shape and model%force_dof: both "// &
+                                     "given (give the load shapes or the forced DOFs)", &
+                                     stickslip_stat%input)
+                    return
+                end if
+            end if
+            call check_shape("force_shape", model%force_shape, .false., error)
+            if (allocated(error)) return
+        else if (.not. allocated(model%force_dof)) then
+            call fatal_error(error, "model%force_dof: not allocated (or give "// &
+                             "model%force_shape)", stickslip_stat%input)
+            return
+        end if
+        if (.not. (allocated(model%force_harmonic) .and. allocated(model%force_amplitude) &
+                   .and. allocated(model%force_phase))) then
+            call fatal_error(error, "model%force_harmonic, model%force_amplitude, "// &
+                             "model%force_phase: not all allocated", stickslip_stat%input)
             return
         end if
         if (any([size(model%force_harmonic), size(model%force_amplitude), &
-                 size(model%force_phase)] /= size(model%force_dof))) then
-            call fatal_error(error, "model%force_dof, model%force_harmonic, "// &
-                             "model%force_amplitude and model%force_phase: must have the same "// &
-                             "length", stickslip_stat%input)
+                 size(model%force_phase)] /= model%nforce())) then
+            if (allocated(model%force_shape)) then
+                call fatal_error(error, "model%force_harmonic, model%force_amplitude and "// &
+                                 "model%force_phase: need one entry per column of "// &
+                                 "model%force_shape ("//itoa(model%nforce())//")", &
+                                 stickslip_stat%input)
+            else
+                call fatal_error(error, "model%force_dof, model%force_harmonic, "// &
+                                 "model%force_amplitude and model%force_phase: must have "// &
+                                 "the same length", stickslip_stat%input)
+            end if
             return
         end if
-        do i = 1, size(model%force_dof)
-            if (model%force_dof(i) < 1 .or. model%force_dof(i) > n) then
-                write (buf, '(a,i0,a,i0,a,i0,a)') "model%force_dof(", i, ") = ", &
-                    model%force_dof(i), ": must be a DOF in 1..", n, " (ndof)"
-                call fatal_error(error, trim(buf), stickslip_stat%input)
-                return
+        do i = 1, model%nforce()
+            if (.not. allocated(model%force_shape)) then
+                if (model%force_dof(i) < 1 .or. model%force_dof(i) > n) then
+                    write (buf, '(a,i0,a,i0,a,i0,a)') "model%force_dof(", i, ") = ", &
+                        model%force_dof(i), ": must be a DOF in 1..", n, " (ndof)"
+                    call fatal_error(error, trim(buf), stickslip_stat%input)
+                    return
+                end if
             end if
             if (model%force_harmonic(i) < 0) then
                 write (buf, '(a,i0,a,i0,a)') "model%force_harmonic(", i, ") = ", &
@@ -160,37 +232,70 @@ contains
             end if
         end do
 
-        if (.not. (allocated(model%contact_dof) .and. allocated(model%contact_dof2) .and. &
-                   allocated(model%mu) .and. allocated(model%normal_load))) then
-            call fatal_error(error, "model%contact_dof, model%contact_dof2, model%mu, "// &
-                             "model%normal_load: not all allocated", stickslip_stat%input)
+        if (allocated(model%contact_direction)) then
+            if (allocated(model%contact_dof)) then
+                if (size(model%contact_dof) > 0) then
+                    call fatal_error(error, "model%contact_direction and model%contact_dof: "// &
+                                     "both given (give the directions or the contact DOFs)", &
+                                     stickslip_stat%input)
+                    return
+                end if
+            end if
+            if (allocated(model%contact_dof2)) then
+                if (size(model%contact_dof2) > 0) then
+                    call fatal_error(error, "model%contact_direction and model%contact_dof2: "// &
+                                     "both given (give the directions or the contact DOFs)", &
+                                     stickslip_stat%input)
+                    return
+                end if
+            end if
+            call check_shape("contact_direction", model%contact_direction, .true., error)
+            if (allocated(error)) return
+        else if (.not. (allocated(model%contact_dof) .and. allocated(model%contact_dof2))) then
+            call fatal_error(error, "model%contact_dof, model%contact_dof2: not both "// &
+                             "allocated (or give model%contact_direction)", stickslip_stat%input)
             return
         end if
-        if (any([size(model%contact_dof2), size(model%mu), size(model%normal_load)] &
-                /= size(model%contact_dof))) then
+        if (.not. (allocated(model%mu) .and. allocated(model%normal_load))) then
+            call fatal_error(error, "model%mu, model%normal_load: not both allocated", &
+                             stickslip_stat%input)
+            return
+        end if
+        if (allocated(model%contact_direction)) then
+            if (any([size(model%mu), size(model%normal_load)] /= model%ncontact())) then
+                call fatal_error(error, "model%mu and model%normal_load: need one entry per "// &
+                                 "column of model%contact_direction ("// &
+                                 itoa(model%ncontact())//")", stickslip_stat%input)
+                return
+            end if
+        else if (any([size(model%contact_dof2), size(model%mu), size(model%normal_load)] &
+                     /= size(model%contact_dof))) then
             call fatal_error(error, "model%contact_dof, model%contact_dof2, model%mu and "// &
                              "model%normal_load: must have the same length", stickslip_stat%input)
             return
         end if
-        do j = 1, size(model%contact_dof)
-            if (model%contact_dof(j) < 1 .or. model%contact_dof(j) > n) then
-                write (buf, '(a,i0,a,i0,a,i0,a)') "model%contact_dof(", j, ") = ", &
-                    model%contact_dof(j), ": must be a DOF in 1..", n, " (ndof)"
-                call fatal_error(error, trim(buf), stickslip_stat%input)
-                return
-            end if
-            if (model%contact_dof2(j) < 0 .or. model%contact_dof2(j) > n) then
-                write (buf, '(a,i0,a,i0,a,i0,a)') "model%contact_dof2(", j, ") = ", &
-                    model%contact_dof2(j), ": must be 0 (ground) or a DOF in 1..", n, " (ndof)"
-                call fatal_error(error, trim(buf), stickslip_stat%input)
-                return
-            end if
-            if (model%contact_dof2(j) == model%contact_dof(j)) then
-                write (buf, '(a,i0,a)') "model%contact_dof2(", j, &
-                    "): equals model%contact_dof: a contact needs two different DOFs or "// &
-                    "the ground (0)"
-                call fatal_error(error, trim(buf), stickslip_stat%input)
-                return
+        do j = 1, model%ncontact()
+            if (.not. allocated(model%contact_direction)) then
+                if (model%contact_dof(j) < 1 .or. model%contact_dof(j) > n) then
+                    write (buf, '(a,i0,a,i0,a,i0,a)') "model%contact_dof(", j, ") = ", &
+                        model%contact_dof(j), ": must be a DOF in 1..", n, " (ndof)"
+                    call fatal_error(error, trim(buf), stickslip_stat%input)
+                    return
+                end if
+                if (model%contact_dof2(j) < 0 .or. model%contact_dof2(j) > n) then
+                    write (buf, '(a,i0,a,i0,a,i0,a)') "model%contact_dof2(", j, ") = ", &
+                        model%contact_dof2(j), ": must be 0 (ground) or a DOF in 1..", n, &
+                        " (ndof)"
+                    call fatal_error(error, trim(buf), stickslip_stat%input)
+                    return
+                end if
+                if (model%contact_dof2(j) == model%contact_dof(j)) then
+                    write (buf, '(a,i0,a)') "model%contact_dof2(", j, &
+                        "): equals model%contact_dof: a contact needs two different DOFs or "// &
+                        "the ground (0)"
+                    call fatal_error(error, trim(buf), stickslip_stat%input)
+                    return
+                end if
             end if
             if (.not. finite(model%mu(j)) .or. model%mu(j) < 0.0_dp) then
                 write (buf, '(a,i0,a,g0.6,a)') "model%mu(", j, ") = ", model%mu(j), &
@@ -207,6 +312,36 @@ contains
         end do
 
     contains
+
+        !> An N x m matrix of directions: ndof rows, finite, (nonzero_columns) no zero column.
+        subroutine check_shape(name, a, nonzero_columns, error)
+            character(len=*), intent(in) :: name
+            real(dp), intent(in) :: a(:, :)
+            logical, intent(in) :: nonzero_columns
+            type(error_type), allocatable, intent(out) :: error
+            integer :: p, q
+            if (size(a, 1) /= n) then
+                call fatal_error(error, "model%"//name//": has "//itoa(size(a, 1))// &
+                                 " rows, expected ndof = "//itoa(n), stickslip_stat%input)
+                return
+            end if
+            do q = 1, size(a, 2)
+                do p = 1, n
+                    if (.not. finite(a(p, q))) then
+                        call fatal_error(error, "model%"//name//"("//itoa(p)//", "// &
+                                         itoa(q)//"): not a finite number (NaN or Inf)", &
+                                         stickslip_stat%input)
+                        return
+                    end if
+                end do
+                if (nonzero_columns .and. all(a(:, q) == 0.0_dp)) then
+                    call fatal_error(error, "model%"//name//"(:, "//itoa(q)//"): a zero "// &
+                                     "column (contact "//itoa(q)//" has no direction)", &
+                                     stickslip_stat%input)
+                    return
+                end if
+            end do
+        end subroutine check_shape
 
         subroutine check_matrix(name, a, must_be_symmetric, error)
             character(len=*), intent(in) :: name

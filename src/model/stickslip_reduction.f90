@@ -1,14 +1,25 @@
 !> Craig-Bampton reduction of a sparse structure (M, K, optional C) to a small dense model.
 !>
-!> The DOFs split into boundary DOFs b (given: every DOF a contact or a force touches) and
-!> interior DOFs i (the rest). The basis is T = [I 0; Phi_c Phi_n] (rows in the order b, i):
+!> The DOFs split into boundary DOFs b (given: every DOF a contact or a forced DOF touches)
+!> and interior DOFs i (the rest). The basis is T = [I 0 0; Phi_c Phi_n Psi] (rows b, i):
 !> the static constraint modes Phi_c = -K_ii^-1 K_ib (one sparse LU of K_ii, nb right-hand
 !> sides) and the fixed-interface normal modes Phi_n of K_ii phi = w^2 M_ii phi (shift-invert
 !> Lanczos at sigma = 0 on the sparse LU of K_ii, or LAPACK dsygv when the interior is small),
 !> M_ii-orthonormal. The reduced matrices M_r = T^T M T, K_r = T^T K T, C_r = T^T C T are
-!> formed from sparse products with the N x (nb + nm) basis (no dense N x N matrix).
+!> formed from sparse products with the N x (nb + nm + nl) basis (no dense N x N matrix).
 !> Reduced DOF j <= nb is full DOF boundary(j) (boundary DOFs ascending); reduced DOF nb + k
-!> is the amplitude of fixed-interface mode k.
+!> is the amplitude of fixed-interface mode k; reduced DOF nb + nm + l that of load vector l.
+!>
+!> Load vectors (distributed loads, argument `loads` = F, N x n_terms): the interior part F_i
+!> of a load is poorly represented by the fixed-interface modes alone (their series for the
+!> static response K_ii^-1 F_i converges slowly). For every column with a nonzero interior
+!> part one static load-correction vector psi = K_ii^-1 F_i (the sparse LU of K_ii already
+!> made for Phi_c) is M_ii-orthogonalized (twice, Gram-Schmidt) against the kept modes and
+!> the load vectors before it, dropped when what is left is below load_vector_tolerance of
+!> its M_ii-norm (numerically dependent), and normalized to unit modal mass. With them the
+!> exact static response K^-1 F lies in the span of T, so the reduced model's static response
+!> to F_r = T^T F is the full one (reduce_vectors gives T^T F). They get no modal damping
+!> ratio (damping_ratio acts on the modes only); C, when given, is projected as for the rest.
 !>
 !> Mode-count rule (options%modes = 0): keep every fixed-interface mode with frequency below
 !> cutoff_factor x the highest excitation frequency (options%highest_frequency = H omega_max),
@@ -29,11 +40,13 @@
 !> adds modal damping 2 zeta w_k on the diagonal of the fixed-interface modes (unit modal mass).
 !>
 !> Reduction error (receptance_error): the contact receptance G = W^T Z^-1 W with
-!> Z = K - w^2 M + i w C and W the contact directions (e_dof1 - e_dof2), of the reduced model
-!> against the full sparse model (complex sparse LU, UMFPACK) at given frequencies:
+!> Z = K - w^2 M + i w C and W the contact directions (e_dof1 - e_dof2, or any W nonzero on
+!> boundary DOFs only), of the reduced model against the full sparse model (complex sparse
+!> LU, UMFPACK) at given frequencies:
 !> max over the frequencies of max|G_r - G| / max|G|.
 module stickslip_reduction
     use, intrinsic :: iso_fortran_env, only: int64
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
@@ -44,12 +57,15 @@ module stickslip_reduction
     implicit none
     private
     public :: reduction_options_t, reduction_report_t, reduced_model_t, craig_bampton, &
-        recover_dofs, receptance_error, default_cutoff_factor, reduced_dof_of
+        recover_dofs, receptance_error, default_cutoff_factor, reduced_dof_of, reduce_vectors
 
     !> Default factor of the mode-count rule: modes below 3 H omega_max are kept.
     real(dp), parameter :: default_cutoff_factor = 3.0_dp
     !> Interiors up to this size use a dense eigensolver (LAPACK dsygv).
     integer, parameter :: dense_interior = 400
+    !> A load vector is dropped when its M_ii-norm after the orthogonalization is below this
+    !> fraction of its norm before (it lies in the span of the modes and earlier vectors).
+    real(dp), parameter, public :: load_vector_tolerance = 1.0e-10_dp
 
     !> What to keep in a Craig-Bampton reduction.
     type :: reduction_options_t
@@ -76,6 +92,8 @@ module stickslip_reduction
         integer :: reduced_dof = 0
         integer :: boundary_dof = 0
         integer :: modes = 0
+        !> Static load-correction vectors appended to the basis (distributed loads).
+        integer :: load_vectors = 0
         !> Wall time of the reduction [s].
         real(dp) :: seconds = 0.0_dp
         !> Frequency of the highest kept fixed-interface mode [rad/s] (0: none kept).
@@ -90,10 +108,12 @@ module stickslip_reduction
 
     !> A Craig-Bampton reduced model and its basis.
     type :: reduced_model_t
-        !> Full DOFs, boundary DOFs, fixed-interface modes, reduced DOFs (nb + nm).
+        !> Full DOFs, boundary DOFs, fixed-interface modes, load vectors, reduced DOFs
+        !> (nb + nm + nl).
         integer :: n = 0
         integer :: nb = 0
         integer :: nm = 0
+        integer :: nl = 0
         integer :: nr = 0
         !> Full DOF of boundary DOF j (ascending), size nb.
         integer, allocatable :: boundary(:)
@@ -107,19 +127,31 @@ module stickslip_reduction
         real(dp), allocatable :: modes(:, :)
         !> Their frequencies [rad/s], ascending.
         real(dp), allocatable :: frequencies(:)
+        !> Static load-correction vectors Psi, (n - nb) x nl, M_ii-orthonormal and
+        !> M_ii-orthogonal to the modes (see the module header).
+        real(dp), allocatable :: loads(:, :)
     end type reduced_model_t
 
     interface recover_dofs
         module procedure recover_real, recover_complex
     end interface recover_dofs
 
+    !> The contact receptance error of a reduction (see receptance_error_directions), for
+    !> contacts given by DOF pairs or by directions W.
+    interface receptance_error
+        module procedure receptance_error_dofs, receptance_error_directions
+    end interface receptance_error
+
 contains
 
     !> Craig-Bampton reduction of (M, K, C) with the boundary DOFs `boundary_dofs` (any
-    !> order, duplicates ignored). Errors (input): sizes that disagree, a DOF out of range, no
-    !> boundary or no interior DOF, options out of range; (numerical): K_ii singular (the
-    !> interior moves as a rigid body when the boundary is fixed), the eigensolver failing.
-    subroutine craig_bampton(kmat, mmat, boundary_dofs, options, reduced, report, error, cmat)
+    !> order, duplicates ignored); with `loads`, one static load-correction vector per load
+    !> column with a nonzero interior part (see the module header). Errors (input): sizes that
+    !> disagree, a DOF out of range, no boundary or no interior DOF, options out of range, a
+    !> non-finite load; (numerical): K_ii singular (the interior moves as a rigid body when
+    !> the boundary is fixed), the eigensolver failing.
+    subroutine craig_bampton(kmat, mmat, boundary_dofs, options, reduced, report, error, cmat, &
+                             loads)
         !> Stiffness K, N x N (full storage).
         type(sparse_matrix_t), intent(in) :: kmat
         !> Mass M, N x N.
@@ -136,8 +168,11 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Damping C, N x N (optional: projected).
         type(sparse_matrix_t), intent(in), optional :: cmat
+        !> Distributed loads F, N x n_terms (optional: load vectors for their interior parts).
+        real(dp), intent(in), optional :: loads(:, :)
         integer, allocatable :: loc(:)
-        integer :: n, nb, ni, j, p, r, q, nm, nev, nr
+        integer :: n, nb, ni, j, p, r, q, nm, nev, nr, nl
+        real(dp), allocatable :: psi(:, :)
         integer(int64) :: t0, t1, rate
         type(sparse_matrix_t) :: kii, mii, kiit, miit, cii
         type(sparse_lu_t) :: lu
@@ -156,6 +191,18 @@ contains
         if (present(cmat)) then
             if (cmat%nrows /= n .or. cmat%ncols /= n) then
                 call fatal_error(error, "craig_bampton: C must be "//itoa(n)//" x "//itoa(n), &
+                                 stickslip_stat%input)
+                return
+            end if
+        end if
+        if (present(loads)) then
+            if (size(loads, 1) /= n) then
+                call fatal_error(error, "craig_bampton: loads has "//itoa(size(loads, 1))// &
+                                 " rows, must be "//itoa(n), stickslip_stat%input)
+                return
+            end if
+            if (.not. all(ieee_is_finite(loads))) then
+                call fatal_error(error, "craig_bampton: loads: not all finite", &
                                  stickslip_stat%input)
                 return
             end if
@@ -229,6 +276,7 @@ contains
         end if
         allocate (reduced%constraint(ni, nb))
         call lu%solve(rhs, reduced%constraint, error)
+        if (.not. allocated(error) .and. present(loads)) call interior_load_solutions(psi)
         call lu%release()
         if (allocated(error)) return
 
@@ -270,13 +318,17 @@ contains
             nm = 0
         end if
         reduced%nm = nm
-        nr = nb + nm
-        reduced%nr = nr
         allocate (reduced%modes(ni, nm), reduced%frequencies(nm))
         if (nm > 0) then
             reduced%modes = vec(:, 1:nm)
             reduced%frequencies = sqrt(max(lam(1:nm), 0.0_dp))
         end if
+        if (.not. allocated(psi)) allocate (psi(ni, 0))
+        call orthonormal_loads(psi, reduced%loads)
+        nl = size(reduced%loads, 2)
+        reduced%nl = nl
+        nr = nb + nm + nl
+        reduced%nr = nr
 
         ! T (N x nr) and the projections
         allocate (t(n, nr))
@@ -286,7 +338,8 @@ contains
         end do
         do p = 1, ni
             t(reduced%interior(p), 1:nb) = reduced%constraint(p, :)
-            if (nm > 0) t(reduced%interior(p), nb + 1:nr) = reduced%modes(p, :)
+            if (nm > 0) t(reduced%interior(p), nb + 1:nb + nm) = reduced%modes(p, :)
+            if (nl > 0) t(reduced%interior(p), nb + nm + 1:nr) = reduced%loads(p, :)
         end do
         call project(mmat, reduced%mass)
         call project(kmat, reduced%stiffness)
@@ -307,10 +360,64 @@ contains
         report%reduced_dof = nr
         report%boundary_dof = nb
         report%modes = nm
+        report%load_vectors = nl
         report%seconds = real(t1 - t0, dp)/real(max(rate, 1_int64), dp)
         if (nm > 0) report%highest_mode_frequency = reduced%frequencies(nm)
 
     contains
+
+        !> K_ii^-1 F_i for every column of `loads` with a nonzero interior part (on the LU of
+        !> K_ii), ni x (those columns).
+        subroutine interior_load_solutions(psi)
+            real(dp), allocatable, intent(out) :: psi(:, :)
+            real(dp), allocatable :: fi(:, :)
+            integer :: c, m
+            allocate (fi(ni, size(loads, 2)))
+            m = 0
+            do c = 1, size(loads, 2)
+                if (all(loads(reduced%interior, c) == 0.0_dp)) cycle
+                m = m + 1
+                fi(:, m) = loads(reduced%interior, c)
+            end do
+            allocate (psi(ni, m))
+            if (m == 0) return
+            call lu%solve(fi(:, 1:m), psi, error)
+            if (allocated(error)) error%message = "craig_bampton: load vectors: "// &
+                error%message
+        end subroutine interior_load_solutions
+
+        !> The load vectors: each column of `raw` M_ii-orthogonalized (classical Gram-Schmidt,
+        !> twice) against the kept modes and the vectors kept before it, dropped below
+        !> load_vector_tolerance, normalized to unit modal mass.
+        subroutine orthonormal_loads(raw, kept)
+            real(dp), intent(in) :: raw(:, :)
+            real(dp), allocatable, intent(out) :: kept(:, :)
+            real(dp), allocatable :: v(:, :), mv(:, :)
+            real(dp) :: norm0, norm1
+            integer :: c, pass, m
+            allocate (kept(ni, size(raw, 2)), v(ni, 1), mv(ni, 1))
+            m = 0
+            do c = 1, size(raw, 2)
+                v(:, 1) = raw(:, c)
+                call csr_times_dense(mii, v, mv)
+                norm0 = sqrt(max(dot_product(v(:, 1), mv(:, 1)), 0.0_dp))
+                if (.not. (norm0 > 0.0_dp)) cycle
+                do pass = 1, 2
+                    if (nm + m == 0) exit
+                    ! v -= B B^T M v with B = [modes, kept(:, 1:m)] (M_ii-orthonormal columns)
+                    if (nm > 0) v(:, 1) = v(:, 1) - matmul(reduced%modes, &
+                                                           matmul(mv(:, 1), reduced%modes))
+                    if (m > 0) v(:, 1) = v(:, 1) - matmul(kept(:, 1:m), &
+                                                          matmul(mv(:, 1), kept(:, 1:m)))
+                    call csr_times_dense(mii, v, mv)
+                end do
+                norm1 = sqrt(max(dot_product(v(:, 1), mv(:, 1)), 0.0_dp))
+                if (.not. (norm1 > load_vector_tolerance*norm0)) cycle
+                m = m + 1
+                kept(:, m) = v(:, 1)/norm1
+            end do
+            kept = kept(:, 1:m)
+        end subroutine orthonormal_loads
 
         !> The last mode the rule keeps (0: none): w_k <= limit, or (damped, no max_frequency)
         !> w_k^2 <= cutoff_factor^2 highest_frequency c_k.
@@ -479,7 +586,9 @@ contains
                 p = interior_position(reduced, dofs(k))
                 x(k) = dot_product(reduced%constraint(p, :), q(1:reduced%nb))
                 if (reduced%nm > 0) x(k) = x(k) + dot_product(reduced%modes(p, :), &
-                                                              q(reduced%nb + 1:reduced%nr))
+                                                              q(reduced%nb + 1:reduced%nb + reduced%nm))
+                if (reduced%nl > 0) x(k) = x(k) + dot_product(reduced%loads(p, :), &
+                                                              q(reduced%nb + reduced%nm + 1:reduced%nr))
             end if
         end do
     end subroutine recover_real
@@ -507,7 +616,9 @@ contains
                 p = interior_position(reduced, dofs(k))
                 x(k) = sum(reduced%constraint(p, :)*q(1:reduced%nb))
                 if (reduced%nm > 0) x(k) = x(k) + sum(reduced%modes(p, :)* &
-                                                      q(reduced%nb + 1:reduced%nr))
+                                                      q(reduced%nb + 1:reduced%nb + reduced%nm))
+                if (reduced%nl > 0) x(k) = x(k) + sum(reduced%loads(p, :)* &
+                                                      q(reduced%nb + reduced%nm + 1:reduced%nr))
             end if
         end do
     end subroutine recover_complex
@@ -527,6 +638,38 @@ contains
                 "recover_dofs: a DOF out of range 1.."//itoa(reduced%n), stickslip_stat%input)
         end if
     end subroutine check_recover
+
+    !> T^T A for a dense N x m block A (loads, contact directions): rows 1..nb are
+    !> A_b + Phi_c^T A_i, then Phi_n^T A_i and Psi^T A_i (nr x m). For A zero on the interior
+    !> (contact directions on boundary DOFs) it is A_b exactly, padded with zeros.
+    !> Errors (input): A without N rows.
+    subroutine reduce_vectors(reduced, a, ar, error)
+        !> The reduced model.
+        type(reduced_model_t), intent(in) :: reduced
+        !> Full-model vectors, N x m.
+        real(dp), intent(in) :: a(:, :)
+        !> Reduced vectors, nr x m.
+        real(dp), allocatable, intent(out) :: ar(:, :)
+        !> Error (last).
+        type(error_type), allocatable, intent(out) :: error
+        real(dp), allocatable :: ai(:, :)
+        integer :: nb, nm
+        if (size(a, 1) /= reduced%n) then
+            call fatal_error(error, "reduce_vectors: "//itoa(size(a, 1))//" rows, must be "// &
+                             itoa(reduced%n), stickslip_stat%input)
+            return
+        end if
+        nb = reduced%nb
+        nm = reduced%nm
+        allocate (ar(reduced%nr, size(a, 2)))
+        ar(1:nb, :) = a(reduced%boundary, :)
+        ar(nb + 1:, :) = 0.0_dp
+        ai = a(reduced%interior, :)
+        if (all(ai == 0.0_dp)) return
+        ar(1:nb, :) = ar(1:nb, :) + matmul(transpose(reduced%constraint), ai)
+        if (nm > 0) ar(nb + 1:nb + nm, :) = matmul(transpose(reduced%modes), ai)
+        if (reduced%nl > 0) ar(nb + nm + 1:, :) = matmul(transpose(reduced%loads), ai)
+    end subroutine reduce_vectors
 
     !> Position of full DOF `dof` among the interior DOFs (binary search; 0: not interior).
     pure integer function interior_position(reduced, dof) result(p)
@@ -549,13 +692,11 @@ contains
         end do
     end function interior_position
 
-    !> Reduction error: max over `frequencies` of max|G_r - G| / max|G|, G = W^T Z^-1 W the
-    !> receptance of the contact directions W (column j: e_dof1(j) - e_dof2(j), dof2 = 0 the
-    !> ground) of the full sparse model (complex sparse LU of Z = K - w^2 M + i w C per
-    !> frequency) and G_r that of the reduced model. Errors (input): a contact DOF that is not
+    !> Reduction error for contacts given by DOFs: receptance_error with W column j
+    !> e_dof1(j) - e_dof2(j) (dof2 = 0 the ground). Errors (input): a contact DOF that is not
     !> a boundary DOF, sizes; (numerical): Z singular at a frequency (named).
-    subroutine receptance_error(kmat, mmat, reduced, dof1, dof2, frequencies, max_error, &
-                                error, cmat)
+    subroutine receptance_error_dofs(kmat, mmat, reduced, dof1, dof2, frequencies, max_error, &
+                                     error, cmat)
         !> Full stiffness K.
         type(sparse_matrix_t), intent(in) :: kmat
         !> Full mass M.
@@ -572,7 +713,59 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Full damping C (optional).
         type(sparse_matrix_t), intent(in), optional :: cmat
-        integer :: n, nc, nr, k, j, f, row, m, info, pk, pm, pc
+        real(dp), allocatable :: w(:, :)
+        integer :: k, nc
+        max_error = 0.0_dp
+        nc = size(dof1)
+        if (size(dof2) /= nc) then
+            call fatal_error(error, "receptance_error: dof1 and dof2 differ in size", &
+                             stickslip_stat%input)
+            return
+        end if
+        do k = 1, nc
+            if (reduced_dof_of(reduced, dof1(k)) == 0 .or. (dof2(k) /= 0 .and. &
+                                                              reduced_dof_of(reduced, dof2(k)) == 0)) then
+                call fatal_error(error, "receptance_error: contact "//itoa(k)//" (DOFs "// &
+                                 itoa(dof1(k))//", "//itoa(dof2(k))//") is not on the "// &
+                                 "boundary", stickslip_stat%input)
+                return
+            end if
+        end do
+        allocate (w(reduced%n, nc))
+        w = 0.0_dp
+        do k = 1, nc
+            w(dof1(k), k) = 1.0_dp
+            if (dof2(k) > 0) w(dof2(k), k) = w(dof2(k), k) - 1.0_dp
+        end do
+        call receptance_error_directions(kmat, mmat, reduced, w, frequencies, max_error, error, &
+                                         cmat)
+    end subroutine receptance_error_dofs
+
+    !> Reduction error: max over `frequencies` of max|G_r - G| / max|G|, G = W^T Z^-1 W the
+    !> receptance of the contact directions W (N x n_c, nonzero on boundary DOFs only) of
+    !> the full sparse model (complex sparse LU of Z = K - w^2 M + i w C per frequency) and
+    !> G_r = W_r^T Z_r^-1 W_r that of the reduced model, W_r = T^T W (the boundary rows of
+    !> W). Errors (input): W with a nonzero interior entry or the wrong number of rows;
+    !> (numerical): Z singular at a frequency (named).
+    subroutine receptance_error_directions(kmat, mmat, reduced, directions, frequencies, &
+                                           max_error, error, cmat)
+        !> Full stiffness K.
+        type(sparse_matrix_t), intent(in) :: kmat
+        !> Full mass M.
+        type(sparse_matrix_t), intent(in) :: mmat
+        !> The reduced model of (K, M, C).
+        type(reduced_model_t), intent(in) :: reduced
+        !> Contact directions W, N x n_c.
+        real(dp), intent(in) :: directions(:, :)
+        !> Frequencies w [rad/s].
+        real(dp), intent(in) :: frequencies(:)
+        !> The error measure (0 when there are no contacts or frequencies).
+        real(dp), intent(out) :: max_error
+        !> Error (last non-optional).
+        type(error_type), allocatable, intent(out) :: error
+        !> Full damping C (optional).
+        type(sparse_matrix_t), intent(in), optional :: cmat
+        integer :: n, nc, nr, k, f, row, m, info, pk, pm, pc
         type(sparse_matrix_t) :: pattern
         integer, allocatable :: ri(:), ci(:), posk(:), posm(:), posc(:), ipiv(:)
         real(dp), allocatable :: ones(:)
@@ -584,19 +777,21 @@ contains
         max_error = 0.0_dp
         n = reduced%n
         nr = reduced%nr
-        nc = size(dof1)
-        if (size(dof2) /= nc) then
-            call fatal_error(error, "receptance_error: dof1 and dof2 differ in size", &
+        nc = size(directions, 2)
+        if (size(directions, 1) /= n) then
+            call fatal_error(error, "receptance_error: directions has "// &
+                             itoa(size(directions, 1))//" rows, must be "//itoa(n), &
                              stickslip_stat%input)
             return
         end if
         if (nc == 0 .or. size(frequencies) == 0) return
         do k = 1, nc
-            if (reduced_dof_of(reduced, dof1(k)) == 0 .or. (dof2(k) /= 0 .and. &
-                                                              reduced_dof_of(reduced, dof2(k)) == 0)) then
-                call fatal_error(error, "receptance_error: contact "//itoa(k)//" (DOFs "// &
-                                 itoa(dof1(k))//", "//itoa(dof2(k))//") is not on the "// &
-                                 "boundary", stickslip_stat%input)
+            if (any(directions(reduced%interior, k) /= 0.0_dp)) then
+                call fatal_error(error, "receptance_error: contact "//itoa(k)//" has a "// &
+                                 "direction on interior DOF "// &
+                                 itoa(reduced%interior(findloc(directions(reduced%interior, k) &
+                                                               /= 0.0_dp, .true., 1)))// &
+                                 " (not on the boundary)", stickslip_stat%input)
                 return
             end if
         end do
@@ -616,17 +811,9 @@ contains
         if (present(cmat)) call positions(cmat, posc)
 
         allocate (b(n, nc), x(n, nc), br(nr, nc), zr(nr, nr), ipiv(nr), zval(pattern%nnz()))
-        b = (0.0_dp, 0.0_dp)
+        b = cmplx(directions, 0.0_dp, dp)
         br = (0.0_dp, 0.0_dp)
-        do k = 1, nc
-            b(dof1(k), k) = (1.0_dp, 0.0_dp)
-            br(reduced_dof_of(reduced, dof1(k)), k) = (1.0_dp, 0.0_dp)
-            if (dof2(k) > 0) then
-                b(dof2(k), k) = b(dof2(k), k) - (1.0_dp, 0.0_dp)
-                j = reduced_dof_of(reduced, dof2(k))
-                br(j, k) = br(j, k) - (1.0_dp, 0.0_dp)
-            end if
-        end do
+        br(1:reduced%nb, :) = b(reduced%boundary, :)
         do f = 1, size(frequencies)
             w = frequencies(f)
             zval = (0.0_dp, 0.0_dp)
@@ -710,7 +897,7 @@ contains
                 end do
             end do
         end subroutine positions
-    end subroutine receptance_error
+    end subroutine receptance_error_directions
 
     pure function rtext(x) result(s)
         real(dp), intent(in) :: x

@@ -19,7 +19,8 @@ module stickslip_euler
     use stickslip_progress, only: progress_t
     use stickslip_diagnostics, only: diagnostics_t, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_model, only: model_t, validate_model, contact_velocity_direction
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
+        force_direction
     use stickslip_lapack, only: dgetrf, dgetrs
     use stickslip_contact_solve, only: contact_forces
     implicit none
@@ -129,8 +130,9 @@ contains
         character(len=40) :: defect_text
         real(dp) :: h, period_t, t, ampx, ampv, dx, dv
         real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), b(:), wk(:), x(:), v(:), &
-                                 xstart(:), vstart(:), r(:), ufree(:), limit(:), famp(:), fph(:)
-        integer, allocatable :: ipiv(:), fdof(:), fh(:)
+                                 xstart(:), vstart(:), r(:), ufree(:), limit(:), famp(:), fph(:), &
+                                 fshape(:, :)
+        integer, allocatable :: ipiv(:), fh(:)
         integer(int64) :: c0, c1, rate
         character(len=300) :: buf
 
@@ -171,7 +173,10 @@ contains
         if (nc > 0) call dgetrs('N', n, nc, s, n, ipiv, sw, n, info)
         d = h*matmul(transpose(w), sw)
         limit = model%mu*model%normal_load
-        fdof = model%force_dof
+        allocate (fshape(n, model%nforce()))
+        do i = 1, model%nforce()
+            fshape(:, i) = force_direction(model, i)
+        end do
         fh = model%force_harmonic
         famp = model%force_amplitude
         fph = model%force_phase
@@ -197,8 +202,8 @@ contains
                 b = matmul(model%mass, v)
                 wk = matmul(model%stiffness, x)
                 b = b - h*wk
-                do i = 1, size(fdof)
-                    b(fdof(i)) = b(fdof(i)) + h*famp(i)*cos(fh(i)*model%omega*t + fph(i))
+                do i = 1, size(fh)
+                    b = b + (h*famp(i)*cos(fh(i)*model%omega*t + fph(i)))*fshape(:, i)
                 end do
                 call dgetrs('N', n, 1, s, n, ipiv, b, n, info)
                 v = b

@@ -22,6 +22,7 @@ module test_reduction
     use stickslip_cli, only: run_cli, string_t
     use fixtures, only: enter_project_root, scratch, write_lines, project_path
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
+    use stickslip_case_reduction, only: error_frequencies
     implicit none
     private
     public :: run_reduction_tests, chain_matrices
@@ -40,6 +41,7 @@ contains
         call test_weighted_residual(t)
         call test_case_file(t)
         call test_beam_reference(t)
+        call test_error_frequencies(t)
     end subroutine run_reduction_tests
 
     !> Fixed-free chain of n masses: springs k between neighbours and to the ground at DOF 1,
@@ -660,4 +662,22 @@ contains
                    "beam reference: hbm -> reference as H grows", rt(diff(1))//" "// &
                    rt(diff(2))//" "//rt(diff(3)))
     end subroutine test_beam_reference
+
+    !> Where the reduction error is measured: 1, 3, 5 times the forcing frequencies, both
+    !> sweep ends, distinct, m <= harmonics, a static load alone as h = 1, at most 8.
+    subroutine test_error_frequencies(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp), allocatable :: f(:)
+        f = error_frequencies([1], [2.0_dp], 30)
+        call check(t, size(f) == 3 .and. all(f == [2.0_dp, 6.0_dp, 10.0_dp]), &
+                   "error frequencies: omega, 3 omega, 5 omega")
+        f = error_frequencies([1], [1.0_dp, 3.0_dp], 30)
+        call check(t, size(f) == 5 .and. all(f == [1.0_dp, 3.0_dp, 9.0_dp, 5.0_dp, 15.0_dp]), &
+                   "error frequencies: sweep ends, distinct")
+        f = error_frequencies([0], [2.0_dp], 1)
+        call check(t, size(f) == 1 .and. all(f == [2.0_dp]), &
+                   "error frequencies: static load alone, H = 1")
+        f = error_frequencies([1, 2, 3], [1.0_dp, 1.5_dp], 30)
+        call check(t, size(f) == 8, "error frequencies: at most 8")
+    end subroutine test_error_frequencies
 end module test_reduction

@@ -21,8 +21,8 @@
 !> mode below 3 x the highest harmonic frequency of the run, H_max omega_max, with H_max the
 !> larger of &hbm harmonics and the forcing harmonics and omega_max the larger of &forcing
 !> omega and, for a sweep over omega, its start and stop; max_frequency > 0 overrides.
-!> The measured reduction error (receptance_error) is taken at the forcing harmonics'
-!> frequencies h omega (at most 4 distinct ones).
+!> The measured reduction error (receptance_error) is taken at error_frequencies: 1, 3 and 5
+!> times the forcing harmonics' frequencies (sweep ends for a sweep over omega), at most 8.
 module stickslip_case_reduction
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
@@ -35,7 +35,7 @@ module stickslip_case_reduction
     implicit none
     private
     public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs, &
-        recover_full_field
+        recover_full_field, error_frequencies
 
     !> The &reduction group as read, what the reduction did, and the full-model DOF numbers.
     type :: reduction_case_t
@@ -206,13 +206,14 @@ contains
             return
         end if
 
-        ! the error measure at the forcing harmonics (distinct h omega, at most 4)
-        allocate (freqs(0))
-        do k = 1, size(model%force_harmonic)
-            if (size(freqs) >= 4) exit
-            if (any(abs(freqs - model%force_harmonic(k)*model%omega) <= 0.0_dp)) cycle
-            freqs = [freqs, model%force_harmonic(k)*model%omega]
-        end do
+        ! the error measure at the run's frequencies (error_frequencies)
+        if (omega_max > abs(model%omega)) then
+            freqs = error_frequencies(model%force_harmonic, [min(abs(start), abs(stop)), &
+                                      omega_max], harmonics)
+        else
+            freqs = error_frequencies(model%force_harmonic, [abs(model%omega)], harmonics)
+        end if
+        red%report%error_frequencies = freqs
         d2 = model%contact_dof2
         if (allocated(model%contact_direction) .and. size(freqs) > 0) then
             if (sparse%has_damping) then
@@ -371,4 +372,38 @@ contains
             end if
         end associate
     end subroutine recover_full_field
+
+    !> The frequencies where the reduction error is measured [rad/s]: m h omega for every
+    !> distinct forcing harmonic h > 0 (a static load alone: h = 1), m = 1, 3, 5 (the
+    !> fundamental and the first odd harmonics friction generates, m <= max(harmonics, 1)),
+    !> omega each of `omegas` (the forcing omega, or the ends of a sweep over omega);
+    !> distinct, at most max_error_frequencies (the lowest first: each costs one sparse
+    !> complex LU of the full model).
+    pure function error_frequencies(force_harmonic, omegas, harmonics) result(freqs)
+        !> Harmonic of every forcing term.
+        integer, intent(in) :: force_harmonic(:)
+        !> The forcing frequencies of the run [rad/s].
+        real(dp), intent(in) :: omegas(:)
+        !> &hbm harmonics.
+        integer, intent(in) :: harmonics
+        real(dp), allocatable :: freqs(:)
+        integer, parameter :: max_error_frequencies = 8
+        integer, allocatable :: hs(:)
+        integer :: i, j, m
+        real(dp) :: f
+        hs = pack(force_harmonic, force_harmonic > 0)
+        if (size(hs) == 0) hs = [1]
+        allocate (freqs(0))
+        do m = 1, min(5, max(harmonics, 1)), 2
+            do i = 1, size(hs)
+                do j = 1, size(omegas)
+                    f = m*hs(i)*omegas(j)
+                    if (.not. (f > 0.0_dp)) cycle
+                    if (any(freqs == f)) cycle
+                    if (size(freqs) >= max_error_frequencies) return
+                    freqs = [freqs, f]
+                end do
+            end do
+        end do
+    end function error_frequencies
 end module stickslip_case_reduction

@@ -530,7 +530,8 @@ contains
     !> The reduction keys of &summary (only when the model was reduced): reduction_method,
     !> reduced_dof, full_dof, reduction_modes, reduction_load_vectors (static load-correction
     !> vectors of a force_file), reduction_highest_mode_frequency [rad/s], reduction_seconds,
-    !> reduction_error (-1: not measured, e.g. no contact).
+    !> reduction_error (-1: not measured, e.g. no contact), reduction_error_frequencies
+    !> [rad/s] (where it was measured).
     subroutine put_reduction_keys(u, case, stat, msg)
         integer, intent(in) :: u
         type(case_t), intent(in) :: case
@@ -547,6 +548,11 @@ contains
                          rtoa(r%highest_mode_frequency), stat, msg)
                 call put(u, "  reduction_seconds = "//rtoa(r%seconds), stat, msg)
                 call put(u, "  reduction_error = "//rtoa(r%error), stat, msg)
+                if (allocated(r%error_frequencies)) then
+                    if (size(r%error_frequencies) > 0) call put(u, &
+                        "  reduction_error_frequencies = "//rlist(r%error_frequencies), &
+                        stat, msg)
+                end if
             end if
         end associate
     end subroutine put_reduction_keys

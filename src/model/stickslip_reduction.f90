@@ -104,6 +104,8 @@ module stickslip_reduction
         logical :: capped = .false.
         !> Receptance error (receptance_error) at the run's frequencies; -1: not measured.
         real(dp) :: error = -1.0_dp
+        !> The frequencies where `error` was measured [rad/s] (set by the caller).
+        real(dp), allocatable :: error_frequencies(:)
     end type reduction_report_t
 
     !> A Craig-Bampton reduced model and its basis.

@@ -58,12 +58,15 @@ contains
         call put(u, "set grid lc rgb '#dddddd'", stat, msg)
         call put(u, "set logscale y", stat, msg)
         call put(u, "f = 'frc.csv'", stat, msg)
-        call put(u, "# the y range: four decades below the largest amplitude (a contact stuck "// &
-                 "all period drives its DOF to roundoff)", stat, msg)
-        call put(u, "ymax = 0", stat, msg)
+        call put(u, "# the y range: from the smallest amplitude, but at most four decades "// &
+                 "below the largest (a contact stuck all period drives its DOF to roundoff)", &
+                 stat, msg)
+        call put(u, "ymax = 0; ymin = 1e300", stat, msg)
         call put(u, "do for [k=2:"//itoa(1 + nsel)//"] { stats f using k nooutput; "// &
-                 "if (STATS_max > ymax) { ymax = STATS_max } }", stat, msg)
-        call put(u, "if (ymax > 0) set yrange [ymax*1e-4:ymax*2]", stat, msg)
+                 "if (STATS_max > ymax) { ymax = STATS_max }; "// &
+                 "if (STATS_min > 0 && STATS_min < ymin) { ymin = STATS_min } }", stat, msg)
+        call put(u, "if (ymax > 0) set yrange [(ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4):"// &
+                 "ymax*1.5]", stat, msg)
         call put(u, "set xlabel '"//parameter//"'", stat, msg)
         call put(u, "set ylabel 'amplitude max |x_k(t)|'", stat, msg)
         call put(u, "set title 'Forced-response curve (red crosses: unstable, Floquet)'", &
@@ -73,10 +76,10 @@ contains
         do k = 1, nsel
             if (k == 1) then
                 call put(u, "plot f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(sel(k))//"', \", stat, msg)
+                         itoa(sel(k))//"' noenhanced, \", stat, msg)
             else
                 call put(u, "     f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(sel(k))//"', \", stat, msg)
+                         itoa(sel(k))//"' noenhanced, \", stat, msg)
             end if
             if (k < nsel) then
                 call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points pt 2 "// &

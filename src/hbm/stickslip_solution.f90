@@ -76,7 +76,11 @@ module stickslip_solution
         real(dp) :: omega = 0.0_dp
         !> Harmonic of each coefficient index (0 for the constant), length nb.
         integer, allocatable :: harmonic(:)
-        !> Displacement coefficients, nb x N [m].
+        !> The DOFs of the columns of xcoef, vcoef, x and v when they do not hold all N
+        !> (the exact sparse condensation, solve_periodic_sparse: the DOFs asked for, then
+        !> the contact and forced DOFs); unallocated: columns 1..N.
+        integer, allocatable :: dofs(:)
+        !> Displacement coefficients, nb x N (nb x size(dofs) when dofs is set) [m].
         real(dp), allocatable :: xcoef(:, :)
         !> Velocity coefficients, nb x N [m/s].
         real(dp), allocatable :: vcoef(:, :)

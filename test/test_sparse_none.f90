@@ -5,6 +5,7 @@
 !> solution converging to the 'none' one as modes are added.
 module test_sparse_none
     use stickslip_kinds, only: dp
+    use stickslip_lapack, only: dgetrf, dgetrs
     use stickslip_error, only: error_type
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense
     use stickslip_model, only: model_t
@@ -16,6 +17,12 @@ module test_sparse_none
     use stickslip_hbm, only: solve_periodic
     use stickslip_hbm_sparse, only: solve_periodic_sparse
     use test_reduction, only: chain_matrices
+    use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
+        craig_bampton
+    use stickslip_case, only: case_t, read_case
+    use stickslip_matrix_market, only: write_matrix_market
+    use stickslip_cli, only: run_cli, string_t
+    use fixtures, only: enter_project_root, scratch, scratch_dir, write_lines
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
@@ -27,6 +34,9 @@ contains
         type(test_counter_t), intent(inout) :: t
         call test_dynamics_equal(t)
         call test_solution_equal(t)
+        call test_singular(t)
+        call test_cli(t)
+        call test_craig_bampton_converges(t)
     end subroutine run_sparse_none_tests
 
     !> A 60-DOF damped chain with two contacts (one relative), forcing on harmonics 0, 1, 3.
@@ -129,6 +139,236 @@ contains
         call check(t, size(ss%x, 2) == 6 .and. size(ss%x, 1) == 256, "sparse none: samples "// &
                    "of the kept DOFs only")
     end subroutine test_solution_equal
+
+    !> A free chain (K singular) with a static load: the static problem is refused with the
+    !> dense path's message; an undamped resonance is found with its harmonic.
+    subroutine test_singular(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_model_t) :: sm
+        type(model_t) :: dm
+        type(hbm_options_t) :: opts
+        type(hbm_solution_t) :: ss
+        type(error_type), allocatable :: error
+        type(basis_t) :: basis
+        type(dynamics_t) :: dd
+        real(dp) :: w1
+        integer :: i
+        call small_chain(sm, dm)
+        ! remove the ground spring at DOF 1 (chain_matrices: K(1,1) = 2k): a free chain
+        do i = sm%stiffness%row_start(1), sm%stiffness%row_start(2) - 1
+            if (sm%stiffness%col(i) == 1) sm%stiffness%val(i) = 1.0e4_dp
+        end do
+        opts%harmonics = 3
+        opts%samples = 64
+        call solve_periodic_sparse(sm, opts, [integer ::], ss, error)
+        call check(t, allocated(error), "sparse none: singular K with a static load refused")
+        if (allocated(error)) call check(t, index(error%message, "stiffness matrix K is "// &
+                                                  "singular") > 0, &
+                                         "sparse none: the message names K", error%message)
+        ! undamped, omega at the first natural frequency (from the dense eigen-solve below)
+        call small_chain(sm, dm)
+        sm%damping = sparse_matrix_t()
+        dm%damping = 0.0_dp
+        w1 = first_frequency(dm)
+        sm%model%omega = w1
+        dm%omega = w1
+        sm%model%force_harmonic = [1, 0, 1]
+        dm%force_harmonic = sm%model%force_harmonic
+        call new_basis(basis, 3, .false., 64, error)
+        call new_dynamics(dd, dm, basis, error)
+        call check(t, allocated(error), "sparse none: dense path finds the resonance")
+        call basis%destroy()
+        call solve_periodic_sparse(sm, opts, [integer ::], ss, error)
+        call check(t, allocated(error), "sparse none: resonance refused")
+        if (allocated(error)) call check(t, index(error%message, "undamped resonance at "// &
+                                                  "harmonic h = 1") > 0, &
+                                         "sparse none: resonance named with its harmonic", &
+                                         error%message)
+        ! near it (relative 1e-8): a near_resonance finding, as the dense path
+        sm%model%omega = w1*(1.0_dp + 1.0e-8_dp)
+        call solve_periodic_sparse(sm, opts, [integer ::], ss, error)
+        if (.not. allocated(error)) then
+            call check(t, ss%diagnostics%has("near_resonance"), &
+                       "sparse none: near_resonance reported")
+        else
+            call check(t, index(error%message, "resonance") > 0, &
+                       "sparse none: near resonance reported", error%message)
+        end if
+    end subroutine test_singular
+
+    !> The first natural frequency of a dense model (LAPACK dsygv through the dense path's
+    !> own tools is not exported: a bisection on the sign of det is overkill; use the
+    !> Rayleigh quotient of inverse iteration on K with M).
+    function first_frequency(m) result(w)
+        type(model_t), intent(in) :: m
+        real(dp) :: w
+        real(dp) :: x(m%ndof), y(m%ndof), a(m%ndof, m%ndof)
+        integer :: ipiv(m%ndof), info, it, n
+        n = m%ndof
+        a = m%stiffness
+        call dgetrf(n, n, a, n, ipiv, info)
+        x = 1.0_dp
+        do it = 1, 500
+            y = matmul(m%mass, x)
+            call dgetrs('N', n, 1, a, n, ipiv, y, n, info)
+            x = y/norm2(y)
+        end do
+        w = sqrt(dot_product(x, matmul(m%stiffness, x))/dot_product(x, matmul(m%mass, x)))
+    end function first_frequency
+
+    !> A 3000-DOF model from Matrix Market files with &reduction method = 'none' through the
+    !> command line: hbm.csv with the default columns (contact and forced DOFs), summary.nml
+    !> with reduction_method = 'none'; the same answer as Craig-Bampton with many modes;
+    !> method 'euler' and &hbm stability refused naming &reduction method.
+    subroutine test_cli(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_matrix_t) :: k, m, c
+        type(error_type), allocatable :: error
+        type(case_t) :: cs
+        type(string_t), allocatable :: args(:)
+        integer :: uo, ue, code, u, stat
+        character(len=2000) :: line
+        logical :: keys(3)
+        call enter_project_root()
+        if (len(scratch_dir()) == 0) return
+        call chain_matrices(3000, k, m, c)
+        call write_matrix_market(scratch//"/none_m.mtx", m, .true., error)
+        call write_matrix_market(scratch//"/none_k.mtx", k, .true., error)
+        call check(t, .not. allocated(error), "sparse none cli: files written", msg(error))
+        if (allocated(error)) return
+        call write_lines(scratch//"/none.nml", [character(len=100) :: &
+            "&system mass_file = 'none_m.mtx', stiffness_file = 'none_k.mtx',", &
+            "  rayleigh_alpha = 0.01 /", &
+            "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+            "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+            "&reduction method = 'none' /", &
+            "&hbm harmonics = 5 /", &
+            "&output directory = '"//scratch//"/out_none' /"])
+        allocate (args(1))
+        args(1)%s = scratch//"/none.nml"
+        open (newunit=uo, status='scratch', action='readwrite')
+        open (newunit=ue, status='scratch', action='readwrite')
+        code = run_cli(args, uo, ue)
+        close (uo)
+        close (ue)
+        call check(t, code == 0, "sparse none cli: exits 0", it(code))
+        open (newunit=u, file=scratch//"/out_none/hbm.csv", status='old', action='read', &
+              iostat=stat)
+        line = ""
+        if (stat == 0) read (u, '(a)', iostat=stat) line
+        close (u, iostat=stat)
+        call check(t, trim(line) == "t,x2990,x3000,v2990,v3000,r1", &
+                   "sparse none cli: hbm.csv columns of the contact and forced DOFs", trim(line))
+        keys = .false.
+        open (newunit=u, file=scratch//"/out_none/summary.nml", status='old', action='read', &
+              iostat=stat)
+        do while (stat == 0)
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            if (index(line, "reduction_method = 'none'") > 0) keys(1) = .true.
+            if (index(line, "full_dof = 3000") > 0) keys(2) = .true.
+            if (index(line, "condensation_seconds = ") > 0) keys(3) = .true.
+        end do
+        close (u, iostat=stat)
+        call check(t, all(keys), "sparse none cli: summary.nml reports 'none', N and the time")
+        ! the summary reads back as the same sparse case
+        call read_case(scratch//"/out_none/summary.nml", cs, error)
+        call check(t, .not. allocated(error), "sparse none cli: summary.nml reads back", &
+                   msg(error))
+        if (.not. allocated(error)) call check(t, allocated(cs%sparse_model), &
+                                               "sparse none cli: read back sparse")
+        ! methods that need dense matrices
+        call write_lines(scratch//"/none_euler.nml", [character(len=100) :: &
+            "&system mass_file = 'none_m.mtx', stiffness_file = 'none_k.mtx' /", &
+            "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+            "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+            "&reduction method = 'none' /", &
+            "&run method = 'euler' /"])
+        call read_case(scratch//"/none_euler.nml", cs, error)
+        call check(t, allocated(error), "sparse none: euler refused")
+        if (allocated(error)) call check(t, index(error%message, "&run method = 'euler'") > 0 &
+            .and. index(error%message, "&reduction method = 'none'") > 0 .and. &
+            index(error%message, "'craig-bampton'") > 0, &
+            "sparse none: the euler error names &run method, &reduction method and the fix", &
+            error%message)
+        call write_lines(scratch//"/none_stab.nml", [character(len=100) :: &
+            "&system mass_file = 'none_m.mtx', stiffness_file = 'none_k.mtx' /", &
+            "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+            "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+            "&reduction method = 'none' /", &
+            "&hbm stability = .true. /"])
+        call read_case(scratch//"/none_stab.nml", cs, error)
+        call check(t, allocated(error), "sparse none: stability refused")
+        if (allocated(error)) call check(t, index(error%message, "stability") > 0 .and. &
+            index(error%message, "&reduction method") > 0, &
+            "sparse none: the stability error names the check and &reduction method", &
+            error%message)
+    end subroutine test_cli
+
+    !> The reduction-error yardstick: Craig-Bampton solutions of a 400-DOF damped chain
+    !> approach the exact 'none' solution as fixed-interface modes are added.
+    subroutine test_craig_bampton_converges(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_model_t) :: sm
+        type(model_t) :: small
+        type(hbm_options_t) :: opts
+        type(hbm_solution_t) :: sx, sr
+        type(reduced_model_t) :: red
+        type(reduction_report_t) :: rep
+        type(error_type), allocatable :: error
+        integer, parameter :: n = 400, dc = 300, df = 400
+        integer, parameter :: counts(4) = [1, 3, 8, 20]
+        real(dp) :: err(4), scale
+        integer :: i
+        call chain_matrices(n, sm%stiffness, sm%mass, sm%damping)
+        sm%model%ndof = n
+        sm%model%omega = 0.5_dp
+        sm%model%force_dof = [df]
+        sm%model%force_harmonic = [1]
+        sm%model%force_amplitude = [2.0_dp]
+        sm%model%force_phase = [0.0_dp]
+        sm%model%contact_dof = [dc]
+        sm%model%contact_dof2 = [0]
+        sm%model%mu = [0.5_dp]
+        sm%model%normal_load = [1.0_dp]
+        opts%harmonics = 5
+        opts%samples = 128
+        call solve_periodic_sparse(sm, opts, [dc], sx, error)
+        call check(t, .not. allocated(error) .and. sx%converged, &
+                   "sparse none: exact chain solution", msg(error))
+        if (allocated(error)) return
+        scale = maxval(abs(sx%xcoef(:, 1)))
+        err = huge(1.0_dp)
+        do i = 1, size(counts)
+            call craig_bampton(sm%stiffness, sm%mass, [dc, df], &
+                               reduction_options_t(modes=counts(i)), red, rep, error, &
+                               cmat=sm%damping)
+            if (allocated(error)) exit
+            small = sm%model
+            small%ndof = red%nr
+            small%mass = red%mass
+            small%stiffness = red%stiffness
+            small%damping = red%damping
+            small%force_dof = [2]
+            small%contact_dof = [1]
+            call solve_periodic(small, opts, sr, error)
+            if (allocated(error)) exit
+            err(i) = maxval(abs(sr%xcoef(:, 1) - sx%xcoef(:, 1)))/scale
+        end do
+        call check(t, .not. allocated(error), "sparse none: reduced solves", msg(error))
+        call check(t, err(2) < err(1) .and. err(3) < err(2) .and. err(4) < err(3) .and. &
+                   err(4) < 1.0e-4_dp, "sparse none: Craig-Bampton converges to the exact "// &
+                   "solution as modes are added", rt(err(1))//" "//rt(err(2))//" "// &
+                   rt(err(3))//" "//rt(err(4)))
+    end subroutine test_craig_bampton_converges
+
+    function it(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=16) :: buf
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function it
 
     function msg(error) result(s)
         type(error_type), allocatable, intent(in) :: error

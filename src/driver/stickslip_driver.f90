@@ -22,7 +22,9 @@ module stickslip_driver
     use stickslip_case_reduction, only: recover_outputs
     use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_checks, only: hbm_checks_t, solve_and_check
+    use stickslip_checks, only: hbm_checks_t, solve_and_check, sampling_notes, &
+        sampling_diagnostics
+    use stickslip_hbm_sparse, only: solve_periodic_sparse
     use stickslip_euler, only: euler_result_t, integrate_euler
     use stickslip_reference, only: reference_result_t
     use stickslip_reference_start, only: solve_reference_from_starts
@@ -96,6 +98,14 @@ contains
         type(progress_t), intent(inout), optional :: progress
         result%method = trim(case%method)
         if (len(result%method) == 0) result%method = 'hbm'
+        if (allocated(case%sparse_model) .and. result%method /= 'hbm') then
+            call fatal_error(error, "&run method = '"//result%method//"': needs the dense "// &
+                             "matrices of a small or reduced model, but &reduction method = "// &
+                             "'none' keeps this model sparse (only method 'hbm' runs on it); "// &
+                             "use &reduction method = 'craig-bampton'", stickslip_stat%input)
+            call name_case_file(case, error)
+            return
+        end if
         select case (result%method)
         case ('hbm')
             call run_case(case, result%hbm, error, result%checks)
@@ -224,18 +234,35 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         logical :: wanted
-        call solve_and_check(case%model, case%hbm, case%checks, &
-                             case%reference%reference_options_t, sol, ch, error)
+        integer, allocatable :: cols(:)
+        if (allocated(case%sparse_model)) then
+            ! &reduction method = 'none' above the dense limit: the exact sparse condensation
+            call solve_periodic_sparse(case%sparse_model, case%hbm, selected_dofs(case), sol, &
+                                       error)
+            ch%notes = sampling_notes(case%hbm%samples, case%hbm%harmonics)
+            call sampling_diagnostics(case%hbm%samples, ch%diagnostics)
+            ch%truncation%note = "not estimated for &reduction method = 'none' on a sparse "// &
+                                 "model"
+        else
+            call solve_and_check(case%model, case%hbm, case%checks, &
+                                 case%reference%reference_options_t, sol, ch, error)
+        end if
         call after_method(case, error, wanted)
         if (.not. wanted) return
         if (sol%converged) then
             call remove_stale_results(case%directory, [character(len=24) :: "hbm.csv", &
                                       "coefficients.csv"])
+            if (allocated(sol%dofs)) then
+                ! the solution's columns are its kept DOFs: those of the selection
+                cols = sparse_columns(sol%dofs, selected_dofs(case))
+            else
+                cols = output_columns(case)
+            end if
             call write_hbm_csv(case%directory, output_solution(case, sol), error, &
-                               output_columns(case), selected_dofs(case))
+                               cols, selected_dofs(case))
             if (allocated(error)) return
             call write_coefficients_csv(case%directory, output_solution(case, sol), error, &
-                                        output_columns(case), selected_dofs(case))
+                                        cols, selected_dofs(case))
             if (allocated(error)) return
         else
             call remove_stale_results(case%directory, [character(len=24) ::])
@@ -655,6 +682,16 @@ contains
         if (index(error%message, case%path//": ") == 1) return
         error%message = case%path//": "//error%message
     end subroutine name_case_file
+    !> The columns of a sparse solution (columns = `kept` DOFs) holding the DOFs `dofs`.
+    pure function sparse_columns(kept, dofs) result(cols)
+        integer, intent(in) :: kept(:), dofs(:)
+        integer :: cols(size(dofs))
+        integer :: k
+        do k = 1, size(dofs)
+            cols(k) = findloc(kept, dofs(k), 1)
+        end do
+    end function sparse_columns
+
     !> Whether the case's model was reduced with output rows kept (the result files then hold
     !> recovered full-model DOFs).
     pure logical function recovers(case)

@@ -52,7 +52,7 @@ contains
         type(hb_problem_t) :: prob
         real(dp), allocatable :: mob(:)
         integer, allocatable :: kept(:)
-        integer(int64) :: c0, c1, rate
+        integer(int64) :: c0, c1, c2, c3, rate
         integer :: i
 
         call system_clock(c0, rate)
@@ -82,7 +82,9 @@ contains
 
         call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
         if (allocated(error)) return
+        call system_clock(c2)
         call new_sparse_dynamics(dyn, smodel, basis, kept, error)
+        call system_clock(c3)
         call basis%destroy()
         if (allocated(error)) return
         call new_condensed_problem(prob, dyn, s%limit, o%harmonics, o%odd_only, o%samples, &
@@ -91,6 +93,7 @@ contains
         call solve_condensed(s, prob, opts, o, sol, error, r_start, dyn_out)
         if (allocated(error)) return
         sol%dofs = kept
+        sol%condensation_seconds = real(c3 - c2, dp)/real(rate, dp)
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine solve_periodic_sparse

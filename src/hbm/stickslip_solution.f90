@@ -62,6 +62,9 @@ module stickslip_solution
         real(dp) :: rho = 0.0_dp
         !> Wall-clock seconds spent in the solve (condensation, hybrj, recovery).
         real(dp) :: seconds = 0.0_dp
+        !> Wall-clock seconds of the exact sparse condensation within `seconds` (the sparse
+        !> LU factorizations and solves, solve_periodic_sparse; 0 for the dense path) [s].
+        real(dp) :: condensation_seconds = 0.0_dp
         !> Empty when converged, otherwise what went wrong and what to try.
         character(len=:), allocatable :: diagnosis
         !> Highest harmonic H.

@@ -9,7 +9,7 @@ module test_sparse_none
     use stickslip_error, only: error_type
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense
     use stickslip_model, only: model_t
-    use stickslip_sparse_model, only: sparse_model_t
+    use stickslip_sparse_model, only: sparse_model_t, validate_sparse_model
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t, new_dynamics
     use stickslip_sparse_dynamics, only: new_sparse_dynamics
@@ -35,6 +35,7 @@ contains
         call test_dynamics_equal(t)
         call test_solution_equal(t)
         call test_singular(t)
+        call test_validation(t)
         call test_cli(t)
         call test_craig_bampton_converges(t)
     end subroutine run_sparse_none_tests
@@ -195,6 +196,39 @@ contains
                        "sparse none: near resonance reported", error%message)
         end if
     end subroutine test_singular
+
+    !> validate_sparse_model and the DOF list name what is wrong.
+    subroutine test_validation(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_model_t) :: sm, bad
+        type(model_t) :: dm
+        type(hbm_options_t) :: opts
+        type(hbm_solution_t) :: ss
+        type(error_type), allocatable :: error
+        call small_chain(sm, dm)
+        call validate_sparse_model(sm, error)
+        call check(t, .not. allocated(error), "sparse none: the chain is valid", msg(error))
+        bad = sm
+        bad%stiffness%nrows = 59
+        call validate_sparse_model(bad, error)
+        call check(t, allocated(error), "sparse none: wrong K size refused")
+        if (allocated(error)) call check(t, index(error%message, "smodel%stiffness: 59 x 60") &
+                                         > 0, "sparse none: K size named", error%message)
+        bad = sm
+        bad%mass%val(1) = -1.0_dp
+        call validate_sparse_model(bad, error)
+        call check(t, allocated(error), "sparse none: negative mass refused")
+        if (allocated(error)) call check(t, index(error%message, "smodel%mass(1,1)") > 0, &
+                                         "sparse none: the mass entry named", error%message)
+        bad = sm
+        bad%model%mu(2) = -0.1_dp
+        call validate_sparse_model(bad, error)
+        call check(t, allocated(error), "sparse none: negative mu refused (model_t checks)")
+        opts%harmonics = 3
+        opts%samples = 64
+        call solve_periodic_sparse(sm, opts, [61], ss, error)
+        call check(t, allocated(error), "sparse none: a DOF outside 1..N refused")
+    end subroutine test_validation
 
     !> The first natural frequency of a dense model (LAPACK dsygv through the dense path's
     !> own tools is not exported: a bisection on the sign of det is overkill; use the

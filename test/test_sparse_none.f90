@@ -36,6 +36,7 @@ contains
         call test_solution_equal(t)
         call test_singular(t)
         call test_validation(t)
+        call test_variants(t)
         call test_cli(t)
         call test_craig_bampton_converges(t)
     end subroutine run_sparse_none_tests
@@ -196,6 +197,59 @@ contains
                        "sparse none: near resonance reported", error%message)
         end if
     end subroutine test_singular
+
+    !> Odd harmonics only (no constant, no static LU) and a model without contacts (the
+    !> linear response): equal to the dense path.
+    subroutine test_variants(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_model_t) :: sm
+        type(model_t) :: dm
+        type(hbm_options_t) :: opts
+        type(hbm_solution_t) :: ss, sd
+        type(error_type), allocatable :: error
+        call small_chain(sm, dm)
+        sm%model%force_dof = [60, 45]
+        sm%model%force_harmonic = [1, 3]
+        sm%model%force_amplitude = [40.0_dp, 10.0_dp]
+        sm%model%force_phase = [0.0_dp, 0.4_dp]
+        dm%force_dof = sm%model%force_dof
+        dm%force_harmonic = sm%model%force_harmonic
+        dm%force_amplitude = sm%model%force_amplitude
+        dm%force_phase = sm%model%force_phase
+        opts%harmonics = 7
+        opts%odd_only = .true.
+        opts%samples = 128
+        call solve_periodic(dm, opts, sd, error)
+        call solve_periodic_sparse(sm, opts, [integer ::], ss, error)
+        call check(t, .not. allocated(error) .and. ss%converged .and. sd%converged, &
+                   "sparse none: odd harmonics solve", msg(error))
+        if (allocated(error)) return
+        call check(t, maxval(abs(ss%rcoef - sd%rcoef)) <= 1.0e-8_dp*maxval(abs(sd%rcoef)), &
+                   "sparse none: odd harmonics: same friction forces")
+        call check_close(t, ss%diss_damping, sd%diss_damping, &
+                         "sparse none: odd harmonics: same viscous dissipation", rtol=1.0e-8_dp)
+        ! no contacts
+        sm%model%contact_dof = [integer ::]
+        sm%model%contact_dof2 = [integer ::]
+        sm%model%mu = [real(dp) ::]
+        sm%model%normal_load = [real(dp) ::]
+        dm%contact_dof = sm%model%contact_dof
+        dm%contact_dof2 = sm%model%contact_dof2
+        dm%mu = sm%model%mu
+        dm%normal_load = sm%model%normal_load
+        call solve_periodic(dm, opts, sd, error)
+        call solve_periodic_sparse(sm, opts, [60], ss, error)
+        call check(t, .not. allocated(error) .and. ss%converged, &
+                   "sparse none: no contacts solves", msg(error))
+        if (allocated(error)) return
+        call check(t, maxval(abs(ss%xcoef(:, 1) - sd%xcoef(:, 60))) <= &
+                   1.0e-10_dp*maxval(abs(sd%xcoef(:, 60))), "sparse none: no contacts: "// &
+                   "the linear response")
+        call check_close(t, ss%work_forcing, sd%work_forcing, &
+                         "sparse none: no contacts: forcing work", rtol=1.0e-8_dp)
+        call check_close(t, ss%diss_damping, ss%work_forcing, &
+                         "sparse none: no contacts: all of it damped", rtol=1.0e-8_dp)
+    end subroutine test_variants
 
     !> validate_sparse_model and the DOF list name what is wrong.
     subroutine test_validation(t)

@@ -74,10 +74,10 @@ contains
         integer, allocatable :: kept(:)
         call small_chain(sm, dm)
         call new_basis(basis, 5, .false., 64, error)
-        call new_dynamics(dd, dm, basis, error)
+        call new_dynamics(dd, dm, basis, error, with_omega_derivative=.true.)
         call check(t, .not. allocated(error), "sparse none: dense dynamics", msg(error))
         kept = [7, 50, 30, 29, 60, 45]
-        call new_sparse_dynamics(ds, sm, basis, kept, error)
+        call new_sparse_dynamics(ds, sm, basis, kept, error, with_omega_derivative=.true.)
         call check(t, .not. allocated(error), "sparse none: sparse dynamics", msg(error))
         call basis%destroy()
         if (allocated(error)) return
@@ -85,6 +85,10 @@ contains
                    "sparse none: V0 equal")
         call check(t, maxval(abs(ds%g - dd%g)) <= 1.0e-10_dp*maxval(abs(dd%g)), &
                    "sparse none: G equal")
+        call check(t, maxval(abs(ds%dv0 - dd%dv0)) <= 1.0e-10_dp*maxval(abs(dd%dv0)), &
+                   "sparse none: dV0/domega equal")
+        call check(t, maxval(abs(ds%dg - dd%dg)) <= 1.0e-10_dp*maxval(abs(dd%dg)), &
+                   "sparse none: dG/domega equal")
         call check(t, maxval(abs(ds%x0 - dd%x0(kept, :))) <= 1.0e-10_dp*maxval(abs(dd%x0)), &
                    "sparse none: X0 rows equal")
         call check(t, maxval(abs(ds%y - dd%y(kept, :, :))) <= 1.0e-10_dp*maxval(abs(dd%y)), &

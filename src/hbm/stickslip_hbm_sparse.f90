@@ -30,7 +30,7 @@ contains
     !> condensed dynamics used. Errors: as solve_periodic (stat input: invalid model,
     !> options or `dofs` outside 1..N; stat numerical: singular K with a constant term,
     !> undamped resonance, an UMFPACK failure such as out of memory).
-    subroutine solve_periodic_sparse(smodel, opts, dofs, sol, error, r_start, dyn_out)
+    subroutine solve_periodic_sparse(smodel, opts, dofs, sol, error, r_start, dyn, dyn_out)
         !> The structure with sparse matrices, its contacts and forcing.
         type(sparse_model_t), intent(in) :: smodel
         !> Solver options.
@@ -43,12 +43,16 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Optional start for the friction-force coefficients [N].
         real(dp), intent(in), optional :: r_start(:, :)
+        !> The condensed dynamics of `smodel` on this basis (or a larger one), with the rows of
+        !> kept_dofs(smodel, dofs), already built (as a continuation keeps them): nothing is
+        !> factorized for the condensation.
+        type(dynamics_t), intent(in), optional :: dyn
         !> The condensed dynamics of the solve.
         type(dynamics_t), intent(out), optional :: dyn_out
         type(condensed_structure_t) :: s
         type(hbm_options_t) :: o
         type(basis_t) :: basis
-        type(dynamics_t) :: dyn
+        type(dynamics_t) :: built
         type(hb_problem_t) :: prob
         real(dp), allocatable :: mob(:)
         integer, allocatable :: kept(:)
@@ -80,15 +84,36 @@ contains
         o = opts
         if (o%rho == 0.0_dp) o%rho = s%rho_auto
 
-        call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
-        if (allocated(error)) return
         call system_clock(c2)
-        call new_sparse_dynamics(dyn, smodel, basis, kept, error)
-        call system_clock(c3)
-        call basis%destroy()
-        if (allocated(error)) return
-        call new_condensed_problem(prob, dyn, s%limit, o%harmonics, o%odd_only, o%samples, &
-                                   o%rho, error, s%force_harmonic)
+        if (present(dyn)) then
+            if (.not. allocated(dyn%kept)) then
+                call fatal_error(error, "solve_periodic_sparse: dyn is not a sparse "// &
+                                 "condensation", stickslip_stat%input)
+                return
+            end if
+            if (size(dyn%kept) /= size(kept) .or. .not. (dyn%omega == s%omega)) then
+                call fatal_error(error, "solve_periodic_sparse: dyn was not built for "// &
+                                 "this model (kept DOFs or omega differ)", stickslip_stat%input)
+                return
+            end if
+            if (any(dyn%kept /= kept)) then
+                call fatal_error(error, "solve_periodic_sparse: dyn was not built for "// &
+                                 "these DOFs", stickslip_stat%input)
+                return
+            end if
+            call system_clock(c3)
+            call new_condensed_problem(prob, dyn, s%limit, o%harmonics, o%odd_only, o%samples, &
+                                       o%rho, error, s%force_harmonic)
+        else
+            call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
+            if (allocated(error)) return
+            call new_sparse_dynamics(built, smodel, basis, kept, error)
+            call system_clock(c3)
+            call basis%destroy()
+            if (allocated(error)) return
+            call new_condensed_problem(prob, built, s%limit, o%harmonics, o%odd_only, &
+                                       o%samples, o%rho, error, s%force_harmonic)
+        end if
         if (allocated(error)) return
         call solve_condensed(s, prob, opts, o, sol, error, r_start, dyn_out)
         if (allocated(error)) return

@@ -56,7 +56,8 @@ contains
     !> has the constant, "undamped resonance at harmonic h ...", M singular, an UMFPACK
     !> failure such as out of memory). `singular_values` = [smin_k, smin_m] of an earlier
     !> call for the same M and K skips their two factorizations.
-    subroutine new_sparse_dynamics(self, smodel, basis, kept, error, singular_values)
+    subroutine new_sparse_dynamics(self, smodel, basis, kept, error, singular_values, &
+                                   with_omega_derivative)
         !> The condensed dynamics.
         type(dynamics_t), intent(out) :: self
         !> A validated sparse model.
@@ -69,11 +70,15 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> [smin_k, smin_m] from a dynamics of the same M and K.
         real(dp), intent(in), optional :: singular_values(2)
+        !> Also dv0 and dg, the omega derivatives of V0_h and G_h (as new_dynamics; n_c + 1
+        !> more solves per harmonic), for a continuation in omega.
+        logical, intent(in), optional :: with_omega_derivative
         type(z_pattern_t) :: pat
         type(sparse_lu_t) :: klu
         type(sparse_zlu_t) :: zlu
         real(dp), allocatable :: w(:, :), rrhs(:, :), rsol(:, :)
-        complex(dp), allocatable :: rhs(:, :), xs(:, :), cx(:, :), z(:)
+        complex(dp), allocatable :: rhs(:, :), xs(:, :), cx(:, :), z(:), dx(:, :), mx(:, :)
+        logical :: deriv
         complex(dp) :: ihw
         real(dp) :: knorm, smin_k, smin_m, smin_z, zscale, rel, rcond, homega
         integer :: n, nc, nk, ih, h, j
@@ -102,6 +107,9 @@ contains
         allocate (self%v0(nc, basis%nharm), self%g(nc, nc, basis%nharm))
         allocate (self%damping_gram(nc + 1, nc + 1, basis%nharm), &
                   self%forcing_gram(nc + 1, basis%nharm))
+        deriv = .false.
+        if (present(with_omega_derivative)) deriv = with_omega_derivative
+        if (deriv) allocate (self%dv0(nc, basis%nharm), self%dg(nc, nc, basis%nharm))
 
         call build_pattern(smodel, pat, error)
         if (allocated(error)) return
@@ -213,6 +221,23 @@ contains
             call damping_times(smodel%damping, xs, cx)
             self%damping_gram(:, :, ih) = matmul(conjg(transpose(xs)), cx)
             self%forcing_gram(:, ih) = matmul(conjg(rhs(:, 1)), xs)
+            if (deriv) then
+                ! Z^-1 (dZ/domega) X, dZ/domega = -2 h^2 omega M + i h C (as new_dynamics)
+                call damping_times(smodel%mass, xs, mx)
+                if (.not. allocated(dx)) allocate (dx(n, nc + 1))
+                call zlu%solve(-2.0_dp*h*h*smodel%model%omega*mx + &
+                               cmplx(0.0_dp, real(h, dp), dp)*cx, dx, error)
+                if (allocated(error)) then
+                    call zlu%release()
+                    return
+                end if
+                do j = 1, nc
+                    self%dv0(j, ih) = cmplx(0.0_dp, real(h, dp), dp)*sum(w(:, j)*xs(:, 1)) &
+                                      - ihw*sum(w(:, j)*dx(:, 1))
+                    self%dg(j, :, ih) = cmplx(0.0_dp, real(h, dp), dp)* &
+                                        matmul(w(:, j), xs(:, 2:)) - ihw*matmul(w(:, j), dx(:, 2:))
+                end do
+            end if
         end do
         call zlu%release()
     end subroutine new_sparse_dynamics
@@ -396,7 +421,7 @@ contains
         norm2c = sqrt(norm2(real(x, dp))**2 + norm2(aimag(x))**2)
     end function norm2c
 
-    !> cx = C x for the columns of x (C in CSR; empty C gives 0).
+    !> cx = C x for the columns of x (C in CSR, e.g. the damping or the mass; empty C gives 0).
     subroutine damping_times(c, x, cx)
         type(sparse_matrix_t), intent(in) :: c
         complex(dp), intent(in) :: x(:, :)

@@ -16,6 +16,8 @@ module test_sparse_none
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_hbm_sparse, only: solve_periodic_sparse
+    use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
+    use stickslip_reference, only: reference_options_t
     use test_reduction, only: chain_matrices
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
         craig_bampton
@@ -37,6 +39,7 @@ contains
         call test_singular(t)
         call test_validation(t)
         call test_variants(t)
+        call test_sweep(t)
         call test_cli(t)
         call test_craig_bampton_converges(t)
     end subroutine run_sparse_none_tests
@@ -257,6 +260,66 @@ contains
                          "sparse none: no contacts: all of it damped", rtol=1.0e-8_dp)
     end subroutine test_variants
 
+    !> A sweep in omega (and one in the forcing amplitude) on the sparse condensation: the
+    !> same points as the dense sweep (parameters, amplitudes, dissipation); stability refused.
+    subroutine test_sweep(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sparse_model_t) :: sm
+        type(model_t) :: dm
+        type(hbm_options_t) :: opts
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: rs, rd
+        type(reference_options_t) :: ref
+        type(error_type), allocatable :: error
+        integer :: k, n
+        real(dp) :: dmax
+        character(len=16) :: parameters(2) = [character(len=16) :: 'omega', 'force_amplitude']
+        integer :: ip
+        call small_chain(sm, dm)
+        opts%harmonics = 5
+        opts%samples = 64
+        do ip = 1, 2
+            so = sweep_options_t()
+            so%parameter = parameters(ip)
+            if (ip == 1) then
+                so%start = 2.8_dp
+                so%stop = 3.3_dp
+            else
+                so%start = 40.0_dp
+                so%stop = 60.0_dp
+            end if
+            so%stability = .false.
+            so%truncation = .false.
+            so%max_points = 12
+            call run_sweep(dm, opts, ref, so, rd, error)
+            call check(t, .not. allocated(error), "sparse none sweep: dense "// &
+                       trim(so%parameter), msg(error))
+            if (allocated(error)) return
+            call run_sweep(sm%model, opts, ref, so, rs, error, sparse=sm, dofs=[50])
+            call check(t, .not. allocated(error), "sparse none sweep: sparse "// &
+                       trim(so%parameter), msg(error))
+            if (allocated(error)) return
+            n = min(rs%npoints, rd%npoints)
+            call check(t, rs%npoints == rd%npoints .and. n > 3, "sparse none sweep: same "// &
+                       "number of points ("//trim(so%parameter)//")", it(rs%npoints)//" vs "// &
+                       it(rd%npoints))
+            dmax = 0.0_dp
+            do k = 1, n
+                dmax = max(dmax, abs(rs%points(k)%parameter - rd%points(k)%parameter)/ &
+                           abs(rd%points(k)%parameter), &
+                           abs(rs%points(k)%amplitude(1) - rd%points(k)%amplitude(50))/ &
+                           rd%points(k)%amplitude(50), &
+                           abs(rs%points(k)%dissipation - rd%points(k)%dissipation)/ &
+                           rd%points(k)%dissipation)
+            end do
+            call check(t, dmax < 1.0e-7_dp, "sparse none sweep: same points ("// &
+                       trim(so%parameter)//")", rt(dmax))
+        end do
+        so%stability = .true.
+        call run_sweep(sm%model, opts, ref, so, rs, error, sparse=sm)
+        call check(t, allocated(error), "sparse none sweep: stability refused")
+    end subroutine test_sweep
+
     !> validate_sparse_model and the DOF list name what is wrong.
     subroutine test_validation(t)
         type(test_counter_t), intent(inout) :: t
@@ -371,6 +434,31 @@ contains
                    msg(error))
         if (.not. allocated(error)) call check(t, allocated(cs%sparse_model), &
                                                "sparse none cli: read back sparse")
+        ! a sweep in omega (stability off): frc.csv with the selected DOFs' amplitudes
+        call write_lines(scratch//"/none_sweep.nml", [character(len=100) :: &
+            "&system mass_file = 'none_m.mtx', stiffness_file = 'none_k.mtx',", &
+            "  rayleigh_alpha = 0.01 /", &
+            "&forcing omega = 0.03, force_dof = 3000, force_amplitude = 1.0 /", &
+            "&friction contact_dof = 2990, mu = 0.3, normal_load = 1.0 /", &
+            "&reduction method = 'none' /", &
+            "&hbm harmonics = 3, samples = 64 /", &
+            "&output directory = '"//scratch//"/out_none_sweep', dofs = 1500, 2990 /", &
+            "&sweep start = 0.03, stop = 0.032, stability = .false., max_points = 6 /", &
+            "&run method = 'sweep' /"])
+        args(1)%s = scratch//"/none_sweep.nml"
+        open (newunit=uo, status='scratch', action='readwrite')
+        open (newunit=ue, status='scratch', action='readwrite')
+        code = run_cli(args, uo, ue)
+        close (uo)
+        close (ue)
+        call check(t, code == 0 .or. code == 2, "sparse none cli: the sweep runs", it(code))
+        open (newunit=u, file=scratch//"/out_none_sweep/frc.csv", status='old', &
+              action='read', iostat=stat)
+        line = ""
+        if (stat == 0) read (u, '(a)', iostat=stat) line
+        close (u, iostat=stat)
+        call check(t, index(line, "amp_1500,amp_2990") > 0, "sparse none cli: frc.csv "// &
+                   "holds the selected DOFs (an interior one too)", trim(line))
         ! methods that need dense matrices
         call write_lines(scratch//"/none_euler.nml", [character(len=100) :: &
             "&system mass_file = 'none_m.mtx', stiffness_file = 'none_k.mtx' /", &

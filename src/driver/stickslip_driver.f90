@@ -24,7 +24,7 @@ module stickslip_driver
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t, solve_and_check, sampling_notes, &
         sampling_diagnostics
-    use stickslip_hbm_sparse, only: solve_periodic_sparse
+    use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_euler, only: euler_result_t, integrate_euler
     use stickslip_reference, only: reference_result_t
     use stickslip_reference_start, only: solve_reference_from_starts
@@ -98,10 +98,11 @@ contains
         type(progress_t), intent(inout), optional :: progress
         result%method = trim(case%method)
         if (len(result%method) == 0) result%method = 'hbm'
-        if (allocated(case%sparse_model) .and. result%method /= 'hbm') then
+        if (allocated(case%sparse_model) .and. result%method /= 'hbm' .and. &
+            result%method /= 'sweep') then
             call fatal_error(error, "&run method = '"//result%method//"': needs the dense "// &
                              "matrices of a small or reduced model, but &reduction method = "// &
-                             "'none' keeps this model sparse (only method 'hbm' runs on it); "// &
+                             "'none' keeps this model sparse (only methods 'hbm' and 'sweep' run on it); "// &
                              "use &reduction method = 'craig-bampton'", stickslip_stat%input)
             call name_case_file(case, error)
             return
@@ -535,16 +536,40 @@ contains
         type(sweep_result_t) :: saved
         logical :: found
         logical :: wanted
+        integer, allocatable :: kept(:), cols(:)
+        integer :: ncols
 
         writer%directory = case%directory
         writer%fingerprint = case_fingerprint(case)
         found = .false.
+        ! the points hold an amplitude per DOF of the model, or per kept DOF of the exact
+        ! sparse condensation (the selection, then the contact and forced DOFs)
+        ncols = case%model%ndof
+        cols = boundary_columns(case)
+        if (allocated(case%sparse_model)) then
+            kept = kept_dofs(case%sparse_model, selected_dofs(case), error)
+            if (allocated(error)) return
+            ncols = size(kept)
+            cols = sparse_columns(kept, selected_dofs(case))
+        end if
         if (case%sweep%resume) then
-            call read_checkpoint(case%directory, writer%fingerprint, case%model%ndof, &
+            call read_checkpoint(case%directory, writer%fingerprint, ncols, &
                                  case%model%ncontact(), saved, found, error)
             if (allocated(error)) return
         end if
-        if (found) then
+        if (allocated(case%sparse_model)) then
+            if (found) then
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               case%sweep%sweep_options_t, res, error, observer=writer, &
+                               resume=saved, progress=progress, sparse=case%sparse_model, &
+                               dofs=selected_dofs(case))
+            else
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               case%sweep%sweep_options_t, res, error, observer=writer, &
+                               progress=progress, sparse=case%sparse_model, &
+                               dofs=selected_dofs(case))
+            end if
+        else if (found) then
             call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
                            case%sweep%sweep_options_t, res, error, &
                            observer=writer, resume=saved, progress=progress)
@@ -556,12 +581,10 @@ contains
         call after_method(case, error, wanted)
         if (.not. wanted) return
         call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
-        call write_frc_csv(case%directory, res, error, boundary_columns(case), &
-                           selected_dofs(case))
+        call write_frc_csv(case%directory, res, error, cols, selected_dofs(case))
         if (allocated(error)) return
         call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
-                                   case%model%ndof, error, boundary_columns(case), &
-                                   selected_dofs(case))
+                                   ncols, error, cols, selected_dofs(case))
         if (allocated(error)) return
         call write_sweep_summary(case%directory, case, res, error)
         if (allocated(error)) return

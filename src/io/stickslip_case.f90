@@ -227,15 +227,18 @@ contains
     end subroutine read_case
 
     !> &reduction method = 'none' on a model above max_file_dof runs only the weighted
-    !> residual (method 'hbm') without the checks that integrate in time: anything else is
-    !> one error naming &run method (or the &hbm check) and &reduction method.
+    !> residual (method 'hbm', and 'sweep' with &sweep stability = .false.) without the
+    !> checks that integrate in time: anything else is one error naming &run method (or the
+    !> check) and &reduction method.
     subroutine check_sparse_methods(nml, case, error)
         type(nml_file_t), intent(in) :: nml
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: what
         what = ""
-        if (case%method /= 'hbm') then
+        if (case%method == 'sweep') then
+            if (case%sweep%stability) what = "&sweep stability = .true. (the default)"
+        else if (case%method /= 'hbm') then
             what = "&run method = '"//trim(case%method)//"'"
         else if (case%checks%stability) then
             what = "&hbm stability = .true."
@@ -250,8 +253,8 @@ contains
                          "from files (N = "//itoa(case%model%ndof)//" > "// &
                          itoa(max_file_dof)//" DOFs) sparse, where only the weighted "// &
                          "residual runs (&run method = 'hbm' without stability, "// &
-                         "verify_periods, harmonics_tol); use &reduction method = "// &
-                         "'craig-bampton' (or 'auto')")
+                         "verify_periods, harmonics_tol; 'sweep' with &sweep stability = "// &
+                         ".false.); use &reduction method = 'craig-bampton' (or 'auto')")
     end subroutine check_sparse_methods
 
     !> `text` with its first `old` replaced by `new`.

@@ -343,6 +343,12 @@ contains
         write (u, '(a,i0,a,a,a,i0,a,g0.4)') "  basis: harmonics ", sol%harmonics, " (", &
             trim(merge("odd only", "all     ", sol%odd_only)), "), samples ", sol%samples, &
             ", rho ", sol%rho
+        if (allocated(sol%dofs)) then
+            write (buffer, '(a,i0,a,f0.3,a)') "  model: N = ", case%model%ndof, " DOFs kept "// &
+                "sparse (&reduction method = 'none'), condensed exactly in ", &
+                sol%condensation_seconds, " s"
+            call emit(u)
+        end if
         do j = 1, size(sol%stick_fraction)
             write (u, '(a,i0,a,f0.1,a,i0,a,g0.4,a,g0.4,a)', advance='no') "  contact ", j, &
                 ": sticks ", 100*sol%stick_fraction(j), "% of the period in ", &

@@ -17,11 +17,13 @@ module stickslip
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, &
         sparse_to_dense, sparse_from_dense, sparse_transpose, sparse_scaled_sum, &
         sparse_symmetry_defect
+    use stickslip_sparse_model, only: sparse_model_t, validate_sparse_model
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
         craig_bampton, recover_dofs, receptance_error, reduced_dof_of, reduce_vectors
     ! the weighted residual
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
+    use stickslip_hbm_sparse, only: solve_periodic_sparse
     use stickslip_rho, only: automatic_rho
     ! implicit Euler
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
@@ -52,6 +54,7 @@ module stickslip
     public :: model_t, validate_model, contact_velocity_direction, force_direction
     public :: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, sparse_to_dense, &
               sparse_from_dense, sparse_transpose, sparse_scaled_sum, sparse_symmetry_defect
+    public :: sparse_model_t, validate_sparse_model, solve_periodic_sparse
     public :: reduction_options_t, reduction_report_t, reduced_model_t, craig_bampton, &
               recover_dofs, receptance_error, reduced_dof_of, reduce_vectors
     public :: hbm_options_t, hbm_solution_t, solve_periodic, validate_options, automatic_rho

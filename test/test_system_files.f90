@@ -313,16 +313,17 @@ contains
             write (u, '(i0,1x,i0,a)') i, i, " 1.0"
         end do
         close (u)
+        ! beyond it, 'none' keeps the model sparse: only the weighted residual runs
         call bad(t, "beyond 2000 DOFs", "&system mass_file = 'big.mtx', stiffness_file = "// &
-                 "'big.mtx' / &reduction method = 'none' /", [character(len=80) :: &
-                 dir//"/big.mtx", "N = 2001", "the largest unreduced model", &
-                 "&reduction method = 'craig-bampton' or 'auto'"])
-        ! refused from the size line, before the entries (this file has one of 50000)
+                 "'big.mtx' / &reduction method = 'none' / &run method = 'euler' /", &
+                 [character(len=80) :: "&run method = 'euler'", "N = 2001", &
+                 "&reduction method = 'none'", "'craig-bampton'"])
+        ! read sparse then ('none'): a truncated file is named with its line
         call write_lines(dir//"/huge.mtx", [character(len=60) :: &
             "%%MatrixMarket matrix coordinate real symmetric", "5000 5000 50000", "1 1 1"])
-        call bad(t, "refused before reading", "&system mass_file = 'huge.mtx', "// &
+        call bad(t, "'none' reads large files sparse", "&system mass_file = 'huge.mtx', "// &
                  "stiffness_file = 'huge.mtx' / &reduction method = 'none' /", &
-                 [character(len=80) :: "N = 5000 DOFs"])
+                 [character(len=80) :: "huge.mtx:3:", "end of file"])
         ! a damping file of another size than the model
         call bad(t, "damping size", "&system mass_file = 'm8.mtx', stiffness_file = "// &
                  "'k8.mtx', damping_file = 'k4.mtx' /", [character(len=80) :: &

@@ -19,8 +19,12 @@ module stickslip_sweep
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
-    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
+    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem, new_condensed_problem
     use stickslip_dynamics, only: dynamics_t, new_dynamics
+    use stickslip_basis, only: basis_t, new_basis
+    use stickslip_sparse_model, only: sparse_model_t, validate_sparse_model
+    use stickslip_sparse_dynamics, only: new_sparse_dynamics
+    use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_friction, only: psi_limit_derivative
     use stickslip_lapack, only: dgetrf, dgetrs, dgeev
     use stickslip_continuation, only: parametric_system_t, continuation_options_t, &
@@ -174,6 +178,10 @@ module stickslip_sweep
         real(dp), allocatable :: amplitude0(:), rs(:, :), vs(:, :), ss(:, :), dv(:, :), &
                                  dvs(:)
         complex(dp), allocatable :: cw(:)
+        !> The model's sparse matrices (a sweep of the exact sparse condensation; its
+        !> %model follows `model`), and the DOFs whose rows the dynamics keep.
+        type(sparse_model_t), allocatable :: sparse
+        integer, allocatable :: kept(:)
     contains
         procedure :: residual => family_residual
         procedure :: jacobian => family_jacobian
@@ -313,7 +321,14 @@ contains
     !> res%complete = .false. and res%diagnosis. Errors: stat input (invalid model or
     !> options, a resume of another size), stat numerical (no solution at the start, NaN),
     !> the observer's errors.
-    subroutine run_sweep(model, hbm, ref, opts, res, error, observer, resume, progress)
+    !> With `sparse` (the model's matrices kept sparse, &reduction method = 'none' above the
+    !> dense limit; `model` is then sparse%model, without dense matrices), every point is
+    !> condensed exactly by sparse LU factorizations (stickslip_sparse_dynamics, redone per
+    !> omega), the points hold the amplitudes of kept_dofs(sparse, dofs) in that order, and
+    !> neither the truncation estimate nor the stability is computed (opts%stability is
+    !> then an input error).
+    subroutine run_sweep(model, hbm, ref, opts, res, error, observer, resume, progress, &
+                         sparse, dofs)
         !> The model at the case's values (the parameter is overwritten along the curve).
         type(model_t), intent(in) :: model
         !> Weighted-residual options of every point.
@@ -332,6 +347,11 @@ contains
         type(sweep_result_t), intent(in), optional :: resume
         !> Progress hook: told after every point (points so far, the parameter).
         type(progress_t), intent(inout), optional :: progress
+        !> The model with sparse matrices (the exact sparse condensation).
+        type(sparse_model_t), intent(in), optional :: sparse
+        !> With `sparse`: the DOFs whose amplitudes the points hold (then the contact and
+        !> forced DOFs, kept_dofs); default none beyond those.
+        integer, intent(in), optional :: dofs(:)
         type(friction_family_t), target :: fam
         type(continuation_options_t) :: co
         type(continuation_report_t) :: rep
@@ -346,8 +366,19 @@ contains
         integer :: k
 
         call cpu_time(c0)
-        call validate_model(model, error)
-        if (allocated(error)) return
+        if (present(sparse)) then
+            call validate_sparse_model(sparse, error)
+            if (allocated(error)) return
+            if (opts%stability) then
+                call fatal_error(error, "opts%stability: the Floquet multipliers need the "// &
+                                 "dense matrices of a small or reduced model, not the "// &
+                                 "sparse condensation", stickslip_stat%input)
+                return
+            end if
+        else
+            call validate_model(model, error)
+            if (allocated(error)) return
+        end if
         call validate_options(hbm, error)
         if (allocated(error)) return
         call validate_sweep_options(model, opts, error)
@@ -367,7 +398,15 @@ contains
         call set_sweep_parameter(m0, opts%parameter, opts%start, amplitude0)
         ho = hbm
         ho%want_samples = .false.
-        call solve_periodic(m0, ho, sol, error)
+        if (present(sparse)) then
+            call new_friction_family(fam, model, hbm, opts%parameter, opts%start, 1.0_dp, &
+                                     error, sparse, dofs, build=.false.)
+            if (allocated(error)) return
+            fam%sparse%model = m0
+            call solve_periodic_sparse(fam%sparse, ho, fam%kept, sol, error)
+        else
+            call solve_periodic(m0, ho, sol, error)
+        end if
         if (allocated(error)) return
         if (.not. sol%converged) then
             write (buf, '(g0.6)') opts%start
@@ -376,7 +415,12 @@ contains
                              sol%diagnosis, stickslip_stat%numerical)
             return
         end if
-        call new_friction_family(fam, model, hbm, opts%parameter, opts%start, sol%rho, error)
+        if (present(sparse)) then
+            call new_friction_family(fam, model, hbm, opts%parameter, opts%start, sol%rho, &
+                                     error, sparse, dofs)
+        else
+            call new_friction_family(fam, model, hbm, opts%parameter, opts%start, sol%rho, error)
+        end if
         if (allocated(error)) return
         nb = fam%prob%basis%nb
         co%tol = hbm%tol
@@ -470,7 +514,7 @@ contains
         res%factorizations = fam%factorizations
         if (allocated(error)) return
         res%complete = res%state%reason == reason_end
-        if (opts%parameter == 'omega') then
+        if (opts%parameter == 'omega' .and. .not. present(sparse)) then
             res%notes = undamped_resonance_notes(model, opts%start, opts%stop)
         else
             res%notes = ""
@@ -508,7 +552,17 @@ contains
             ! the family's dynamics are at this parameter (the tangent was just computed
             ! there): the point and its truncation estimate need no new factorization
             at_point = fam%have_current .and. fam%current == res%state%lambda
-            if (at_point) then
+            if (allocated(fam%sparse)) then
+                fam%sparse%model = m
+                if (at_point) then
+                    call solve_periodic_sparse(fam%sparse, po, fam%kept, ps, error, &
+                                               r_start=reshape(res%state%y, [nb, nc]), &
+                                               dyn=fam%prob%dyn)
+                else
+                    call solve_periodic_sparse(fam%sparse, po, fam%kept, ps, error, &
+                                               r_start=reshape(res%state%y, [nb, nc]))
+                end if
+            else if (at_point) then
                 call solve_periodic(m, po, ps, error, &
                                     r_start=reshape(res%state%y, [nb, nc]), dyn=fam%prob%dyn)
             else
@@ -521,7 +575,7 @@ contains
             if (allocated(opts%observe)) then
                 pt%amplitude = maxval(abs(matmul(ps%x, transpose(opts%observe))), dim=1)
             else
-                pt%amplitude = [(maxval(abs(ps%x(:, k))), k=1, m%ndof)]
+                pt%amplitude = [(maxval(abs(ps%x(:, k))), k=1, size(ps%x, 2))]
             end if
             pt%diss_friction = ps%diss_friction
             pt%diss_damping = ps%diss_damping
@@ -535,7 +589,7 @@ contains
             pt%floquet_max = ieee_value(1.0_dp, ieee_quiet_nan)
             pt%stable = -1
             pt%truncation = ieee_value(1.0_dp, ieee_quiet_nan)
-            if (opts%truncation) then
+            if (opts%truncation .and. .not. allocated(fam%sparse)) then
                 if (at_point) then
                     call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn)
                 else
@@ -644,7 +698,10 @@ contains
     !> 'force_amplitude', 'mu' or 'normal_load'), set at `p`, on the basis of `hbm` with the
     !> weight `rho` > 0 (fixed along the family). Errors: as new_hb_problem and
     !> new_dynamics.
-    subroutine new_friction_family(fam, model, hbm, parameter, p, rho, error)
+    !> With `sparse` (and `dofs`, see run_sweep), the dynamics are the exact sparse
+    !> condensation; `build` = .false. only sets the family's data (no dynamics, no basis).
+    subroutine new_friction_family(fam, model, hbm, parameter, p, rho, error, sparse, dofs, &
+                                   build)
         !> The family.
         type(friction_family_t), intent(out) :: fam
         !> A validated model with friction contacts.
@@ -659,6 +716,12 @@ contains
         real(dp), intent(in) :: rho
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The model's sparse matrices.
+        type(sparse_model_t), intent(in), optional :: sparse
+        !> With `sparse`: the DOFs to keep (then the contact and forced ones).
+        integer, intent(in), optional :: dofs(:)
+        !> Build the problem (default .true.).
+        logical, intent(in), optional :: build
         integer :: nb, nc, stat
         fam%model = model
         fam%opts = hbm
@@ -666,8 +729,36 @@ contains
         fam%parameter = parameter
         fam%amplitude0 = model%force_amplitude
         call set_sweep_parameter(fam%model, parameter, p, fam%amplitude0)
-        call new_hb_problem(fam%prob, fam%model, hbm%harmonics, hbm%odd_only, hbm%samples, &
-                            rho, error)
+        if (present(sparse)) then
+            fam%sparse = sparse
+            fam%sparse%model = fam%model
+            if (present(dofs)) then
+                fam%kept = kept_dofs(sparse, dofs, error)
+            else
+                fam%kept = kept_dofs(sparse, [integer ::], error)
+            end if
+            if (allocated(error)) return
+        end if
+        if (present(build)) then
+            if (.not. build) return
+        end if
+        if (allocated(fam%sparse)) then
+            block
+                type(basis_t) :: basis
+                type(dynamics_t) :: dyn
+                call new_basis(basis, hbm%harmonics, hbm%odd_only, hbm%samples, error)
+                if (allocated(error)) return
+                call new_sparse_dynamics(dyn, fam%sparse, basis, fam%kept, error)
+                call basis%destroy()
+                if (allocated(error)) return
+                call new_condensed_problem(fam%prob, dyn, fam%model%mu*fam%model%normal_load, &
+                                           hbm%harmonics, hbm%odd_only, hbm%samples, rho, &
+                                           error, fam%model%force_harmonic)
+            end block
+        else
+            call new_hb_problem(fam%prob, fam%model, hbm%harmonics, hbm%odd_only, &
+                                hbm%samples, rho, error)
+        end if
         fam%factorizations = 1
         if (allocated(error)) return
         nb = fam%prob%basis%nb
@@ -679,7 +770,14 @@ contains
                 type(model_t) :: m1
                 m1 = fam%model
                 m1%force_amplitude = fam%amplitude0/fam%amplitude0(1)
-                call new_dynamics(fam%unit, m1, fam%prob%basis, error)
+                if (allocated(fam%sparse)) then
+                    fam%sparse%model = m1
+                    call new_sparse_dynamics(fam%unit, fam%sparse, fam%prob%basis, fam%kept, &
+                                             error)
+                    fam%sparse%model = fam%model
+                else
+                    call new_dynamics(fam%unit, m1, fam%prob%basis, error)
+                end if
                 fam%factorizations = fam%factorizations + 1
                 if (allocated(error)) return
             end block
@@ -791,6 +889,15 @@ contains
             self%prob%dyn%v0 = p*self%unit%v0
             self%prob%dyn%x0 = p*self%unit%x0
             if (allocated(self%unit%x0_static)) self%prob%dyn%x0_static = p*self%unit%x0_static
+            if (allocated(self%unit%forcing_gram)) then
+                ! the Gram matrices of [X0, Y]: the X0 row and column scale with p
+                self%prob%dyn%forcing_gram(1, :) = p*p*self%unit%forcing_gram(1, :)
+                self%prob%dyn%forcing_gram(2:, :) = p*self%unit%forcing_gram(2:, :)
+                self%prob%dyn%damping_gram = self%unit%damping_gram
+                self%prob%dyn%damping_gram(1, :, :) = p*self%unit%damping_gram(1, :, :)
+                self%prob%dyn%damping_gram(:, 1, :) = p*self%unit%damping_gram(:, 1, :)
+                self%prob%dyn%damping_gram(1, 1, :) = p*p*self%unit%damping_gram(1, 1, :)
+            end if
         case ('mu', 'normal_load')
             if (p < 0.0_dp) then
                 stat = 1
@@ -821,7 +928,17 @@ contains
             end if
         end do
         ! K and M do not change along the family: their smallest singular values neither
-        if (self%singular_values(1) >= 0.0_dp) then
+        if (allocated(self%sparse)) then
+            self%sparse%model = self%model
+            if (self%singular_values(1) >= 0.0_dp) then
+                call new_sparse_dynamics(self%prob%dyn, self%sparse, self%prob%basis, &
+                                         self%kept, error, singular_values=self%singular_values, &
+                                         with_omega_derivative=.true.)
+            else
+                call new_sparse_dynamics(self%prob%dyn, self%sparse, self%prob%basis, &
+                                         self%kept, error, with_omega_derivative=.true.)
+            end if
+        else if (self%singular_values(1) >= 0.0_dp) then
             call new_dynamics(self%prob%dyn, self%model, self%prob%basis, error, &
                               with_omega_derivative=.true., &
                               singular_values=self%singular_values)
@@ -944,8 +1061,14 @@ contains
         o = self%opts
         o%start = 'ladder'
         o%want_samples = .false.
-        call solve_periodic(m, o, s, error, r_start=reshape(y, [self%prob%basis%nb, &
-                                                               self%prob%nc]))
+        if (allocated(self%sparse)) then
+            self%sparse%model = m
+            call solve_periodic_sparse(self%sparse, o, self%kept, s, error, &
+                                       r_start=reshape(y, [self%prob%basis%nb, self%prob%nc]))
+        else
+            call solve_periodic(m, o, s, error, r_start=reshape(y, [self%prob%basis%nb, &
+                                                                   self%prob%nc]))
+        end if
         if (allocated(error)) then
             ! a singular dynamic stiffness at this parameter: no recovery here
             if (error%stat == stickslip_stat%numerical) deallocate (error)

@@ -23,7 +23,9 @@ module stickslip_driver
     use stickslip_full_field, only: write_full_field
     use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_checks, only: hbm_checks_t, solve_and_check
+    use stickslip_checks, only: hbm_checks_t, solve_and_check, sampling_notes, &
+        sampling_diagnostics
+    use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_euler, only: euler_result_t, integrate_euler
     use stickslip_reference, only: reference_result_t
     use stickslip_reference_start, only: solve_reference_from_starts
@@ -97,6 +99,15 @@ contains
         type(progress_t), intent(inout), optional :: progress
         result%method = trim(case%method)
         if (len(result%method) == 0) result%method = 'hbm'
+        if (allocated(case%sparse_model) .and. result%method /= 'hbm' .and. &
+            result%method /= 'sweep') then
+            call fatal_error(error, "&run method = '"//result%method//"': needs the dense "// &
+                             "matrices of a small or reduced model, but &reduction method = "// &
+                             "'none' keeps this model sparse (only methods 'hbm' and 'sweep' run on it); "// &
+                             "use &reduction method = 'craig-bampton'", stickslip_stat%input)
+            call name_case_file(case, error)
+            return
+        end if
         select case (result%method)
         case ('hbm')
             call run_case(case, result%hbm, error, result%checks)
@@ -225,25 +236,55 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         logical :: wanted
-        call solve_and_check(case%model, case%hbm, case%checks, &
-                             case%reference%reference_options_t, sol, ch, error)
+        integer, allocatable :: cols(:)
+        integer :: i
+        if (allocated(case%sparse_model)) then
+            ! &reduction method = 'none' above the dense limit: the exact sparse condensation
+            if (case%full_field) then
+                ! every DOF kept (the selection first: the files' columns)
+                call solve_periodic_sparse(case%sparse_model, case%hbm, [selected_dofs(case), &
+                                           (i, i=1, case%sparse_model%model%ndof)], sol, error)
+            else
+                call solve_periodic_sparse(case%sparse_model, case%hbm, selected_dofs(case), &
+                                           sol, error)
+            end if
+            ch%notes = sampling_notes(case%hbm%samples, case%hbm%harmonics)
+            call sampling_diagnostics(case%hbm%samples, ch%diagnostics)
+            ch%truncation%note = "not estimated for &reduction method = 'none' on a sparse "// &
+                                 "model"
+        else
+            call solve_and_check(case%model, case%hbm, case%checks, &
+                                 case%reference%reference_options_t, sol, ch, error)
+        end if
         call after_method(case, error, wanted)
         if (.not. wanted) return
         if (sol%converged) then
             call remove_stale_results(case%directory, [character(len=24) :: "hbm.csv", &
                                       "coefficients.csv", &
                                       merge("full_field.mtx", "hbm.csv       ", case%full_field)])
+            if (allocated(sol%dofs)) then
+                ! the solution's columns are its kept DOFs: those of the selection
+                cols = sparse_columns(sol%dofs, selected_dofs(case))
+            else
+                cols = output_columns(case)
+            end if
             call write_hbm_csv(case%directory, output_solution(case, sol), error, &
-                               output_columns(case), selected_dofs(case))
+                               cols, selected_dofs(case))
             if (allocated(error)) return
             call write_coefficients_csv(case%directory, output_solution(case, sol), error, &
-                                        output_columns(case), selected_dofs(case))
+                                        cols, selected_dofs(case))
             if (allocated(error)) return
             if (case%full_field) then
                 block
                     real(dp), allocatable :: coef(:, :)
-                    call recover_full_field(case%reduction, sol%xcoef, coef, error)
-                    if (allocated(error)) return
+                    if (allocated(sol%dofs)) then
+                        ! the exact sparse condensation kept every DOF (above)
+                        allocate (coef(case%sparse_model%model%ndof, sol%nb))
+                        coef(sol%dofs, :) = transpose(sol%xcoef)
+                    else
+                        call recover_full_field(case%reduction, sol%xcoef, coef, error)
+                        if (allocated(error)) return
+                    end if
                     call write_full_field(case%directory, coef, sol, error)
                     if (allocated(error)) return
                 end block
@@ -525,6 +566,8 @@ contains
         type(sweep_result_t) :: saved
         logical :: found
         logical :: wanted
+        integer, allocatable :: kept(:), cols(:)
+        integer :: ncols
 
         type(sweep_options_t) :: opts
         integer :: namp
@@ -539,12 +582,34 @@ contains
         writer%directory = case%directory
         writer%fingerprint = case_fingerprint(case)
         found = .false.
+        ! the points hold an amplitude per DOF of the model, or per kept DOF of the exact
+        ! sparse condensation (the selection, then the contact and forced DOFs)
+        ncols = namp
+        cols = output_columns(case)
+        if (allocated(case%sparse_model)) then
+            kept = kept_dofs(case%sparse_model, selected_dofs(case), error)
+            if (allocated(error)) return
+            ncols = size(kept)
+            cols = sparse_columns(kept, selected_dofs(case))
+        end if
         if (case%sweep%resume) then
-            call read_checkpoint(case%directory, writer%fingerprint, namp, &
+            call read_checkpoint(case%directory, writer%fingerprint, ncols, &
                                  case%model%ncontact(), saved, found, error)
             if (allocated(error)) return
         end if
-        if (found) then
+        if (allocated(case%sparse_model)) then
+            if (found) then
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               case%sweep%sweep_options_t, res, error, observer=writer, &
+                               resume=saved, progress=progress, sparse=case%sparse_model, &
+                               dofs=selected_dofs(case))
+            else
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               case%sweep%sweep_options_t, res, error, observer=writer, &
+                               progress=progress, sparse=case%sparse_model, &
+                               dofs=selected_dofs(case))
+            end if
+        else if (found) then
             call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
                            opts, res, error, observer=writer, resume=saved, progress=progress)
         else
@@ -554,11 +619,10 @@ contains
         call after_method(case, error, wanted)
         if (.not. wanted) return
         call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
-        call write_frc_csv(case%directory, res, error, output_columns(case), &
-                           selected_dofs(case))
+        call write_frc_csv(case%directory, res, error, cols, selected_dofs(case))
         if (allocated(error)) return
         call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
-                                   namp, error, output_columns(case), selected_dofs(case))
+                                   ncols, error, cols, selected_dofs(case))
         if (allocated(error)) return
         call write_sweep_summary(case%directory, case, res, error)
         if (allocated(error)) return
@@ -679,6 +743,16 @@ contains
         if (index(error%message, case%path//": ") == 1) return
         error%message = case%path//": "//error%message
     end subroutine name_case_file
+    !> The columns of a sparse solution (columns = `kept` DOFs) holding the DOFs `dofs`.
+    pure function sparse_columns(kept, dofs) result(cols)
+        integer, intent(in) :: kept(:), dofs(:)
+        integer :: cols(size(dofs))
+        integer :: k
+        do k = 1, size(dofs)
+            cols(k) = findloc(kept, dofs(k), 1)
+        end do
+    end function sparse_columns
+
     !> Whether the case's model was reduced with output rows kept (the result files then hold
     !> recovered full-model DOFs).
     pure logical function recovers(case)

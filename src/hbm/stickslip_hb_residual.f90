@@ -13,12 +13,13 @@ module stickslip_hb_residual
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_basis, only: basis_t, new_basis
-    use stickslip_dynamics, only: dynamics_t, new_dynamics, restrict_dynamics
+    use stickslip_dynamics, only: dynamics_t, new_dynamics, restrict_dynamics, restrict_to_basis, &
+        check_harmonics_in_basis
     use stickslip_friction, only: psi, psi_stick
     use stickslip_nonlinear, only: nonlinear_system_t
     implicit none
     private
-    public :: hb_problem_t, new_hb_problem
+    public :: hb_problem_t, new_hb_problem, new_condensed_problem
 
     !> The projected friction equations of one model on one basis. Owns its work arrays:
     !> use one instance per thread.
@@ -108,6 +109,69 @@ contains
         allocate (self%rs(nt), self%vs(nt), self%ps(nt), self%cw(nt/2 + 1))
         allocate (self%rc(nb, nc), self%vc(nb, nc), self%a(nb, nb))
     end subroutine new_hb_problem
+
+    !> The problem on condensed dynamics already built, without a model (the exact sparse
+    !> condensation, the rungs of a harmonic ladder): `dyn` on this basis or on a larger one
+    !> (restricted, restrict_to_basis), friction limits `limit` = mu_j N_j. With
+    !> `force_harmonic`, those harmonics must be in the basis (as new_hb_problem checks the
+    !> model's). Errors: stat input (rho, sizes, a harmonic missing from `dyn` or from the
+    !> basis).
+    subroutine new_condensed_problem(self, dyn, limit, harmonics, odd_only, samples, rho, &
+                                     error, force_harmonic)
+        !> The problem.
+        type(hb_problem_t), intent(out) :: self
+        !> Condensed dynamics on this basis or a larger one.
+        type(dynamics_t), intent(in) :: dyn
+        !> Friction limits mu_j N_j, one per contact of `dyn` [N].
+        real(dp), intent(in) :: limit(:)
+        !> Highest harmonic H.
+        integer, intent(in) :: harmonics
+        !> Odd harmonics only.
+        logical, intent(in) :: odd_only
+        !> Quadrature samples per period.
+        integer, intent(in) :: samples
+        !> Weight rho > 0 [m/(N s)].
+        real(dp), intent(in) :: rho
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Harmonics of the forcing terms.
+        integer, intent(in), optional :: force_harmonic(:)
+        integer :: nb, nc, nt
+        character(len=100) :: buf
+        if (.not. (rho > 0.0_dp) .or. rho > huge(rho)) then
+            write (buf, '(a,g0.6,a)') "rho = ", rho, ": must be finite and > 0"
+            call fatal_error(error, trim(buf), stickslip_stat%input)
+            return
+        end if
+        call new_basis(self%basis, harmonics, odd_only, samples, error)
+        if (allocated(error)) return
+        if (present(force_harmonic)) then
+            call check_harmonics_in_basis(force_harmonic, self%basis, error)
+        end if
+        if (.not. allocated(error)) then
+            if (size(limit) /= dyn%ncontact .or. .not. allocated(dyn%v0)) then
+                call fatal_error(error, "new_condensed_problem: limit and dyn disagree on "// &
+                                 "the contacts, or dyn was not built", stickslip_stat%input)
+            else if (same_harmonics(dyn, self%basis)) then
+                self%dyn = dyn
+            else
+                call restrict_to_basis(dyn, self%basis, self%dyn, error)
+            end if
+        end if
+        if (allocated(error)) then
+            call self%basis%destroy()
+            return
+        end if
+        nb = self%basis%nb
+        nc = dyn%ncontact
+        nt = samples
+        self%nc = nc
+        self%n = nb*nc
+        self%rho = rho
+        self%limit = limit
+        allocate (self%rs(nt), self%vs(nt), self%ps(nt), self%cw(nt/2 + 1))
+        allocate (self%rc(nb, nc), self%vc(nb, nc), self%a(nb, nb))
+    end subroutine new_condensed_problem
 
     !> Whether `dyn` holds exactly the harmonics (and constant) of `basis`.
     pure logical function same_harmonics(dyn, basis)

@@ -14,13 +14,14 @@ module stickslip_hbm
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
         force_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
-    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
+    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem, new_condensed_problem
     use stickslip_dynamics, only: dynamics_t, near_singular_threshold
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_rho, only: automatic_rho, rho_fraction
     implicit none
     private
     public :: solve_periodic, validate_options, convergence_scale
+    public :: condensed_structure_t, solve_condensed
     public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns
 
     !> Largest harmonics H accepted by validate_options (the basis has 2 H + 1 terms).
@@ -31,6 +32,26 @@ module stickslip_hbm
     !> the square of it (8193**2 doubles = 0.5 GB). Checked by the case reader, which knows
     !> the model.
     integer, parameter :: hbm_max_unknowns = 2*hbm_max_harmonics + 1
+
+    !> What the weighted-residual solve needs of a structure beside its condensed dynamics
+    !> (solve_condensed): built from a dense model_t by solve_periodic, from a
+    !> sparse_model_t by solve_periodic_sparse.
+    type :: condensed_structure_t
+        !> Fundamental angular frequency [rad/s].
+        real(dp) :: omega = 0.0_dp
+        !> Number of contacts.
+        integer :: ncontact = 0
+        !> Friction limits mu_j N_j [N].
+        real(dp), allocatable :: limit(:)
+        !> The automatic rho of the structure (stickslip_rho) [m/(N s)].
+        real(dp) :: rho_auto = 1.0_dp
+        !> Load shape of each forcing term on the displacement columns (all N DOFs, or the
+        !> kept DOFs of a sparse condensation), ncols x nforce: force_direction restricted.
+        real(dp), allocatable :: force_rows(:, :)
+        !> Harmonic, amplitude [N] and phase [rad] of each forcing term.
+        integer, allocatable :: force_harmonic(:)
+        real(dp), allocatable :: force_amplitude(:), force_phase(:)
+    end type condensed_structure_t
 
     !> hybrj calls per stage: the first plus restarts from the last iterate.
     integer, parameter :: max_calls_per_stage = 4
@@ -122,22 +143,78 @@ contains
         type(dynamics_t), intent(out), optional :: dyn_out
         type(hbm_options_t) :: o
         type(hb_problem_t) :: prob
-        real(dp), allocatable :: y(:), vzero(:, :)
+        type(condensed_structure_t) :: s
         integer(int64) :: c0, c1, rate
-        integer :: nb, nc, ncopy
-        real(dp) :: target_norm
 
         call system_clock(c0, rate)
         call validate_model(model, error)
         if (allocated(error)) return
         call validate_options(opts, error)
         if (allocated(error)) return
+        s = dense_structure(model)
         ! the options in effect: rho = 0 asks for the automatic weight
         o = opts
-        if (o%rho == 0.0_dp) o%rho = automatic_rho(model)
+        if (o%rho == 0.0_dp) o%rho = s%rho_auto
         call new_hb_problem(prob, model, o%harmonics, o%odd_only, o%samples, o%rho, error, &
                             dyn)
         if (allocated(error)) return
+        call solve_condensed(s, prob, opts, o, sol, error, r_start, dyn_out, model)
+        if (allocated(error)) return
+        call system_clock(c1)
+        sol%seconds = real(c1 - c0, dp)/real(rate, dp)
+    end subroutine solve_periodic
+
+    !> The data of a dense model the weighted-residual solve needs beside its dynamics.
+    function dense_structure(model) result(s)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        type(condensed_structure_t) :: s
+        integer :: i
+        s%omega = model%omega
+        s%ncontact = model%ncontact()
+        s%limit = model%mu*model%normal_load
+        s%rho_auto = automatic_rho(model)
+        allocate (s%force_rows(model%ndof, model%nforce()))
+        do i = 1, model%nforce()
+            s%force_rows(:, i) = force_direction(model, i)
+        end do
+        s%force_harmonic = model%force_harmonic
+        s%force_amplitude = model%force_amplitude
+        s%force_phase = model%force_phase
+    end function dense_structure
+
+    !> The weighted-residual solve on projected friction equations already built (`prob`,
+    !> whose dynamics condense the structure `s`), shared by solve_periodic (dense) and
+    !> solve_periodic_sparse (stickslip_hbm_sparse): start, hybrj stages and ladder,
+    !> settling, recovery, energies, samples and checks. `opts` as given, `o` in effect (rho
+    !> set). The displacement columns are those of the dynamics (all N, or its kept DOFs).
+    !> With `dense_model` (the dense path), the contact velocities of the energy balance are
+    !> W^T v and the viscous dissipation uses its C; without it, the contact velocities come
+    !> from the dynamics (V0 + G R) and the energies from its Gram matrices (exact over all
+    !> N DOFs, dynamics_t%damping_gram, forcing_gram). Destroys `prob`. Errors: as
+    !> solve_periodic. sol%seconds is the caller's.
+    subroutine solve_condensed(s, prob, opts, o, sol, error, r_start, dyn_out, dense_model)
+        !> The structure's data (limits, forcing, automatic rho).
+        type(condensed_structure_t), intent(in) :: s
+        !> The projected friction equations (destroyed on return).
+        type(hb_problem_t), intent(inout) :: prob
+        !> Solver options as given.
+        type(hbm_options_t), intent(in) :: opts
+        !> Solver options in effect (rho > 0).
+        type(hbm_options_t), intent(in) :: o
+        !> The solution and its convergence report.
+        type(hbm_solution_t), intent(out) :: sol
+        !> Set on invalid input or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        !> Optional start for the friction-force coefficients [N].
+        real(dp), intent(in), optional :: r_start(:, :)
+        !> The condensed dynamics of the solve (set unless an error occurred).
+        type(dynamics_t), intent(out), optional :: dyn_out
+        !> The dense model (dense path only).
+        type(model_t), intent(in), optional :: dense_model
+        real(dp), allocatable :: y(:), vzero(:, :)
+        integer :: nb, nc, ncopy
+        real(dp) :: target_norm
 
         nb = prob%basis%nb
         nc = prob%nc
@@ -146,7 +223,7 @@ contains
         sol%samples = opts%samples
         sol%rho = o%rho
         sol%nb = nb
-        sol%omega = model%omega
+        sol%omega = s%omega
         sol%harmonic = prob%basis%harmonic_of([(ncopy, ncopy=1, nb)])
 
         allocate (y(prob%n), vzero(nb, nc))
@@ -163,7 +240,7 @@ contains
             vzero(1:ncopy, :) = r_start
             y = reshape(vzero, [prob%n])
         end if
-        sol%fscale = convergence_scale(model, prob)
+        sol%fscale = condensed_convergence_scale(prob, s%rho_auto)
         target_norm = opts%tol*sol%fscale
 
         if (nc == 0) then
@@ -172,20 +249,20 @@ contains
         else
             select case (opts%start)
             case ('ladder')
-                call solve_ladder(model, o, prob, y, target_norm, sol, error)
+                call solve_ladder(s, o, prob, y, target_norm, sol, error)
             case default
                 call solve_stage(prob, y, opts, target_norm, sol, error)
                 if (.not. allocated(error) .and. .not. sol%converged .and. opts%start == 'auto' &
                     .and. opts%harmonics > ladder_first) then
                     y = 0.0_dp
                     if (present(r_start)) y = reshape(vzero, [prob%n])
-                    call solve_ladder(model, o, prob, y, target_norm, sol, error)
+                    call solve_ladder(s, o, prob, y, target_norm, sol, error)
                 end if
             end select
             if (allocated(error)) then
-                if (error%stat == stickslip_stat%numerical .and. rho_out_of_band(model, o%rho)) &
+                if (error%stat == stickslip_stat%numerical .and. rho_out_of_band(s, o%rho)) &
                     error%message = error%message//" (rho = "//rtoa(o%rho)// &
-                    " is far from the contact mobility "//rtoa(o%rho/rho_ratio(model, o%rho))// &
+                    " is far from the contact mobility "//rtoa(o%rho/rho_ratio(s, o%rho))// &
                     " m/(N s): use &hbm rho = 0, the automatic choice)"
                 call prob%destroy()
                 return
@@ -207,13 +284,11 @@ contains
             sol%diagnosis = ""
         end if
 
-        call finish_solution(model, opts, prob, y, sol)
-        call check_solution(model, o, prob, sol)
+        call finish_solution(s, opts, prob, y, sol, dense_model)
+        call check_solution(s, o, prob, sol)
         if (present(dyn_out)) dyn_out = prob%dyn
         call prob%destroy()
-        call system_clock(c1)
-        sol%seconds = real(c1 - c0, dp)/real(rate, dp)
-    end subroutine solve_periodic
+    end subroutine solve_condensed
 
     !> The residual scale of the convergence test ||F||_2 <= tol * fscale [m/s]:
     !>     fscale = min(||V0||_2, rho * Rs),  Rs = max(min(max_j mu_j N_j, Rstop), 1e-6 Rstop),
@@ -233,6 +308,18 @@ contains
         !> Its projected friction equations.
         type(hb_problem_t), intent(in) :: prob
         real(dp) :: fscale
+        fscale = 0.0_dp
+        if (prob%nc == 0) return
+        fscale = condensed_convergence_scale(prob, automatic_rho(model))
+    end function convergence_scale
+
+    !> convergence_scale with the automatic rho of the structure given (`rho_auto`).
+    function condensed_convergence_scale(prob, rho_auto) result(fscale)
+        !> The projected friction equations.
+        type(hb_problem_t), intent(in) :: prob
+        !> The automatic rho of the structure [m/(N s)].
+        real(dp), intent(in) :: rho_auto
+        real(dp) :: fscale
         real(dp) :: rzero(prob%basis%nb, prob%nc), vfree(prob%basis%nb, prob%nc)
         real(dp) :: vnorm, rstop, rs
         fscale = 0.0_dp
@@ -240,10 +327,10 @@ contains
         rzero = 0.0_dp
         call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
         vnorm = norm2(vfree)
-        rstop = vnorm*rho_fraction/automatic_rho(model)
+        rstop = vnorm*rho_fraction/rho_auto
         rs = max(min(maxval(prob%limit), rstop), 1.0e-6_dp*rstop)
         fscale = min(vnorm, prob%rho*rs)
-    end function convergence_scale
+    end function condensed_convergence_scale
 
     !> One solve on a fixed basis: hybrj, then restarts from the last iterate while it
     !> stops short of the target without exhausting its evaluations.
@@ -287,8 +374,8 @@ contains
 
     !> Climb from `ladder_first` harmonics, doubling, each stage warm-started from the one
     !> before (the lower basis is a prefix of the higher one), up to the requested basis.
-    subroutine solve_ladder(model, opts, prob, y, target_norm, sol, error)
-        type(model_t), intent(in) :: model
+    subroutine solve_ladder(s, opts, prob, y, target_norm, sol, error)
+        type(condensed_structure_t), intent(in) :: s
         type(hbm_options_t), intent(in) :: opts
         type(hb_problem_t), intent(inout) :: prob
         real(dp), intent(inout) :: y(:)
@@ -307,8 +394,8 @@ contains
         h = ladder_first
         do while (h < opts%harmonics)
             ! the lower basis is a subset of prob's: its dynamics without a factorization
-            call new_hb_problem(low, model, h, opts%odd_only, opts%samples, opts%rho, error, &
-                                dyn=prob%dyn)
+            call new_condensed_problem(low, prob%dyn, prob%limit, h, opts%odd_only, &
+                                       opts%samples, opts%rho, error, s%force_harmonic)
             if (allocated(error)) return
             nbl = low%basis%nb
             rlow = rfull(1:nbl, :)
@@ -327,14 +414,14 @@ contains
 
     !> Settle undetermined mean forces, recover every DOF, energies, stick statistics and
     !> samples.
-    subroutine finish_solution(model, opts, prob, y, sol)
-        type(model_t), intent(in) :: model
+    subroutine finish_solution(s, opts, prob, y, sol, model)
+        type(condensed_structure_t), intent(in) :: s
         type(hbm_options_t), intent(in) :: opts
         type(hb_problem_t), intent(inout) :: prob
         real(dp), intent(inout) :: y(:)
         type(hbm_solution_t), intent(inout) :: sol
-        real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:), &
-                                 fdir(:)
+        type(model_t), intent(in), optional :: model
+        real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:)
         complex(dp), allocatable :: cw(:)
         integer :: nb, nc, nt, n, j, i, k, p, q, i0
         real(dp) :: period, lo, hi, shift, coulomb_slip, max_force_ratio
@@ -343,9 +430,9 @@ contains
         nb = prob%basis%nb
         nc = prob%nc
         nt = prob%basis%nt
-        n = model%ndof
+        n = size(prob%dyn%x0, 1)
         i0 = prob%basis%i0
-        period = two_pi/model%omega
+        period = two_pi/s%omega
         allocate (rs(nt, nc), vs(nt, nc), ss(nt, nc), sol%offset_undetermined(nc))
         sol%offset_undetermined = .false.
         if (nc > 0) call prob%contact_samples(y, rs, vs, ss)
@@ -370,7 +457,7 @@ contains
         allocate (sol%xcoef(nb, n), sol%vcoef(nb, n))
         call prob%dyn%displacement(prob%basis, sol%rcoef, sol%xcoef)
         do p = 1, n
-            call prob%basis%derivative(sol%xcoef(:, p), model%omega, sol%vcoef(:, p))
+            call prob%basis%derivative(sol%xcoef(:, p), s%omega, sol%vcoef(:, p))
         end do
 
         allocate (sol%stick_fraction(nc), sol%stick_phases(nc))
@@ -383,24 +470,33 @@ contains
         ! energy balance over one period, exact for the truncated series (Parseval)
         allocate (fcoef(nb, n), vc(nb, nc))
         fcoef = 0.0_dp
-        do i = 1, model%nforce()
-            fdir = force_direction(model, i)
-            if (model%force_harmonic(i) == 0) then
-                fcoef(i0, :) = fcoef(i0, :) + model%force_amplitude(i)*cos(model%force_phase(i))*fdir
+        do i = 1, size(s%force_harmonic)
+            if (s%force_harmonic(i) == 0) then
+                fcoef(i0, :) = fcoef(i0, :) + s%force_amplitude(i)*cos(s%force_phase(i))* &
+                               s%force_rows(:, i)
             else
-                k = prob%basis%icos(findloc(prob%basis%harm, model%force_harmonic(i), 1))
-                fcoef(k, :) = fcoef(k, :) + model%force_amplitude(i)*cos(model%force_phase(i))*fdir
-                fcoef(k + 1, :) = fcoef(k + 1, :) - &
-                                  model%force_amplitude(i)*sin(model%force_phase(i))*fdir
+                k = prob%basis%icos(findloc(prob%basis%harm, s%force_harmonic(i), 1))
+                fcoef(k, :) = fcoef(k, :) + s%force_amplitude(i)*cos(s%force_phase(i))* &
+                              s%force_rows(:, i)
+                fcoef(k + 1, :) = fcoef(k + 1, :) - s%force_amplitude(i)*sin(s%force_phase(i))* &
+                                  s%force_rows(:, i)
             end if
         end do
-        do j = 1, nc
-            vc(:, j) = matmul(sol%vcoef, contact_velocity_direction(model, j))
-        end do
+        if (present(model)) then
+            do j = 1, nc
+                vc(:, j) = matmul(sol%vcoef, contact_velocity_direction(model, j))
+            end do
+        else if (nc > 0) then
+            call prob%dyn%contact_velocity(prob%basis, sol%rcoef, vc)
+        end if
         sol%work_forcing = 0.0_dp
-        do p = 1, n
-            sol%work_forcing = sol%work_forcing + inner(fcoef(:, p), sol%vcoef(:, p))
-        end do
+        if (present(model)) then
+            do p = 1, n
+                sol%work_forcing = sol%work_forcing + inner(fcoef(:, p), sol%vcoef(:, p))
+            end do
+        else
+            sol%work_forcing = gram_energy(.true.)
+        end if
         ! the gross work, integral |f . v| dt: the scale of the energy balance
         block
             real(dp) :: fs(nt), vt(nt), pw(nt)
@@ -429,12 +525,16 @@ contains
                                                               maxval(abs(rs(:, j)))/prob%limit(j))
         end do
         sol%diss_damping = 0.0_dp
-        do q = 1, n
-            do p = 1, n
-                sol%diss_damping = sol%diss_damping + &
-                    model%damping(p, q)*inner(sol%vcoef(:, p), sol%vcoef(:, q))
+        if (present(model)) then
+            do q = 1, n
+                do p = 1, n
+                    sol%diss_damping = sol%diss_damping + &
+                        model%damping(p, q)*inner(sol%vcoef(:, p), sol%vcoef(:, q))
+                end do
             end do
-        end do
+        else
+            sol%diss_damping = gram_energy(.false.)
+        end if
 
         sol%coulomb_check = abs(coulomb_slip - sol%diss_friction)/ &
                             max(coulomb_slip, abs(sol%diss_friction) + abs(sol%diss_damping), &
@@ -454,6 +554,31 @@ contains
 
     contains
 
+        !> Energy per period from the Gram matrices of a sparse condensation, with
+        !> u_h = [1; R_h] (R_h = r_cos - i r_sin of each contact): the forcing work
+        !> (`forcing`; q_h = forcing_gram) sum_h (T/2) Re(i h omega q_h u_h), or the viscous
+        !> dissipation (P_h = damping_gram) sum_h (T/2) (h omega)^2 u_h^H P_h u_h.
+        real(dp) function gram_energy(forcing) result(e)
+            logical, intent(in) :: forcing
+            complex(dp) :: u(nc + 1)
+            real(dp) :: homega
+            integer :: ih, kk
+            e = 0.0_dp
+            do ih = 1, prob%basis%nharm
+                kk = prob%basis%icos(ih)
+                homega = prob%basis%harm(ih)*s%omega
+                u(1) = (1.0_dp, 0.0_dp)
+                u(2:) = cmplx(sol%rcoef(kk, :), -sol%rcoef(kk + 1, :), dp)
+                if (forcing) then
+                    e = e + 0.5_dp*period*homega* &
+                        real((0.0_dp, 1.0_dp)*sum(prob%dyn%forcing_gram(:, ih)*u), dp)
+                else
+                    e = e + 0.5_dp*period*homega**2* &
+                        real(dot_product(u, matmul(prob%dyn%damping_gram(:, :, ih), u)), dp)
+                end if
+            end do
+        end function gram_energy
+
         !> integral over one period of the product of two functions given by coefficients
         pure real(dp) function inner(a, b)
             real(dp), intent(in) :: a(:), b(:)
@@ -466,8 +591,8 @@ contains
     !> not_converged; rho_out_of_range (rho / contact mobility outside [rho_ratio_min,
     !> rho_ratio_max]: the friction equality loses its digits); near_resonance (Z_h nearly
     !> singular); and, once converged, energy_balance, coulomb_dissipation and coulomb_law.
-    subroutine check_solution(model, opts, prob, sol)
-        type(model_t), intent(in) :: model
+    subroutine check_solution(s, opts, prob, sol)
+        type(condensed_structure_t), intent(in) :: s
         type(hbm_options_t), intent(in) :: opts
         type(hb_problem_t), intent(in) :: prob
         type(hbm_solution_t), intent(inout) :: sol
@@ -475,9 +600,9 @@ contains
         character(len=400) :: buf
         if (.not. sol%converged) &
             call sol%diagnostics%add(level_untrusted, "not_converged", sol%diagnosis)
-        if (prob%nc > 0 .and. rho_out_of_band(model, opts%rho)) then
+        if (prob%nc > 0 .and. rho_out_of_band(s, opts%rho)) then
             write (buf, '(a,es10.2e3,a,es10.2e3,a,es9.1e3,a,es9.1e3,a)') "rho = ", opts%rho, &
-                " is ", rho_ratio(model, opts%rho), " times the contact mobility (outside ", &
+                " is ", rho_ratio(s, opts%rho), " times the contact mobility (outside ", &
                 rho_ratio_min, " .. ", rho_ratio_max, "): the friction equality cannot "// &
                 "resolve the forces; use &hbm rho = 0 (automatic)"
             call sol%diagnostics%add(level_untrusted, "rho_out_of_range", trim(buf))
@@ -485,7 +610,7 @@ contains
         if (prob%dyn%relative_conditioning < near_singular_threshold) then
             write (buf, '(a,i0,a,g0.6,a,es10.2e3,a,es9.1e3,a)') "near an undamped resonance at "// &
                 "harmonic h = ", prob%dyn%worst_harmonic, " (h omega = ", &
-                prob%dyn%worst_harmonic*model%omega, " rad/s): the dynamic stiffness is "// &
+                prob%dyn%worst_harmonic*s%omega, " rad/s): the dynamic stiffness is "// &
                 "nearly singular (relative conditioning ", prob%dyn%relative_conditioning, &
                 " < ", near_singular_threshold, "), the response hangs on the last digits "// &
                 "of omega, M and K; add damping or move omega"
@@ -523,20 +648,20 @@ contains
     end subroutine check_solution
 
     !> rho / (the geometric mean of the resonance-free contact mobilities) (dimensionless).
-    real(dp) function rho_ratio(model, rho)
-        type(model_t), intent(in) :: model
+    real(dp) function rho_ratio(s, rho)
+        type(condensed_structure_t), intent(in) :: s
         real(dp), intent(in) :: rho
-        rho_ratio = rho*rho_fraction/automatic_rho(model)
+        rho_ratio = rho*rho_fraction/s%rho_auto
     end function rho_ratio
 
     !> rho is outside [rho_ratio_min, rho_ratio_max] times the contact mobility.
-    logical function rho_out_of_band(model, rho)
-        type(model_t), intent(in) :: model
+    logical function rho_out_of_band(s, rho)
+        type(condensed_structure_t), intent(in) :: s
         real(dp), intent(in) :: rho
         real(dp) :: q
         rho_out_of_band = .false.
-        if (model%ncontact() == 0) return
-        q = rho_ratio(model, rho)
+        if (s%ncontact == 0) return
+        q = rho_ratio(s, rho)
         rho_out_of_band = .not. (q >= rho_ratio_min .and. q <= rho_ratio_max)
     end function rho_out_of_band
 

@@ -51,7 +51,7 @@ module stickslip_rho
     use stickslip_lapack, only: dgetrf, dgetrs
     implicit none
     private
-    public :: automatic_rho, contact_mobility, rho_fraction
+    public :: automatic_rho, contact_mobility, rho_fraction, rho_from_mobility
 
     !> The automatic rho as a fraction of the contact mobility (see the module header).
     real(dp), parameter :: rho_fraction = 0.5_dp
@@ -69,14 +69,28 @@ contains
         !> The weight rho > 0 [m/(N s)].
         real(dp) :: rho
         real(dp) :: mob(model%ncontact())
-        logical :: holds(model%ncontact())
         rho = 1.0_dp
         if (model%ncontact() == 0) return
         mob = contact_mobility(model)
-        holds = model%mu*model%normal_load > 0.0_dp
+        rho = rho_from_mobility(mob, model%mu, model%normal_load)
+    end function automatic_rho
+
+    !> The automatic rho from the contact mobilities `mob` (contact_mobility, or its sparse
+    !> twin): rho_fraction times their geometric mean over the contacts with mu N > 0 (all
+    !> when none has) [m/(N s)]; 1 without contacts.
+    pure function rho_from_mobility(mob, mu, normal_load) result(rho)
+        !> Mobility of each contact [m/(N s)].
+        real(dp), intent(in) :: mob(:)
+        !> Friction coefficient and normal load [N] of each contact.
+        real(dp), intent(in) :: mu(:), normal_load(:)
+        real(dp) :: rho
+        logical :: holds(size(mob))
+        rho = 1.0_dp
+        if (size(mob) == 0) return
+        holds = mu*normal_load > 0.0_dp
         if (.not. any(holds)) holds = .true.
         rho = rho_fraction*exp(sum(log(mob), mask=holds)/real(count(holds), dp))
-    end function automatic_rho
+    end function rho_from_mobility
 
     !> Resonance-free mobility of every contact, Omega w_j^T (K + Omega^2 M)^{-1} w_j
     !> [m/(N s)], at Omega = h_f omega, h_f the harmonic of the forcing term of largest

@@ -62,6 +62,9 @@ module stickslip_solution
         real(dp) :: rho = 0.0_dp
         !> Wall-clock seconds spent in the solve (condensation, hybrj, recovery).
         real(dp) :: seconds = 0.0_dp
+        !> Wall-clock seconds of the exact sparse condensation within `seconds` (the sparse
+        !> LU factorizations and solves, solve_periodic_sparse; 0 for the dense path) [s].
+        real(dp) :: condensation_seconds = 0.0_dp
         !> Empty when converged, otherwise what went wrong and what to try.
         character(len=:), allocatable :: diagnosis
         !> Highest harmonic H.
@@ -76,7 +79,11 @@ module stickslip_solution
         real(dp) :: omega = 0.0_dp
         !> Harmonic of each coefficient index (0 for the constant), length nb.
         integer, allocatable :: harmonic(:)
-        !> Displacement coefficients, nb x N [m].
+        !> The DOFs of the columns of xcoef, vcoef, x and v when they do not hold all N
+        !> (the exact sparse condensation, solve_periodic_sparse: the DOFs asked for, then
+        !> the contact and forced DOFs); unallocated: columns 1..N.
+        integer, allocatable :: dofs(:)
+        !> Displacement coefficients, nb x N (nb x size(dofs) when dofs is set) [m].
         real(dp), allocatable :: xcoef(:, :)
         !> Velocity coefficients, nb x N [m/s].
         real(dp), allocatable :: vcoef(:, :)

@@ -9,6 +9,7 @@ module stickslip_case
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model
+    use stickslip_sparse_model, only: sparse_model_t, validate_sparse_model
     use stickslip_solution, only: hbm_options_t
     use stickslip_hbm, only: hbm_max_unknowns
     use stickslip_checks, only: check_options_t
@@ -17,6 +18,7 @@ module stickslip_case
     use stickslip_study, only: study_options_t
     use stickslip_robustness, only: robustness_options_t
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance
+    use stickslip_namelist_values, only: get_logical
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         read_friction_group, max_dof, max_terms, group_error, system_files_t, max_file_dof, &
         sparse_system_t
@@ -61,6 +63,11 @@ module stickslip_case
         !> 'reference' (exact event-driven), 'all' (the three side by side) or 'study' (the
         !> work-precision study).
         character(len=16) :: method = 'hbm'
+        !> The full sparse model of &reduction method = 'none' for a model from files with
+        !> N > max_file_dof (allocated only then): condensed exactly per harmonic by sparse
+        !> LU (solve_periodic_sparse); only method 'hbm' runs on it. `model` then holds the
+        !> same ndof, forcing and contacts without matrices.
+        type(sparse_model_t), allocatable :: sparse_model
         !> Weighted-residual options (&hbm).
         type(hbm_options_t) :: hbm
         !> What to check about a weighted-residual solution (&hbm harmonics_tol,
@@ -140,12 +147,31 @@ contains
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
                                    case%output_dofs_given, case%full_field, error)
             if (allocated(error)) return
-            case%reduction%keep_basis = case%full_field
-            call reduce_case_model(nml, case%reduction, sparse, case%hbm%harmonics, &
-                                   case%model, case%output_dofs, case%output_dofs_given, error)
-            if (allocated(error)) return
+            if (case%reduction%method == 'none') then
+                ! the exact sparse condensation: no reduction, the matrices kept sparse
+                allocate (case%sparse_model)
+                case%sparse_model%model = case%model
+                case%sparse_model%mass = sparse%mass
+                case%sparse_model%stiffness = sparse%stiffness
+                if (sparse%has_damping) case%sparse_model%damping = sparse%damping
+                case%reduction%report%full_dof = case%model%ndof
+                case%reduction%report%reduced_dof = case%model%ndof
+            else
+                case%reduction%keep_basis = case%full_field
+                call reduce_case_model(nml, case%reduction, sparse, case%hbm%harmonics, &
+                                       case%model, case%output_dofs, case%output_dofs_given, &
+                                       error)
+                if (allocated(error)) return
+            end if
         end if
-        call validate_model(case%model, error)
+        if (allocated(case%sparse_model)) then
+            call validate_sparse_model(case%sparse_model, error)
+            if (allocated(error)) then
+                error%message = replace_prefix(error%message, "smodel%", "model%")
+            end if
+        else
+            call validate_model(case%model, error)
+        end if
         if (allocated(error)) then
             call to_case_message(error, nml%path, [character(len=1) ::], [character(len=1) ::])
             call name_matrix_file(error, "mass", case%system_files%mass_path)
@@ -192,6 +218,23 @@ contains
                              "writes full_field.mtx (this case runs method = '"//method//"')")
             return
         end if
+        if (allocated(case%sparse_model)) then
+            ! a sweep of the exact sparse condensation has no stability check: off by default
+            if (method == 'sweep') then
+                block
+                    logical :: given_t, given_f
+                    given_t = .true.
+                    given_f = .false.
+                    call get_logical(nml, "sweep", "stability", given_t, error)
+                    if (allocated(error)) return
+                    call get_logical(nml, "sweep", "stability", given_f, error)
+                    if (allocated(error)) return
+                    if (given_t .and. .not. given_f) case%sweep%stability = .false.
+                end block
+            end if
+            call check_sparse_methods(nml, case, error)
+            if (allocated(error)) return
+        end if
         if (allocated(case%reduction%output_reduced)) then
             if (method == 'study') then
                 do k = 1, size(case%reduction%output_reduced)
@@ -210,6 +253,47 @@ contains
             end if
         end if
     end subroutine read_case
+
+    !> &reduction method = 'none' on a model above max_file_dof runs only the weighted
+    !> residual (method 'hbm', and 'sweep' with &sweep stability = .false.) without the
+    !> checks that integrate in time: anything else is one error naming &run method (or the
+    !> check) and &reduction method.
+    subroutine check_sparse_methods(nml, case, error)
+        type(nml_file_t), intent(in) :: nml
+        type(case_t), intent(in) :: case
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: what
+        what = ""
+        if (case%method == 'sweep') then
+            if (case%sweep%stability) what = "&sweep stability = .true."
+        else if (case%method /= 'hbm') then
+            what = "&run method = '"//trim(case%method)//"'"
+        else if (case%checks%stability) then
+            what = "&hbm stability = .true."
+        else if (case%checks%verify_periods > 0) then
+            what = "&hbm verify_periods = "//itoa(case%checks%verify_periods)
+        else if (case%checks%harmonics_tol > 0.0_dp) then
+            what = "&hbm harmonics_tol = "//rtoa(case%checks%harmonics_tol)
+        end if
+        if (len(what) == 0) return
+        call group_error(nml, error, what//": needs the dense matrices of a small or "// &
+                         "reduced model, but &reduction method = 'none' keeps this model "// &
+                         "from files (N = "//itoa(case%model%ndof)//" > "// &
+                         itoa(max_file_dof)//" DOFs) sparse, where only the weighted "// &
+                         "residual runs (&run method = 'hbm' without stability, "// &
+                         "verify_periods, harmonics_tol; 'sweep' with &sweep stability = "// &
+                         ".false.); use &reduction method = 'craig-bampton' (or 'auto')")
+    end subroutine check_sparse_methods
+
+    !> `text` with its first `old` replaced by `new`.
+    pure function replace_prefix(text, old, new) result(out)
+        character(len=*), intent(in) :: text, old, new
+        character(len=:), allocatable :: out
+        integer :: k
+        out = text
+        k = index(text, old)
+        if (k > 0) out = text(1:k - 1)//new//text(k + len(old):)
+    end function replace_prefix
 
     !> A model message about &system `name` names the file the matrix came from.
     subroutine name_matrix_file(error, name, path)
@@ -334,6 +418,9 @@ contains
         character(len=:), allocatable :: what
         nc = case%model%ncontact()
         per_sample = 2_int64*case%model%ndof + 3_int64*nc + 1
+        ! the exact sparse condensation recovers only the selected, contact and forced DOFs
+        if (allocated(case%sparse_model)) per_sample = 2_int64*(size(selected_dofs(case)) + &
+            2_int64*nc + case%model%nforce()) + 3_int64*nc + 1
         ! the highest H the method's weighted-residual solves reach
         h = -1
         select case (case%method)

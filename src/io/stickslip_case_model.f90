@@ -25,8 +25,9 @@ module stickslip_case_model
     !> Largest ndof a case file can hold (host codes calling the library have no limit).
     integer, parameter :: max_dof = 64
     !> Largest N of an UNREDUCED model read from Matrix Market files (&system mass_file,
-    !> stiffness_file), converted to the dense model_t; larger models are reduced
-    !> (&reduction method = 'craig-bampton' or 'auto').
+    !> stiffness_file) converted to the dense model_t; larger models are reduced
+    !> (&reduction method = 'craig-bampton' or 'auto') or kept sparse (method = 'none':
+    !> condensed exactly per harmonic by sparse LU, weighted residual only).
     integer, parameter :: max_file_dof = 2000
     !> Largest number of forcing terms or contacts (and of entries of a list) in a case file.
     integer, parameter :: max_terms = 256
@@ -80,8 +81,9 @@ contains
     !> form. Relative file paths resolve against the case file's folder. Finally C += alpha M
     !> + beta K (rayleigh_alpha, rayleigh_beta, default 0, finite and >= 0). Errors (stat
     !> input; stat io for an unreadable file) name the variable, and the file and its line.
-    !> With `sparse` present and `method` = 'craig-bampton', or 'auto' and N > max_file_dof, the
-    !> file matrices are kept sparse in `sparse` (no size limit) and model gets only ndof = N.
+    !> With `sparse` present and `method` = 'craig-bampton', or 'auto' or 'none' and N >
+    !> max_file_dof, the file matrices are kept sparse in `sparse` (no size limit) and model
+    !> gets only ndof = N ('none': the exact sparse condensation, stickslip_sparse_dynamics).
     subroutine read_system_group(nml, model, files, error, method, sparse)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
@@ -148,7 +150,8 @@ contains
                     return
                 end if
                 keep_sparse = method == 'craig-bampton' .or. &
-                              (method == 'auto' .and. rows > max_file_dof)
+                              ((method == 'auto' .or. method == 'none') .and. &
+                               rows > max_file_dof)
             end if
             if (keep_sparse) then
                 call read_sparse(files%mass_path, "mass_file", 0, sparse%mass)

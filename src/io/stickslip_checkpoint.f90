@@ -81,7 +81,14 @@ contains
             end do
         end do
         close (u)
-        if (allocated(case%system_files%mass_file)) then
+        if (allocated(case%sparse_model)) then
+            ! the exact sparse condensation: the sparse values
+            call mix(reshape(case%sparse_model%mass%val, [case%sparse_model%mass%nnz(), 1]))
+            call mix(reshape(case%sparse_model%stiffness%val, &
+                             [case%sparse_model%stiffness%nnz(), 1]))
+            if (case%sparse_model%damping%nnz() > 0) call mix(reshape( &
+                case%sparse_model%damping%val, [case%sparse_model%damping%nnz(), 1]))
+        else if (allocated(case%system_files%mass_file)) then
             call mix(case%model%mass)
             call mix(case%model%stiffness)
             call mix(case%model%damping)

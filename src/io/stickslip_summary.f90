@@ -178,6 +178,8 @@ contains
         call put(u, "  fnorm = "//rtoa(sol%fnorm), stat, msg)
         call put(u, "  fscale = "//rtoa(sol%fscale), stat, msg)
         call put(u, "  solve_seconds = "//rtoa(sol%seconds), stat, msg)
+        if (allocated(sol%dofs)) call put(u, "  condensation_seconds = "// &
+                                          rtoa(sol%condensation_seconds), stat, msg)
         call put(u, "  harmonics = "//itoa(sol%harmonics), stat, msg)
         call put(u, "  odd_only = "//ltoa(sol%odd_only), stat, msg)
         call put(u, "  samples = "//itoa(sol%samples), stat, msg)
@@ -531,7 +533,10 @@ contains
     !> reduced_dof, full_dof, reduction_modes, reduction_load_vectors (static load-correction
     !> vectors of a force_file), reduction_highest_mode_frequency [rad/s], reduction_seconds,
     !> reduction_error (-1: not measured, e.g. no contact), reduction_error_frequencies
-    !> [rad/s] (where it was measured).
+    !> [rad/s] (where it was measured). For the exact sparse condensation (&reduction method
+    !> = 'none', N > max_file_dof): reduction_method = 'none', reduced_dof = full_dof = N and
+    !> reduction_error = 0 (exact); the time of the sparse factorizations is the hbm key
+    !> condensation_seconds.
     subroutine put_reduction_keys(u, case, stat, msg)
         integer, intent(in) :: u
         type(case_t), intent(in) :: case
@@ -553,6 +558,12 @@ contains
                         "  reduction_error_frequencies = "//rlist(r%error_frequencies), &
                         stat, msg)
                 end if
+            else if (allocated(case%sparse_model)) then
+                ! &reduction method = 'none' on a sparse model: exact, nothing reduced
+                call put(u, "  reduction_method = 'none'", stat, msg)
+                call put(u, "  reduced_dof = "//itoa(r%reduced_dof), stat, msg)
+                call put(u, "  full_dof = "//itoa(r%full_dof), stat, msg)
+                call put(u, "  reduction_error = 0.0", stat, msg)
             end if
         end associate
     end subroutine put_reduction_keys

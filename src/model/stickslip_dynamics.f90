@@ -15,7 +15,8 @@ module stickslip_dynamics
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     implicit none
     private
-    public :: dynamics_t, new_dynamics, restrict_dynamics
+    public :: dynamics_t, new_dynamics, restrict_dynamics, check_harmonics_in_basis, &
+        restrict_to_basis
 
     !> Condensed linear dynamics on a basis.
     type :: dynamics_t
@@ -62,6 +63,17 @@ module stickslip_dynamics
         integer, allocatable :: harm(:)
         !> Relative conditioning of Z_h per harmonic of `harm` (see relative_conditioning).
         real(dp), allocatable :: rel(:)
+        !> The DOFs of the rows of x0, y, x0_static, y_static when not all N are kept (the
+        !> exact sparse condensation, stickslip_sparse_dynamics); unallocated: rows 1..N.
+        integer, allocatable :: kept(:)
+        !> Sparse condensation only: P_h = [X0_h, Y_h]^H C [X0_h, Y_h] over ALL N DOFs,
+        !> (n_c + 1) x (n_c + 1) x nharm, so that the viscous dissipation of the response
+        !> X_h = X0_h + Y_h R_h is exact without the N-row X_h: X_h^H C X_h = [1; R_h]^H P_h
+        !> [1; R_h] [m^2 N s/m].
+        complex(dp), allocatable :: damping_gram(:, :, :)
+        !> Sparse condensation only: q_h = F_h^H [X0_h, Y_h] over all N DOFs, (n_c + 1) x
+        !> nharm: the forcing work per period is sum_h (T/2) h omega Re(i q_h [1; R_h]) [N m].
+        complex(dp), allocatable :: forcing_gram(:, :)
     contains
         procedure :: contact_velocity
         procedure :: contact_velocity_derivative
@@ -257,10 +269,25 @@ contains
         type(dynamics_t), intent(out) :: sub
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer :: ih, k, nh
-        integer :: pick(basis%nharm)
         call check_forcing_in_basis(model, basis, error)
         if (allocated(error)) return
+        call restrict_to_basis(self, basis, sub, error)
+    end subroutine restrict_dynamics
+
+    !> restrict_dynamics without the model: the forcing harmonics are the caller's to check
+    !> (check_harmonics_in_basis). Errors: stat input when a harmonic of `basis` (or its
+    !> constant) is not in `self`.
+    subroutine restrict_to_basis(self, basis, sub, error)
+        !> Dynamics on a larger basis.
+        class(dynamics_t), intent(in) :: self
+        !> The smaller basis.
+        type(basis_t), intent(in) :: basis
+        !> The dynamics on `basis`.
+        type(dynamics_t), intent(out) :: sub
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: ih, k, nh
+        integer :: pick(basis%nharm)
         if (.not. allocated(self%harm)) then
             call fatal_error(error, "restrict_dynamics: the dynamics were not built", &
                              stickslip_stat%input)
@@ -282,6 +309,9 @@ contains
         sub%smin_m = self%smin_m
         sub%harm = self%harm(pick)
         sub%rel = self%rel(pick)
+        if (allocated(self%kept)) sub%kept = self%kept
+        if (allocated(self%damping_gram)) sub%damping_gram = self%damping_gram(:, :, pick)
+        if (allocated(self%forcing_gram)) sub%forcing_gram = self%forcing_gram(:, pick)
         sub%x0 = self%x0(:, pick)
         sub%y = self%y(:, :, pick)
         sub%v0 = self%v0(:, pick)
@@ -300,18 +330,31 @@ contains
                 sub%worst_harmonic = sub%harm(k)
             end if
         end do
-    end subroutine restrict_dynamics
+    end subroutine restrict_to_basis
 
     !> Error (stat input) when a forcing term's harmonic is not in `basis`.
     subroutine check_forcing_in_basis(model, basis, error)
         type(model_t), intent(in) :: model
         type(basis_t), intent(in) :: basis
         type(error_type), allocatable, intent(out) :: error
+        if (model%nforce() == 0) return
+        call check_harmonics_in_basis(model%force_harmonic, basis, error)
+    end subroutine check_forcing_in_basis
+
+    !> Error (stat input, "model%force_harmonic(i) = h: not in the harmonic basis ...")
+    !> when one of the forcing harmonics `force_harmonic` is not in `basis`.
+    subroutine check_harmonics_in_basis(force_harmonic, basis, error)
+        !> Harmonic of each forcing term.
+        integer, intent(in) :: force_harmonic(:)
+        !> The basis.
+        type(basis_t), intent(in) :: basis
+        !> Set when a harmonic is missing.
+        type(error_type), allocatable, intent(out) :: error
         integer :: i, h
         logical :: placed
         character(len=200) :: buf
-        do i = 1, model%nforce()
-            h = model%force_harmonic(i)
+        do i = 1, size(force_harmonic)
+            h = force_harmonic(i)
             if (h == 0) then
                 placed = basis%has_zero
             else
@@ -324,7 +367,7 @@ contains
                 return
             end if
         end do
-    end subroutine check_forcing_in_basis
+    end subroutine check_harmonics_in_basis
 
     !> Contact slip-velocity coefficients V = V0 + G R (nb x n_c) for friction-force
     !> coefficients R (nb x n_c), in the real coefficient layout of `basis`.
@@ -377,7 +420,7 @@ contains
     end subroutine affine_contact
 
     !> Displacement coefficients of every DOF, X = X0 + Y R (nb x N), for friction-force
-    !> coefficients R (nb x n_c).
+    !> coefficients R (nb x n_c); nb x size(kept) for the kept DOFs of a sparse condensation.
     pure subroutine displacement(self, basis, rcoef, xcoef)
         !> The condensed dynamics.
         class(dynamics_t), intent(in) :: self
@@ -385,10 +428,10 @@ contains
         type(basis_t), intent(in) :: basis
         !> Friction force coefficients, nb x n_c [N].
         real(dp), intent(in) :: rcoef(:, :)
-        !> Displacement coefficients, nb x N [m].
+        !> Displacement coefficients, nb x N (nb x size(kept) when kept) [m].
         real(dp), intent(out) :: xcoef(:, :)
         integer :: ih, k, j
-        complex(dp) :: x(self%ndof), r(self%ncontact)
+        complex(dp) :: x(size(self%x0, 1)), r(self%ncontact)
         if (basis%has_zero) then
             xcoef(basis%i0, :) = self%x0_static
             do j = 1, self%ncontact

@@ -128,13 +128,17 @@ contains
     !> beside a non-empty contact_dof/contact_dof2 or force_dof, no zero contact direction,
     !> one mu, normal_load (force_harmonic, force_amplitude, force_phase) per column. Errors (stat input) name the argument and its component, e.g.
     !> "model%mu(2) = -0.1: must be >= 0" (a case file reports "&friction mu(2) = ...").
-    subroutine validate_model(model, error)
+    !> With `dense` = .false. the dense matrices are not checked (they are left unallocated
+    !> by a sparse_model_t, whose validate_sparse_model checks its sparse ones).
+    subroutine validate_model(model, error, dense)
         !> The model to check.
         type(model_t), intent(in) :: model
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
-        integer :: n, i, j, info
-        real(dp), allocatable :: chol(:, :)
+        !> Check the dense mass, stiffness and damping (default .true.).
+        logical, intent(in), optional :: dense
+        integer :: n, i, j
+        logical :: check_dense
         character(len=160) :: buf
 
         n = model%ndof
@@ -142,26 +146,11 @@ contains
             call fatal_error(error, "model%ndof: must be >= 1", stickslip_stat%input)
             return
         end if
-        call check_matrix("mass", model%mass, .true., error)
-        if (allocated(error)) return
-        call check_matrix("stiffness", model%stiffness, .false., error)
-        if (allocated(error)) return
-        call check_matrix("damping", model%damping, .false., error)
-        if (allocated(error)) return
-        do i = 1, n
-            if (model%mass(i, i) <= 0.0_dp) then
-                write (buf, '(a,i0,a,i0,a,g0.6,a)') "model%mass(", i, ",", i, ") = ", &
-                    model%mass(i, i), ": diagonal masses must be > 0"
-                call fatal_error(error, trim(buf), stickslip_stat%input)
-                return
-            end if
-        end do
-        allocate (chol(n, n))
-        chol = model%mass
-        call dpotrf('U', n, chol, n, info)
-        if (info /= 0) then
-            call fatal_error(error, "model%mass: not positive definite", stickslip_stat%input)
-            return
+        check_dense = .true.
+        if (present(dense)) check_dense = dense
+        if (check_dense) then
+            call check_dense_matrices(error)
+            if (allocated(error)) return
         end if
         if (.not. (model%omega > 0.0_dp) .or. model%omega > huge(1.0_dp)) then
             write (buf, '(a,g0.6,a)') "model%omega = ", model%omega, ": must be finite and > 0"
@@ -342,6 +331,34 @@ contains
                 end if
             end do
         end subroutine check_shape
+
+        !> M symmetric positive definite, C and K square and finite.
+        subroutine check_dense_matrices(error)
+            type(error_type), allocatable, intent(out) :: error
+            real(dp), allocatable :: chol(:, :)
+            integer :: i, info
+            call check_matrix("mass", model%mass, .true., error)
+            if (allocated(error)) return
+            call check_matrix("stiffness", model%stiffness, .false., error)
+            if (allocated(error)) return
+            call check_matrix("damping", model%damping, .false., error)
+            if (allocated(error)) return
+            do i = 1, n
+                if (model%mass(i, i) <= 0.0_dp) then
+                    write (buf, '(a,i0,a,i0,a,g0.6,a)') "model%mass(", i, ",", i, ") = ", &
+                        model%mass(i, i), ": diagonal masses must be > 0"
+                    call fatal_error(error, trim(buf), stickslip_stat%input)
+                    return
+                end if
+            end do
+            allocate (chol(n, n))
+            chol = model%mass
+            call dpotrf('U', n, chol, n, info)
+            if (info /= 0) then
+                call fatal_error(error, "model%mass: not positive definite", stickslip_stat%input)
+                return
+            end if
+        end subroutine check_dense_matrices
 
         subroutine check_matrix(name, a, must_be_symmetric, error)
             character(len=*), intent(in) :: name

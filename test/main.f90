@@ -37,6 +37,7 @@ program tester
     use test_matrix_market, only: run_matrix_market_tests
     use test_system_files, only: run_system_files_tests
     use test_output_selection, only: run_output_selection_tests
+    use test_calculix, only: run_calculix_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -83,6 +84,7 @@ program tester
     if (selected("matrix_market")) call run_matrix_market_tests(t)
     if (selected("system_files")) call run_system_files_tests(t)
     if (selected("output_selection")) call run_output_selection_tests(t)
+    if (selected("calculix")) call run_calculix_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

@@ -5,7 +5,8 @@
 !> files) equal the ones CalculiX's own eigensolver printed (calculix_frequencies.txt, 7
 !> digits), an independent truth: another program's eigensolver on its own assembly; the
 !> Craig-Bampton model that case.nml builds bounds the first one from above within its
-!> reduction error (1.6e-5), and with 30 fixed-interface modes equals it to the digits.
+!> reduction error (1.6e-5), and with 30 fixed-interface modes equals it to the digits. The
+!> picture's key shows amp_2409, not gnuplot's subscript of "_2".
 module test_calculix
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
@@ -18,7 +19,9 @@ module test_calculix
     use stickslip_reduction, only: craig_bampton, reduction_options_t, reduced_model_t, &
         reduction_report_t
     use testing, only: test_counter_t, check, check_close
-    use fixtures, only: project_path
+    use stickslip_files, only: make_directory
+    use stickslip_plot_scripts, only: write_frc_plot_script
+    use fixtures, only: project_path, scratch_dir
     implicit none
     private
     public :: run_calculix_tests
@@ -43,6 +46,7 @@ contains
         type(sparse_matrix_t) :: kmat, mmat
         real(dp), allocatable :: reference(:)
         logical :: ok
+        call test_plot_titles(t)
         call read_matrices(t, kmat, mmat, ok)
         if (.not. ok) return
         call read_reference(t, reference)
@@ -52,6 +56,33 @@ contains
         call test_reduced_frequency(t, reference)
         call test_more_modes(t, kmat, mmat, reference)
     end subroutine run_calculix_tests
+
+    !> frc.gp of the example's sweep (full-model labels 2409, 2244) titles its curves
+    !> amp_2409 and amp_2244 as plain text: gnuplot's enhanced mode would make "_2" a
+    !> subscript ("amp" with a subscript 2, then "409").
+    subroutine test_plot_titles(t)
+        type(test_counter_t), intent(inout) :: t
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: dir
+        character(len=256) :: line
+        integer :: u, stat, found
+        dir = scratch_dir()//"/calculix_plot"
+        call make_directory(dir, error)
+        if (.not. allocated(error)) call write_frc_plot_script(dir, "omega", 10, error, [1, 2], &
+                                                                [2409, 2244])
+        call check(t, .not. allocated(error), "calculix: frc.gp written")
+        if (allocated(error)) return
+        found = 0
+        open (newunit=u, file=dir//"/frc.gp", status='old', action='read', iostat=stat)
+        do while (stat == 0)
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            if (index(line, "title 'amp_2409' noenhanced") > 0) found = found + 1
+            if (index(line, "title 'amp_2244' noenhanced") > 0) found = found + 1
+        end do
+        close (u)
+        call check(t, found == 2, "calculix: frc.gp titles amp_2409, amp_2244 as plain text")
+    end subroutine test_plot_titles
 
     !> stiffness.mtx and mass.mtx: declared symmetric, N x N, exactly symmetric after the
     !> expansion, positive diagonals.

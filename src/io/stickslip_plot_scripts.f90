@@ -73,10 +73,10 @@ contains
         do k = 1, nsel
             if (k == 1) then
                 call put(u, "plot f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(sel(k))//"', \", stat, msg)
+                         itoa(sel(k))//"' noenhanced, \", stat, msg)
             else
                 call put(u, "     f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(sel(k))//"', \", stat, msg)
+                         itoa(sel(k))//"' noenhanced, \", stat, msg)
             end if
             if (k < nsel) then
                 call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points pt 2 "// &

@@ -16,8 +16,8 @@ elements before the tip.
 
 What it does:
  1. writes blade_mesh.inp (nodes, elements, the tip's reference nodes, node sets ROOT,
-    TIPFACE, DRIVE), included by the
-    hand-written decks blade_matrices.inp and blade_modes.inp;
+    TIPFACE, DRIVE), included by the hand-written decks blade_matrices.inp and
+    blade_modes.inp;
  2. runs `ccx blade_matrices` (*FREQUENCY, SOLVER=MATRIXSTORAGE: K and M of the constrained
     model to blade_matrices.sti/.mas, one line "i j value" per entry of the upper triangle,
     1-based, explicit zeros included; blade_matrices.dof: "node.direction" of row k on line k)
@@ -26,7 +26,9 @@ What it does:
       stiffness.mtx, mass.mtx   Matrix Market, coordinate real symmetric, upper triangle as
                                 CalculiX stores it (the values copied digit for digit, its
                                 zeros and roundoff-level entries dropped: see convert); K in
-                                N/m, M in kg (translations only);
+                                N/m, M in kg for translations (the rows of the rotation node
+                                TIP_ROT_NODE are the rigid tip's rotations [rad]: N m/rad,
+                                kg m^2 and the mixed units between);
       dofs.csv                  row,node,direction,x,y,z: the row (= DOF number of stickslip)
                                 of each node and direction (1 = x, 2 = y, 3 = z) and the
                                 node's coordinates [m];

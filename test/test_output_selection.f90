@@ -285,6 +285,16 @@ contains
         call check(t, has_line_starting(dir//"/chain_reduced_all/summary.nml", &
                                         "quantities = 'x3', 'x70', 'v3', 'v70', 'r1', 'r2'"), &
                    "chain reduced, method all: compares x3, x70 (full numbers)")
+        ! too few modes: the measured reduction error is reported as a warning (stderr and
+        ! summary), the run still exits 0
+        call chain_case("chain_reduced_err", "dofs = 3, 70 / &reduction method = "// &
+                        "'craig-bampton', modes = 1")
+        call cli([character(len=200) :: dir//"/chain_reduced_err.nml"], code, out, err)
+        call check(t, code == 0 .and. index(err, "stickslip: warning: reduction: the "// &
+                   "measured error") > 0, "chain reduced, 1 mode: reduction error warning", err)
+        call check(t, has_line_starting(dir//"/chain_reduced_err/summary.nml", &
+                                        "warning_reduction_error = "), &
+                   "chain reduced, 1 mode: warning_reduction_error in summary.nml")
         call chain_case("chain_reduced_study", "dofs = 70, 3 / &reduction method = "// &
                         "'craig-bampton', modes = 66 / &study harmonics = 3, 5")
         call read_case(dir//"/chain_reduced_study.nml", c, error)

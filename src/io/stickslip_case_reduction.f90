@@ -27,6 +27,7 @@ module stickslip_case_reduction
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
+    use stickslip_diagnostics, only: diagnostics_t, level_warning
     use stickslip_namelist, only: nml_file_t
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_string
     use stickslip_case_model, only: group_error, sparse_system_t
@@ -34,6 +35,10 @@ module stickslip_case_reduction
         craig_bampton, receptance_error, reduced_dof_of, recover_dofs, reduce_vectors
     implicit none
     private
+    !> Measured reduction error above which the reduction is reported (warning
+    !> 'reduction_error'): the reduced contact receptance is off by more than 5 %.
+    real(dp), parameter, public :: reduction_error_warning = 0.05_dp
+
     public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs, &
         recover_full_field, error_frequencies
 
@@ -57,6 +62,10 @@ module stickslip_case_reduction
         !> model was reduced.
         integer, allocatable :: output_dofs(:), output_reduced(:)
         real(dp), allocatable :: output_rows(:, :)
+        !> What the checks of the reduction found (warnings 'reduction_capped': the mode-count
+        !> rule stopped at its cap; 'reduction_error': the measured error above
+        !> reduction_error_warning); the summary and the CLI report them with every method.
+        type(diagnostics_t) :: diagnostics
         !> Keep the whole reduction basis (set by read_case for &output full_field).
         logical :: keep_basis = .false.
         !> The reduction basis T (its reduced matrices dropped), allocated only when the model
@@ -245,6 +254,7 @@ contains
             end if
             red%report%error = err
         end if
+        call reduction_findings(red)
 
         ! the reduced dense model, DOFs remapped
         red%contact_dof = model%contact_dof
@@ -406,4 +416,31 @@ contains
             end do
         end do
     end function error_frequencies
+
+    !> The checks of a reduction done (red%report) into red%diagnostics: 'reduction_capped'
+    !> when the mode-count rule stopped at its cap before its frequency limit, and
+    !> 'reduction_error' when the measured error exceeds reduction_error_warning.
+    subroutine reduction_findings(red)
+        !> The reduction (report in, diagnostics out).
+        type(reduction_case_t), intent(inout) :: red
+        character(len=400) :: buf
+        associate (r => red%report)
+            if (r%capped) then
+                write (buf, '(a,i0,a,es10.3,a,es10.3,a)') "reduction: the mode-count rule "// &
+                    "stopped at its cap of ", r%modes, " fixed-interface modes (highest ", &
+                    r%highest_mode_frequency, " rad/s) below its limit ", r%frequency_limit, &
+                    " rad/s: modes that respond may be missing (stiffness-proportional "// &
+                    "damping, rayleigh_beta with 9 H omega beta >= 1, makes every mode count); "// &
+                    "give &reduction modes or max_frequency"
+                call red%diagnostics%add(level_warning, "reduction_capped", trim(buf))
+            end if
+            if (r%error > reduction_error_warning) then
+                write (buf, '(a,es10.3,a,i0,a)') "reduction: the measured error of the "// &
+                    "reduced model (contact receptance) is ", r%error, " > ", &
+                    nint(100*reduction_error_warning), "%: keep more modes (&reduction "// &
+                    "modes, max_frequency)"
+                call red%diagnostics%add(level_warning, "reduction_error", trim(buf))
+            end if
+        end associate
+    end subroutine reduction_findings
 end module stickslip_case_reduction

@@ -74,7 +74,7 @@ contains
             found = sol%diagnostics
             if (present(checks)) call found%extend(checks%diagnostics)
         end if
-        call begin_summary(dir, "hbm", found, u, stat, msg, error)
+        call begin_summary(dir, "hbm", case, found, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put_hbm_keys(u, sol, stat, msg)
@@ -154,7 +154,7 @@ contains
         else
             found = res%diagnostics
         end if
-        call begin_summary(dir, "euler", found, u, stat, msg, error)
+        call begin_summary(dir, "euler", case, found, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put_euler_keys(u, case, res, stat, msg)
@@ -268,7 +268,7 @@ contains
         else
             found = ref%diagnostics
         end if
-        call begin_summary(dir, "reference", found, u, stat, msg, error)
+        call begin_summary(dir, "reference", case, found, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put_reference_keys(u, ref, stat, msg)
@@ -315,7 +315,7 @@ contains
         else
             found = res%diagnostics
         end if
-        call begin_summary(dir, "all", found, u, stat, msg, error)
+        call begin_summary(dir, "all", case, found, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  hbm_cpu_seconds = "//rtoa(res%hbm_seconds), stat, msg)
@@ -378,7 +378,7 @@ contains
         else
             found = study%diagnostics
         end if
-        call begin_summary(dir, "study", found, u, stat, msg, error)
+        call begin_summary(dir, "study", case, found, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  rows = "//itoa(nrow), stat, msg)
@@ -413,7 +413,7 @@ contains
         else
             found = res%diagnostics
         end if
-        call begin_summary(dir, "sweep", found, u, stat, msg, error)
+        call begin_summary(dir, "sweep", case, found, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  complete = "//ltoa(res%complete), stat, msg)
@@ -470,7 +470,7 @@ contains
         integer :: u, stat, k
         character(len=512) :: msg
         if (present(diagnostics)) found = diagnostics
-        call begin_summary(dir, "robustness", found, u, stat, msg, error)
+        call begin_summary(dir, "robustness", case, found, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
         if (allocated(error)) return
         call put(u, "  rows = "//itoa(size(rows)), stat, msg)
@@ -487,16 +487,28 @@ contains
     !> `trusted` (F when a finding is level_untrusted), `warnings` (the keys of the warning
     !> and untrusted findings, '' when none) and one `warning_<key>` or `untrusted_<key>`
     !> line with the message of each.
-    subroutine begin_summary(dir, method, found, u, stat, msg, error)
+    subroutine begin_summary(dir, method, case, found_in, u, stat, msg, error)
         character(len=*), intent(in) :: dir, method
-        type(diagnostics_t), intent(in) :: found
+        type(case_t), intent(in) :: case
+        type(diagnostics_t), intent(in) :: found_in
         integer, intent(out) :: u, stat
         character(len=*), intent(out) :: msg
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: keys
+        type(diagnostics_t) :: found
         integer :: k
         stat = 0
         msg = ""
+        ! the method's findings, then those of the model's reduction (read_case)
+        found = found_in
+        if (allocated(case%reduction%diagnostics%items)) then
+            do k = 1, size(case%reduction%diagnostics%items)
+                associate (item => case%reduction%diagnostics%items(k))
+                    if (.not. found%has(item%key)) call found%add(item%level, item%key, &
+                                                                  item%message)
+                end associate
+            end do
+        end if
         call open_temporary(dir, "summary.nml", u, error)
         if (allocated(error)) return
         call put(u, "! stickslip summary: the group &summary (and for several methods "// &

@@ -10,8 +10,13 @@
 !> The friction forces solve min 1/2 r^T D r + u_free^T r over the box |r_j| <= mu_j N_j (its
 !> optimality conditions are Coulomb's law): closed form for one contact, projected
 !> Gauss-Seidel for several (it converges when D is symmetric positive definite, i.e. for
-!> symmetric C and K; stickslip_contact_solve). The step is first order: errors are O(h). No
-!> allocation in the step loop.
+!> symmetric C and K; stickslip_contact_solve). The step is first order: errors are O(h).
+!>
+!> The free velocity v_free = S^{-1} (M v - h K x + h f(t)): up to opts%inverse_max_ndof
+!> unknowns the matrices S^{-1} M, S^{-1} h K and S^{-1} F (F the load shapes) are formed
+!> once, and a step costs one N x (2N + n_f) matrix-vector product and the cosines of the
+!> forcing; above, a step forms M v - h K x + h f and solves with the LU factors of S
+!> (dgetrs). No allocation and no array temporary in the step loop (written-out loops).
 module stickslip_euler
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -48,6 +53,11 @@ module stickslip_euler
         real(dp) :: contact_tol = 1.0e-13_dp
         !> Projected Gauss-Seidel sweeps at most per step.
         integer :: contact_max_sweeps = 10000
+        !> Iteration matrices M + h C + h^2 K of at most this order are inverted once (a step
+        !> is then one matrix-vector product, no LAPACK call); larger ones are LU-factorized
+        !> once and solved every step (dgetrs). Both give the same results to roundoff;
+        !> 0: always the LU solve.
+        integer :: inverse_max_ndof = 1024
     end type euler_options_t
 
     !> Result of the time integration: the report and the last period.
@@ -110,7 +120,8 @@ contains
     !> Integrate `model` from rest (or from x0, v0 at t = 0) until the response is periodic.
     !> Not reaching a periodic state within max_periods is an outcome (res%periodic = F and a
     !> diagnosis: drift, quasi-periodic or unbounded response). Errors: stat input (invalid
-    !> model or options), stat numerical (singular iteration matrix).
+    !> model or options, x0 or v0 not of size ndof), stat numerical (singular iteration
+    !> matrix).
     subroutine integrate_euler(model, opts, res, error, x0, v0, progress)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
@@ -126,13 +137,14 @@ contains
         real(dp), intent(in), optional :: v0(:)
         !> Progress of the periods (a line at most once a second when its unit is set).
         type(progress_t), intent(inout), optional :: progress
-        integer :: n, nc, ns, info, j, k, period, step, sweeps, i
+        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, sweeps
+        logical :: inverse
         character(len=40) :: defect_text
-        real(dp) :: h, period_t, t, ampx, ampv, dx, dv
-        real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), b(:), wk(:), x(:), v(:), &
-                                 xstart(:), vstart(:), r(:), ufree(:), limit(:), famp(:), fph(:), &
-                                 fshape(:, :)
-        integer, allocatable :: ipiv(:), fh(:)
+        real(dp) :: h, period_t, t, ampx, ampv, dx, dv, acc
+        real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), a(:, :), y(:), &
+                                 ystart(:), vf(:), r(:), ufree(:), limit(:), famp(:), fph(:), &
+                                 fh(:)
+        integer, allocatable :: ipiv(:)
         integer(int64) :: c0, c1, rate
         character(len=300) :: buf
 
@@ -152,13 +164,34 @@ contains
             return
         end if
         n = model%ndof
+        if (present(x0)) then
+            if (size(x0) /= n) then
+                call fatal_error(error, "x0: size "//itoa(size(x0))//", must be ndof = "// &
+                                 itoa(n), stickslip_stat%input)
+                return
+            end if
+        end if
+        if (present(v0)) then
+            if (size(v0) /= n) then
+                call fatal_error(error, "v0: size "//itoa(size(v0))//", must be ndof = "// &
+                                 itoa(n), stickslip_stat%input)
+                return
+            end if
+        end if
         nc = model%ncontact()
+        nf = model%nforce()
+        ny = 2*n + nf
         ns = opts%steps_per_period
         period_t = two_pi/model%omega
         h = period_t/ns
+        inverse = n <= opts%inverse_max_ndof
 
-        allocate (s(n, n), sw(n, nc), d(nc, nc), w(n, nc), b(n), wk(n), x(n), v(n), xstart(n), &
-                  vstart(n), r(nc), ufree(nc), limit(nc), ipiv(n))
+        ! The state y = [v; x; c]: velocities, displacements and the forcing coefficients
+        ! c_i = h famp_i cos(k_i omega t + phase_i) of the step. The right-hand side
+        ! M v - h K x + h f(t) is A y with A = [M, -h K, F] (F: the load shapes); the free
+        ! velocity S^{-1} A y is one product when A holds S^{-1} [M, -h K, F].
+        allocate (s(n, n), sw(n, nc), d(nc, nc), w(n, nc), a(n, ny), y(ny), ystart(ny), &
+                  vf(n), r(nc), ufree(nc), limit(nc), ipiv(n))
         s = model%mass + h*model%damping + h*h*model%stiffness
         call dgetrf(n, n, s, n, ipiv, info)
         if (info /= 0) then
@@ -173,63 +206,108 @@ contains
         if (nc > 0) call dgetrs('N', n, nc, s, n, ipiv, sw, n, info)
         d = h*matmul(transpose(w), sw)
         limit = model%mu*model%normal_load
-        allocate (fshape(n, model%nforce()))
-        do i = 1, model%nforce()
-            fshape(:, i) = force_direction(model, i)
+        a(:, 1:n) = model%mass
+        a(:, n + 1:2*n) = -h*model%stiffness
+        do i = 1, nf
+            a(:, 2*n + i) = force_direction(model, i)
         end do
-        fh = model%force_harmonic
-        famp = model%force_amplitude
+        if (inverse) call dgetrs('N', n, ny, s, n, ipiv, a, n, info)
+        fh = real(model%force_harmonic, dp)*model%omega
+        famp = h*model%force_amplitude
         fph = model%force_phase
 
         allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc))
-        res%t = [(period_t*real(k, dp)/real(ns, dp), k=0, ns - 1)]
-        x = 0.0_dp
-        v = 0.0_dp
-        if (present(x0)) x = x0
-        if (present(v0)) v = v0
+        do k = 1, ns
+            res%t(k) = period_t*real(k - 1, dp)/real(ns, dp)
+        end do
+        y = 0.0_dp
+        if (present(v0)) y(1:n) = v0
+        if (present(x0)) y(n + 1:2*n) = x0
         r = 0.0_dp
         res%max_sweeps = 0
 
+        ! No allocation, no array temporary and (up to inverse_max_ndof unknowns) no library
+        ! call in the step loop: the loops below are written out for that.
         do period = 1, opts%max_periods
-            xstart = x
-            vstart = v
+            ystart = y
             do step = 1, ns
                 ! the state at the start of this step is sample step of the period
-                res%x(step, :) = x
-                res%v(step, :) = v
-                res%r(step, :) = r
-                t = period_t*(real(period - 1, dp) + real(step, dp)/real(ns, dp))
-                b = matmul(model%mass, v)
-                wk = matmul(model%stiffness, x)
-                b = b - h*wk
-                do i = 1, size(fh)
-                    b = b + (h*famp(i)*cos(fh(i)*model%omega*t + fph(i)))*fshape(:, i)
+                do k = 1, n
+                    res%v(step, k) = y(k)
+                    res%x(step, k) = y(n + k)
                 end do
-                call dgetrs('N', n, 1, s, n, ipiv, b, n, info)
-                v = b
-                if (nc > 0) then
-                    ufree = matmul(v, w)
+                do j = 1, nc
+                    res%r(step, j) = r(j)
+                end do
+                t = period_t*(real(period - 1, dp) + real(step, dp)/real(ns, dp))
+                do i = 1, nf
+                    y(2*n + i) = famp(i)*cos(fh(i)*t + fph(i))
+                end do
+                ! free velocity: A y, solved with S unless A holds S^{-1} [M, -h K, F]
+                do k = 1, n
+                    vf(k) = a(k, 1)*y(1)
+                end do
+                do j = 2, ny
+                    do k = 1, n
+                        vf(k) = vf(k) + a(k, j)*y(j)
+                    end do
+                end do
+                if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
+                ! friction forces, then v = v_free + h S^{-1} W r
+                if (nc == 1) then
+                    acc = 0.0_dp
+                    do k = 1, n
+                        acc = acc + w(k, 1)*vf(k)
+                    end do
+                    r(1) = max(-limit(1), min(limit(1), -acc/d(1, 1)))
+                    do k = 1, n
+                        y(k) = vf(k) + h*(sw(k, 1)*r(1))
+                    end do
+                else if (nc > 1) then
+                    do j = 1, nc
+                        acc = 0.0_dp
+                        do k = 1, n
+                            acc = acc + w(k, j)*vf(k)
+                        end do
+                        ufree(j) = acc
+                    end do
                     call contact_forces(d, ufree, limit, r, opts%contact_tol, &
                                         opts%contact_max_sweeps, sweeps)
                     res%max_sweeps = max(res%max_sweeps, sweeps)
-                    wk = matmul(sw, r)
-                    v = v + h*wk
+                    do k = 1, n
+                        acc = 0.0_dp
+                        do j = 1, nc
+                            acc = acc + sw(k, j)*r(j)
+                        end do
+                        y(k) = vf(k) + h*acc
+                    end do
+                else
+                    do k = 1, n
+                        y(k) = vf(k)
+                    end do
                 end if
-                x = x + h*v
+                do k = 1, n
+                    y(n + k) = y(n + k) + h*y(k)
+                end do
             end do
             res%periods = period
-            ! the last stored period runs from xstart to x: compare the two ends
+            ! the last stored period runs from ystart to y: compare the two ends
             ampx = maxval(abs(res%x))
             ampv = maxval(abs(res%v))
-            if (.not. (all(ieee_is_finite(x)) .and. all(ieee_is_finite(v))) .or. &
-                ampx > 1.0e100_dp) then
+            if (.not. finite_state(y(1:2*n)) .or. ampx > 1.0e100_dp) then
                 res%diagnosis = "unbounded response: the state overflowed during period "// &
                                 itoa(period)
                 res%defect = huge(1.0_dp)
                 exit
             end if
-            dx = maxval(abs(x - xstart))/max(ampx, tiny(1.0_dp))
-            dv = maxval(abs(v - vstart))/max(ampv, tiny(1.0_dp))
+            dx = 0.0_dp
+            dv = 0.0_dp
+            do k = 1, n
+                dv = max(dv, abs(y(k) - ystart(k)))
+                dx = max(dx, abs(y(n + k) - ystart(n + k)))
+            end do
+            dx = dx/max(ampx, tiny(1.0_dp))
+            dv = dv/max(ampv, tiny(1.0_dp))
             if (ampx == 0.0_dp .and. ampv == 0.0_dp) then
                 dx = 0.0_dp
                 dv = 0.0_dp
@@ -259,4 +337,15 @@ contains
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler
+
+    !> True when every entry of `z` is finite.
+    pure logical function finite_state(z) result(ok)
+        !> The state.
+        real(dp), intent(in) :: z(:)
+        integer :: k
+        ok = .true.
+        do k = 1, size(z)
+            ok = ok .and. ieee_is_finite(z(k))
+        end do
+    end function finite_state
 end module stickslip_euler

@@ -137,13 +137,13 @@ contains
         real(dp), intent(in), optional :: v0(:)
         !> Progress of the periods (a line at most once a second when its unit is set).
         type(progress_t), intent(inout), optional :: progress
-        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, sweeps
+        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, sweeps, first, last, nblock
         logical :: inverse
         character(len=40) :: defect_text
         real(dp) :: h, period_t, t, ampx, ampv, dx, dv, acc
         real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), a(:, :), y(:), &
                                  ystart(:), vf(:), r(:), ufree(:), limit(:), famp(:), fph(:), &
-                                 fh(:)
+                                 fh(:), fc(:, :)
         integer, allocatable :: ipiv(:)
         integer(int64) :: c0, c1, rate
         character(len=300) :: buf
@@ -211,12 +211,24 @@ contains
         do i = 1, nf
             a(:, 2*n + i) = force_direction(model, i)
         end do
-        if (inverse) call dgetrs('N', n, ny, s, n, ipiv, a, n, info)
+        if (inverse) then
+            call dgetrs('N', n, ny, s, n, ipiv, a, n, info)
+            ! S^{-1} of a chain or a beam decays away from the diagonal into subnormal
+            ! numbers, whose products cost ~100 times a normal one: entries below 1e-30 of
+            ! their column's largest are set to zero (a change far below roundoff)
+            do j = 1, ny
+                acc = 1.0e-30_dp*maxval(abs(a(:, j)))
+                do k = 1, n
+                    if (abs(a(k, j)) < acc) a(k, j) = 0.0_dp
+                end do
+            end do
+        end if
         fh = real(model%force_harmonic, dp)*model%omega
         famp = h*model%force_amplitude
         fph = model%force_phase
 
-        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc))
+        nblock = min(ns, 1024)
+        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc), fc(nf, nblock))
         do k = 1, ns
             res%t(k) = period_t*real(k - 1, dp)/real(ns, dp)
         end do
@@ -230,65 +242,24 @@ contains
         ! call in the step loop: the loops below are written out for that.
         do period = 1, opts%max_periods
             ystart = y
-            do step = 1, ns
-                ! the state at the start of this step is sample step of the period
-                do k = 1, n
-                    res%v(step, k) = y(k)
-                    res%x(step, k) = y(n + k)
-                end do
-                do j = 1, nc
-                    res%r(step, j) = r(j)
-                end do
-                t = period_t*(real(period - 1, dp) + real(step, dp)/real(ns, dp))
-                do i = 1, nf
-                    y(2*n + i) = famp(i)*cos(fh(i)*t + fph(i))
-                end do
-                ! free velocity: A y, solved with S unless A holds S^{-1} [M, -h K, F]
-                do k = 1, n
-                    vf(k) = a(k, 1)*y(1)
-                end do
-                do j = 2, ny
-                    do k = 1, n
-                        vf(k) = vf(k) + a(k, j)*y(j)
+            do first = 1, ns, nblock
+                last = min(ns, first + nblock - 1)
+                ! the forcing coefficients of a block of steps first, apart from the steps: the
+                ! cosines then overlap each other instead of stalling the chain of the steps
+                do step = first, last
+                    t = period_t*(real(period - 1, dp) + real(step, dp)/real(ns, dp))
+                    do i = 1, nf
+                        fc(i, step - first + 1) = famp(i)*cos(fh(i)*t + fph(i))
                     end do
                 end do
-                if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
-                ! friction forces, then v = v_free + h S^{-1} W r
-                if (nc == 1) then
-                    acc = 0.0_dp
-                    do k = 1, n
-                        acc = acc + w(k, 1)*vf(k)
-                    end do
-                    r(1) = max(-limit(1), min(limit(1), -acc/d(1, 1)))
-                    do k = 1, n
-                        y(k) = vf(k) + h*(sw(k, 1)*r(1))
-                    end do
-                else if (nc > 1) then
-                    do j = 1, nc
-                        acc = 0.0_dp
-                        do k = 1, n
-                            acc = acc + w(k, j)*vf(k)
-                        end do
-                        ufree(j) = acc
-                    end do
-                    call contact_forces(d, ufree, limit, r, opts%contact_tol, &
-                                        opts%contact_max_sweeps, sweeps)
-                    res%max_sweeps = max(res%max_sweeps, sweeps)
-                    do k = 1, n
-                        acc = 0.0_dp
-                        do j = 1, nc
-                            acc = acc + sw(k, j)*r(j)
-                        end do
-                        y(k) = vf(k) + h*acc
-                    end do
+                if (n == 2 .and. nc == 1 .and. nf == 1 .and. inverse) then
+                    call step_block_2(ns, first, last, h, a, w, sw, d(1, 1), limit(1), fc, y, &
+                                      r(1), res%x, res%v, res%r)
                 else
-                    do k = 1, n
-                        y(k) = vf(k)
-                    end do
+                    call step_block(n, nc, nf, ns, first, last, h, inverse, a, s, ipiv, w, sw, &
+                                    d, limit, opts, fc, y, vf, r, ufree, res%x, res%v, res%r, &
+                                    res%max_sweeps)
                 end if
-                do k = 1, n
-                    y(n + k) = y(n + k) + h*y(k)
-                end do
             end do
             res%periods = period
             ! the last stored period runs from ystart to y: compare the two ends
@@ -337,6 +308,163 @@ contains
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler
+
+    !> Steps first..last of a period (the kernel of integrate_euler): from the state y =
+    !> [v; x; c] and the forces r, store each step's starting state in xs, vs, rs, set the
+    !> forcing coefficients from fc, form the free velocity A y (solved with the LU factors
+    !> of S unless A holds S^{-1} [M, -h K, F]), the friction forces and the new v and x.
+    subroutine step_block(n, nc, nf, ns, first, last, h, inverse, a, s, ipiv, w, sw, d, &
+                          limit, opts, fc, y, vf, r, ufree, xs, vs, rs, max_sweeps)
+        !> Degrees of freedom, contacts, forcing terms, steps per period.
+        integer, intent(in) :: n, nc, nf, ns
+        !> First and last step of the block (1..ns).
+        integer, intent(in) :: first, last
+        !> Time step [s].
+        real(dp), intent(in) :: h
+        !> A holds S^{-1} [M, -h K, F] (else [M, -h K, F] and S its LU factors).
+        logical, intent(in) :: inverse
+        !> The free-velocity matrix, N x (2N + n_f).
+        real(dp), intent(in) :: a(n, 2*n + nf)
+        !> LU factors of S (dgetrf) and their pivots.
+        real(dp), intent(in) :: s(n, n)
+        !> Pivots of the LU factors.
+        integer, intent(in) :: ipiv(n)
+        !> Contact directions W and S^{-1} W, N x n_c.
+        real(dp), intent(in) :: w(n, nc), sw(n, nc)
+        !> Delassus matrix h W^T S^{-1} W.
+        real(dp), intent(in) :: d(nc, nc)
+        !> Friction limits mu N [N].
+        real(dp), intent(in) :: limit(nc)
+        !> Contact tolerances and sweeps.
+        type(euler_options_t), intent(in) :: opts
+        !> Forcing coefficients of the block's steps, n_f x (last - first + 1).
+        real(dp), intent(in) :: fc(nf, *)
+        !> State [v; x; c]: start of the block on entry, end on exit.
+        real(dp), intent(inout) :: y(2*n + nf)
+        !> Work: the free velocity.
+        real(dp), intent(inout) :: vf(n)
+        !> Friction forces: of the last step on entry, updated [N].
+        real(dp), intent(inout) :: r(nc)
+        !> Work: the free slip velocities.
+        real(dp), intent(inout) :: ufree(nc)
+        !> The samples of the period: displacements, velocities (ns x N), forces (ns x n_c).
+        real(dp), intent(inout) :: xs(ns, n), vs(ns, n), rs(ns, nc)
+        !> Most Gauss-Seidel sweeps of a step so far.
+        integer, intent(inout) :: max_sweeps
+        integer :: i, j, k, step, ny, sweeps, info
+        real(dp) :: acc
+        ny = 2*n + nf
+        do step = first, last
+            ! the state at the start of this step is sample step of the period
+            do k = 1, n
+                vs(step, k) = y(k)
+                xs(step, k) = y(n + k)
+            end do
+            do j = 1, nc
+                rs(step, j) = r(j)
+            end do
+            do i = 1, nf
+                y(2*n + i) = fc(i, step - first + 1)
+            end do
+            ! free velocity: A y, solved with S unless A holds S^{-1} [M, -h K, F]
+            do k = 1, n
+                vf(k) = a(k, 1)*y(1)
+            end do
+            do j = 2, ny
+                do k = 1, n
+                    vf(k) = vf(k) + a(k, j)*y(j)
+                end do
+            end do
+            if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
+            ! friction forces, then v = v_free + h S^{-1} W r
+            if (nc == 1) then
+                acc = 0.0_dp
+                do k = 1, n
+                    acc = acc + w(k, 1)*vf(k)
+                end do
+                r(1) = max(-limit(1), min(limit(1), -acc/d(1, 1)))
+                do k = 1, n
+                    y(k) = vf(k) + h*(sw(k, 1)*r(1))
+                end do
+            else if (nc > 1) then
+                do j = 1, nc
+                    acc = 0.0_dp
+                    do k = 1, n
+                        acc = acc + w(k, j)*vf(k)
+                    end do
+                    ufree(j) = acc
+                end do
+                call contact_forces(d, ufree, limit, r, opts%contact_tol, &
+                                    opts%contact_max_sweeps, sweeps)
+                max_sweeps = max(max_sweeps, sweeps)
+                do k = 1, n
+                    acc = 0.0_dp
+                    do j = 1, nc
+                        acc = acc + sw(k, j)*r(j)
+                    end do
+                    y(k) = vf(k) + h*acc
+                end do
+            else
+                do k = 1, n
+                    y(k) = vf(k)
+                end do
+            end if
+            do k = 1, n
+                y(n + k) = y(n + k) + h*y(k)
+            end do
+        end do
+    end subroutine step_block
+
+    !> step_block for 2 DOF, one contact and one forcing term on the inverse path (the
+    !> seed case's shape) with scalars: the same operations (the slip velocity formed as
+    !> (W^T A) y), without the loop overhead that is most of a step at this size.
+    subroutine step_block_2(ns, first, last, h, a, w, sw, d, limit, fc, y, r, xs, vs, rs)
+        !> Steps per period, first and last step of the block.
+        integer, intent(in) :: ns, first, last
+        !> Time step [s].
+        real(dp), intent(in) :: h
+        !> S^{-1} [M, -h K, F], 2 x 5.
+        real(dp), intent(in) :: a(2, 5)
+        !> Contact direction W and S^{-1} W.
+        real(dp), intent(in) :: w(2), sw(2)
+        !> Delassus number h W^T S^{-1} W and friction limit mu N [N].
+        real(dp), intent(in) :: d, limit
+        !> Forcing coefficients of the block's steps.
+        real(dp), intent(in) :: fc(*)
+        !> State [v; x; c]: start of the block on entry, end on exit.
+        real(dp), intent(inout) :: y(5)
+        !> Friction force: of the last step on entry, updated [N].
+        real(dp), intent(inout) :: r
+        !> The samples of the period.
+        real(dp), intent(inout) :: xs(ns, 2), vs(ns, 2), rs(ns)
+        real(dp) :: v1, v2, x1, x2, c, f1, f2, u, b(5)
+        integer :: step
+        ! the slip velocity W^T A y as a product of its own, beside f1 and f2 rather than
+        ! after them (the same numbers when W is a unit vector)
+        b = w(1)*a(1, :) + w(2)*a(2, :)
+        v1 = y(1)
+        v2 = y(2)
+        x1 = y(3)
+        x2 = y(4)
+        c = y(5)
+        do step = first, last
+            vs(step, 1) = v1
+            vs(step, 2) = v2
+            xs(step, 1) = x1
+            xs(step, 2) = x2
+            rs(step) = r
+            c = fc(step - first + 1)
+            f1 = a(1, 1)*v1 + a(1, 2)*v2 + a(1, 3)*x1 + a(1, 4)*x2 + a(1, 5)*c
+            f2 = a(2, 1)*v1 + a(2, 2)*v2 + a(2, 3)*x1 + a(2, 4)*x2 + a(2, 5)*c
+            u = b(1)*v1 + b(2)*v2 + b(3)*x1 + b(4)*x2 + b(5)*c
+            r = max(-limit, min(limit, -u/d))
+            v1 = f1 + h*(sw(1)*r)
+            v2 = f2 + h*(sw(2)*r)
+            x1 = x1 + h*v1
+            x2 = x2 + h*v2
+        end do
+        y = [v1, v2, x1, x2, c]
+    end subroutine step_block_2
 
     !> True when every entry of `z` is finite.
     pure logical function finite_state(z) result(ok)

@@ -137,7 +137,7 @@ contains
         real(dp), intent(in), optional :: v0(:)
         !> Progress of the periods (a line at most once a second when its unit is set).
         type(progress_t), intent(inout), optional :: progress
-        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, sweeps, first, last, nblock
+        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, first, last, nblock
         logical :: inverse
         character(len=40) :: defect_text
         real(dp) :: h, period_t, t, ampx, ampv, dx, dv, acc
@@ -463,7 +463,11 @@ contains
             x1 = x1 + h*v1
             x2 = x2 + h*v2
         end do
-        y = [v1, v2, x1, x2, c]
+        y(1) = v1
+        y(2) = v2
+        y(3) = x1
+        y(4) = x2
+        y(5) = c
     end subroutine step_block_2
 
     !> True when every entry of `z` is finite.

@@ -21,7 +21,10 @@ program bench_euler
     use stickslip_case, only: case_t, read_case
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
     implicit none
-    type(case_t) :: c
+    type(case_t) :: c, cx
+    integer :: icase
+    character(len=*), parameter :: examples(2) = [character(len=24) :: &
+                                                  "examples/many_sticks.nml", "examples/chain4.nml"]
     type(model_t) :: m
     type(euler_options_t) :: o
     type(euler_result_t) :: res, old, hand
@@ -84,6 +87,32 @@ program bench_euler
     write (output_unit, '(a,es9.2,a,es9.2)') "  last period, max |x - x_hand| / max |x|: ", &
         maxval(abs(res%x - hand%x))/maxval(abs(hand%x)), ", against the replaced loop: ", &
         maxval(abs(res%x - old%x))/maxval(abs(old%x))
+
+    ! per step on the other examples (the general kernel): library against the replaced loop
+    do icase = 1, 2
+        call read_case(trim(examples(icase)), cx, error)
+        if (allocated(error)) then
+            write (output_unit, '(a)') "error: "//error%message
+            stop 1
+        end if
+        o%max_periods = 100
+        do i = 1, repeats
+            call cpu_time(t0)
+            call integrate_euler(cx%model, o, res, error)
+            call cpu_time(t1)
+            tlib(i) = t1 - t0
+            call legacy_euler(cx%model, o, old)
+            call cpu_time(t0)
+            told(i) = t0 - t1
+        end do
+        steps = o%steps_per_period*o%max_periods
+        write (output_unit, '(a,a,i0,a,i0,a,i0,a,f0.1,a,f0.1,a,f0.2,a,es9.2)') &
+            trim(examples(icase)), " (", cx%model%ndof, " DOF, ", cx%model%ncontact(), &
+            " contacts, ", cx%model%nforce(), " forces): library ", median(tlib)/steps*1e9_dp, &
+            " ns/step, replaced loop ", median(told)/steps*1e9_dp, " ns/step (", &
+            median(told)/median(tlib), "x); last period max |x - x_old| / max |x|: ", &
+            maxval(abs(res%x - old%x))/maxval(abs(old%x))
+    end do
 
     ! 2. the run of bench/euler_vs_python.sh: from rest until periodic
     o%tol = 1.0e-8_dp

@@ -32,7 +32,8 @@ py=()
 py_step=()
 for _ in $(seq "$p"); do
     t0=$(date +%s%N)
-    line=$(python3 bench/euler_python.py 1000 1e-8 | head -n 1)
+    line=$(python3 bench/euler_python.py 1000 1e-8)
+    line=${line%%$'\n'*}
     t1=$(date +%s%N)
     py+=("$(( (t1 - t0) / 1000 ))")
     py_step+=("$(echo "$line" | awk '{print $6}')")
@@ -41,7 +42,7 @@ done
 py_us=$(printf '%s\n' "${py[@]}" | median "$p")
 py_step_s=$(printf '%s\n' "${py_step[@]}" | median "$p")
 awk -v c="$cli_us" -v q="$py_us" -v s="$step_s" -v qs="$py_step_s" -v n="$n" -v p="$p" \
-    -v per="$periods" -v pper="$py_periods" -v cores="$(nproc)" 'BEGIN {
+    -v per="$periods" -v pper="$py_periods" -v cores="$(getconf _NPROCESSORS_ONLN)" 'BEGIN {
     printf "seed, 1000 steps per period, from rest until periodic (%s periods; Python: %s)\n", per, pper
     printf "  stickslip (whole process, release build): %8.1f ms  median of %d (stepping %.1f ms, last run)\n", c / 1000, n, s * 1000
     printf "  plain Python stepper (whole process):     %8.1f ms  median of %d (stepping %.1f ms)\n", q / 1000, p, qs * 1000

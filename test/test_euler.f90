@@ -46,13 +46,13 @@ contains
         type(euler_options_t) :: o
         o%steps_per_period = 1000
         call compare_with_legacy(t, seed_model(), o, "seed")
-        ! the seed with a second, zero forcing term: the general kernel instead of the 2-DOF one
+        ! the seed with a second, zero forcing term (the 2-DOF kernel with two forcing terms)
         m = seed_model()
         m%force_dof = [1, 2]
         m%force_harmonic = [1, 3]
         m%force_amplitude = [10.0_dp, 0.0_dp]
         m%force_phase = [0.0_dp, 0.0_dp]
-        call compare_with_legacy(t, m, o, "seed, general kernel")
+        call compare_with_legacy(t, m, o, "seed, two forcing terms")
         call compare_with_legacy(t, chain_model(), o, "chain4")
         call read_case(project_path("examples/many_sticks.nml"), c, error)
         call check_error(t, error, "same as before: read many_sticks.nml", .false.)

@@ -38,6 +38,8 @@ module stickslip_euler
     integer, parameter :: euler_max_steps_per_period = 10**7
     !> Largest steps_per_period x max_periods (time steps of one run) accepted.
     integer(int64), parameter :: euler_max_total_steps = 2000000000_int64
+    !> Steps whose forcing coefficients are computed together, before the steps.
+    integer, parameter :: block_steps = 1024
 
     !> Options of the time integration.
     type :: euler_options_t
@@ -143,7 +145,7 @@ contains
         real(dp) :: h, period_t, t, ampx, ampv, dx, dv, acc
         real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), a(:, :), y(:), &
                                  ystart(:), vf(:), r(:), ufree(:), limit(:), famp(:), fph(:), &
-                                 fh(:), fc(:, :)
+                                 fh(:), fc(:, :), wa(:)
         integer, allocatable :: ipiv(:)
         integer(int64) :: c0, c1, rate
         character(len=300) :: buf
@@ -223,11 +225,21 @@ contains
                 end do
             end do
         end if
+        ! W^T A for one contact: its slip velocity without friction (the 2-DOF kernel)
+        allocate (wa(ny))
+        wa = 0.0_dp
+        if (nc == 1) then
+            do j = 1, ny
+                do k = 1, n
+                    wa(j) = wa(j) + w(k, 1)*a(k, j)
+                end do
+            end do
+        end if
         fh = real(model%force_harmonic, dp)*model%omega
         famp = h*model%force_amplitude
         fph = model%force_phase
 
-        nblock = min(ns, 1024)
+        nblock = min(ns, block_steps)
         allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc), fc(nf, nblock))
         do k = 1, ns
             res%t(k) = period_t*real(k - 1, dp)/real(ns, dp)
@@ -252,8 +264,8 @@ contains
                         fc(i, step - first + 1) = famp(i)*cos(fh(i)*t + fph(i))
                     end do
                 end do
-                if (n == 2 .and. nc == 1 .and. nf == 1 .and. inverse) then
-                    call step_block_2(ns, first, last, h, a, w, sw, d(1, 1), limit(1), fc, y, &
+                if (n == 2 .and. nc == 1 .and. nf >= 1 .and. inverse) then
+                    call step_block_2(nf, ns, first, last, h, a, wa, sw, d(1, 1), limit(1), fc, y, &
                                       r(1), res%x, res%v, res%r)
                 else
                     call step_block(n, nc, nf, ns, first, last, h, inverse, a, s, ipiv, w, sw, &
@@ -415,48 +427,57 @@ contains
         end do
     end subroutine step_block
 
-    !> step_block for 2 DOF, one contact and one forcing term on the inverse path (the
-    !> seed case's shape) with scalars: the same operations (the slip velocity formed as
-    !> (W^T A) y), without the loop overhead that is most of a step at this size.
-    subroutine step_block_2(ns, first, last, h, a, w, sw, d, limit, fc, y, r, xs, vs, rs)
-        !> Steps per period, first and last step of the block.
-        integer, intent(in) :: ns, first, last
+    !> step_block for 2 DOF and one contact on the inverse path (the seed case's shape)
+    !> with scalars, without the loop overhead that is most of a step at this size: the
+    !> forcing terms of the block's steps summed first, the slip velocity formed as
+    !> (W^T A) y beside the free velocity rather than after it.
+    subroutine step_block_2(nf, ns, first, last, h, a, b, sw, d, limit, fc, y, r, xs, vs, rs)
+        !> Forcing terms, steps per period, first and last step of the block.
+        integer, intent(in) :: nf, ns, first, last
         !> Time step [s].
         real(dp), intent(in) :: h
-        !> S^{-1} [M, -h K, F], 2 x 5.
-        real(dp), intent(in) :: a(2, 5)
-        !> Contact direction W and S^{-1} W.
-        real(dp), intent(in) :: w(2), sw(2)
+        !> S^{-1} [M, -h K, F], 2 x (4 + n_f).
+        real(dp), intent(in) :: a(2, 4 + nf)
+        !> W^T A: the slip velocity W^T S^{-1} [M, -h K, F] y of the free velocity.
+        real(dp), intent(in) :: b(4 + nf)
+        !> S^{-1} W.
+        real(dp), intent(in) :: sw(2)
         !> Delassus number h W^T S^{-1} W and friction limit mu N [N].
         real(dp), intent(in) :: d, limit
-        !> Forcing coefficients of the block's steps.
-        real(dp), intent(in) :: fc(*)
+        !> Forcing coefficients of the block's steps, n_f x (last - first + 1).
+        real(dp), intent(in) :: fc(nf, *)
         !> State [v; x; c]: start of the block on entry, end on exit.
-        real(dp), intent(inout) :: y(5)
+        real(dp), intent(inout) :: y(4 + nf)
         !> Friction force: of the last step on entry, updated [N].
         real(dp), intent(inout) :: r
         !> The samples of the period.
         real(dp), intent(inout) :: xs(ns, 2), vs(ns, 2), rs(ns)
-        real(dp) :: v1, v2, x1, x2, c, f1, f2, u, b(5)
-        integer :: step
-        ! the slip velocity W^T A y as a product of its own, beside f1 and f2 rather than
-        ! after them (the same numbers when W is a unit vector)
-        b = w(1)*a(1, :) + w(2)*a(2, :)
+        real(dp) :: v1, v2, x1, x2, f1, f2, u, g(3, block_steps)
+        integer :: step, i, k
+        do k = 1, last - first + 1
+            g(1, k) = a(1, 5)*fc(1, k)
+            g(2, k) = a(2, 5)*fc(1, k)
+            g(3, k) = b(5)*fc(1, k)
+            do i = 2, nf
+                g(1, k) = g(1, k) + a(1, 4 + i)*fc(i, k)
+                g(2, k) = g(2, k) + a(2, 4 + i)*fc(i, k)
+                g(3, k) = g(3, k) + b(4 + i)*fc(i, k)
+            end do
+        end do
         v1 = y(1)
         v2 = y(2)
         x1 = y(3)
         x2 = y(4)
-        c = y(5)
         do step = first, last
             vs(step, 1) = v1
             vs(step, 2) = v2
             xs(step, 1) = x1
             xs(step, 2) = x2
             rs(step) = r
-            c = fc(step - first + 1)
-            f1 = a(1, 1)*v1 + a(1, 2)*v2 + a(1, 3)*x1 + a(1, 4)*x2 + a(1, 5)*c
-            f2 = a(2, 1)*v1 + a(2, 2)*v2 + a(2, 3)*x1 + a(2, 4)*x2 + a(2, 5)*c
-            u = b(1)*v1 + b(2)*v2 + b(3)*x1 + b(4)*x2 + b(5)*c
+            k = step - first + 1
+            f1 = a(1, 1)*v1 + a(1, 2)*v2 + a(1, 3)*x1 + a(1, 4)*x2 + g(1, k)
+            f2 = a(2, 1)*v1 + a(2, 2)*v2 + a(2, 3)*x1 + a(2, 4)*x2 + g(2, k)
+            u = b(1)*v1 + b(2)*v2 + b(3)*x1 + b(4)*x2 + g(3, k)
             r = max(-limit, min(limit, -u/d))
             v1 = f1 + h*(sw(1)*r)
             v2 = f2 + h*(sw(2)*r)
@@ -467,7 +488,7 @@ contains
         y(2) = v2
         y(3) = x1
         y(4) = x2
-        y(5) = c
+        y(5:) = fc(:, last - first + 1)
     end subroutine step_block_2
 
     !> True when every entry of `z` is finite.

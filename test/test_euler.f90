@@ -3,6 +3,8 @@
 !> solution; steady-state detection, including a case that must report no periodic state;
 !> agreement with the weighted-residual solution on the seed case.
 module test_euler
+    use, intrinsic :: ieee_arithmetic, only: ieee_support_underflow_control, &
+        ieee_get_underflow_mode, ieee_set_underflow_mode
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t, contact_velocity_direction, force_direction
@@ -30,7 +32,28 @@ contains
         call test_progress(t)
         call test_same_as_before(t)
         call test_start_size(t)
+        call test_underflow_mode(t)
     end subroutine run_euler_tests
+
+    !> The step loop flushes subnormal numbers to zero; the caller's gradual underflow is
+    !> back afterwards (a subnormal quotient stays nonzero).
+    subroutine test_underflow_mode(t)
+        type(test_counter_t), intent(inout) :: t
+        type(euler_options_t) :: o
+        type(euler_result_t) :: res
+        type(error_type), allocatable :: error
+        logical :: gradual
+        real(dp) :: x
+        if (.not. ieee_support_underflow_control(1.0_dp)) return
+        call ieee_set_underflow_mode(.true.)
+        o%steps_per_period = 100
+        o%max_periods = 2
+        call integrate_euler(seed_model(), o, res, error)
+        call ieee_get_underflow_mode(gradual)
+        x = tiny(1.0_dp)
+        x = x/real(res%periods*4, dp)
+        call check(t, gradual .and. x > 0.0_dp, "euler: the caller's underflow mode restored")
+    end subroutine test_underflow_mode
 
     !> The step loop of issue 12 (inverse of the iteration matrix formed once, written-out
     !> loops) against the loop it replaced (per-step products and dgetrs, frozen below as

@@ -10,11 +10,18 @@
 !> The friction forces solve min 1/2 r^T D r + u_free^T r over the box |r_j| <= mu_j N_j (its
 !> optimality conditions are Coulomb's law): closed form for one contact, projected
 !> Gauss-Seidel for several (it converges when D is symmetric positive definite, i.e. for
-!> symmetric C and K; stickslip_contact_solve). The step is first order: errors are O(h). No
-!> allocation in the step loop.
+!> symmetric C and K; stickslip_contact_solve). The step is first order: errors are O(h).
+!>
+!> The free velocity v_free = S^{-1} (M v - h K x + h f(t)): up to opts%inverse_max_ndof
+!> unknowns the matrices S^{-1} M, S^{-1} h K and S^{-1} F (F the load shapes) are formed
+!> once, and a step costs one N x (2N + n_f) matrix-vector product and the cosines of the
+!> forcing; above, a step forms M v - h K x + h f and solves with the LU factors of S
+!> (dgetrs). No allocation and no array temporary in the step loop (written-out loops);
+!> subnormal numbers are flushed to zero inside it (ieee_set_underflow_mode, restored after).
 module stickslip_euler
     use, intrinsic :: iso_fortran_env, only: int64
-    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_support_underflow_control, &
+        ieee_get_underflow_mode, ieee_set_underflow_mode
     use stickslip_kinds, only: dp, two_pi
     use stickslip_progress, only: progress_t
     use stickslip_diagnostics, only: diagnostics_t, level_untrusted
@@ -33,6 +40,8 @@ module stickslip_euler
     integer, parameter :: euler_max_steps_per_period = 10**7
     !> Largest steps_per_period x max_periods (time steps of one run) accepted.
     integer(int64), parameter :: euler_max_total_steps = 2000000000_int64
+    !> Steps whose forcing coefficients are computed together, before the steps.
+    integer, parameter :: block_steps = 1024
 
     !> Options of the time integration.
     type :: euler_options_t
@@ -48,6 +57,11 @@ module stickslip_euler
         real(dp) :: contact_tol = 1.0e-13_dp
         !> Projected Gauss-Seidel sweeps at most per step.
         integer :: contact_max_sweeps = 10000
+        !> Iteration matrices M + h C + h^2 K of at most this order are inverted once (a step
+        !> is then one matrix-vector product, no LAPACK call); larger ones are LU-factorized
+        !> once and solved every step (dgetrs). Both give the same results to roundoff;
+        !> 0: always the LU solve.
+        integer :: inverse_max_ndof = 1024
     end type euler_options_t
 
     !> Result of the time integration: the report and the last period.
@@ -110,7 +124,8 @@ contains
     !> Integrate `model` from rest (or from x0, v0 at t = 0) until the response is periodic.
     !> Not reaching a periodic state within max_periods is an outcome (res%periodic = F and a
     !> diagnosis: drift, quasi-periodic or unbounded response). Errors: stat input (invalid
-    !> model or options), stat numerical (singular iteration matrix).
+    !> model or options, x0 or v0 not of size ndof), stat numerical (singular iteration
+    !> matrix).
     subroutine integrate_euler(model, opts, res, error, x0, v0, progress)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
@@ -126,13 +141,14 @@ contains
         real(dp), intent(in), optional :: v0(:)
         !> Progress of the periods (a line at most once a second when its unit is set).
         type(progress_t), intent(inout), optional :: progress
-        integer :: n, nc, ns, info, j, k, period, step, sweeps, i
+        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, first, last, nblock
+        logical :: inverse, ftz, gradual
         character(len=40) :: defect_text
-        real(dp) :: h, period_t, t, ampx, ampv, dx, dv
-        real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), b(:), wk(:), x(:), v(:), &
-                                 xstart(:), vstart(:), r(:), ufree(:), limit(:), famp(:), fph(:), &
-                                 fshape(:, :)
-        integer, allocatable :: ipiv(:), fh(:)
+        real(dp) :: h, period_t, t, ampx, ampv, dx, dv, acc
+        real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), a(:, :), y(:), &
+                                 ystart(:), vf(:), r(:), ufree(:), limit(:), famp(:), fph(:), &
+                                 fh(:), fc(:, :), wa(:)
+        integer, allocatable :: ipiv(:)
         integer(int64) :: c0, c1, rate
         character(len=300) :: buf
 
@@ -152,13 +168,34 @@ contains
             return
         end if
         n = model%ndof
+        if (present(x0)) then
+            if (size(x0) /= n) then
+                call fatal_error(error, "x0: size "//itoa(size(x0))//", must be ndof = "// &
+                                 itoa(n), stickslip_stat%input)
+                return
+            end if
+        end if
+        if (present(v0)) then
+            if (size(v0) /= n) then
+                call fatal_error(error, "v0: size "//itoa(size(v0))//", must be ndof = "// &
+                                 itoa(n), stickslip_stat%input)
+                return
+            end if
+        end if
         nc = model%ncontact()
+        nf = model%nforce()
+        ny = 2*n + nf
         ns = opts%steps_per_period
         period_t = two_pi/model%omega
         h = period_t/ns
+        inverse = n <= opts%inverse_max_ndof
 
-        allocate (s(n, n), sw(n, nc), d(nc, nc), w(n, nc), b(n), wk(n), x(n), v(n), xstart(n), &
-                  vstart(n), r(nc), ufree(nc), limit(nc), ipiv(n))
+        ! The state y = [v; x; c]: velocities, displacements and the forcing coefficients
+        ! c_i = h famp_i cos(k_i omega t + phase_i) of the step. The right-hand side
+        ! M v - h K x + h f(t) is A y with A = [M, -h K, F] (F: the load shapes); the free
+        ! velocity S^{-1} A y is one product when A holds S^{-1} [M, -h K, F].
+        allocate (s(n, n), sw(n, nc), d(nc, nc), w(n, nc), a(n, ny), y(ny), ystart(ny), &
+                  vf(n), r(nc), ufree(nc), limit(nc), ipiv(n))
         s = model%mass + h*model%damping + h*h*model%stiffness
         call dgetrf(n, n, s, n, ipiv, info)
         if (info /= 0) then
@@ -173,63 +210,98 @@ contains
         if (nc > 0) call dgetrs('N', n, nc, s, n, ipiv, sw, n, info)
         d = h*matmul(transpose(w), sw)
         limit = model%mu*model%normal_load
-        allocate (fshape(n, model%nforce()))
-        do i = 1, model%nforce()
-            fshape(:, i) = force_direction(model, i)
+        a(:, 1:n) = model%mass
+        a(:, n + 1:2*n) = -h*model%stiffness
+        do i = 1, nf
+            a(:, 2*n + i) = force_direction(model, i)
         end do
-        fh = model%force_harmonic
-        famp = model%force_amplitude
+        if (inverse) then
+            call dgetrs('N', n, ny, s, n, ipiv, a, n, info)
+            ! S^{-1} of a chain or a beam decays away from the diagonal into subnormal
+            ! numbers, whose products cost ~100 times a normal one: entries below 1e-30 of
+            ! their column's largest are set to zero (a change far below roundoff)
+            do j = 1, ny
+                acc = 1.0e-30_dp*maxval(abs(a(:, j)))
+                do k = 1, n
+                    if (abs(a(k, j)) < acc) a(k, j) = 0.0_dp
+                end do
+            end do
+        end if
+        ! W^T A for one contact: its slip velocity without friction (the 2-DOF kernel)
+        allocate (wa(ny))
+        wa = 0.0_dp
+        if (nc == 1) then
+            do j = 1, ny
+                do k = 1, n
+                    wa(j) = wa(j) + w(k, 1)*a(k, j)
+                end do
+            end do
+        end if
+        fh = real(model%force_harmonic, dp)*model%omega
+        famp = h*model%force_amplitude
         fph = model%force_phase
 
-        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc))
-        res%t = [(period_t*real(k, dp)/real(ns, dp), k=0, ns - 1)]
-        x = 0.0_dp
-        v = 0.0_dp
-        if (present(x0)) x = x0
-        if (present(v0)) v = v0
+        nblock = min(ns, block_steps)
+        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc), fc(nf, nblock))
+        do k = 1, ns
+            res%t(k) = period_t*real(k - 1, dp)/real(ns, dp)
+        end do
+        y = 0.0_dp
+        if (present(v0)) y(1:n) = v0
+        if (present(x0)) y(n + 1:2*n) = x0
         r = 0.0_dp
         res%max_sweeps = 0
 
+        ! No allocation, no array temporary and (up to inverse_max_ndof unknowns) no library
+        ! call in the step loop: the loops below are written out for that. Subnormal numbers
+        ! (below 2.2e-308) are flushed to zero in the loop where the processor allows it:
+        ! from rest, the far end of a chain or a beam holds subnormal states for many steps,
+        ! and their products cost ~100 normal ones (N = 256: half the time). The caller's
+        ! underflow mode is restored after the loop.
+        ftz = ieee_support_underflow_control(1.0_dp)
+        if (ftz) then
+            call ieee_get_underflow_mode(gradual)
+            call ieee_set_underflow_mode(.false.)
+        end if
         do period = 1, opts%max_periods
-            xstart = x
-            vstart = v
-            do step = 1, ns
-                ! the state at the start of this step is sample step of the period
-                res%x(step, :) = x
-                res%v(step, :) = v
-                res%r(step, :) = r
-                t = period_t*(real(period - 1, dp) + real(step, dp)/real(ns, dp))
-                b = matmul(model%mass, v)
-                wk = matmul(model%stiffness, x)
-                b = b - h*wk
-                do i = 1, size(fh)
-                    b = b + (h*famp(i)*cos(fh(i)*model%omega*t + fph(i)))*fshape(:, i)
+            ystart = y
+            do first = 1, ns, nblock
+                last = min(ns, first + nblock - 1)
+                ! the forcing coefficients of a block of steps first, apart from the steps: the
+                ! cosines then overlap each other instead of stalling the chain of the steps
+                do step = first, last
+                    t = period_t*(real(period - 1, dp) + real(step, dp)/real(ns, dp))
+                    do i = 1, nf
+                        fc(i, step - first + 1) = famp(i)*cos(fh(i)*t + fph(i))
+                    end do
                 end do
-                call dgetrs('N', n, 1, s, n, ipiv, b, n, info)
-                v = b
-                if (nc > 0) then
-                    ufree = matmul(v, w)
-                    call contact_forces(d, ufree, limit, r, opts%contact_tol, &
-                                        opts%contact_max_sweeps, sweeps)
-                    res%max_sweeps = max(res%max_sweeps, sweeps)
-                    wk = matmul(sw, r)
-                    v = v + h*wk
+                if (n == 2 .and. nc == 1 .and. nf >= 1 .and. inverse) then
+                    call step_block_2(nf, ns, first, last, h, a, wa, sw, d(1, 1), limit(1), fc, y, &
+                                      r(1), res%x, res%v, res%r)
+                else
+                    call step_block(n, nc, nf, ns, first, last, h, inverse, a, s, ipiv, w, sw, &
+                                    d, limit, opts, fc, y, vf, r, ufree, res%x, res%v, res%r, &
+                                    res%max_sweeps)
                 end if
-                x = x + h*v
             end do
             res%periods = period
-            ! the last stored period runs from xstart to x: compare the two ends
+            ! the last stored period runs from ystart to y: compare the two ends
             ampx = maxval(abs(res%x))
             ampv = maxval(abs(res%v))
-            if (.not. (all(ieee_is_finite(x)) .and. all(ieee_is_finite(v))) .or. &
-                ampx > 1.0e100_dp) then
+            if (.not. finite_state(y(1:2*n)) .or. ampx > 1.0e100_dp) then
                 res%diagnosis = "unbounded response: the state overflowed during period "// &
                                 itoa(period)
                 res%defect = huge(1.0_dp)
                 exit
             end if
-            dx = maxval(abs(x - xstart))/max(ampx, tiny(1.0_dp))
-            dv = maxval(abs(v - vstart))/max(ampv, tiny(1.0_dp))
+            dx = 0.0_dp
+            dv = 0.0_dp
+            do k = 1, n
+                dv = max(dv, abs(y(k) - ystart(k)))
+                dx = max(dx, abs(y(n + k) - ystart(n + k)))
+            end do
+            dx = dx/max(ampx, tiny(1.0_dp))
+            dv = dv/max(ampv, tiny(1.0_dp))
             if (ampx == 0.0_dp .and. ampv == 0.0_dp) then
                 dx = 0.0_dp
                 dv = 0.0_dp
@@ -245,6 +317,8 @@ contains
             end if
         end do
 
+        if (ftz) call ieee_set_underflow_mode(gradual)
+
         if (.not. res%periodic .and. .not. allocated(res%diagnosis)) then
             write (buf, '(a,i0,a,es10.2e3,a,es10.2e3,a)') "no periodic state after ", res%periods, &
                 " periods: the states one period apart still differ by ", res%defect, &
@@ -259,4 +333,185 @@ contains
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler
+
+    !> Steps first..last of a period (the kernel of integrate_euler): from the state y =
+    !> [v; x; c] and the forces r, store each step's starting state in xs, vs, rs, set the
+    !> forcing coefficients from fc, form the free velocity A y (solved with the LU factors
+    !> of S unless A holds S^{-1} [M, -h K, F]), the friction forces and the new v and x.
+    subroutine step_block(n, nc, nf, ns, first, last, h, inverse, a, s, ipiv, w, sw, d, &
+                          limit, opts, fc, y, vf, r, ufree, xs, vs, rs, max_sweeps)
+        !> Degrees of freedom, contacts, forcing terms, steps per period.
+        integer, intent(in) :: n, nc, nf, ns
+        !> First and last step of the block (1..ns).
+        integer, intent(in) :: first, last
+        !> Time step [s].
+        real(dp), intent(in) :: h
+        !> A holds S^{-1} [M, -h K, F] (else [M, -h K, F] and S its LU factors).
+        logical, intent(in) :: inverse
+        !> The free-velocity matrix, N x (2N + n_f).
+        real(dp), intent(in) :: a(n, 2*n + nf)
+        !> LU factors of S (dgetrf) and their pivots.
+        real(dp), intent(in) :: s(n, n)
+        !> Pivots of the LU factors.
+        integer, intent(in) :: ipiv(n)
+        !> Contact directions W and S^{-1} W, N x n_c.
+        real(dp), intent(in) :: w(n, nc), sw(n, nc)
+        !> Delassus matrix h W^T S^{-1} W.
+        real(dp), intent(in) :: d(nc, nc)
+        !> Friction limits mu N [N].
+        real(dp), intent(in) :: limit(nc)
+        !> Contact tolerances and sweeps.
+        type(euler_options_t), intent(in) :: opts
+        !> Forcing coefficients of the block's steps, n_f x (last - first + 1).
+        real(dp), intent(in) :: fc(nf, *)
+        !> State [v; x; c]: start of the block on entry, end on exit.
+        real(dp), intent(inout) :: y(2*n + nf)
+        !> Work: the free velocity.
+        real(dp), intent(inout) :: vf(n)
+        !> Friction forces: of the last step on entry, updated [N].
+        real(dp), intent(inout) :: r(nc)
+        !> Work: the free slip velocities.
+        real(dp), intent(inout) :: ufree(nc)
+        !> The samples of the period: displacements, velocities (ns x N), forces (ns x n_c).
+        real(dp), intent(inout) :: xs(ns, n), vs(ns, n), rs(ns, nc)
+        !> Most Gauss-Seidel sweeps of a step so far.
+        integer, intent(inout) :: max_sweeps
+        integer :: i, j, k, step, ny, sweeps, info
+        real(dp) :: acc
+        ny = 2*n + nf
+        do step = first, last
+            ! the state at the start of this step is sample step of the period
+            do k = 1, n
+                vs(step, k) = y(k)
+                xs(step, k) = y(n + k)
+            end do
+            do j = 1, nc
+                rs(step, j) = r(j)
+            end do
+            do i = 1, nf
+                y(2*n + i) = fc(i, step - first + 1)
+            end do
+            ! free velocity: A y, solved with S unless A holds S^{-1} [M, -h K, F]
+            do k = 1, n
+                vf(k) = a(k, 1)*y(1)
+            end do
+            do j = 2, ny
+                do k = 1, n
+                    vf(k) = vf(k) + a(k, j)*y(j)
+                end do
+            end do
+            if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
+            ! friction forces, then v = v_free + h S^{-1} W r
+            if (nc == 1) then
+                acc = 0.0_dp
+                do k = 1, n
+                    acc = acc + w(k, 1)*vf(k)
+                end do
+                r(1) = max(-limit(1), min(limit(1), -acc/d(1, 1)))
+                do k = 1, n
+                    y(k) = vf(k) + h*(sw(k, 1)*r(1))
+                end do
+            else if (nc > 1) then
+                do j = 1, nc
+                    acc = 0.0_dp
+                    do k = 1, n
+                        acc = acc + w(k, j)*vf(k)
+                    end do
+                    ufree(j) = acc
+                end do
+                call contact_forces(d, ufree, limit, r, opts%contact_tol, &
+                                    opts%contact_max_sweeps, sweeps)
+                max_sweeps = max(max_sweeps, sweeps)
+                do k = 1, n
+                    acc = 0.0_dp
+                    do j = 1, nc
+                        acc = acc + sw(k, j)*r(j)
+                    end do
+                    y(k) = vf(k) + h*acc
+                end do
+            else
+                do k = 1, n
+                    y(k) = vf(k)
+                end do
+            end if
+            do k = 1, n
+                y(n + k) = y(n + k) + h*y(k)
+            end do
+        end do
+    end subroutine step_block
+
+    !> step_block for 2 DOF and one contact on the inverse path (the seed case's shape)
+    !> with scalars, without the loop overhead that is most of a step at this size: the
+    !> forcing terms of the block's steps summed first, the slip velocity formed as
+    !> (W^T A) y beside the free velocity rather than after it.
+    subroutine step_block_2(nf, ns, first, last, h, a, b, sw, d, limit, fc, y, r, xs, vs, rs)
+        !> Forcing terms, steps per period, first and last step of the block.
+        integer, intent(in) :: nf, ns, first, last
+        !> Time step [s].
+        real(dp), intent(in) :: h
+        !> S^{-1} [M, -h K, F], 2 x (4 + n_f).
+        real(dp), intent(in) :: a(2, 4 + nf)
+        !> W^T A: the slip velocity W^T S^{-1} [M, -h K, F] y of the free velocity.
+        real(dp), intent(in) :: b(4 + nf)
+        !> S^{-1} W.
+        real(dp), intent(in) :: sw(2)
+        !> Delassus number h W^T S^{-1} W and friction limit mu N [N].
+        real(dp), intent(in) :: d, limit
+        !> Forcing coefficients of the block's steps, n_f x (last - first + 1).
+        real(dp), intent(in) :: fc(nf, *)
+        !> State [v; x; c]: start of the block on entry, end on exit.
+        real(dp), intent(inout) :: y(4 + nf)
+        !> Friction force: of the last step on entry, updated [N].
+        real(dp), intent(inout) :: r
+        !> The samples of the period.
+        real(dp), intent(inout) :: xs(ns, 2), vs(ns, 2), rs(ns)
+        real(dp) :: v1, v2, x1, x2, f1, f2, u, g(3, block_steps)
+        integer :: step, i, k
+        do k = 1, last - first + 1
+            g(1, k) = a(1, 5)*fc(1, k)
+            g(2, k) = a(2, 5)*fc(1, k)
+            g(3, k) = b(5)*fc(1, k)
+            do i = 2, nf
+                g(1, k) = g(1, k) + a(1, 4 + i)*fc(i, k)
+                g(2, k) = g(2, k) + a(2, 4 + i)*fc(i, k)
+                g(3, k) = g(3, k) + b(4 + i)*fc(i, k)
+            end do
+        end do
+        v1 = y(1)
+        v2 = y(2)
+        x1 = y(3)
+        x2 = y(4)
+        do step = first, last
+            vs(step, 1) = v1
+            vs(step, 2) = v2
+            xs(step, 1) = x1
+            xs(step, 2) = x2
+            rs(step) = r
+            k = step - first + 1
+            f1 = a(1, 1)*v1 + a(1, 2)*v2 + a(1, 3)*x1 + a(1, 4)*x2 + g(1, k)
+            f2 = a(2, 1)*v1 + a(2, 2)*v2 + a(2, 3)*x1 + a(2, 4)*x2 + g(2, k)
+            u = b(1)*v1 + b(2)*v2 + b(3)*x1 + b(4)*x2 + g(3, k)
+            r = max(-limit, min(limit, -u/d))
+            v1 = f1 + h*(sw(1)*r)
+            v2 = f2 + h*(sw(2)*r)
+            x1 = x1 + h*v1
+            x2 = x2 + h*v2
+        end do
+        y(1) = v1
+        y(2) = v2
+        y(3) = x1
+        y(4) = x2
+        y(5:) = fc(:, last - first + 1)
+    end subroutine step_block_2
+
+    !> True when every entry of `z` is finite.
+    pure logical function finite_state(z) result(ok)
+        !> The state.
+        real(dp), intent(in) :: z(:)
+        integer :: k
+        ok = .true.
+        do k = 1, size(z)
+            ok = ok .and. ieee_is_finite(z(k))
+        end do
+    end function finite_state
 end module stickslip_euler

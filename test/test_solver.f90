@@ -207,6 +207,25 @@ contains
         call check_close(t, reshape(sn%rcoef, [size(sn%rcoef)]), &
                          reshape(sh%rcoef, [size(sh%rcoef)]), "stuck: same settled forces", &
                          rtol=0.0_dp, atol=1.0e-6_dp*maxval(abs(sh%rcoef)))
+        ! a start near that answer: Newton at H meets the singular Jacobian (the stuck
+        ! contact's mean force enters no equation) and hands over to hybrj
+        block
+            real(dp), allocatable :: start(:, :)
+            type(hbm_solution_t) :: sf
+            start = sh%rcoef
+            start(2:3, 2) = start(2:3, 2) + 0.01_dp
+            o%start = 'direct'
+            call solve_periodic(m, o, sf, error, r_start=start)
+            call check_error(t, error, "stuck: newton from a start runs", .false.)
+            if (allocated(error)) return
+            call check(t, sf%converged .and. sf%newton_calls == 1 .and. &
+                       sf%newton_fallbacks == 1 .and. sf%hybrj_calls >= 1, &
+                       "stuck: singular Jacobian handed to hybrj")
+            call check_close(t, reshape(sf%rcoef, [size(sf%rcoef)]), &
+                             reshape(sh%rcoef, [size(sh%rcoef)]), &
+                             "stuck: same settled forces after the fallback", &
+                             rtol=0.0_dp, atol=1.0e-6_dp*maxval(abs(sh%rcoef)))
+        end block
     end subroutine test_stuck
 
     subroutine test_options(t)

@@ -9,7 +9,8 @@
 !> (620 unknowns). Then one factorization of a random dense matrix by the LAPACK kernels
 !> the candidates use (dgetrf; dgeqrf + dorgqr for a Powell hybrid on blocked QR).
 !> Run from the project root: fpm run --example bench_solver --profile release
-!> [-- --quick] (--quick: fewer repeats, skips H = 256 with hybrj).
+!> [-- --quick] (--quick: fewer repeats, skips H = 256 with hybrj; --profile-newton: only the
+!> Newton path on the chain at H = 15, 20 times, for perf).
 program bench_solver
     use, intrinsic :: iso_fortran_env, only: output_unit, int64
     use stickslip_kinds, only: dp
@@ -27,12 +28,14 @@ program bench_solver
     type(error_type), allocatable :: error
     integer :: i
     character(len=32) :: arg
-    logical :: quick
+    logical :: quick, profile
 
     quick = .false.
+    profile = .false.
     do i = 1, command_argument_count()
         call get_command_argument(i, arg)
         if (arg == '--quick') quick = .true.
+        if (arg == '--profile-newton') profile = .true.
     end do
     call read_case("examples/seed.nml", c, error)
     if (allocated(error)) then
@@ -40,6 +43,10 @@ program bench_solver
         stop 1
     end if
     chain = contact_chain(20, 0.3_dp)
+    if (profile) then
+        call profile_newton(chain)
+        stop
+    end if
 
     write (output_unit, '(a,i0)') "solver = 'auto' takes Newton from unknowns >= ", &
         newton_min_unknowns
@@ -87,6 +94,24 @@ contains
             sn%newton_calls, sn%newton_fallbacks, dr, note(sh%converged, sn%converged)
         flush (output_unit)
     end subroutine compare
+
+    !> Only the Newton path on the 20-contact chain at H = 15, 20 times (for a profiler).
+    subroutine profile_newton(m)
+        type(model_t), intent(in) :: m
+        type(hbm_options_t) :: o
+        type(hbm_solution_t) :: s
+        integer :: k
+        o%harmonics = 15
+        o%samples = 1024
+        o%want_samples = .false.
+        o%solver = 'newton'
+        do k = 1, 20
+            call solve_periodic(m, o, s, error)
+            if (allocated(error)) stop 1
+        end do
+        write (output_unit, '(a,i0,a,l1)') "20 solves, ", s%njev, " Jacobians each, converged ", &
+            s%converged
+    end subroutine profile_newton
 
     !> What to add to a row when a solve did not converge.
     function note(hybrj_ok, newton_ok) result(text)

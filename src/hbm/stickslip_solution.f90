@@ -36,6 +36,7 @@ module stickslip_solution
         character(len=8) :: solver = 'auto'
         !> Stop hybrj as soon as a residual meets the tolerance (reported as hybrj info -1);
         !> .false. lets hybrj run to its own step-size test (info 1, or 4/5 at a kink).
+        !> The Newton path (solver) always stops at the tolerance.
         logical :: stop_at_tol = .true.
         !> Also return time samples of x, v, r and the stick indicator.
         logical :: want_samples = .true.

@@ -4,7 +4,7 @@ module stickslip_lapack
     use stickslip_kinds, only: dp
     implicit none
     private
-    public :: dpotrf, dpotrs, dgetrf, dgetrs, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
+    public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
         zgesv, dsygv
 
     interface
@@ -137,5 +137,47 @@ module stickslip_lapack
             real(dp), intent(out) :: work(*)
             integer, intent(out) :: info
         end subroutine dsygv
+        !> Reciprocal condition number estimate of a real matrix from its LU factors.
+        subroutine dgecon(norm, n, a, lda, anorm, rcond, work, iwork, info)
+            import :: dp
+            character(len=1), intent(in) :: norm
+            integer, intent(in) :: n, lda
+            real(dp), intent(in) :: a(lda, *)
+            real(dp), intent(in) :: anorm
+            real(dp), intent(out) :: rcond
+            real(dp), intent(out) :: work(*)
+            integer, intent(out) :: iwork(*)
+            integer, intent(out) :: info
+        end subroutine dgecon
+
+        !> A norm of a real matrix ('1', 'I', 'F' or 'M').
+        function dlange(norm, m, n, a, lda, work) result(anorm)
+            import :: dp
+            character(len=1), intent(in) :: norm
+            integer, intent(in) :: m, n, lda
+            real(dp), intent(in) :: a(lda, *)
+            real(dp), intent(inout) :: work(*)
+            real(dp) :: anorm
+        end function dlange
+
+        !> Blocked QR factorization of a real matrix (Householder reflectors).
+        subroutine dgeqrf(m, n, a, lda, tau, work, lwork, info)
+            import :: dp
+            integer, intent(in) :: m, n, lda, lwork
+            real(dp), intent(inout) :: a(lda, *)
+            real(dp), intent(out) :: tau(*)
+            real(dp), intent(inout) :: work(*)
+            integer, intent(out) :: info
+        end subroutine dgeqrf
+
+        !> Form the orthogonal factor Q of dgeqrf explicitly (blocked).
+        subroutine dorgqr(m, n, k, a, lda, tau, work, lwork, info)
+            import :: dp
+            integer, intent(in) :: m, n, k, lda, lwork
+            real(dp), intent(inout) :: a(lda, *)
+            real(dp), intent(in) :: tau(*)
+            real(dp), intent(inout) :: work(*)
+            integer, intent(out) :: info
+        end subroutine dorgqr
     end interface
 end module stickslip_lapack

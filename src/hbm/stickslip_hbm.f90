@@ -17,12 +17,14 @@ module stickslip_hbm
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem, new_condensed_problem
     use stickslip_dynamics, only: dynamics_t, near_singular_threshold
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
+    use stickslip_newton, only: newton_options_t, newton_report_t, solve_newton, &
+        newton_converged
     use stickslip_rho, only: automatic_rho, rho_fraction
     implicit none
     private
     public :: solve_periodic, validate_options, convergence_scale
     public :: condensed_structure_t, solve_condensed
-    public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns
+    public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns, newton_min_unknowns
 
     !> Largest harmonics H accepted by validate_options (the basis has 2 H + 1 terms).
     integer, parameter :: hbm_max_harmonics = 4096
@@ -52,6 +54,11 @@ module stickslip_hbm
         integer, allocatable :: force_harmonic(:)
         real(dp), allocatable :: force_amplitude(:), force_phase(:)
     end type condensed_structure_t
+
+    !> Number of unknowns (basis size x contacts) from which &hbm solver = 'auto' takes the
+    !> semismooth Newton path (warm starts, LU) instead of hybrj: where it starts to win
+    !> (bench/bench_solver.f90, README "Solvers").
+    integer, parameter :: newton_min_unknowns = 100
 
     !> hybrj calls per stage: the first plus restarts from the last iterate.
     integer, parameter :: max_calls_per_stage = 4
@@ -107,6 +114,10 @@ contains
         else if (opts%start /= 'auto' .and. opts%start /= 'direct' .and. opts%start /= 'ladder') then
             write (buf, '(a)') "opts%start = '"//trim(opts%start)// &
                 "': must be 'auto', 'direct' or 'ladder'"
+        else if (opts%solver /= 'auto' .and. opts%solver /= 'hybrj' .and. &
+                 opts%solver /= 'newton') then
+            write (buf, '(a)') "opts%solver = '"//trim(opts%solver)// &
+                "': must be 'auto', 'hybrj' or 'newton'"
         else
             return
         end if
@@ -246,6 +257,27 @@ contains
         if (nc == 0) then
             sol%converged = .true.
             sol%fnorm = 0.0_dp
+        else if (use_newton(opts, prob%n) .and. target_norm > 0.0_dp) then
+            ! Newton only from warm starts: r_start, or the halving ladder H/2^k
+            select case (opts%start)
+            case ('ladder')
+                call solve_halving_ladder(s, o, prob, y, target_norm, sol, error, &
+                                          present(r_start))
+            case ('direct')
+                call solve_stage(prob, y, opts, target_norm, sol, error, present(r_start))
+            case default
+                if (present(r_start)) then
+                    call solve_stage(prob, y, opts, target_norm, sol, error, .true.)
+                    if (.not. allocated(error) .and. .not. sol%converged .and. &
+                        opts%harmonics > ladder_first) then
+                        y = reshape(vzero, [prob%n])
+                        call solve_halving_ladder(s, o, prob, y, target_norm, sol, error, &
+                                                  .true.)
+                    end if
+                else
+                    call solve_halving_ladder(s, o, prob, y, target_norm, sol, error, .false.)
+                end if
+            end select
         else
             select case (opts%start)
             case ('ladder')
@@ -332,24 +364,71 @@ contains
         fscale = min(vnorm, prob%rho*rs)
     end function condensed_convergence_scale
 
-    !> One solve on a fixed basis: hybrj, then restarts from the last iterate while it
-    !> stops short of the target without exhausting its evaluations.
-    subroutine solve_stage(prob, y, opts, target_norm, sol, error)
+    !> The Newton path is taken for `n` unknowns (opts%solver; 'auto': n >=
+    !> newton_min_unknowns).
+    pure logical function use_newton(opts, n)
+        type(hbm_options_t), intent(in) :: opts
+        integer, intent(in) :: n
+        select case (opts%solver)
+        case ('newton')
+            use_newton = .true.
+        case ('hybrj')
+            use_newton = .false.
+        case default
+            use_newton = n >= newton_min_unknowns
+        end select
+    end function use_newton
+
+    !> One solve on a fixed basis. With `warm` (y is a warm start) and the Newton path
+    !> selected (use_newton), semismooth Newton first; when it does not meet the target,
+    !> hybrj from its best point. hybrj restarts from its last iterate while it stops short
+    !> of the target without exhausting its evaluations.
+    subroutine solve_stage(prob, y, opts, target_norm, sol, error, warm)
         type(hb_problem_t), intent(inout) :: prob
         real(dp), intent(inout) :: y(:)
         type(hbm_options_t), intent(in) :: opts
         real(dp), intent(in) :: target_norm
         type(hbm_solution_t), intent(inout) :: sol
         type(error_type), allocatable, intent(out) :: error
+        logical, intent(in), optional :: warm
         type(hybrj_options_t) :: hopts
         type(hybrj_report_t) :: report
         integer :: call_no
+
+        sol%converged = .false.
+        if (present(warm)) then
+            if (warm .and. use_newton(opts, prob%n) .and. target_norm > 0.0_dp) then
+                block
+                    type(newton_options_t) :: nopts
+                    type(newton_report_t) :: nrep
+                    nopts%ftarget = target_norm
+                    call solve_newton(prob, y, nopts, nrep, error)
+                    sol%nfev = sol%nfev + nrep%nfev
+                    sol%njev = sol%njev + nrep%njev
+                    sol%newton_calls = sol%newton_calls + 1
+                    if (allocated(error)) then
+                        if (error%stat == stickslip_stat%callback) then
+                            error%message = "the residual or its Jacobian became NaN "// &
+                                            "during the solve"
+                            error%stat = stickslip_stat%numerical
+                        end if
+                        return
+                    end if
+                    sol%fnorm = nrep%fnorm
+                    if (nrep%outcome == newton_converged) then
+                        sol%info = -1
+                        sol%converged = .true.
+                        return
+                    end if
+                    sol%newton_fallbacks = sol%newton_fallbacks + 1
+                end block
+            end if
+        end if
 
         hopts%xtol = opts%xtol
         hopts%maxfev = opts%maxfev
         hopts%mode = 1
         if (opts%stop_at_tol) hopts%ftarget = target_norm
-        sol%converged = .false.
         do call_no = 1, max_calls_per_stage
             call solve_hybrj(prob, y, hopts, report, error)
             sol%nfev = sol%nfev + report%nfev
@@ -411,6 +490,50 @@ contains
         y = reshape(rfull, [nb*nc])
         call solve_stage(prob, y, opts, target_norm, sol, error)
     end subroutine solve_ladder
+
+    !> The ladder of the Newton path: levels H, H/2, H/4, ... down to `ladder_first`
+    !> (integer halving: 3, 7, 15 for H = 15), solved from the lowest up, each stage
+    !> warm-started from the one below; the lowest is cold (hybrj) unless `warm` (y holds
+    !> a start).
+    subroutine solve_halving_ladder(s, opts, prob, y, target_norm, sol, error, warm)
+        type(condensed_structure_t), intent(in) :: s
+        type(hbm_options_t), intent(in) :: opts
+        type(hb_problem_t), intent(inout) :: prob
+        real(dp), intent(inout) :: y(:)
+        real(dp), intent(in) :: target_norm
+        type(hbm_solution_t), intent(inout) :: sol
+        type(error_type), allocatable, intent(out) :: error
+        logical, intent(in) :: warm
+        type(hb_problem_t) :: low
+        real(dp), allocatable :: ylow(:), rfull(:, :)
+        integer :: levels(32), nlev, i, nbl, nb, nc
+        real(dp) :: low_target
+
+        nb = prob%basis%nb
+        nc = prob%nc
+        allocate (rfull(nb, nc))
+        rfull = reshape(y, [nb, nc])
+        nlev = 1
+        levels(1) = opts%harmonics
+        do while (levels(nlev) > ladder_first .and. nlev < size(levels))
+            nlev = nlev + 1
+            levels(nlev) = max(ladder_first, levels(nlev - 1)/2)
+        end do
+        low_target = max(target_norm, 1.0e-6_dp*sol%fscale)
+        do i = nlev, 2, -1
+            call new_condensed_problem(low, prob%dyn, prob%limit, levels(i), opts%odd_only, &
+                                       opts%samples, opts%rho, error, s%force_harmonic)
+            if (allocated(error)) return
+            nbl = low%basis%nb
+            ylow = reshape(rfull(1:nbl, :), [nbl*nc])
+            call solve_stage(low, ylow, opts, low_target, sol, error, warm .or. i < nlev)
+            call low%destroy()
+            if (allocated(error)) return
+            rfull(1:nbl, :) = reshape(ylow, [nbl, nc])
+        end do
+        y = reshape(rfull, [nb*nc])
+        call solve_stage(prob, y, opts, target_norm, sol, error, warm .or. nlev > 1)
+    end subroutine solve_halving_ladder
 
     !> Settle undetermined mean forces, recover every DOF, energies, stick statistics and
     !> samples.

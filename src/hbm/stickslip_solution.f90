@@ -29,8 +29,14 @@ module stickslip_solution
         !> Start strategy: 'auto' (cold start at H, then the harmonic ladder if that fails),
         !> 'direct' (only the cold start) or 'ladder' (always climb from few harmonics).
         character(len=8) :: start = 'auto'
+        !> Nonlinear solver: 'auto' (hybrj below newton_min_unknowns unknowns, 'newton'
+        !> from there on), 'hybrj' (MINPACK's Powell hybrid method only, the reference) or
+        !> 'newton' (semismooth Newton with LU from warm starts: the halving ladder H/2^k,
+        !> a start r_start; cold stages and every Newton failure go to hybrj).
+        character(len=8) :: solver = 'auto'
         !> Stop hybrj as soon as a residual meets the tolerance (reported as hybrj info -1);
         !> .false. lets hybrj run to its own step-size test (info 1, or 4/5 at a kink).
+        !> The Newton path (solver) always stops at the tolerance.
         logical :: stop_at_tol = .true.
         !> Also return time samples of x, v, r and the stick indicator.
         logical :: want_samples = .true.
@@ -42,7 +48,7 @@ module stickslip_solution
         !> The residual met the tolerance.
         logical :: converged = .false.
         !> hybrj's info of the last call: -1 stopped by stickslip because the residual met
-        !> the tolerance (the usual outcome), 1 xtol met, 2 maxfev reached, 4 or 5 no
+        !> the tolerance (the usual outcome, also when Newton met it), 1 xtol met, 2 maxfev reached, 4 or 5 no
         !> progress (README, "Convergence").
         integer :: info = 0
         !> Residual evaluations, all stages and restarts included.
@@ -51,6 +57,12 @@ module stickslip_solution
         integer :: njev = 0
         !> Number of hybrj calls made (ladder stages and restarts).
         integer :: hybrj_calls = 0
+        !> Number of semismooth Newton calls made (hbm_options_t%solver; 0 on the hybrj
+        !> path).
+        integer :: newton_calls = 0
+        !> Newton calls that ended without meeting the target (singular Jacobian, stall)
+        !> and were continued by hybrj.
+        integer :: newton_fallbacks = 0
         !> Final residual norm ||F||_2 of the projected friction equations [m/s].
         real(dp) :: fnorm = huge(1.0_dp)
         !> Residual scale: min(||V0||_2, rho Rs), V0 the contact velocities of the structure

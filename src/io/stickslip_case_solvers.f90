@@ -39,10 +39,10 @@ contains
         type(check_options_t), intent(out) :: check_opts
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
-        character(len=:), allocatable :: start
+        character(len=:), allocatable :: start, solver
         character(len=*), parameter :: g = "hbm"
         call check_names(nml, g, [character(len=14) :: "harmonics", "odd_only", "rho", &
-                             "samples", "tol", "start", "maxfev", "harmonics_tol", &
+                             "samples", "tol", "start", "solver", "maxfev", "harmonics_tol", &
                              "max_harmonics", "stability", "verify_periods"], error)
         if (allocated(error)) return
         call get_integer(nml, g, "harmonics", hbm_opts%harmonics, error)
@@ -64,6 +64,15 @@ contains
             return
         end if
         hbm_opts%start = trim(start)
+        solver = trim(hbm_opts%solver)
+        call get_string(nml, g, "solver", solver, error)
+        if (allocated(error)) return
+        if (solver /= 'auto' .and. solver /= 'hybrj' .and. solver /= 'newton') then
+            call group_error(nml, error, "&hbm solver = '"//solver// &
+                             "': must be 'auto', 'hybrj' or 'newton'")
+            return
+        end if
+        hbm_opts%solver = trim(solver)
         call get_integer(nml, g, "maxfev", hbm_opts%maxfev, error)
         if (allocated(error)) return
         call get_real(nml, g, "harmonics_tol", check_opts%harmonics_tol, error)

@@ -59,6 +59,9 @@ module stickslip_flow
         !> code_j w_j^T v of a slipping contact j; columns 2j-1, 2j the margins
         !> limit_j - r_j and limit_j + r_j of a stuck one.
         real(dp), allocatable :: rows(:, :)
+        !> Their time derivatives: drows = b^T rows (the slope of event function k at y is
+        !> drows(:, k) . y).
+        real(dp), allocatable :: drows(:, :)
         !> Dyadic ladder of exponentials ladder(:, :, k) = exp(b delta 2^-k), k = 0..nl,
         !> ||b delta 2^-nl|| <= 1/16 (balanced coordinates): exp(b tau) y for any tau by
         !> matrix-vector products only.
@@ -312,6 +315,7 @@ contains
                 call move_alloc(self%modes(i)%force, grown(i)%force)
                 call move_alloc(self%modes(i)%b, grown(i)%b)
                 call move_alloc(self%modes(i)%rows, grown(i)%rows)
+                call move_alloc(self%modes(i)%drows, grown(i)%drows)
                 call move_alloc(self%modes(i)%ladder, grown(i)%ladder)
                 call move_alloc(self%modes(i)%gauss, grown(i)%gauss)
                 grown(i)%nl = self%modes(i)%nl
@@ -327,6 +331,7 @@ contains
             if (allocated(md%a)) deallocate (md%a, md%force)
             if (allocated(md%b)) deallocate (md%b)
             if (allocated(md%rows)) deallocate (md%rows)
+            if (allocated(md%drows)) deallocate (md%drows)
             if (allocated(md%ladder)) deallocate (md%ladder)
             if (allocated(md%gauss)) deallocate (md%gauss)
             allocate (md%a(na, na), md%force(self%nc, na))
@@ -384,6 +389,7 @@ contains
                     end do
                 end if
             end do
+            md%drows = matmul(transpose(md%b), md%rows)
             bnorm = maxval(sum(abs(md%b), 2))*self%delta
             md%nl = 0
             if (bnorm > 1.0_dp/16.0_dp) md%nl = exponent(bnorm) + 4
@@ -446,7 +452,7 @@ contains
     !> level. Errors (stat numerical): a non-finite state, dependent stuck contact
     !> directions, more than `max_events` events (chattering) or repeated events at one
     !> instant (no consistent mode).
-    subroutine period_map(self, t0, z0, z1, error, mono, orbit)
+    subroutine period_map(self, t0, z0, z1, error, mono, orbit, energies)
         !> The flow (its mode cache grows).
         class(flow_t), intent(inout) :: self
         !> Start time [s].
@@ -461,13 +467,15 @@ contains
         real(dp), intent(out), optional :: mono(:, :)
         !> The recorded period.
         type(orbit_t), intent(out), optional :: orbit
+        !> With orbit: integrate the energies (default .true.; .false. leaves them 0).
+        logical, intent(in), optional :: energies
         integer, parameter :: max_zero_length = 8
         integer :: n, nz, na, im, imnew, j, k, nevents, zero_length, stat, jev, kev, max_events
         integer, allocatable :: code(:), oldcode(:), zset(:)
         real(dp), allocatable :: y(:), yb(:), ybb(:), yeb(:), ye(:), yp(:), phi(:, :), &
                                  jac(:, :), sal(:, :), c(:), fm(:), fp(:)
         real(dp) :: t, tb, te, tp, tend, h
-        logical :: found, want_mono, want_orbit, full_step
+        logical :: found, want_mono, want_orbit, full_step, want_energy
         character(len=200) :: buf
 
         n = self%n
@@ -475,6 +483,8 @@ contains
         na = self%na
         want_mono = present(mono)
         want_orbit = present(orbit)
+        want_energy = want_orbit
+        if (want_orbit .and. present(energies)) want_energy = energies
         max_events = 1000*(self%nc + 1)
         tend = t0 + self%period
         allocate (y(na), yb(na), ybb(na), yeb(na), ye(na), c(na), fm(na), fp(na), &
@@ -534,7 +544,7 @@ contains
             call find_event(self, self%modes(im), t, yb, tb, ybb, found, te, yeb, jev, kev, c)
             if (.not. found) then
                 ! a whole grid step: the cached exponentials at the Gauss points serve
-                if (want_orbit) then
+                if (want_energy) then
                     if (full_step) call gauss_exponentials(self, self%modes(im))
                     call energy(self%modes(im), t, yb, tb, full_step)
                 end if
@@ -546,7 +556,7 @@ contains
             ! an event at te for contact jev (kev: 0 velocity, +1 / -1 force at +/- limit)
             ye = matmul(self%tbi, yeb)
             ye(nz + 1:) = self%exo(te)
-            if (want_orbit) call energy(self%modes(im), t, yb, te, .false.)
+            if (want_energy) call energy(self%modes(im), t, yb, te, .false.)
             if (want_orbit) call close_phase(self%modes(im), yp, ye, te - tp)
             if (want_mono) then
                 call expm(self%modes(im)%b(1:nz, 1:nz)*(te - tp), phi, stat)
@@ -830,23 +840,21 @@ contains
         real(dp), intent(out) :: te, ye(:)
         integer, intent(out) :: jev, kev
         real(dp), intent(out) :: c(:)
-        real(dp) :: fa(self%na), fb(self%na), tau, best, gscale
+        real(dp) :: tau, best, gscale
         integer :: j, side
         found = .false.
         best = huge(1.0_dp)
         jev = 0
         kev = 0
-        fa = matmul(md%b, ya)
-        fb = matmul(md%b, yb)
         do j = 1, self%nc
             if (self%limit(j) <= 0.0_dp) cycle
             if (md%code(j) /= 0) then
                 gscale = self%vref(j)
-                call test(md%rows(:, 2*j - 1), 0)
+                call test(2*j - 1, 0)
             else
                 gscale = self%limit(j)
                 do side = 1, 2
-                    call test(md%rows(:, 2*j - 2 + side), 2*side - 3)
+                    call test(2*j - 2 + side, 2*side - 3)
                 end do
             end if
         end do
@@ -858,33 +866,34 @@ contains
 
     contains
 
-        subroutine test(r, kind)
-            real(dp), intent(in) :: r(:)
-            integer, intent(in) :: kind
+        subroutine test(col, kind)
+            integer, intent(in) :: col, kind
             real(dp) :: ga, gb, da, db, thr, tmin, h
-            h = tb - ta
-            ga = dot_product(r, ya)
-            gb = dot_product(r, yb)
-            da = dot_product(r, fa)
-            db = dot_product(r, fb)
-            thr = 1.0e-9_dp*gscale*self%omega
-            if (gb <= 0.0_dp) then
-                tau = first_crossing(md, self%delta, ya, r, 0, h)
-            else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
-                ! a dip between two positive values: does its minimum go below zero?
-                tmin = first_crossing(md, self%delta, ya, -r, 1, h)
-                if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
-                tau = first_crossing(md, self%delta, ya, r, 0, tmin)
-            else
-                return
-            end if
-            if (tau < best) then
-                best = tau
-                found = .true.
-                jev = j
-                kev = kind
-                c = r
-            end if
+            associate (r => md%rows(:, col))
+                h = tb - ta
+                ga = dot_product(r, ya)
+                gb = dot_product(r, yb)
+                da = dot_product(md%drows(:, col), ya)
+                db = dot_product(md%drows(:, col), yb)
+                thr = 1.0e-9_dp*gscale*self%omega
+                if (gb <= 0.0_dp) then
+                    tau = first_crossing(md, self%delta, ya, r, 0, h)
+                else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
+                    ! a dip between two positive values: does its minimum go below zero?
+                    tmin = first_crossing(md, self%delta, ya, -r, 1, h)
+                    if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
+                    tau = first_crossing(md, self%delta, ya, r, 0, tmin)
+                else
+                    return
+                end if
+                if (tau < best) then
+                    best = tau
+                    found = .true.
+                    jev = j
+                    kev = kind
+                    c = r
+                end if
+            end associate
         end subroutine test
     end subroutine find_event
 
@@ -966,15 +975,19 @@ contains
         real(dp), intent(out) :: x(:, :), v(:, :), r(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        real(dp) :: y(self%na), yb(self%na), tk, tprev, dt
-        integer :: k, kk, p, kfirst, last_p, n
+        real(dp) :: y(self%na), yb(self%na), tk, dt
+        real(dp), allocatable :: step(:, :, :)
+        logical, allocatable :: have_step(:)
+        integer :: k, kk, p, kfirst, last_p, n, stat, im
         n = self%n
         dt = self%period/ng
         ! the first sample at or after t0; samples before t0 belong to the end of the period
         kfirst = modulo(ceiling(orbit%t0/dt - 1.0e-12_dp), ng)
         p = 1
         last_p = 0
-        tprev = 0.0_dp
+        ! exp(b dt) of each mode met, built on first use
+        allocate (step(self%na, self%na, self%nmodes), have_step(self%nmodes))
+        have_step = .false.
         do kk = 0, ng - 1
             k = modulo(kfirst + kk, ng)
             tk = k*dt
@@ -983,17 +996,21 @@ contains
                 if (orbit%phase_t(p + 1) > tk) exit
                 p = p + 1
             end do
-            associate (md => self%modes(orbit%phase_mode(p)))
+            im = orbit%phase_mode(p)
+            associate (md => self%modes(im))
                 if (p /= last_p) then
                     yb = matmul(self%tb, orbit%phase_y(:, p))
                     call propagate(md, self%delta, tk - orbit%phase_t(p), yb, y)
                     last_p = p
                 else
-                    call propagate(md, self%delta, tk - tprev, yb, y)
+                    if (.not. have_step(im)) then
+                        call expm(md%b*dt, step(:, :, im), stat)
+                        have_step(im) = .true.
+                    end if
+                    y = matmul(step(:, :, im), yb)
                 end if
                 yb = y
                 yb(2*n + 1:) = self%se*self%exo(tk)
-                tprev = tk
                 y = matmul(self%tbi, yb)
                 if (.not. all(ieee_is_finite(y))) then
                     call fatal_error(error, "reference: the state is not finite while "// &

@@ -109,6 +109,11 @@ module stickslip_flow
         !> roundoff; the state is stepped in them and converted at events.
         real(dp), allocatable :: tb(:, :), tbi(:, :)
         real(dp) :: se = 1.0_dp
+        !> The model in those coordinates (M = I): eigenvalues lam of (K, M), scales s,
+        !> Phi^T C Phi, Phi^T W, Phi^T times the forcing columns of hf. The phase matrices
+        !> are built from them, never from M^-1 K (whose cancellation would leave stick and
+        !> slip modes inconsistent at the switching surface).
+        real(dp), allocatable :: lam(:), s(:), ct(:, :), wt(:, :), ft(:, :)
         type(mode_t), allocatable :: modes(:)
         integer :: nmodes = 0
     contains
@@ -270,6 +275,11 @@ contains
         end do
         self%se = fs/self%omega
         if (.not. (self%se > 0.0_dp .and. self%se < huge(1.0_dp))) self%se = 1.0_dp
+        self%lam = lam
+        self%s = s
+        self%ct = matmul(transpose(phi), matmul(model%damping, phi))
+        self%wt = matmul(transpose(phi), self%w)
+        self%ft = matmul(transpose(phi), self%hf(:, 2*n + 1:))
         allocate (self%tb(na, na), self%tbi(na, na))
         self%tb = 0.0_dp
         self%tbi = 0.0_dp
@@ -313,6 +323,7 @@ contains
         integer, allocatable :: stuck(:)
         real(dp), allocatable :: hfull(:, :), mws(:, :), g(:, :), l(:, :)
         real(dp) :: row(self%na), bnorm
+        real(dp), allocatable :: hb(:, :), fb(:, :)
 
         do im = 1, self%nmodes
             if (all(self%modes(im)%code == code)) return
@@ -381,21 +392,51 @@ contains
                 md%a(2*n + 2*k, 2*n + 2*k + 1) = -self%eharm(k)*self%omega
                 md%a(2*n + 2*k + 1, 2*n + 2*k) = self%eharm(k)*self%omega
             end do
-            ! the balanced dynamics, its event rows and its ladder of exponentials
-            md%b = matmul(self%tb, matmul(md%a, self%tbi))
-            allocate (md%rows(na, 2*self%nc))
+            ! the balanced dynamics from the modal model (M = I): p' = S u,
+            ! u' = P hb y, hb = [-lam / s, -Phi^T C Phi, (Phi^T f + friction) / se], P the
+            ! orthogonal projection off the stuck directions Phi^T w_S; their forces
+            ! fb y = -(Wt_S^T Wt_S)^-1 Wt_S^T hb y; its event rows; its ladder
+            allocate (md%b(na, na), hb(n, na), fb(self%nc, na), md%rows(na, 2*self%nc))
+            hb = 0.0_dp
+            do i = 1, n
+                hb(i, i) = -self%lam(i)/self%s(i)
+            end do
+            hb(:, n + 1:2*n) = -self%ct
+            hb(:, 2*n + 1:) = self%ft/self%se
+            do j = 1, self%nc
+                if (code(j) /= 0) hb(:, 2*n + 1) = hb(:, 2*n + 1) - &
+                    self%limit(j)*code(j)*self%wt(:, j)/self%se
+            end do
+            fb = 0.0_dp
+            do j = 1, self%nc
+                if (code(j) /= 0) fb(j, 2*n + 1) = -self%limit(j)*code(j)/self%se
+            end do
+            if (ns > 0) then
+                g = matmul(transpose(self%wt(:, stuck)), self%wt(:, stuck))
+                call dpotrf('U', ns, g, ns, info)
+                l = -matmul(transpose(self%wt(:, stuck)), hb)
+                call dpotrs('U', ns, na, g, ns, l, ns, info)
+                fb(stuck, :) = l
+                hb = hb + matmul(self%wt(:, stuck), l)
+            end if
+            md%b = 0.0_dp
+            do i = 1, n
+                md%b(i, n + i) = self%s(i)
+            end do
+            md%b(n + 1:2*n, :) = hb
+            md%b(2*n + 1:, 2*n + 1:) = md%a(2*n + 1:, 2*n + 1:)
             md%rows = 0.0_dp
             do j = 1, self%nc
                 row = 0.0_dp
                 if (code(j) /= 0) then
-                    row(n + 1:2*n) = code(j)*self%w(:, j)
-                    md%rows(:, 2*j - 1) = matmul(row, self%tbi)
+                    row(n + 1:2*n) = code(j)*self%wt(:, j)
+                    md%rows(:, 2*j - 1) = row
                 else
                     do k = 1, 2
                         ! g = limit - side * r_j >= 0 while stuck, side = +1, -1
-                        row = -(3 - 2*k)*md%force(j, :)
-                        row(2*n + 1) = row(2*n + 1) + self%limit(j)
-                        md%rows(:, 2*j - 2 + k) = matmul(row, self%tbi)
+                        row = -(3 - 2*k)*fb(j, :)
+                        row(2*n + 1) = row(2*n + 1) + self%limit(j)/self%se
+                        md%rows(:, 2*j - 2 + k) = row
                     end do
                 end if
             end do
@@ -417,25 +458,30 @@ contains
         if (allocated(error)) self%nmodes = self%nmodes - 1
     end function mode_index
 
-    !> New codes for the contacts at zero velocity `zset` in state y, from Coulomb's law at
-    !> acceleration level (a box-constrained strictly convex QP; unique solution).
-    subroutine zero_velocity_modes(self, y, zset, code, error)
+    !> New codes for the contacts at zero velocity `zset` in the balanced state yb, from
+    !> Coulomb's law at acceleration level (a box-constrained strictly convex QP; unique
+    !> solution), formed in the modal coordinates (M = I): D = Wt_Z^T Wt_Z = W_Z^T M^-1 W_Z,
+    !> b = Wt_Z^T Phi^T f.
+    subroutine zero_velocity_modes(self, yb, zset, code, error)
         class(flow_t), intent(inout) :: self
-        real(dp), intent(in) :: y(:)
+        real(dp), intent(in) :: yb(:)
         integer, intent(in) :: zset(:)
         integer, intent(inout) :: code(:)
         type(error_type), allocatable, intent(inout) :: error
-        real(dp), allocatable :: f(:), mwz(:, :), d(:, :), b(:), r(:), lim(:)
-        integer :: k, j, nz, sweeps
+        real(dp), allocatable :: f(:), d(:, :), b(:), r(:), lim(:)
+        integer :: k, j, nz, sweeps, n
         nz = size(zset)
         if (nz == 0) return
-        f = matmul(self%hf, y)
+        n = self%n
+        ! Phi^T (f - C v - K x) from the balanced state
+        f = -self%lam/self%s*yb(1:n) - matmul(self%ct, yb(n + 1:2*n)) + &
+            matmul(self%ft, yb(2*n + 1:)/self%se)
         do j = 1, self%nc
-            if (code(j) /= 0 .and. .not. any(zset == j)) f = f - self%limit(j)*code(j)*self%w(:, j)
+            if (code(j) /= 0 .and. .not. any(zset == j)) &
+                f = f - self%limit(j)*code(j)*self%wt(:, j)
         end do
-        mwz = matmul(self%minv, self%w(:, zset))
-        d = matmul(transpose(self%w(:, zset)), mwz)
-        b = matmul(f, mwz)
+        d = matmul(transpose(self%wt(:, zset)), self%wt(:, zset))
+        b = matmul(f, self%wt(:, zset))
         lim = self%limit(zset)
         allocate (r(nz))
         r = 0.0_dp
@@ -513,7 +559,7 @@ contains
         end do
         zset = pack([(j, j=1, self%nc)], code == 0 .and. self%limit > 0.0_dp)
         code = merge(1, code, code == 0 .and. self%limit <= 0.0_dp)
-        call self%zero_velocity_modes(y, zset, code, error)
+        call self%zero_velocity_modes(matmul(self%tb, y), zset, code, error)
         if (allocated(error)) return
         im = self%mode_index(code, error)
         if (allocated(error)) return
@@ -577,17 +623,19 @@ contains
             if (kev == 0) then
                 zset = pack([(j, j=1, self%nc)], code == 0 .and. self%limit > 0.0_dp)
                 zset = [zset, jev]
-                call self%zero_velocity_modes(ye, zset, code, error)
+                call self%zero_velocity_modes(yeb, zset, code, error)
                 if (allocated(error)) return
             else
                 code(jev) = kev
             end if
             imnew = self%mode_index(code, error)
             if (allocated(error)) return
-            ! stuck contacts: clear the roundoff left in their slip velocity
-            call project_stuck(self, code, ye)
-            yeb = matmul(self%tb, ye)
+            ! stuck contacts: clear the roundoff left in their slip velocity (in the balanced
+            ! state: a round trip through [x; v] would cost the stiff components accuracy)
+            call project_stuck(self, code, yeb)
             yeb(nz + 1:) = self%se*self%exo(te)
+            ye = matmul(self%tbi, yeb)
+            ye(nz + 1:) = self%exo(te)
             if (want_mono) then
                 fp = matmul(self%modes(imnew)%b, yeb)
                 h = dot_product(c, fm)
@@ -815,27 +863,27 @@ contains
         end do
     end subroutine gauss_exponentials
 
-    !> Remove the slip velocity of the stuck contacts by the M-orthogonal projection
-    !> v <- v - M^{-1} W_S G^{-1} W_S^T v (a roundoff-sized correction after an event).
-    subroutine project_stuck(self, code, y)
+    !> Remove the slip velocity of the stuck contacts from the balanced state yb by the
+    !> orthogonal projection u <- u - Wt_S (Wt_S^T Wt_S)^-1 Wt_S^T u of its modal velocities
+    !> (the M-orthogonal projection of v; a roundoff-sized correction after an event).
+    subroutine project_stuck(self, code, yb)
         type(flow_t), intent(in) :: self
         integer, intent(in) :: code(:)
-        real(dp), intent(inout) :: y(:)
+        real(dp), intent(inout) :: yb(:)
         integer, allocatable :: stuck(:)
-        real(dp), allocatable :: mws(:, :), g(:, :), u(:, :)
+        real(dp), allocatable :: g(:, :), u(:, :)
         integer :: ns, info, j, n
         n = self%n
         stuck = pack([(j, j=1, self%nc)], code == 0)
         ns = size(stuck)
         if (ns == 0) return
-        mws = matmul(self%minv, self%w(:, stuck))
-        g = matmul(transpose(self%w(:, stuck)), mws)
+        g = matmul(transpose(self%wt(:, stuck)), self%wt(:, stuck))
         allocate (u(ns, 1))
-        u(:, 1) = matmul(y(n + 1:2*n), self%w(:, stuck))
+        u(:, 1) = matmul(yb(n + 1:2*n), self%wt(:, stuck))
         call dpotrf('U', ns, g, ns, info)
         if (info /= 0) return
         call dpotrs('U', ns, 1, g, ns, u, ns, info)
-        y(n + 1:2*n) = y(n + 1:2*n) - matmul(mws, u(:, 1))
+        yb(n + 1:2*n) = yb(n + 1:2*n) - matmul(self%wt(:, stuck), u(:, 1))
     end subroutine project_stuck
 
     !> The earliest event in (ta, tb] of the mode md, if any: its time te, state ye, contact

@@ -9,6 +9,7 @@ program tester
     use test_euler, only: run_euler_tests
     use test_exact_reference, only: run_exact_reference_tests
     use test_stability, only: run_stability_tests
+    use test_stiff_flow, only: run_stiff_flow_tests
     use test_robustness, only: run_robustness_tests
     use test_continuation, only: run_continuation_tests
     use test_factorizations, only: run_factorizations_tests
@@ -59,6 +60,7 @@ program tester
     if (selected("euler")) call run_euler_tests(t)
     if (selected("exact_reference")) call run_exact_reference_tests(t)
     if (selected("stability")) call run_stability_tests(t)
+    if (selected("stiff_flow")) call run_stiff_flow_tests(t)
     if (selected("robustness")) call run_robustness_tests(t)
     if (selected("continuation")) call run_continuation_tests(t)
     if (selected("factorizations")) call run_factorizations_tests(t)

@@ -23,15 +23,25 @@
 !> functions at both ends: a dip below zero between two positive values is caught too) and
 !> located to roundoff by safeguarded Newton iteration on the exact solution.
 !>
+!> Stiff models (a reduced FE model keeps modes far above the forcing: |eig A| ~ 1e7 s^-1
+!> against omega ~ 50 rad/s, and M^-1 K of a Craig-Bampton model has norm ~1e12): the state
+!> is stepped in balanced coordinates, x = Phi S^-1 p, v = Phi u, Phi the M-orthonormal
+!> modes of (K, M), S = diag(max(w_k, omega)) (flow_t%tb), where each phase matrix is near
+!> normal and its exponential accurate to roundoff (in [x; v] the x/v unit mixing and the
+!> non-normality of M^-1 K cost up to 1e-6 .. 1 of relative accuracy). Each contact mode
+!> keeps a dyadic ladder exp(b delta 2^-k), so exp(b tau) y for any tau (event location,
+!> sampling) takes matrix-vector products only: one matrix exponential per mode and grid
+!> step length, none per Newton iterate.
+!>
 !> The period map z(t0) -> z(t0 + T) also returns its Jacobian (the monodromy matrix): the
 !> product of the phase flows exp(A_zz tau) and of the saltation matrices
 !> I + (f+ - f-) c^T / (c . f-) at the events. Knows nothing of files or of the other methods.
 module stickslip_flow
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, pi, two_pi
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, contact_velocity_direction, force_direction
-    use stickslip_lapack, only: dpotrf, dpotrs
+    use stickslip_lapack, only: dpotrf, dpotrs, dsygv
     use stickslip_expm, only: expm
     use stickslip_contact_solve, only: contact_forces
     implicit none
@@ -53,9 +63,21 @@ module stickslip_flow
         real(dp), allocatable :: a(:, :)
         !> Friction forces r = force y, n_c x na.
         real(dp), allocatable :: force(:, :)
-        !> exp(a delta), the grid step.
-        real(dp), allocatable :: step(:, :)
-        !> exp(a delta (1 + x_i) / 2) at the Gauss points x_i.
+        !> The same dynamics in the balanced coordinates of the flow (flow_t%tb): b = tb a tb^-1.
+        real(dp), allocatable :: b(:, :)
+        !> Event rows in balanced coordinates, na x 2 n_c: column 2j-1 the slip velocity
+        !> code_j w_j^T v of a slipping contact j; columns 2j-1, 2j the margins
+        !> limit_j - r_j and limit_j + r_j of a stuck one.
+        real(dp), allocatable :: rows(:, :)
+        !> Their time derivatives: drows = b^T rows (the slope of event function k at y is
+        !> drows(:, k) . y).
+        real(dp), allocatable :: drows(:, :)
+        !> Dyadic ladder of exponentials ladder(:, :, k) = exp(b delta 2^-k), k = 0..nl,
+        !> ||b delta 2^-nl|| <= 1/16 (balanced coordinates): exp(b tau) y for any tau by
+        !> matrix-vector products only.
+        real(dp), allocatable :: ladder(:, :, :)
+        integer :: nl = 0
+        !> exp(b delta (1 + x_i) / 2) at the Gauss points x_i (balanced; built on first use).
         real(dp), allocatable :: gauss(:, :, :)
     end type mode_t
 
@@ -80,6 +102,18 @@ module stickslip_flow
         !> Harmonic of each cos/sin pair of the exosystem.
         integer, allocatable :: eharm(:)
         real(dp) :: gx(ngauss) = 0.0_dp, gw(ngauss) = 0.0_dp
+        !> Balanced coordinates yb = tb y (tbi = tb^-1): x = Phi S^-1 p, v = Phi u, e = e~ / se,
+        !> Phi the M-orthonormal modes of (K, M), S = diag(max(w_k, omega)). In them every
+        !> phase matrix has a norm of the order of its spectral radius (no x/v unit mixing,
+        !> no M^-1 K of a badly scaled reduced model), so its exponentials are accurate to
+        !> roundoff; the state is stepped in them and converted at events.
+        real(dp), allocatable :: tb(:, :), tbi(:, :)
+        real(dp) :: se = 1.0_dp
+        !> The model in those coordinates (M = I): eigenvalues lam of (K, M), scales s,
+        !> Phi^T C Phi, Phi^T W, Phi^T times the forcing columns of hf. The phase matrices
+        !> are built from them, never from M^-1 K (whose cancellation would leave stick and
+        !> slip modes inconsistent at the switching surface).
+        real(dp), allocatable :: lam(:), s(:), ct(:, :), wt(:, :), ft(:, :)
         type(mode_t), allocatable :: modes(:)
         integer :: nmodes = 0
     contains
@@ -198,9 +232,68 @@ contains
         self%limit = model%mu*model%normal_load
         self%vref = max(vref, tiny(1.0_dp))
         call gauss_legendre(self%gx, self%gw)
+        call balance(self, model, error)
+        if (allocated(error)) return
         allocate (self%modes(8))
         self%nmodes = 0
     end subroutine new_flow
+
+    !> The balanced coordinates of the flow: tb = diag(S Phi^T M, Phi^T M, se I), Phi the
+    !> M-orthonormal eigenvectors of the symmetric part of K (LAPACK dsygv), S = diag(max(
+    !> w_k, omega)), se the size of the forcing and friction terms in those coordinates over
+    !> omega. Any invertible tb gives the same flow (a similarity transformation); this one
+    !> makes the phase matrices near-normal. Errors (stat numerical): dsygv failed.
+    subroutine balance(self, model, error)
+        type(flow_t), intent(inout) :: self
+        type(model_t), intent(in) :: model
+        type(error_type), allocatable, intent(inout) :: error
+        real(dp), allocatable :: phi(:, :), mm(:, :), lam(:), work(:), s(:), phit(:, :)
+        real(dp) :: query(1), fs
+        integer :: n, na, info, k, j
+        n = self%n
+        na = self%na
+        phi = 0.5_dp*(model%stiffness + transpose(model%stiffness))
+        mm = model%mass
+        allocate (lam(n))
+        call dsygv(1, 'V', 'U', n, phi, n, mm, n, lam, query, -1, info)
+        allocate (work(max(1, int(query(1)))))
+        call dsygv(1, 'V', 'U', n, phi, n, mm, n, lam, work, size(work), info)
+        if (info /= 0) then
+            call fatal_error(error, "reference: the modes of (K, M) could not be computed "// &
+                             "(dsygv info "//itoa(info)//")", stickslip_stat%numerical)
+            return
+        end if
+        s = max(sqrt(max(lam, 0.0_dp)), self%omega)
+        ! Phi^T M = Phi^-1
+        phit = matmul(transpose(phi), model%mass)
+        fs = 0.0_dp
+        do k = 1, self%ne
+            fs = max(fs, maxval(abs(matmul(transpose(phi), self%hf(:, 2*n + k)))))
+        end do
+        do j = 1, self%nc
+            fs = max(fs, self%limit(j)*maxval(abs(matmul(transpose(phi), self%w(:, j)))))
+        end do
+        self%se = fs/self%omega
+        if (.not. (self%se > 0.0_dp .and. self%se < huge(1.0_dp))) self%se = 1.0_dp
+        self%lam = lam
+        self%s = s
+        self%ct = matmul(transpose(phi), matmul(model%damping, phi))
+        self%wt = matmul(transpose(phi), self%w)
+        self%ft = matmul(transpose(phi), self%hf(:, 2*n + 1:))
+        allocate (self%tb(na, na), self%tbi(na, na))
+        self%tb = 0.0_dp
+        self%tbi = 0.0_dp
+        do k = 1, n
+            self%tb(k, 1:n) = s(k)*phit(k, :)
+            self%tbi(1:n, k) = phi(:, k)/s(k)
+        end do
+        self%tb(n + 1:2*n, n + 1:2*n) = phit
+        self%tbi(n + 1:2*n, n + 1:2*n) = phi
+        do k = 2*n + 1, na
+            self%tb(k, k) = self%se
+            self%tbi(k, k) = 1.0_dp/self%se
+        end do
+    end subroutine balance
 
     !> The exosystem state at time t [s]: [1, cos(h omega t), sin(h omega t), ...].
     pure function exo(self, t) result(e)
@@ -229,6 +322,8 @@ contains
         integer :: i, n, na, ns, j, k, info, stat
         integer, allocatable :: stuck(:)
         real(dp), allocatable :: hfull(:, :), mws(:, :), g(:, :), l(:, :)
+        real(dp) :: row(self%na), bnorm
+        real(dp), allocatable :: hb(:, :), fb(:, :)
 
         do im = 1, self%nmodes
             if (all(self%modes(im)%code == code)) return
@@ -239,8 +334,12 @@ contains
                 call move_alloc(self%modes(i)%code, grown(i)%code)
                 call move_alloc(self%modes(i)%a, grown(i)%a)
                 call move_alloc(self%modes(i)%force, grown(i)%force)
-                call move_alloc(self%modes(i)%step, grown(i)%step)
+                call move_alloc(self%modes(i)%b, grown(i)%b)
+                call move_alloc(self%modes(i)%rows, grown(i)%rows)
+                call move_alloc(self%modes(i)%drows, grown(i)%drows)
+                call move_alloc(self%modes(i)%ladder, grown(i)%ladder)
                 call move_alloc(self%modes(i)%gauss, grown(i)%gauss)
+                grown(i)%nl = self%modes(i)%nl
             end do
             call move_alloc(grown, self%modes)
         end if
@@ -250,9 +349,13 @@ contains
         na = self%na
         build: associate (md => self%modes(im))
             md%code = code
-            if (allocated(md%a)) deallocate (md%a, md%force, md%step, md%gauss)
-            allocate (md%a(na, na), md%force(self%nc, na), md%step(na, na), &
-                      md%gauss(na, na, ngauss))
+            if (allocated(md%a)) deallocate (md%a, md%force)
+            if (allocated(md%b)) deallocate (md%b)
+            if (allocated(md%rows)) deallocate (md%rows)
+            if (allocated(md%drows)) deallocate (md%drows)
+            if (allocated(md%ladder)) deallocate (md%ladder)
+            if (allocated(md%gauss)) deallocate (md%gauss)
+            allocate (md%a(na, na), md%force(self%nc, na))
             hfull = self%hf
             md%force = 0.0_dp
             do j = 1, self%nc
@@ -289,11 +392,64 @@ contains
                 md%a(2*n + 2*k, 2*n + 2*k + 1) = -self%eharm(k)*self%omega
                 md%a(2*n + 2*k + 1, 2*n + 2*k) = self%eharm(k)*self%omega
             end do
-            call expm(md%a*self%delta, md%step, stat)
-            do k = 1, ngauss
-                call expm(md%a*(0.5_dp*self%delta*(1.0_dp + self%gx(k))), md%gauss(:, :, k), stat)
+            ! the balanced dynamics from the modal model (M = I): p' = S u,
+            ! u' = P hb y, hb = [-lam / s, -Phi^T C Phi, (Phi^T f + friction) / se], P the
+            ! orthogonal projection off the stuck directions Phi^T w_S; their forces
+            ! fb y = -(Wt_S^T Wt_S)^-1 Wt_S^T hb y; its event rows; its ladder
+            allocate (md%b(na, na), hb(n, na), fb(self%nc, na), md%rows(na, 2*self%nc))
+            hb = 0.0_dp
+            do i = 1, n
+                hb(i, i) = -self%lam(i)/self%s(i)
             end do
-            if (stat /= 0 .or. .not. all(ieee_is_finite(md%step))) then
+            hb(:, n + 1:2*n) = -self%ct
+            hb(:, 2*n + 1:) = self%ft/self%se
+            do j = 1, self%nc
+                if (code(j) /= 0) hb(:, 2*n + 1) = hb(:, 2*n + 1) - &
+                    self%limit(j)*code(j)*self%wt(:, j)/self%se
+            end do
+            fb = 0.0_dp
+            do j = 1, self%nc
+                if (code(j) /= 0) fb(j, 2*n + 1) = -self%limit(j)*code(j)/self%se
+            end do
+            if (ns > 0) then
+                g = matmul(transpose(self%wt(:, stuck)), self%wt(:, stuck))
+                call dpotrf('U', ns, g, ns, info)
+                l = -matmul(transpose(self%wt(:, stuck)), hb)
+                call dpotrs('U', ns, na, g, ns, l, ns, info)
+                fb(stuck, :) = l
+                hb = hb + matmul(self%wt(:, stuck), l)
+            end if
+            md%b = 0.0_dp
+            do i = 1, n
+                md%b(i, n + i) = self%s(i)
+            end do
+            md%b(n + 1:2*n, :) = hb
+            md%b(2*n + 1:, 2*n + 1:) = md%a(2*n + 1:, 2*n + 1:)
+            md%rows = 0.0_dp
+            do j = 1, self%nc
+                row = 0.0_dp
+                if (code(j) /= 0) then
+                    row(n + 1:2*n) = code(j)*self%wt(:, j)
+                    md%rows(:, 2*j - 1) = row
+                else
+                    do k = 1, 2
+                        ! g = limit - side * r_j >= 0 while stuck, side = +1, -1
+                        row = -(3 - 2*k)*fb(j, :)
+                        row(2*n + 1) = row(2*n + 1) + self%limit(j)/self%se
+                        md%rows(:, 2*j - 2 + k) = row
+                    end do
+                end if
+            end do
+            md%drows = matmul(transpose(md%b), md%rows)
+            bnorm = maxval(sum(abs(md%b), 2))*self%delta
+            md%nl = 0
+            if (bnorm > 1.0_dp/16.0_dp) md%nl = exponent(bnorm) + 4
+            allocate (md%ladder(na, na, 0:md%nl))
+            call expm(md%b*(self%delta*0.5_dp**md%nl), md%ladder(:, :, md%nl), stat)
+            do k = md%nl, 1, -1
+                md%ladder(:, :, k - 1) = matmul(md%ladder(:, :, k), md%ladder(:, :, k))
+            end do
+            if (stat /= 0 .or. .not. all(ieee_is_finite(md%ladder(:, :, 0)))) then
                 call fatal_error(error, "reference: the matrix exponential of a contact mode "// &
                                  "is not finite", stickslip_stat%numerical)
             end if
@@ -302,25 +458,30 @@ contains
         if (allocated(error)) self%nmodes = self%nmodes - 1
     end function mode_index
 
-    !> New codes for the contacts at zero velocity `zset` in state y, from Coulomb's law at
-    !> acceleration level (a box-constrained strictly convex QP; unique solution).
-    subroutine zero_velocity_modes(self, y, zset, code, error)
+    !> New codes for the contacts at zero velocity `zset` in the balanced state yb, from
+    !> Coulomb's law at acceleration level (a box-constrained strictly convex QP; unique
+    !> solution), formed in the modal coordinates (M = I): D = Wt_Z^T Wt_Z = W_Z^T M^-1 W_Z,
+    !> b = Wt_Z^T Phi^T f.
+    subroutine zero_velocity_modes(self, yb, zset, code, error)
         class(flow_t), intent(inout) :: self
-        real(dp), intent(in) :: y(:)
+        real(dp), intent(in) :: yb(:)
         integer, intent(in) :: zset(:)
         integer, intent(inout) :: code(:)
         type(error_type), allocatable, intent(inout) :: error
-        real(dp), allocatable :: f(:), mwz(:, :), d(:, :), b(:), r(:), lim(:)
-        integer :: k, j, nz, sweeps
+        real(dp), allocatable :: f(:), d(:, :), b(:), r(:), lim(:)
+        integer :: k, j, nz, sweeps, n
         nz = size(zset)
         if (nz == 0) return
-        f = matmul(self%hf, y)
+        n = self%n
+        ! Phi^T (f - C v - K x) from the balanced state
+        f = -self%lam/self%s*yb(1:n) - matmul(self%ct, yb(n + 1:2*n)) + &
+            matmul(self%ft, yb(2*n + 1:)/self%se)
         do j = 1, self%nc
-            if (code(j) /= 0 .and. .not. any(zset == j)) f = f - self%limit(j)*code(j)*self%w(:, j)
+            if (code(j) /= 0 .and. .not. any(zset == j)) &
+                f = f - self%limit(j)*code(j)*self%wt(:, j)
         end do
-        mwz = matmul(self%minv, self%w(:, zset))
-        d = matmul(transpose(self%w(:, zset)), mwz)
-        b = matmul(f, mwz)
+        d = matmul(transpose(self%wt(:, zset)), self%wt(:, zset))
+        b = matmul(f, self%wt(:, zset))
         lim = self%limit(zset)
         allocate (r(nz))
         r = 0.0_dp
@@ -347,7 +508,7 @@ contains
     !> level. Errors (stat numerical): a non-finite state, dependent stuck contact
     !> directions, more than `max_events` events (chattering) or repeated events at one
     !> instant (no consistent mode).
-    subroutine period_map(self, t0, z0, z1, error, mono, orbit)
+    subroutine period_map(self, t0, z0, z1, error, mono, orbit, energies)
         !> The flow (its mode cache grows).
         class(flow_t), intent(inout) :: self
         !> Start time [s].
@@ -362,13 +523,15 @@ contains
         real(dp), intent(out), optional :: mono(:, :)
         !> The recorded period.
         type(orbit_t), intent(out), optional :: orbit
+        !> With orbit: integrate the energies (default .true.; .false. leaves them 0).
+        logical, intent(in), optional :: energies
         integer, parameter :: max_zero_length = 8
         integer :: n, nz, na, im, imnew, j, k, nevents, zero_length, stat, jev, kev, max_events
         integer, allocatable :: code(:), oldcode(:), zset(:)
-        real(dp), allocatable :: y(:), yb(:), ye(:), yp(:), phi(:, :), jac(:, :), sal(:, :), &
-                                 c(:), fm(:), fp(:)
+        real(dp), allocatable :: y(:), yb(:), ybb(:), yeb(:), ye(:), yp(:), phi(:, :), &
+                                 jac(:, :), sal(:, :), c(:), fm(:), fp(:)
         real(dp) :: t, tb, te, tp, tend, h
-        logical :: found, want_mono, want_orbit, full_step
+        logical :: found, want_mono, want_orbit, full_step, want_energy
         character(len=200) :: buf
 
         n = self%n
@@ -376,9 +539,12 @@ contains
         na = self%na
         want_mono = present(mono)
         want_orbit = present(orbit)
+        want_energy = want_orbit
+        if (want_orbit .and. present(energies)) want_energy = energies
         max_events = 1000*(self%nc + 1)
         tend = t0 + self%period
-        allocate (y(na), yb(na), ye(na), c(na), fm(na), fp(na), code(self%nc), oldcode(self%nc))
+        allocate (y(na), yb(na), ybb(na), yeb(na), ye(na), c(na), fm(na), fp(na), &
+                  code(self%nc), oldcode(self%nc))
         y(1:nz) = z0
         y(nz + 1:) = self%exo(t0)
         if (want_mono) then
@@ -393,7 +559,7 @@ contains
         end do
         zset = pack([(j, j=1, self%nc)], code == 0 .and. self%limit > 0.0_dp)
         code = merge(1, code, code == 0 .and. self%limit <= 0.0_dp)
-        call self%zero_velocity_modes(y, zset, code, error)
+        call self%zero_velocity_modes(matmul(self%tb, y), zset, code, error)
         if (allocated(error)) return
         im = self%mode_index(code, error)
         if (allocated(error)) return
@@ -407,6 +573,9 @@ contains
             call add_phase(t0, y, im)
         end if
 
+        ! the state is stepped in balanced coordinates (yb: y; ybb: the end of the step;
+        ! yeb: at the event); y, ye, yp in the model's coordinates at phase boundaries
+        yb = matmul(self%tb, y)
         t = t0
         tp = t0
         yp = y
@@ -417,53 +586,58 @@ contains
             if (tend - t <= self%delta*(1.0_dp + 1.0e-9_dp)) then
                 tb = tend
                 full_step = .false.
-                call propagate(self%modes(im)%a, tb - t, y, yb, stat)
-                if (stat /= 0) then
-                    call fail("the matrix exponential failed")
-                    return
-                end if
+                call propagate(self%modes(im), self%delta, tb - t, yb, ybb)
             else
                 tb = t + self%delta
                 full_step = .true.
-                yb = matmul(self%modes(im)%step, y)
+                ybb = matmul(self%modes(im)%ladder(:, :, 0), yb)
             end if
-            yb(nz + 1:) = self%exo(tb)
-            if (.not. all(ieee_is_finite(yb))) then
+            ybb(nz + 1:) = self%se*self%exo(tb)
+            if (.not. all(ieee_is_finite(ybb))) then
                 call fail("the state is not finite (unbounded response)")
                 return
             end if
-            call find_event(self, self%modes(im), t, y, tb, yb, found, te, ye, jev, kev, c)
+            call find_event(self, self%modes(im), t, yb, tb, ybb, found, te, yeb, jev, kev, c)
             if (.not. found) then
                 ! a whole grid step: the cached exponentials at the Gauss points serve
-                if (want_orbit) call energy(self%modes(im), t, y, tb, full_step)
+                if (want_energy) then
+                    if (full_step) call gauss_exponentials(self, self%modes(im))
+                    call energy(self%modes(im), t, yb, tb, full_step)
+                end if
                 t = tb
-                y = yb
+                yb = ybb
                 cycle
             end if
 
             ! an event at te for contact jev (kev: 0 velocity, +1 / -1 force at +/- limit)
-            if (want_orbit) call energy(self%modes(im), t, y, te, .false.)
+            ye = matmul(self%tbi, yeb)
+            ye(nz + 1:) = self%exo(te)
+            if (want_energy) call energy(self%modes(im), t, yb, te, .false.)
             if (want_orbit) call close_phase(self%modes(im), yp, ye, te - tp)
             if (want_mono) then
-                call expm(self%modes(im)%a(1:nz, 1:nz)*(te - tp), phi, stat)
+                call expm(self%modes(im)%b(1:nz, 1:nz)*(te - tp), phi, stat)
                 jac = matmul(phi, jac)
-                fm = matmul(self%modes(im)%a, ye)
+                fm = matmul(self%modes(im)%b, yeb)
             end if
             oldcode = code
             if (kev == 0) then
                 zset = pack([(j, j=1, self%nc)], code == 0 .and. self%limit > 0.0_dp)
                 zset = [zset, jev]
-                call self%zero_velocity_modes(ye, zset, code, error)
+                call self%zero_velocity_modes(yeb, zset, code, error)
                 if (allocated(error)) return
             else
                 code(jev) = kev
             end if
             imnew = self%mode_index(code, error)
             if (allocated(error)) return
-            ! stuck contacts: clear the roundoff left in their slip velocity
-            call project_stuck(self, code, ye)
+            ! stuck contacts: clear the roundoff left in their slip velocity (in the balanced
+            ! state: a round trip through [x; v] would cost the stiff components accuracy)
+            call project_stuck(self, code, yeb)
+            yeb(nz + 1:) = self%se*self%exo(te)
+            ye = matmul(self%tbi, yeb)
+            ye(nz + 1:) = self%exo(te)
             if (want_mono) then
-                fp = matmul(self%modes(imnew)%a, ye)
+                fp = matmul(self%modes(imnew)%b, yeb)
                 h = dot_product(c, fm)
                 if (abs(h) > 1.0e-300_dp) then
                     sal = identity(nz)
@@ -502,13 +676,16 @@ contains
             end if
             im = imnew
             t = te
-            y = ye
+            yb = yeb
             tp = te
             yp = ye
         end do
+        y = matmul(self%tbi, yb)
+        y(nz + 1:) = self%exo(tend)
         if (want_mono) then
-            call expm(self%modes(im)%a(1:nz, 1:nz)*(tend - tp), phi, stat)
-            mono = matmul(phi, jac)
+            ! back to the model's coordinates: mono = tbi_zz (phase flow x jac) tb_zz
+            call expm(self%modes(im)%b(1:nz, 1:nz)*(tend - tp), phi, stat)
+            mono = matmul(self%tbi(1:nz, 1:nz), matmul(matmul(phi, jac), self%tb(1:nz, 1:nz)))
         end if
         if (want_orbit) call close_phase(self%modes(im), yp, y, tend - tp)
         z1 = y(1:nz)
@@ -586,17 +763,18 @@ contains
             type(mode_t), intent(in) :: md
             real(dp), intent(in) :: ta, ya(:), tz
             logical, intent(in) :: full_step
-            real(dp) :: yg(na), e(na, na), half, power
-            integer :: ig, st
+            real(dp) :: yg(na), ygb(na), half, power
+            integer :: ig
             half = 0.5_dp*(tz - ta)
             if (half <= 0.0_dp) return
             do ig = 1, ngauss
+                ! ya is balanced; yg in the model's coordinates
                 if (full_step) then
-                    yg = matmul(md%gauss(:, :, ig), ya)
+                    ygb = matmul(md%gauss(:, :, ig), ya)
                 else
-                    call expm(md%a*(half*(1.0_dp + self%gx(ig))), e, st)
-                    yg = matmul(e, ya)
+                    call propagate(md, self%delta, half*(1.0_dp + self%gx(ig)), ya, ygb)
                 end if
+                yg = matmul(self%tbi, ygb)
                 yg(nz + 1:) = self%exo(ta + half*(1.0_dp + self%gx(ig)))
                 power = dot_product(matmul(self%hf(:, nz + 1:), yg(nz + 1:)), yg(n + 1:nz))
                 orbit%work_forcing = orbit%work_forcing + half*self%gw(ig)*power
@@ -638,42 +816,80 @@ contains
         end select
     end function event_name
 
-    !> y1 = exp(a tau) y0.
-    subroutine propagate(a, tau, y0, y1, stat)
-        real(dp), intent(in) :: a(:, :), tau, y0(:)
+    !> y1 = exp(b tau) y0 in balanced coordinates, tau >= 0 [s], by matrix-vector products
+    !> only: whole steps exp(b delta), then the dyadic ladder exp(b delta 2^-k) over the
+    !> binary digits of the rest, then the Taylor series of the last piece (||b h|| <= 1/16,
+    !> converged to roundoff in at most a dozen terms). Exact to roundoff for any tau.
+    subroutine propagate(md, delta, tau, y0, y1)
+        type(mode_t), intent(in) :: md
+        real(dp), intent(in) :: delta, tau, y0(:)
         real(dp), intent(out) :: y1(:)
-        integer, intent(out) :: stat
-        real(dp) :: e(size(a, 1), size(a, 1))
-        call expm(a*tau, e, stat)
-        y1 = matmul(e, y0)
+        real(dp) :: r, h, term(size(y0))
+        integer :: k, nsteps
+        y1 = y0
+        r = max(tau, 0.0_dp)
+        nsteps = int(r/delta)
+        do k = 1, nsteps
+            y1 = matmul(md%ladder(:, :, 0), y1)
+        end do
+        r = r - nsteps*delta
+        h = delta
+        do k = 1, md%nl
+            h = 0.5_dp*h
+            if (r >= h) then
+                y1 = matmul(md%ladder(:, :, k), y1)
+                r = r - h
+            end if
+        end do
+        if (r <= 0.0_dp) return
+        term = y1
+        do k = 1, 30
+            term = matmul(md%b, term)*(r/k)
+            y1 = y1 + term
+            if (maxval(abs(term)) <= epsilon(1.0_dp)*maxval(abs(y1))) exit
+        end do
     end subroutine propagate
 
-    !> Remove the slip velocity of the stuck contacts by the M-orthogonal projection
-    !> v <- v - M^{-1} W_S G^{-1} W_S^T v (a roundoff-sized correction after an event).
-    subroutine project_stuck(self, code, y)
+    !> The exponentials at the Gauss points of a whole step, md%gauss, built on first use
+    !> (only the recording pass integrates energies).
+    subroutine gauss_exponentials(self, md)
+        type(flow_t), intent(in) :: self
+        type(mode_t), intent(inout) :: md
+        integer :: k, stat
+        if (allocated(md%gauss)) return
+        allocate (md%gauss(self%na, self%na, ngauss))
+        do k = 1, ngauss
+            call expm(md%b*(0.5_dp*self%delta*(1.0_dp + self%gx(k))), md%gauss(:, :, k), stat)
+        end do
+    end subroutine gauss_exponentials
+
+    !> Remove the slip velocity of the stuck contacts from the balanced state yb by the
+    !> orthogonal projection u <- u - Wt_S (Wt_S^T Wt_S)^-1 Wt_S^T u of its modal velocities
+    !> (the M-orthogonal projection of v; a roundoff-sized correction after an event).
+    subroutine project_stuck(self, code, yb)
         type(flow_t), intent(in) :: self
         integer, intent(in) :: code(:)
-        real(dp), intent(inout) :: y(:)
+        real(dp), intent(inout) :: yb(:)
         integer, allocatable :: stuck(:)
-        real(dp), allocatable :: mws(:, :), g(:, :), u(:, :)
+        real(dp), allocatable :: g(:, :), u(:, :)
         integer :: ns, info, j, n
         n = self%n
         stuck = pack([(j, j=1, self%nc)], code == 0)
         ns = size(stuck)
         if (ns == 0) return
-        mws = matmul(self%minv, self%w(:, stuck))
-        g = matmul(transpose(self%w(:, stuck)), mws)
+        g = matmul(transpose(self%wt(:, stuck)), self%wt(:, stuck))
         allocate (u(ns, 1))
-        u(:, 1) = matmul(y(n + 1:2*n), self%w(:, stuck))
+        u(:, 1) = matmul(yb(n + 1:2*n), self%wt(:, stuck))
         call dpotrf('U', ns, g, ns, info)
         if (info /= 0) return
         call dpotrs('U', ns, 1, g, ns, u, ns, info)
-        y(n + 1:2*n) = y(n + 1:2*n) - matmul(mws, u(:, 1))
+        yb(n + 1:2*n) = yb(n + 1:2*n) - matmul(self%wt(:, stuck), u(:, 1))
     end subroutine project_stuck
 
     !> The earliest event in (ta, tb] of the mode md, if any: its time te, state ye, contact
     !> jev, kind kev (0: slip velocity reaches zero; +1 / -1: stuck force reaches -/+ the
-    !> limit, the slip direction that follows) and the row c of its event function.
+    !> limit, the slip direction that follows) and the row c of its event function. States
+    !> and rows in balanced coordinates.
     subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, jev, kev, c)
         type(flow_t), intent(in) :: self
         type(mode_t), intent(in) :: md
@@ -682,99 +898,94 @@ contains
         real(dp), intent(out) :: te, ye(:)
         integer, intent(out) :: jev, kev
         real(dp), intent(out) :: c(:)
-        real(dp) :: row(self%na), fa(self%na), fb(self%na), tau, best, gscale
-        integer :: j, side, stat
+        real(dp) :: tau, best, gscale
+        integer :: j, side
         found = .false.
         best = huge(1.0_dp)
         jev = 0
         kev = 0
-        fa = matmul(md%a, ya)
-        fb = matmul(md%a, yb)
         do j = 1, self%nc
             if (self%limit(j) <= 0.0_dp) cycle
             if (md%code(j) /= 0) then
-                row = 0.0_dp
-                row(self%n + 1:2*self%n) = md%code(j)*self%w(:, j)
                 gscale = self%vref(j)
-                call test(row, 0)
+                call test(2*j - 1, 0)
             else
-                do side = 1, -1, -2
-                    ! g = limit - side * r_j >= 0 while stuck
-                    row = -side*md%force(j, :)
-                    row(2*self%n + 1) = row(2*self%n + 1) + self%limit(j)
-                    gscale = self%limit(j)
-                    call test(row, -side)
+                gscale = self%limit(j)
+                do side = 1, 2
+                    call test(2*j - 2 + side, 2*side - 3)
                 end do
             end if
         end do
         if (found) then
             te = ta + best
-            call propagate(md%a, best, ya, ye, stat)
-            ye(2*self%n + 1:) = self%exo(te)
+            call propagate(md, self%delta, best, ya, ye)
+            ye(2*self%n + 1:) = self%se*self%exo(te)
         end if
 
     contains
 
-        subroutine test(r, kind)
-            real(dp), intent(in) :: r(:)
-            integer, intent(in) :: kind
+        subroutine test(col, kind)
+            integer, intent(in) :: col, kind
             real(dp) :: ga, gb, da, db, thr, tmin, h
-            h = tb - ta
-            ga = dot_product(r, ya)
-            gb = dot_product(r, yb)
-            da = dot_product(r, fa)
-            db = dot_product(r, fb)
-            thr = 1.0e-9_dp*gscale*self%omega
-            if (gb <= 0.0_dp) then
-                tau = first_crossing(md%a, ya, r, 0, h)
-            else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
-                ! a dip between two positive values: does its minimum go below zero?
-                tmin = first_crossing(md%a, ya, -r, 1, h)
-                if (value_at(md%a, ya, r, tmin) > 0.0_dp) return
-                tau = first_crossing(md%a, ya, r, 0, tmin)
-            else
-                return
-            end if
-            if (tau < best) then
-                best = tau
-                found = .true.
-                jev = j
-                kev = kind
-                c = r
-            end if
+            associate (r => md%rows(:, col))
+                h = tb - ta
+                ga = dot_product(r, ya)
+                gb = dot_product(r, yb)
+                da = dot_product(md%drows(:, col), ya)
+                db = dot_product(md%drows(:, col), yb)
+                thr = 1.0e-9_dp*gscale*self%omega
+                if (gb <= 0.0_dp) then
+                    tau = first_crossing(md, self%delta, ya, r, 0, h)
+                else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
+                    ! a dip between two positive values: does its minimum go below zero?
+                    tmin = first_crossing(md, self%delta, ya, -r, 1, h)
+                    if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
+                    tau = first_crossing(md, self%delta, ya, r, 0, tmin)
+                else
+                    return
+                end if
+                if (tau < best) then
+                    best = tau
+                    found = .true.
+                    jev = j
+                    kev = kind
+                    c = r
+                end if
+            end associate
         end subroutine test
     end subroutine find_event
 
-    !> g(tau) = r . exp(a tau) y0.
-    real(dp) function value_at(a, y0, r, tau) result(g)
-        real(dp), intent(in) :: a(:, :), y0(:), r(:), tau
+    !> g(tau) = r . exp(b tau) y0.
+    real(dp) function value_at(md, delta, y0, r, tau) result(g)
+        type(mode_t), intent(in) :: md
+        real(dp), intent(in) :: delta, y0(:), r(:), tau
         real(dp) :: y(size(y0))
-        integer :: stat
-        call propagate(a, tau, y0, y, stat)
+        call propagate(md, delta, tau, y0, y)
         g = dot_product(r, y)
     end function value_at
 
-    !> A crossing of zero of g(tau) = r . a^order exp(a tau) y0 in (0, hi], taken to be
+    !> A crossing of zero of g(tau) = r . b^order exp(b tau) y0 in (0, hi], taken to be
     !> positive at 0 and known to be <= 0 at hi: safeguarded Newton iteration (bisection
     !> when a Newton step leaves the bracket or stalls) until the bracket is a few ulps of
     !> the period wide. Returns the end of the bracket where g <= 0.
-    real(dp) function first_crossing(a, y0, r, order, hi0) result(hi)
-        real(dp), intent(in) :: a(:, :), y0(:), r(:)
+    real(dp) function first_crossing(md, delta, y0, r, order, hi0) result(hi)
+        type(mode_t), intent(in) :: md
+        real(dp), intent(in) :: delta, y0(:), r(:)
         integer, intent(in) :: order
         real(dp), intent(in) :: hi0
         real(dp) :: lo, tau, g, dg, step, old_step, tol, row(size(r)), row1(size(r))
         real(dp) :: y(size(y0))
-        integer :: iter, stat, k
+        integer :: iter, k
         row = r
         do k = 1, order
-            row = matmul(row, a)
+            row = matmul(row, md%b)
         end do
-        row1 = matmul(row, a)
+        row1 = matmul(row, md%b)
         lo = 0.0_dp
         hi = hi0
         tol = 4.0_dp*epsilon(1.0_dp)*hi0 + tiny(1.0_dp)
         tau = hi
-        call propagate(a, tau, y0, y, stat)
+        call propagate(md, delta, tau, y0, y)
         g = dot_product(row, y)
         dg = dot_product(row1, y)
         old_step = hi - lo
@@ -796,7 +1007,7 @@ contains
                 step = 0.5_dp*(hi - lo)
                 tau = 0.5_dp*(lo + hi)
             end if
-            call propagate(a, tau, y0, y, stat)
+            call propagate(md, delta, tau, y0, y)
             g = dot_product(row, y)
             dg = dot_product(row1, y)
             if (g > 0.0_dp) then
@@ -822,14 +1033,19 @@ contains
         real(dp), intent(out) :: x(:, :), v(:, :), r(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        real(dp) :: y(self%na), tk, dt, step(self%na, self%na), e(self%na, self%na)
-        integer :: k, kk, p, kfirst, stat, last_p, n
+        real(dp) :: y(self%na), yb(self%na), tk, dt
+        real(dp), allocatable :: step(:, :, :)
+        logical, allocatable :: have_step(:)
+        integer :: k, kk, p, kfirst, last_p, n, stat, im
         n = self%n
         dt = self%period/ng
         ! the first sample at or after t0; samples before t0 belong to the end of the period
         kfirst = modulo(ceiling(orbit%t0/dt - 1.0e-12_dp), ng)
         p = 1
         last_p = 0
+        ! exp(b dt) of each mode met, built on first use
+        allocate (step(self%na, self%na, self%nmodes), have_step(self%nmodes))
+        have_step = .false.
         do kk = 0, ng - 1
             k = modulo(kfirst + kk, ng)
             tk = k*dt
@@ -838,17 +1054,24 @@ contains
                 if (orbit%phase_t(p + 1) > tk) exit
                 p = p + 1
             end do
-            associate (md => self%modes(orbit%phase_mode(p)))
+            im = orbit%phase_mode(p)
+            associate (md => self%modes(im))
                 if (p /= last_p) then
-                    call expm(md%a*(tk - orbit%phase_t(p)), e, stat)
-                    y = matmul(e, orbit%phase_y(:, p))
-                    call expm(md%a*dt, step, stat)
+                    yb = matmul(self%tb, orbit%phase_y(:, p))
+                    call propagate(md, self%delta, tk - orbit%phase_t(p), yb, y)
                     last_p = p
                 else
-                    y = matmul(step, y)
+                    if (.not. have_step(im)) then
+                        call expm(md%b*dt, step(:, :, im), stat)
+                        have_step(im) = .true.
+                    end if
+                    y = matmul(step(:, :, im), yb)
                 end if
-                if (stat /= 0) then
-                    call fatal_error(error, "reference: the matrix exponential failed while "// &
+                yb = y
+                yb(2*n + 1:) = self%se*self%exo(tk)
+                y = matmul(self%tbi, yb)
+                if (.not. all(ieee_is_finite(y))) then
+                    call fatal_error(error, "reference: the state is not finite while "// &
                                      "sampling", stickslip_stat%numerical)
                     return
                 end if

@@ -100,8 +100,7 @@ module stickslip_reference
     type, extends(nonlinear_system_t) :: shooting_t
         type(flow_t) :: flow
         real(dp) :: t0 = 0.0_dp
-        real(dp), allocatable :: scale(:), ulast(:), mono(:, :)
-        logical :: have_mono = .false.
+        real(dp), allocatable :: scale(:), mono(:, :)
         type(error_type), allocatable :: error
     contains
         procedure :: residual => shooting_residual
@@ -153,7 +152,7 @@ contains
     !> checks of a converged orbit (energy balance, Coulomb's law) go to res%diagnostics.
     !> Errors: stat input (invalid model or options, start samples of the wrong shape or not
     !> finite); stat numerical (dependent stuck contact directions).
-    subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name)
+    subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name, light)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Reference options.
@@ -168,7 +167,13 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Name of the start, reported in res%start and the diagnosis (default 'given').
         character(len=*), intent(in), optional :: start_name
+        !> Only what a stability verdict needs (default .false.): the orbit, its monodromy
+        !> and its samples on the start's grid (t_k = k T / ns instead of opts%samples);
+        !> no energy integrals and no checks of the converged orbit (res%diagnostics holds
+        !> only a failure to converge).
+        logical, intent(in), optional :: light
         character(len=:), allocatable :: name
+        logical :: is_light
 
         call validate_model(model, error)
         if (allocated(error)) return
@@ -189,9 +194,13 @@ contains
             return
         end if
         res%start = name
-        call shoot_from(model, opts, name, x_start, v_start, res, error)
+        is_light = .false.
+        if (present(light)) is_light = light
+        call shoot_from(model, opts, name, x_start, v_start, res, error, is_light)
         if (allocated(error)) return
-        if (res%converged) then
+        if (res%converged .and. is_light) then
+            continue
+        else if (res%converged) then
             call check_reference(model, res)
         else
             call res%diagnostics%add(level_untrusted, "not_converged", res%diagnosis)
@@ -245,19 +254,20 @@ contains
 
     !> One shooting attempt from samples xs, vs (t_k = k T / size(xs, 1)) of an approximate
     !> periodic solution, then the recording pass, the events and the samples.
-    subroutine shoot_from(model, opts, name, xs, vs, res, error)
+    subroutine shoot_from(model, opts, name, xs, vs, res, error, light)
         type(model_t), intent(in) :: model
         type(reference_options_t), intent(in) :: opts
         character(len=*), intent(in) :: name
         real(dp), intent(in) :: xs(:, :), vs(:, :)
         type(reference_result_t), intent(inout) :: res
         type(error_type), allocatable, intent(out) :: error
+        logical, intent(in) :: light
         type(shooting_t) :: shooting
         type(hybrj_options_t) :: hopts
         type(hybrj_report_t) :: report
         real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:)
         real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv
-        integer :: n, nc, ns, j, k, ksec
+        integer :: n, nc, ns, j, k, ksec, nsamp
         character(len=400) :: buf
 
         call cpu_time(c0)
@@ -289,7 +299,7 @@ contains
         if (allocated(error)) return
         shooting%t0 = res%t_section
         shooting%scale = [(xscale, k=1, n), (vscale, k=1, n)]
-        allocate (shooting%mono(2*n, 2*n), shooting%ulast(2*n))
+        allocate (shooting%mono(2*n, 2*n))
         u = [xs(ksec, :), vs(ksec, :)]/shooting%scale
         hopts%mode = 1
         hopts%maxfev = opts%maxfev
@@ -314,7 +324,7 @@ contains
         if (allocated(res%monodromy)) deallocate (res%monodromy)
         allocate (res%monodromy(2*n, 2*n))
         call shooting%flow%period_map(res%t_section, z0, z1, error, mono=res%monodromy, &
-                                      orbit=res%orbit)
+                                      orbit=res%orbit, energies=.not. light)
         if (allocated(error)) then
             res%diagnosis = "shooting from the "//name//" start: "//error%message//"."
             deallocate (error, res%monodromy)
@@ -323,10 +333,11 @@ contains
         call project_stuck_start(shooting%flow, &
                                  shooting%flow%modes(res%orbit%phase_mode(1))%code, &
                                  res%monodromy)
-        allocate (res%t(opts%samples), res%x(opts%samples, n), res%v(opts%samples, n), &
-                  res%r(opts%samples, nc))
-        res%t = [(period*real(k, dp)/real(opts%samples, dp), k=0, opts%samples - 1)]
-        call shooting%flow%sample(res%orbit, opts%samples, res%x, res%v, res%r, error)
+        nsamp = opts%samples
+        if (light) nsamp = ns
+        allocate (res%t(nsamp), res%x(nsamp, n), res%v(nsamp, n), res%r(nsamp, nc))
+        res%t = [(period*real(k, dp)/real(nsamp, dp), k=0, nsamp - 1)]
+        call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error)
         if (allocated(error)) return
         ampx = max(maxval(abs(res%x)), maxval(abs(z0(1:n))))
         ampv = max(maxval(abs(res%v)), maxval(abs(z0(n + 1:))))
@@ -475,7 +486,8 @@ contains
         call res%flow%sample(res%orbit, ng, x, v, r, error)
     end subroutine sample_reference
 
-    !> F(u) = (P(D u) - D u) / D.
+    !> F(u) = (P(D u) - D u) / D. The period map without its monodromy: hybrj asks for
+    !> few Jacobians (Broyden updates in between), each computed in shooting_jacobian.
     subroutine shooting_residual(self, x, f, stat)
         class(shooting_t), intent(inout) :: self
         real(dp), intent(in) :: x(:)
@@ -483,8 +495,7 @@ contains
         integer, intent(inout) :: stat
         real(dp) :: z0(size(x)), z1(size(x))
         z0 = x*self%scale
-        self%have_mono = .false.
-        call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono)
+        call self%flow%period_map(self%t0, z0, z1, self%error)
         if (allocated(self%error)) then
             stat = 1
             f = 0.0_dp
@@ -497,8 +508,6 @@ contains
             stat = 1
             return
         end if
-        self%ulast = x
-        self%have_mono = .true.
     end subroutine shooting_residual
 
     !> dF/du = D^{-1} (monodromy - I) D.
@@ -507,14 +516,19 @@ contains
         real(dp), intent(in) :: x(:)
         real(dp), intent(out) :: jac(:, :)
         integer, intent(inout) :: stat
-        real(dp) :: f(size(x))
+        real(dp) :: z0(size(x)), z1(size(x))
         integer :: i, k
-        if (.not. self%have_mono) then
-            call self%residual(x, f, stat)
-        else if (any(x /= self%ulast)) then
-            call self%residual(x, f, stat)
+        z0 = x*self%scale
+        call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono)
+        if (allocated(self%error)) then
+            stat = 1
+            jac = 0.0_dp
+            return
         end if
-        if (stat /= 0) then
+        if (.not. all(ieee_is_finite(self%mono))) then
+            call fatal_error(self%error, "reference: the monodromy matrix is not finite", &
+                             stickslip_stat%numerical)
+            stat = 1
             jac = 0.0_dp
             return
         end if

@@ -278,7 +278,9 @@ contains
                          "solution to assess")
             return
         end if
-        call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm')
+        ! the full reference (energies, checks, opts%samples) only when the caller wants it
+        call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
+                             light=.not. present(ref))
         if (allocated(error)) then
             error%message = "periodic_stability: "//error%message
             return
@@ -295,8 +297,13 @@ contains
             return
         end if
         ! the same orbit? compare on the grid of the weighted-residual samples
-        call sample_reference(res, size(sol%x, 1), xr, vr, rr, error)
-        if (allocated(error)) return
+        if (size(res%x, 1) == size(sol%x, 1)) then
+            xr = res%x
+            vr = res%v
+        else
+            call sample_reference(res, size(sol%x, 1), xr, vr, rr, error)
+            if (allocated(error)) return
+        end if
         ampx = max(maxval(abs(xr)), tiny(1.0_dp))
         ampv = max(maxval(abs(vr)), tiny(1.0_dp))
         distance = max(maxval(abs(sol%x - xr))/ampx, maxval(abs(sol%v - vr))/ampv)

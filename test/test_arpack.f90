@@ -12,13 +12,13 @@
 !> lambda_j = 2k/m (1 - cos(j pi/N)).
 module test_arpack
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_error, only: error_type, stickslip_stat, itoa
     use stickslip_lapack, only: dsygv
     use stickslip_umfpack, only: sparse_lu_t
     use stickslip_arpack, only: shift_invert_operator_t, eigen_options_t, eigen_report_t, &
         smallest_eigenpairs
     use stickslip_sparse_eigen, only: csc_combine, csc_matvec_lib => csc_matvec, &
-        sparse_eigenpairs
+        sparse_eigenpairs, sparse_eigenpairs_below, eigen_range_report_t
     use test_umfpack, only: dense_to_csc
     use testing, only: test_counter_t, check, check_close
     implicit none
@@ -51,7 +51,166 @@ contains
         call test_combine(t)
         call test_sparse_chain(t)
         call test_free_chain(t)
+        call test_below_limit(t)
     end subroutine run_arpack_tests
+
+    !> Stiffness and mass of a nx x ny grid of masses joined to their 4 neighbours by springs,
+    !> the outer ones also to fixed walls (a membrane): springs random in [1, 2) and masses
+    !> random in [0.5, 1.5) (`uniform`: all 1, so that the spectrum of a square grid has
+    !> exact double eigenvalues).
+    subroutine grid(nx, ny, uniform, k, m)
+        integer, intent(in) :: nx, ny
+        logical, intent(in) :: uniform
+        real(dp), allocatable, intent(out) :: k(:, :), m(:, :)
+        integer :: i, j, p
+        real(dp) :: s
+        allocate (k(nx*ny, nx*ny), m(nx*ny, nx*ny))
+        k = 0.0_dp
+        m = 0.0_dp
+        do j = 1, ny
+            do i = 1, nx
+                p = i + (j - 1)*nx
+                m(p, p) = 1.0_dp
+                if (.not. uniform) then
+                    call random_number(s)
+                    m(p, p) = 0.5_dp + s
+                end if
+                ! the springs to the right and up (to a wall at the edge), and from the walls
+                ! on the left and at the bottom
+                call spring(p, merge(p + 1, 0, i < nx))
+                call spring(p, merge(p + nx, 0, j < ny))
+                if (i == 1) call spring(p, 0)
+                if (j == 1) call spring(p, 0)
+            end do
+        end do
+    contains
+        subroutine spring(a, b)
+            integer, intent(in) :: a, b
+            real(dp) :: ks
+            ks = 1.0_dp
+            if (.not. uniform) then
+                call random_number(ks)
+                ks = 1.0_dp + ks
+            end if
+            k(a, a) = k(a, a) + ks
+            if (b > 0) then
+                k(b, b) = k(b, b) + ks
+                k(a, b) = k(a, b) - ks
+                k(b, a) = k(b, a) - ks
+            end if
+        end subroutine spring
+    end subroutine grid
+
+    !> sparse_eigenpairs_below against LAPACK dsygv (all eigenpairs) on membranes of about
+    !> 500 DOFs: every eigenvalue below the limit found (the count estimated from the first
+    !> 20, a second run), equal to dsygv's, one more above it, M-orthonormal vectors with
+    !> small residuals; exact double eigenvalues of a square uniform grid all found; the cap
+    !> max_count; a limit below the spectrum; max_count = 0 rejected.
+    subroutine test_below_limit(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp), allocatable :: k(:, :), m(:, :), w(:), values(:), vectors(:, :)
+        integer, allocatable :: kcol(:), krow(:), mcol(:), mrow(:)
+        real(dp), allocatable :: kval(:), mval(:)
+        type(eigen_range_report_t) :: report
+        type(error_type), allocatable :: error
+        real(dp) :: limit
+        integer :: n, want, g, j
+        character(len=24) :: name
+        do g = 1, 2
+            if (g == 1) then
+                call grid(24, 20, .false., k, m)
+                want = 45
+                name = "random 24 x 20 grid"
+            else
+                call grid(22, 22, .true., k, m)
+                name = "uniform 22 x 22 grid"
+                want = 60
+            end if
+            n = size(k, 1)
+            call all_pairs(k, m, w)
+            ! the limit in a gap of the spectrum (double eigenvalues are never split)
+            do while (w(want + 1) - w(want) < 1.0e-6_dp*w(want))
+                want = want + 1
+            end do
+            limit = 0.5_dp*(w(want) + w(want + 1))
+            call dense_to_csc(k, kcol, krow, kval)
+            call dense_to_csc(m, mcol, mrow, mval)
+            call sparse_eigenpairs_below(n, kcol, krow, kval, mcol, mrow, mval, limit, 500, &
+                                         0.0_dp, eigen_options_t(), values, vectors, report, &
+                                         error)
+            call check(t, .not. allocated(error), "eigenpairs below: "//trim(name))
+            if (allocated(error)) return
+            call check(t, report%below == want .and. count(values <= limit) == want, &
+                       "eigenpairs below: "//trim(name)//": none missed", &
+                       "found "//itoa(report%below)//", dsygv "//itoa(want))
+            call check(t, size(values) > want .and. .not. report%capped, &
+                       "eigenpairs below: "//trim(name)//": one above the limit returned")
+            call check(t, report%runs == 2 .and. report%factorizations == 1, &
+                       "eigenpairs below: "//trim(name)//": the count estimated, two runs "// &
+                       "on one factorization")
+            j = min(size(values), want + 1)
+            call check_close(t, values(1:j), w(1:j), "eigenpairs below: "//trim(name)// &
+                             ": values = dsygv's", rtol=1.0e-9_dp)
+            call check_close(t, reshape(matmul(transpose(vectors), matmul(m, vectors)), &
+                                        [size(values)**2]), &
+                             reshape(identity(size(values)), [size(values)**2]), &
+                             "eigenpairs below: "//trim(name)//": M-orthonormal", &
+                             atol=1.0e-9_dp)
+            call check_close(t, maxval(abs(matmul(k, vectors) - matmul(m, vectors)* &
+                                           spread(values, 1, n))), 0.0_dp, &
+                             "eigenpairs below: "//trim(name)//": residuals", &
+                             atol=1.0e-9_dp*maxval(values))
+        end do
+        ! the cap, and a limit below the spectrum (the last grid)
+        call sparse_eigenpairs_below(n, kcol, krow, kval, mcol, mrow, mval, limit, 10, 0.0_dp, &
+                                     eigen_options_t(), values, vectors, report, error)
+        call check(t, .not. allocated(error), "eigenpairs below: max_count = 10")
+        if (allocated(error)) return
+        call check(t, size(values) == 10 .and. report%capped .and. report%below == 10, &
+                   "eigenpairs below: capped at max_count")
+        call check_close(t, values, w(1:10), "eigenpairs below: capped: the 10 lowest", &
+                         rtol=1.0e-9_dp)
+        call sparse_eigenpairs_below(n, kcol, krow, kval, mcol, mrow, mval, 0.5_dp*w(1), 500, &
+                                     0.0_dp, eigen_options_t(), values, vectors, report, error)
+        call check(t, .not. allocated(error), "eigenpairs below: limit below the spectrum")
+        if (allocated(error)) return
+        call check(t, report%below == 0 .and. size(values) >= 1 .and. .not. report%capped &
+                   .and. report%runs == 1, "eigenpairs below: none below, the lowest returned")
+        call check_close(t, values(1), w(1), "eigenpairs below: ... and it is dsygv's first", &
+                         rtol=1.0e-9_dp)
+        call sparse_eigenpairs_below(n, kcol, krow, kval, mcol, mrow, mval, limit, 0, 0.0_dp, &
+                                     eigen_options_t(), values, vectors, report, error)
+        call check(t, allocated(error), "eigenpairs below: max_count = 0 rejected")
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
+                                         "eigenpairs below: ... as an input error")
+    end subroutine test_below_limit
+
+    !> All eigenvalues of K phi = lambda M phi by LAPACK dsygv, ascending.
+    subroutine all_pairs(k, m, w)
+        real(dp), intent(in) :: k(:, :), m(:, :)
+        real(dp), allocatable, intent(out) :: w(:)
+        real(dp), allocatable :: a(:, :), b(:, :), work(:)
+        real(dp) :: wq(1)
+        integer :: n, info
+        n = size(k, 1)
+        a = k
+        b = m
+        allocate (w(n))
+        call dsygv(1, 'N', 'U', n, a, n, b, n, w, wq, -1, info)
+        allocate (work(int(wq(1))))
+        call dsygv(1, 'N', 'U', n, a, n, b, n, w, work, size(work), info)
+        if (info /= 0) w = -1.0_dp
+    end subroutine all_pairs
+
+    pure function identity(n) result(e)
+        integer, intent(in) :: n
+        real(dp) :: e(n, n)
+        integer :: i
+        e = 0.0_dp
+        do i = 1, n
+            e(i, i) = 1.0_dp
+        end do
+    end function identity
 
     subroutine test_combine(t)
         type(test_counter_t), intent(inout) :: t

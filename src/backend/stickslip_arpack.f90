@@ -216,8 +216,8 @@ contains
         !> Error (last).
         type(error_type), allocatable, intent(out) :: error
         integer :: ncv, maxiter, stage, stat, i, j
-        real(dp) :: tmpv
-        real(dp), allocatable :: d(:), z(:, :), col(:)
+        integer, allocatable :: perm(:)
+        real(dp), allocatable :: d(:), z(:, :)
 
         if (n < 2) then
             call fatal_error(error, "eigenpairs: n = "//itoa(n)//": must be >= 2", &
@@ -285,23 +285,23 @@ contains
                              //"opts%ncv", stickslip_stat%numerical)
             return
         end if
-        ! sort ascending (insertion sort: nev is small), vectors along
-        allocate (col(n))
+        ! sort ascending by a permutation (dseupd returns the Ritz values of OP ascending, that
+        ! is lambda descending above sigma), then one gather of the vectors
+        allocate (perm(nev))
+        perm = [(i, i=1, nev)]
         do i = 2, nev
-            tmpv = d(i)
-            col = z(:, i)
             j = i - 1
             do while (j >= 1)
-                if (d(j) <= tmpv) exit
-                d(j + 1) = d(j)
-                z(:, j + 1) = z(:, j)
+                if (d(perm(j)) <= d(perm(j + 1))) exit
+                perm([j, j + 1]) = perm([j + 1, j])
                 j = j - 1
             end do
-            d(j + 1) = tmpv
-            z(:, j + 1) = col
         end do
-        call move_alloc(d, values)
-        call move_alloc(z, vectors)
+        allocate (values(nev), vectors(n, nev))
+        values = d(perm)
+        do i = 1, nev
+            vectors(:, i) = z(:, perm(i))
+        end do
     end subroutine smallest_eigenpairs
 
     !> The ARPACK calls of one eigensolve (dsaupd's reverse-communication loop, then dseupd),

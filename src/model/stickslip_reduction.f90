@@ -32,8 +32,10 @@
 !> (without max_frequency) mode k is also kept when w_k^2 <= cutoff_factor^2 w_h c_k, with
 !> w_h = highest_frequency and c_k = phi_k^T C_ii phi_k + 2 zeta w_k its modal damping
 !> coefficient (heavy mass-proportional damping then keeps more modes); the count is the last
-!> mode kept by either test. The modes are requested in batches (20, 40, 80, ...)
-!> until the largest found exceeds the limit, capped at max_modes (report%capped then).
+!> mode kept by either test. The modes below the limit are found in one pass
+!> (sparse_eigenpairs_below: one factorization, the count estimated from the first 20),
+!> again with a higher limit while the damped test keeps the highest one found, capped at
+!> max_modes (report%capped then).
 !> options%modes > 0 keeps exactly that many (at most the number of interior DOFs).
 !>
 !> Damping: C given on the full model is projected (C_r = T^T C T); options%damping_ratio > 0
@@ -52,7 +54,8 @@ module stickslip_reduction
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
     use stickslip_umfpack, only: sparse_lu_t, sparse_zlu_t
     use stickslip_arpack, only: eigen_options_t, eigen_report_t
-    use stickslip_sparse_eigen, only: sparse_eigenpairs
+    use stickslip_sparse_eigen, only: sparse_eigenpairs, sparse_eigenpairs_below, &
+        eigen_range_report_t
     use stickslip_lapack, only: dsygv, zgesv
     implicit none
     private
@@ -173,15 +176,16 @@ contains
         !> Distributed loads F, N x n_terms (optional: load vectors for their interior parts).
         real(dp), intent(in), optional :: loads(:, :)
         integer, allocatable :: loc(:)
-        integer :: n, nb, ni, j, p, r, q, nm, nev, nr, nl
+        integer :: n, nb, ni, j, p, r, q, nm, nr, nl
         real(dp), allocatable :: psi(:, :)
         integer(int64) :: t0, t1, rate
         type(sparse_matrix_t) :: kii, mii, kiit, miit, cii
         type(sparse_lu_t) :: lu
         real(dp), allocatable :: rhs(:, :), lam(:), vec(:, :), t(:, :), at(:, :)
-        real(dp) :: limit
+        real(dp) :: limit, lmax
         type(eigen_options_t) :: eopts
         type(eigen_report_t) :: erep
+        type(eigen_range_report_t) :: rrep
 
         call system_clock(t0, rate)
         n = kmat%nrows
@@ -303,18 +307,26 @@ contains
                     report%capped = .true.
                 end if
             else
-                nev = min(20, ni - 1, options%max_modes)
+                ! every mode below the limit in one Lanczos pass (stickslip_sparse_eigen
+                ! estimates the count), more only while the damped test keeps the highest
+                lmax = limit**2
                 do
-                    call eigen(nev, lam, vec)
-                    if (allocated(error)) return
-                    if (last_kept(lam, vec) < nev) exit
-                    if (nev >= min(ni - 1, options%max_modes)) then
+                    call sparse_eigenpairs_below(ni, kiit%row_start, kiit%col, kiit%val, &
+                                                 miit%row_start, miit%col, miit%val, lmax, &
+                                                 options%max_modes, 0.0_dp, eopts, lam, vec, &
+                                                 rrep, error)
+                    if (allocated(error)) then
+                        error%message = "craig_bampton: fixed-interface modes: "//error%message
+                        return
+                    end if
+                    nm = last_kept(lam, vec)
+                    if (nm < size(lam)) exit
+                    if (size(lam) >= min(ni - 1, options%max_modes)) then
                         report%capped = .true.
                         exit
                     end if
-                    nev = min(2*nev, ni - 1, options%max_modes)
+                    lmax = 4.0_dp*lam(size(lam))
                 end do
-                nm = min(last_kept(lam, vec), options%max_modes)
             end if
         else
             nm = 0

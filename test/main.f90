@@ -38,6 +38,7 @@ program tester
     use test_system_files, only: run_system_files_tests
     use test_output_selection, only: run_output_selection_tests
     use test_directions, only: run_directions_tests
+    use test_csv_format, only: run_csv_format_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -85,6 +86,7 @@ program tester
     if (selected("system_files")) call run_system_files_tests(t)
     if (selected("output_selection")) call run_output_selection_tests(t)
     if (selected("directions")) call run_directions_tests(t)
+    if (selected("csv_format")) call run_csv_format_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

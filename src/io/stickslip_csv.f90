@@ -410,18 +410,27 @@ contains
         real(dp), parameter :: split = 134217729.0_dp   ! 2^27 + 1 (Veltkamp)
         integer(int64), parameter :: n_upper = 1000000000000000000_int64
         integer(int64), parameter :: n_lower = 100000000000000000_int64
-        real(dp) :: a, fa, p, err, ahi, alo, bhi, blo, t, xh, xl, fl, frac
-        integer(int64) :: n
-        integer :: e10, q, i, ae, ea, sc, two, tries
+        integer(int64), parameter :: mantissa_bits = 4503599627370495_int64   ! 2^52 - 1
+        integer(int64), parameter :: half_bits = 4602678819172646912_int64    ! bits of 0.5
+        real(dp) :: a, fa, p, err, ahi, alo, bhi, blo, t, xh, xl, fl, frac, two_sc
+        integer(int64) :: n, bits
+        integer :: e10, q, i, ae, ea, sc, two, tries, biased
 
         a = abs(value)
         if (.not. (a > 0.0_dp .and. a <= huge(a))) then
             write (s, '(' // real_fmt // ')') value
             return
         end if
-        ! a = fa 2^ea with fa in [0.5, 1) (exact, subnormals included); E estimated low
-        ea = exponent(a)
-        fa = fraction(a)
+        ! a = fa 2^ea with fa in [0.5, 1), from the bits (exponent/fraction for subnormals)
+        bits = transfer(a, bits)
+        biased = int(ishft(bits, -52))
+        if (biased > 0) then
+            ea = biased - 1022
+            fa = transfer(ior(iand(bits, mantissa_bits), half_bits), fa)
+        else
+            ea = exponent(a)
+            fa = fraction(a)
+        end if
         e10 = floor(real(ea - 1, dp)*0.30102999566398120_dp)
         t = split*fa
         ahi = t - (t - fa)
@@ -435,13 +444,15 @@ contains
             blo = pow_hi(q) - bhi
             err = ((ahi*bhi - p) + ahi*blo + alo*bhi) + alo*blo   ! fa*pow_hi - p, exactly
             t = err + fa*pow_lo(q)
+            ! times 2^sc (sc about 57 .. 63: the double 2^sc built from its bits), exactly
             sc = ea + pow_e(q)
-            xh = scale(p, sc)       ! an integer (>= 2^53)
+            two_sc = transfer(ishft(int(sc + 1023, int64), 52), two_sc)
+            xh = p*two_sc           ! an integer (>= 2^53)
             if (xh >= 2.0e18_dp) then   ! E estimated one low: x up to 1e19, beyond int64
                 e10 = e10 + 1
                 cycle
             end if
-            xl = scale(t, sc)       ! |xl| <= about 1.5 ulp(xh)
+            xl = t*two_sc           ! |xl| <= about 1.5 ulp(xh)
             fl = floor(xl)
             n = int(xh, int64) + int(fl, int64)     ! floor(x)
             if (n < n_lower) then

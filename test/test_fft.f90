@@ -25,6 +25,7 @@ contains
         call test_misaligned(t, 16)
         call test_misaligned(t, 15)
         call test_cache(t)
+        call test_concurrent(t)
         call test_bad_length(t)
     end subroutine run_fft_tests
 
@@ -188,6 +189,52 @@ contains
         call p%destroy()
         call q%destroy()
     end subroutine test_cache
+
+    !> Plans created and used by several OpenMP threads at once (lengths new to the cache and
+    !> repeated ones, so that threads race for the same entry) give the serial transforms
+    !> bit for bit. In a build without OpenMP the loop runs serially.
+    subroutine test_concurrent(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: ntask = 16
+        integer, parameter :: lengths(ntask) = [96, 97, 96, 98, 97, 160, 96, 161, 98, 160, &
+                                                 96, 97, 162, 161, 98, 162]
+        real(dp) :: x(162), y(162, ntask)
+        real(dp) :: serial(162, ntask)
+        logical :: ok(ntask)
+        integer :: i
+        x = [(sin(0.37_dp*i) + 0.01_dp*i, i=1, 162)]
+        serial = 0.0_dp
+        y = 0.0_dp
+        do i = 1, ntask
+            call transform(lengths(i), serial(:, i), ok(i))
+        end do
+        !$omp parallel do private(i) schedule(static, 1) num_threads(4)
+        do i = 1, ntask
+            call transform(lengths(i), y(:, i), ok(i))
+        end do
+        !$omp end parallel do
+        call check(t, all(ok), "fft: plans made and used by several threads at once")
+        call check(t, all(y == serial), "fft: several threads at once give the serial transforms")
+    contains
+        subroutine transform(nt, out, good)
+            integer, intent(in) :: nt
+            real(dp), intent(out) :: out(:)
+            logical, intent(out) :: good
+            type(fft_plan_t) :: q
+            type(error_type), allocatable :: err
+            real(dp) :: xi(nt)
+            complex(dp) :: ci(nt/2 + 1)
+            out = 0.0_dp
+            call q%init(nt, err)
+            good = .not. allocated(err)
+            if (.not. good) return
+            xi = x(1:nt)
+            call q%forward(xi, ci)
+            out(1:nt/2 + 1) = real(ci)
+            call q%inverse(ci, out(1:nt))
+            call q%destroy()
+        end subroutine transform
+    end subroutine test_concurrent
 
     subroutine test_bad_length(t)
         type(test_counter_t), intent(inout) :: t

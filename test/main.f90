@@ -42,6 +42,7 @@ program tester
     use test_sparse_none, only: run_sparse_none_tests
     use test_calculix, only: run_calculix_tests
     use test_solver, only: run_solver_tests
+    use test_csv_format, only: run_csv_format_tests
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -93,6 +94,7 @@ program tester
     if (selected("sparse_none")) call run_sparse_none_tests(t)
     if (selected("calculix")) call run_calculix_tests(t)
     if (selected("solver")) call run_solver_tests(t)
+    if (selected("csv_format")) call run_csv_format_tests(t)
     if (ran < size(wanted) .or. ran == 0) then
         write (error_unit, '(a)') "tester: unknown suite name among the arguments"
         t%failed = t%failed + 1

@@ -166,7 +166,8 @@ contains
     end subroutine test_rho_units
 
     !> The seed case from a cold start (no ladder): the automatic rho converges at H = 30 and
-    !> 100 where rho = 5 does not (DESIGN section 3).
+    !> 100 where rho = 5 does not, or only after more than 3x its evaluations (DESIGN
+    !> section 3).
     subroutine test_rho_cold_starts(t)
         type(test_counter_t), intent(inout) :: t
         type(model_t) :: m
@@ -174,7 +175,7 @@ contains
         type(hbm_solution_t) :: s
         type(error_type), allocatable :: error
         integer, parameter :: hs(2) = [30, 100]
-        integer :: i
+        integer :: i, nfev_auto
         character(len=40) :: tag
         m = seed_model()
         do i = 1, size(hs)
@@ -188,10 +189,14 @@ contains
             call check(t, .not. allocated(error) .and. s%converged, trim(tag)//": auto rho converges")
             if (.not. allocated(error)) call check(t, s%stick_phases(1) == 2, &
                                                    trim(tag)//": auto rho, two stick phases")
+            nfev_auto = s%nfev
             o%rho = 5.0_dp
             call solve_periodic(m, o, s, error)
-            call check(t, .not. allocated(error) .and. .not. s%converged, &
-                       trim(tag)//": rho = 5 stalls")
+            ! whether hybrj's restarts finally get through depends on roundoff (at H = 26..34
+            ! and 256..1024 samples it converges at some, stalls at the others)
+            call check(t, .not. allocated(error) .and. (.not. s%converged .or. &
+                       s%nfev > 3*nfev_auto), trim(tag)//": rho = 5 stalls or needs more "// &
+                       "than 3x the evaluations of the automatic rho")
         end do
     end subroutine test_rho_cold_starts
 

@@ -1,6 +1,8 @@
 !> Tests of the harmonic truncation error estimate and of the adaptive solve: the estimate
 !> against the true error of the seed case (the exact event-driven reference), the linear
-!> case (mu = 0) where it must vanish, the adaptive levels, the outcomes and the errors.
+!> case (mu = 0) where it must vanish, the adaptive levels, the outcomes and the errors;
+!> the fine-grid quantities (amplitudes, Coulomb defect, displacement change) against their
+!> definition evaluated directly by a transform of length truncation_oversample * samples.
 module test_truncation
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
@@ -10,8 +12,11 @@ module test_truncation
     use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
     use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
     use stickslip_truncation, only: truncation_t, estimate_truncation, solve_to_tolerance, &
-        coarse_harmonics
-    use fixtures, only: seed_model
+        coarse_harmonics, truncation_oversample
+    use stickslip_basis, only: basis_t, new_basis
+    use stickslip_friction, only: psi, psi_stick
+    use stickslip_model, only: contact_velocity_direction
+    use fixtures, only: seed_model, chain_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -27,7 +32,100 @@ contains
         call test_not_met(t)
         call test_not_converged(t)
         call test_errors(t)
+        call test_fine_grid_direct(t, seed_model(), 30, .false., 1024, "seed")
+        call test_fine_grid_direct(t, seed_model(), 15, .true., 64, "seed odd")
+        call test_fine_grid_direct(t, chain_model(), 12, .false., 100, "chain")
     end subroutine run_truncation_tests
+
+    !> The estimate's fine-grid quantities equal (to roundoff) their definitions evaluated
+    !> directly on m*nt points by one transform of that length, as before the fine grid was
+    !> assembled from shifted transforms of length nt: the amplitudes max_t |x_p|, the
+    !> Coulomb defect (RMS and max, the normalization of stickslip_truncation) and the
+    !> displacement change from the coarse solution.
+    subroutine test_fine_grid_direct(t, m, h, odd_only, samples, name)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t), intent(in) :: m
+        integer, intent(in) :: h, samples
+        logical, intent(in) :: odd_only
+        character(len=*), intent(in) :: name
+        type(hbm_options_t) :: o, co
+        type(hbm_solution_t) :: sol, coarse
+        type(truncation_t) :: est
+        type(basis_t) :: fb
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: xt(:), rt(:), vt(:), pt(:), st(:), xc(:), amp(:), dch(:)
+        complex(dp), allocatable :: cw(:)
+        real(dp) :: vstruct, vfloor, vslip, limit, rho, prms, pmax
+        integer :: nf, p, j, nbc
+        o%harmonics = h
+        o%odd_only = odd_only
+        o%samples = samples
+        o%rho = 0.2_dp
+        call solve_periodic(m, o, sol, error)
+        call check_error(t, error, "truncation: fine grid, solve, "//name, .false.)
+        if (allocated(error)) return
+        if (.not. sol%converged) then
+            call check(t, .false., "truncation: fine grid, solve converged, "//name)
+            return
+        end if
+        call estimate_truncation(m, o, sol, est, error)
+        call check_error(t, error, "truncation: fine grid, estimate, "//name, .false.)
+        if (allocated(error)) return
+        nf = truncation_oversample*samples
+        call check(t, est%fine_samples == nf, "truncation: fine grid size, "//name)
+        call new_basis(fb, h, odd_only, nf, error)
+        if (allocated(error)) return
+        allocate (xt(nf), rt(nf), vt(nf), pt(nf), st(nf), cw(nf/2 + 1), amp(m%ndof), &
+                  dch(m%ndof))
+        vstruct = 0.0_dp
+        do p = 1, m%ndof
+            call fb%synthesize(sol%xcoef(:, p), xt, cw)
+            amp(p) = maxval(abs(xt))
+            call fb%synthesize(sol%vcoef(:, p), xt, cw)
+            vstruct = max(vstruct, maxval(abs(xt)))
+        end do
+        call check_close(t, est%amplitude, amp, "truncation: fine-grid amplitudes = direct, "// &
+                         name, rtol=1.0e-13_dp)
+        vfloor = 1.0e-4_dp*vstruct
+        rho = sol%rho
+        prms = 0.0_dp
+        pmax = 0.0_dp
+        do j = 1, m%ncontact()
+            limit = m%mu(j)*m%normal_load(j)
+            call fb%synthesize(sol%rcoef(:, j), rt, cw)
+            call fb%synthesize(matmul(sol%vcoef, contact_velocity_direction(m, j)), vt, cw)
+            pt = psi(rt, vt, limit, rho)
+            st = psi_stick(rt, vt, limit, rho)
+            vslip = max(maxval(abs(vt)), vfloor)
+            where (st > 0.5_dp)
+                pt = pt/vslip
+            elsewhere
+                pt = pt/max(rho*limit, vfloor)
+            end where
+            prms = max(prms, sqrt(sum(pt**2)/nf))
+            pmax = max(pmax, maxval(abs(pt)))
+        end do
+        call check_close(t, [est%psi_rms, est%psi_max], [prms, pmax], &
+                         "truncation: fine-grid Coulomb defect = direct, "//name, rtol=1.0e-10_dp, &
+                         atol=1.0e-13_dp)
+        if (est%coarse_harmonics == 0) return
+        co = o
+        co%harmonics = est%coarse_harmonics
+        co%rho = sol%rho
+        nbc = count(sol%harmonic <= co%harmonics)
+        call solve_periodic(m, co, coarse, error, r_start=sol%rcoef(1:nbc, :))
+        if (allocated(error)) return
+        allocate (xc(sol%nb))
+        do p = 1, m%ndof
+            xc = sol%xcoef(:, p)
+            xc(1:nbc) = xc(1:nbc) - coarse%xcoef(:, p)
+            call fb%synthesize(xc, xt, cw)
+            dch(p) = maxval(abs(xt))/max(amp(p), 1.0e-12_dp*maxval(amp))
+        end do
+        call check_close(t, est%displacement_change_rel, dch, &
+                         "truncation: fine-grid displacement change = direct, "//name, &
+                         rtol=1.0e-8_dp, atol=1.0e-14_dp)
+    end subroutine test_fine_grid_direct
 
     !> The coarse set is H/2, never below the forcing harmonic, and 0 when not smaller.
     subroutine test_coarse_harmonics(t)

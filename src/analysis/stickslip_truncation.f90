@@ -115,7 +115,68 @@ module stickslip_truncation
         character(len=:), allocatable :: note
     end type truncation_t
 
+    !> The fine grid t_j = j T / (m nt), j = 0 .. m nt - 1, of a basis sampled nt times per
+    !> period, evaluated without a transform of length m nt: the samples t_k + s T / (m nt)
+    !> (s = 0 .. m-1) are those on the basis's own grid of the series advanced by s T/(m nt),
+    !> whose coefficients are the harmonics rotated by the phases 2 pi h s / (m nt). The
+    !> same values up to roundoff, from the transforms (and cached FFT plans) of length nt.
+    type :: fine_grid_t
+        !> Oversampling factor m.
+        integer :: m = 1
+        !> cos and sin of 2 pi h_i s / (m nt), harmonic i of the basis, shift s = 1 .. m-1.
+        real(dp), allocatable :: c(:, :), s(:, :)
+        !> Rotated coefficients (length nb).
+        real(dp), allocatable :: rotated(:)
+        !> Transform work array (length nt/2 + 1).
+        complex(dp), allocatable :: cw(:)
+    contains
+        procedure :: synthesize => fine_synthesize
+    end type fine_grid_t
+
 contains
+
+    !> The phase tables of the fine grid m times finer than the grid of basis b.
+    subroutine new_fine_grid(self, b, m)
+        type(fine_grid_t), intent(out) :: self
+        type(basis_t), intent(in) :: b
+        integer, intent(in) :: m
+        integer :: i, sh
+        real(dp) :: phi
+        self%m = m
+        allocate (self%c(b%nharm, m - 1), self%s(b%nharm, m - 1), self%rotated(b%nb), &
+                  self%cw(b%nt/2 + 1))
+        do sh = 1, m - 1
+            do i = 1, b%nharm
+                ! the phase reduced mod the period first: h s < m nt, so the angle is exact
+                phi = 2.0_dp*pi*real(mod(b%harm(i)*sh, m*b%nt), dp)/real(m*b%nt, dp)
+                self%c(i, sh) = cos(phi)
+                self%s(i, sh) = sin(phi)
+            end do
+        end do
+    end subroutine new_fine_grid
+
+    !> u(1 : m nt) = the series `coef` of basis b at the fine grid's instants, in the order
+    !> of the shifts (u(s nt + k + 1) is the instant t_k + s T/(m nt)): the order does not
+    !> matter to the maxima and RMS values taken of it.
+    subroutine fine_synthesize(self, b, coef, u)
+        class(fine_grid_t), intent(inout) :: self
+        type(basis_t), intent(in) :: b
+        real(dp), intent(in) :: coef(:)
+        real(dp), intent(out) :: u(:)
+        integer :: sh, i, k, nt
+        nt = b%nt
+        call b%synthesize(coef, u(1:nt), self%cw)
+        do sh = 1, self%m - 1
+            ! u(t + tau) = (a cos phi + b sin phi) cos(h w t) + (b cos phi - a sin phi) sin(h w t)
+            if (b%has_zero) self%rotated(b%i0) = coef(b%i0)
+            do i = 1, b%nharm
+                k = b%icos(i)
+                self%rotated(k) = coef(k)*self%c(i, sh) + coef(k + 1)*self%s(i, sh)
+                self%rotated(k + 1) = coef(k + 1)*self%c(i, sh) - coef(k)*self%s(i, sh)
+            end do
+            call b%synthesize(self%rotated, u(sh*nt + 1:(sh + 1)*nt), self%cw)
+        end do
+    end subroutine fine_synthesize
 
     !> Highest harmonic of the coarser set used to estimate the truncation error at
     !> `harmonics`: harmonics / 2, raised to the highest forcing harmonic (which every basis
@@ -318,8 +379,8 @@ contains
         type(truncation_t), intent(out) :: est
         type(error_type), allocatable, intent(out) :: error
         type(basis_t) :: fb
+        type(fine_grid_t) :: grid
         real(dp), allocatable :: rt(:), vt(:), pt(:), st(:), vc(:), xt(:)
-        complex(dp), allocatable :: cw(:)
         real(dp) :: vstruct, vfloor, vslip, limit, rho
         integer :: nf, j, p
 
@@ -334,9 +395,10 @@ contains
         est%psi_max = 0.0_dp
         est%note = ""
         nf = est%fine_samples
-        call new_basis(fb, sol%harmonics, sol%odd_only, nf, error)
+        call new_basis(fb, sol%harmonics, sol%odd_only, sol%samples, error)
         if (allocated(error)) return
-        allocate (rt(nf), vt(nf), pt(nf), st(nf), xt(nf), cw(nf/2 + 1), vc(sol%nb))
+        call new_fine_grid(grid, fb, truncation_oversample)
+        allocate (rt(nf), vt(nf), pt(nf), st(nf), xt(nf), vc(sol%nb))
         allocate (est%amplitude(model%ndof), est%amplitude_change(model%ndof), &
                   est%amplitude_change_rel(model%ndof), est%displacement_change_rel(model%ndof))
         est%amplitude_change = 0.0_dp
@@ -344,9 +406,9 @@ contains
         est%displacement_change_rel = 0.0_dp
         vstruct = 0.0_dp
         do p = 1, model%ndof
-            call fb%synthesize(sol%xcoef(:, p), xt, cw)
+            call grid%synthesize(fb, sol%xcoef(:, p), xt)
             est%amplitude(p) = maxval(abs(xt))
-            call fb%synthesize(sol%vcoef(:, p), xt, cw)
+            call grid%synthesize(fb, sol%vcoef(:, p), xt)
             vstruct = max(vstruct, maxval(abs(xt)))
         end do
         vfloor = velocity_floor*vstruct
@@ -356,8 +418,8 @@ contains
         do j = 1, model%ncontact()
             limit = model%mu(j)*model%normal_load(j)
             vc = matmul(sol%vcoef, contact_velocity_direction(model, j))
-            call fb%synthesize(sol%rcoef(:, j), rt, cw)
-            call fb%synthesize(vc, vt, cw)
+            call grid%synthesize(fb, sol%rcoef(:, j), rt)
+            call grid%synthesize(fb, vc, vt)
             pt = psi(rt, vt, limit, rho)
             st = psi_stick(rt, vt, limit, rho)
             vslip = max(maxval(abs(vt)), vfloor)
@@ -388,8 +450,8 @@ contains
         type(truncation_t), intent(inout) :: est
         type(error_type), allocatable, intent(out) :: error
         type(basis_t) :: fb
+        type(fine_grid_t) :: grid
         real(dp), allocatable :: xt(:), xc(:)
-        complex(dp), allocatable :: cw(:)
         real(dp) :: amax, floor_amp, energy, floor_energy
         integer :: nf, nbc, p, i
 
@@ -406,20 +468,21 @@ contains
         end if
         est%coarse_harmonics = coarse%harmonics
         nf = est%fine_samples
-        call new_basis(fb, fine%harmonics, fine%odd_only, nf, error)
+        call new_basis(fb, fine%harmonics, fine%odd_only, fine%samples, error)
         if (allocated(error)) return
-        allocate (xt(nf), xc(fine%nb), cw(nf/2 + 1))
+        call new_fine_grid(grid, fb, truncation_oversample)
+        allocate (xt(nf), xc(fine%nb))
         amax = maxval(est%amplitude)
         floor_amp = max(1.0e-12_dp*amax, tiny(1.0_dp))
         do p = 1, model%ndof
             ! the coarse series, embedded in the fine basis, and the difference
             xc = 0.0_dp
             xc(1:nbc) = coarse%xcoef(:, p)
-            call fb%synthesize(xc, xt, cw)
+            call grid%synthesize(fb, xc, xt)
             est%amplitude_change(p) = abs(est%amplitude(p) - maxval(abs(xt)))
             est%amplitude_change_rel(p) = est%amplitude_change(p)/max(est%amplitude(p), floor_amp)
             xc = fine%xcoef(:, p) - xc
-            call fb%synthesize(xc, xt, cw)
+            call grid%synthesize(fb, xc, xt)
             est%displacement_change_rel(p) = maxval(abs(xt))/max(est%amplitude(p), floor_amp)
         end do
         call fb%destroy()

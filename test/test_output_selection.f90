@@ -8,6 +8,8 @@ module test_output_selection
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat, itoa
     use stickslip_case, only: case_t, read_case, selected_dofs, default_output_dofs
+    use stickslip_solution, only: hbm_solution_t
+    use stickslip_checks, only: hbm_checks_t, solve_and_check
     use stickslip_model, only: model_t
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets
     use stickslip_matrix_market, only: write_matrix_market, read_matrix_market, &
@@ -42,6 +44,7 @@ contains
         call test_default_rule(t)
         call test_chain(t)
         call test_full_field(t)
+        call test_truncation_observed(t)
         call test_seed_selected(t)
         call test_frc(t)
         call test_bad_dofs(t)
@@ -440,6 +443,35 @@ contains
             same_shape = all(shape(a) == shape(b))
         end function same_shape
     end subroutine test_full_field
+
+    !> The truncation estimate of a reduced model judges the output DOFs: with every interior
+    !> mode kept (exact reduction), its displacement changes of DOFs 3 and 70 equal those of
+    !> the unreduced chain at DOFs 3 and 70, and it has one entry per output DOF.
+    subroutine test_truncation_observed(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: full, red
+        type(hbm_solution_t) :: sf, sr
+        type(hbm_checks_t) :: cf, cr
+        type(error_type), allocatable :: error
+        call read_case(dir//"/chain_all.nml", full, error)
+        if (.not. allocated(error)) call read_case(dir//"/chain_reduced.nml", red, error)
+        call check_error(t, error, "truncation observed: cases read", .false.)
+        if (allocated(error)) return
+        call solve_and_check(full%model, full%hbm, full%checks, &
+                             full%reference%reference_options_t, sf, cf, error)
+        if (.not. allocated(error)) call solve_and_check(red%model, red%hbm, red%checks, &
+            red%reference%reference_options_t, sr, cr, error)
+        call check_error(t, error, "truncation observed: both solve", .false.)
+        if (allocated(error)) return
+        call check(t, size(cr%truncation%displacement_change_rel) == 2 .and. &
+                   size(cf%truncation%displacement_change_rel) == nchain, &
+                   "truncation observed: one entry per output DOF (reduced), per DOF (full)")
+        if (size(cr%truncation%displacement_change_rel) /= 2) return
+        call check(t, maxval(abs(cr%truncation%displacement_change_rel - &
+                                 cf%truncation%displacement_change_rel([3, 70]))) <= &
+                   1.0e-6_dp*maxval(cf%truncation%displacement_change_rel([3, 70])), &
+                   "truncation observed: exact reduction = unreduced changes at DOFs 3, 70")
+    end subroutine test_truncation_observed
 
     !> The seed case with dofs = 2: hbm.csv, euler.csv, reference.csv (method 'all') and
     !> study.csv hold x2, v2 only (and every contact force).

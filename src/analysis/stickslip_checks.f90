@@ -43,6 +43,10 @@ module stickslip_checks
         !> Periods of the exact flow integrated from the solution to report its periodicity
         !> defect (0: none).
         integer :: verify_periods = 0
+        !> Observed combinations of DOFs for the truncation estimate, nobs x ndof (optional;
+        !> a reduced model: the rows of its basis for the output DOFs, so that the estimate
+        !> judges physical displacements, not the coordinates of stiff modes).
+        real(dp), allocatable :: observe(:, :)
     end type check_options_t
 
     !> The checks of one solution.
@@ -121,14 +125,15 @@ contains
             hmax = copts%max_harmonics
             if (hmax == 0) hmax = 8*max(1, opts%harmonics)
             call solve_to_tolerance(model, opts, copts%harmonics_tol, hmax, sol, &
-                                    checks%truncation, error)
+                                    checks%truncation, error, observe=copts%observe)
             if (allocated(error)) return
         else
             ! the estimate's coarse solve restricts the solve's dynamics (no refactorization)
             call solve_periodic(model, opts, sol, error, dyn_out=dyn)
             if (allocated(error)) return
             if (sol%converged) then
-                call estimate_truncation(model, opts, sol, checks%truncation, error, dyn=dyn)
+                call estimate_truncation(model, opts, sol, checks%truncation, error, dyn=dyn, &
+                                         observe=copts%observe)
                 if (allocated(error)) return
             end if
         end if

@@ -208,8 +208,12 @@ contains
     !> Errors: stat input when sol was not solved with opts (harmonics, odd_only, samples)
     !> or holds no coefficients; the errors of solve_periodic on the coarse set.
     !> With `dyn` (the condensed dynamics sol was solved with, e.g. a continuation's), the
-    !> coarse solve restricts them instead of factorizing Z_h again.
-    subroutine estimate_truncation(model, opts, sol, est, error, dyn)
+    !> coarse solve restricts them instead of factorizing Z_h again. With `observe` (nobs x
+    !> ndof), the amplitudes and displacement changes are those of the observed combinations
+    !> observe x (e.g. the full-model DOFs of a reduced model, rows of its basis: the
+    !> amplitudes of its tiny high-mode coordinates would otherwise decide the estimate),
+    !> one per row, instead of one per DOF.
+    subroutine estimate_truncation(model, opts, sol, est, error, dyn, observe)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> The options sol was solved with.
@@ -222,6 +226,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The condensed dynamics of `model` on the basis of `opts`, already built.
         type(dynamics_t), intent(in), optional :: dyn
+        !> Observed combinations of DOFs, nobs x ndof.
+        real(dp), intent(in), optional :: observe(:, :)
         type(hbm_options_t) :: copts
         type(hbm_solution_t) :: coarse
         integer(int64) :: c0, c1, rate
@@ -230,7 +236,9 @@ contains
         call system_clock(c0, rate)
         call check_match(opts, sol, error)
         if (allocated(error)) return
-        call diagnose(model, opts, sol, est, error)
+        call check_observe(model, error, observe)
+        if (allocated(error)) return
+        call diagnose(model, opts, sol, est, error, observe)
         if (allocated(error)) return
         hc = coarse_harmonics(model, sol%harmonics, sol%odd_only)
         if (est%available .and. hc > 0) then
@@ -246,7 +254,7 @@ contains
                                 ": "//error%message
                 return
             end if
-            call compare_with_coarse(model, sol, coarse, est, error)
+            call compare_with_coarse(model, sol, coarse, est, error, observe)
             if (allocated(error)) return
         else if (est%available) then
             est%note = "no coarser harmonic set holds the forcing: the estimate is the "// &
@@ -266,7 +274,7 @@ contains
     !> or a level that does not converge is an outcome told in est%note, not an error;
     !> est%history_* record every level tried. Errors: stat input for tol not in (0, 1) or
     !> max_harmonics < opts%harmonics; the errors of solve_periodic and estimate_truncation.
-    subroutine solve_to_tolerance(model, opts, tol, max_harmonics, sol, est, error)
+    subroutine solve_to_tolerance(model, opts, tol, max_harmonics, sol, est, error, observe)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Solver options; opts%harmonics is the first level (small for the fewest harmonics).
@@ -281,6 +289,8 @@ contains
         type(truncation_t), intent(out) :: est
         !> Set on invalid input or numerical breakdown.
         type(error_type), allocatable, intent(out) :: error
+        !> Observed combinations of DOFs, nobs x ndof (see estimate_truncation).
+        real(dp), intent(in), optional :: observe(:, :)
         type(hbm_options_t) :: lopts
         type(hbm_solution_t) :: prev, cur
         type(truncation_t) :: lest
@@ -304,6 +314,8 @@ contains
             call fatal_error(error, trim(buf), stickslip_stat%input)
             return
         end if
+        call check_observe(model, error, observe)
+        if (allocated(error)) return
         allocate (hist_h(0), hist_s(0), hist_c(0), hist_e(0))
         have_prev = .false.
         lopts = opts
@@ -320,14 +332,15 @@ contains
             if (have_prev .and. cur%converged .and. prev%samples == cur%samples .and. &
                 prev%harmonics == coarse_harmonics(model, h, opts%odd_only)) then
                 call system_clock(c0, rate)
-                call diagnose(model, lopts, cur, lest, error)
+                call diagnose(model, lopts, cur, lest, error, observe)
                 if (allocated(error)) return
-                call compare_with_coarse(model, cur, prev, lest, error)
+                call compare_with_coarse(model, cur, prev, lest, error, observe)
                 if (allocated(error)) return
                 call system_clock(c1)
                 lest%seconds = real(c1 - c0, dp)/real(rate, dp)
             else
-                call estimate_truncation(model, lopts, cur, lest, error, dyn=dyn)
+                call estimate_truncation(model, lopts, cur, lest, error, dyn=dyn, &
+                                         observe=observe)
                 if (allocated(error)) return
             end if
             hist_h = [hist_h, h]
@@ -372,17 +385,18 @@ contains
 
     !> The parts of the estimate that need only the solution: sizes, amplitudes and the
     !> Coulomb defect; the estimate is the defect until a coarse comparison is added.
-    subroutine diagnose(model, opts, sol, est, error)
+    subroutine diagnose(model, opts, sol, est, error, observe)
         type(model_t), intent(in) :: model
         type(hbm_options_t), intent(in) :: opts
         type(hbm_solution_t), intent(in) :: sol
         type(truncation_t), intent(out) :: est
         type(error_type), allocatable, intent(out) :: error
+        real(dp), intent(in), optional :: observe(:, :)
         type(basis_t) :: fb
         type(fine_grid_t) :: grid
         real(dp), allocatable :: rt(:), vt(:), pt(:), st(:), vc(:), xt(:)
         real(dp) :: vstruct, vfloor, vslip, limit, rho
-        integer :: nf, j, p
+        integer :: nf, j, p, nobs
 
         est%harmonics = sol%harmonics
         est%samples = sol%samples
@@ -399,17 +413,20 @@ contains
         if (allocated(error)) return
         call new_fine_grid(grid, fb, truncation_oversample)
         allocate (rt(nf), vt(nf), pt(nf), st(nf), xt(nf), vc(sol%nb))
-        allocate (est%amplitude(model%ndof), est%amplitude_change(model%ndof), &
-                  est%amplitude_change_rel(model%ndof), est%displacement_change_rel(model%ndof))
+        nobs = observed_count(model, observe)
+        allocate (est%amplitude(nobs), est%amplitude_change(nobs), &
+                  est%amplitude_change_rel(nobs), est%displacement_change_rel(nobs))
         est%amplitude_change = 0.0_dp
         est%amplitude_change_rel = 0.0_dp
         est%displacement_change_rel = 0.0_dp
         vstruct = 0.0_dp
         do p = 1, model%ndof
-            call grid%synthesize(fb, sol%xcoef(:, p), xt)
-            est%amplitude(p) = maxval(abs(xt))
             call grid%synthesize(fb, sol%vcoef(:, p), xt)
             vstruct = max(vstruct, maxval(abs(xt)))
+        end do
+        do p = 1, nobs
+            call grid%synthesize(fb, observed(sol%xcoef, p, observe), xt)
+            est%amplitude(p) = maxval(abs(xt))
         end do
         vfloor = velocity_floor*vstruct
         ! the weight the solution was solved with (opts%rho = 0 asks for the automatic one)
@@ -443,12 +460,13 @@ contains
 
     !> Add to est (already diagnosed for `fine`) the changes from the solution `coarse` on
     !> a prefix basis of fine's, and fold them into the estimate.
-    subroutine compare_with_coarse(model, fine, coarse, est, error)
+    subroutine compare_with_coarse(model, fine, coarse, est, error, observe)
         type(model_t), intent(in) :: model
         type(hbm_solution_t), intent(in) :: fine
         type(hbm_solution_t), intent(in) :: coarse
         type(truncation_t), intent(inout) :: est
         type(error_type), allocatable, intent(out) :: error
+        real(dp), intent(in), optional :: observe(:, :)
         type(basis_t) :: fb
         type(fine_grid_t) :: grid
         real(dp), allocatable :: xt(:), xc(:)
@@ -474,14 +492,14 @@ contains
         allocate (xt(nf), xc(fine%nb))
         amax = maxval(est%amplitude)
         floor_amp = max(1.0e-12_dp*amax, tiny(1.0_dp))
-        do p = 1, model%ndof
+        do p = 1, observed_count(model, observe)
             ! the coarse series, embedded in the fine basis, and the difference
             xc = 0.0_dp
-            xc(1:nbc) = coarse%xcoef(:, p)
+            xc(1:nbc) = observed(coarse%xcoef, p, observe)
             call grid%synthesize(fb, xc, xt)
             est%amplitude_change(p) = abs(est%amplitude(p) - maxval(abs(xt)))
             est%amplitude_change_rel(p) = est%amplitude_change(p)/max(est%amplitude(p), floor_amp)
-            xc = fine%xcoef(:, p) - xc
+            xc = observed(fine%xcoef, p, observe) - xc
             call grid%synthesize(fb, xc, xt)
             est%displacement_change_rel(p) = maxval(abs(xt))/max(est%amplitude(p), floor_amp)
         end do
@@ -501,6 +519,42 @@ contains
         est%estimate = max(est%psi_rms, maxval(est%displacement_change_rel), &
                            est%dissipation_change_rel)
     end subroutine compare_with_coarse
+
+    !> Error (stat input) unless `observe` (when present) has ndof columns of finite values.
+    subroutine check_observe(model, error, observe)
+        type(model_t), intent(in) :: model
+        type(error_type), allocatable, intent(out) :: error
+        real(dp), intent(in), optional :: observe(:, :)
+        if (.not. present(observe)) return
+        if (size(observe, 2) /= model%ndof .or. size(observe, 1) < 1) then
+            call fatal_error(error, "estimate_truncation: observe must be nobs x ndof "// &
+                             "(nobs >= 1)", stickslip_stat%input)
+        else if (.not. all(abs(observe) <= huge(1.0_dp))) then
+            call fatal_error(error, "estimate_truncation: observe: not finite", &
+                             stickslip_stat%input)
+        end if
+    end subroutine check_observe
+
+    !> Number of observed series: the rows of `observe`, or every DOF.
+    pure integer function observed_count(model, observe) result(n)
+        type(model_t), intent(in) :: model
+        real(dp), intent(in), optional :: observe(:, :)
+        n = model%ndof
+        if (present(observe)) n = size(observe, 1)
+    end function observed_count
+
+    !> Coefficients (nb) of observed series p: sum_q observe(p, q) xcoef(:, q), or DOF p.
+    pure function observed(xcoef, p, observe) result(c)
+        real(dp), intent(in) :: xcoef(:, :)
+        integer, intent(in) :: p
+        real(dp), intent(in), optional :: observe(:, :)
+        real(dp) :: c(size(xcoef, 1))
+        if (present(observe)) then
+            c = matmul(xcoef, observe(p, :))
+        else
+            c = xcoef(:, p)
+        end if
+    end function observed
 
     !> Error (stat input) unless sol was solved with the basis of opts and holds coefficients.
     subroutine check_match(opts, sol, error)

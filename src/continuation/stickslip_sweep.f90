@@ -591,9 +591,10 @@ contains
             pt%truncation = ieee_value(1.0_dp, ieee_quiet_nan)
             if (opts%truncation .and. .not. allocated(fam%sparse)) then
                 if (at_point) then
-                    call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn)
+                    call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn, &
+                                             observe=opts%observe)
                 else
-                    call estimate_truncation(m, po, ps, est, error)
+                    call estimate_truncation(m, po, ps, est, error, observe=opts%observe)
                 end if
                 if (allocated(error)) return
                 if (est%available) pt%truncation = est%estimate

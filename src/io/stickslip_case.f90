@@ -162,6 +162,9 @@ contains
                                        case%model, case%output_dofs, case%output_dofs_given, &
                                        error)
                 if (allocated(error)) return
+                ! the truncation estimate judges the output DOFs, not modal coordinates
+                if (allocated(case%reduction%output_rows)) &
+                    case%checks%observe = case%reduction%output_rows
             end if
         end if
         if (allocated(case%sparse_model)) then

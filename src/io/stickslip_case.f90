@@ -109,9 +109,8 @@ contains
     !> names the group and the variable. A model from Matrix Market files is reduced here
     !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
     !> model and case%reduction holds the report, the full-model DOF numbers and the rows of
-    !> the basis for &output dofs (full-model numbers, checked against the full N; with
-    !> method 'study' only contact and forced DOFs: an interior one is an error naming
-    !> &output dofs(k)).
+    !> the basis for &output dofs (full-model numbers, checked against the full N; when given
+    !> they are boundary DOFs of the reduction).
     subroutine read_case(path, case, error)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path
@@ -237,23 +236,6 @@ contains
             end if
             call check_sparse_methods(nml, case, error)
             if (allocated(error)) return
-        end if
-        if (allocated(case%reduction%output_reduced)) then
-            if (method == 'study') then
-                do k = 1, size(case%reduction%output_reduced)
-                    if (case%reduction%output_reduced(k) == 0) then
-                        call group_error(nml, error, "&output dofs("//itoa(k)//") = "// &
-                                         itoa(case%reduction%output_dofs(k))//": an "// &
-                                         "interior DOF of the reduced model; method = '"// &
-                                         method//"' with a reduction compares only contact "// &
-                                         "and forced DOFs ("// &
-                                         ilist(case%reduction%output_dofs(pack([(j, j=1, &
-                                         size(case%reduction%output_reduced))], &
-                                         case%reduction%output_reduced > 0)))//" here)")
-                        return
-                    end if
-                end do
-            end if
         end if
     end subroutine read_case
 

@@ -6,7 +6,7 @@
 !> N > max_file_dof (2000) DOFs and keeps smaller ones unreduced; 'none' keeps the full model
 !> (dense, so N <= 2000 for now). Boundary DOFs = every contact DOF (contact_dof, contact_dof2
 !> > 0, or every DOF where a column of the &friction direction_file matrix W is nonzero) and
-!> every forced DOF (force_dof); the reduced model numbers them 1..nb in ascending order of
+!> every forced DOF (force_dof), and the &output dofs when given; the reduced model numbers them 1..nb in ascending order of
 !> their full-model numbers, then the nm fixed-interface modes, then the nl static
 !> load-correction vectors of a &forcing force_file F (one per column with a nonzero
 !> interior part, see stickslip_reduction; its DOFs are NOT boundary DOFs). The contact and
@@ -14,9 +14,10 @@
 !> numbers are kept in reduction_case_t for the echo); directions become W_r = T^T W (the
 !> boundary rows of W) and load shapes F_r = T^T F, so the reduced model's static response
 !> to F is the full one. The result files hold the &output dofs, given in
-!> FULL-model numbers (default: the contact and forced DOFs): reduce_case_model keeps the rows
-!> of the basis T for them (output_rows, nsel x nr; never the whole basis) and recover_outputs
-!> gives their values from reduced samples or coefficients, x_full = T(dof, :) q.
+!> FULL-model numbers (default: the contact and forced DOFs; given ones are boundary DOFs):
+!> reduce_case_model keeps the rows of the basis T for them (output_rows, nsel x nr; never the
+!> whole basis) and recover_outputs gives their values from reduced samples or coefficients,
+!> x_full = T(dof, :) q (for boundary DOFs a unit row).
 !> modes = 0 chooses the mode count by the rule of stickslip_reduction: every fixed-interface
 !> mode below 3 x the highest harmonic frequency of the run, H_max omega_max, with H_max the
 !> larger of &hbm harmonics and the forcing harmonics and omega_max the larger of &forcing
@@ -170,6 +171,12 @@ contains
                 model%force_dof]
         if (allocated(model%contact_direction)) bset = [bset, &
             pack([(i, i=1, n)], any(model%contact_direction /= 0.0_dp, dim=2))]
+        ! the DOFs the user asks for are boundary DOFs too: exact static response there
+        if (output_given) then
+            call check_range("&output dofs", output_dofs)
+            if (allocated(error)) return
+            bset = [bset, output_dofs]
+        end if
         if (size(bset) == 0) then
             call group_error(nml, error, "&reduction method = '"//trim(red%method)//"': no "// &
                              "boundary DOF (no contact and no force_dof; a force_file alone "// &

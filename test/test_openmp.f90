@@ -1,7 +1,7 @@
 !> The library called from several OpenMP threads at once: every thread must get the serial
 !> answer (the solver's callback slot is threadprivate, the FFTW planner is serialized).
-!> Meaningful only when the tests and the library are built with OpenMP
-!> (`fpm test --profile debug --flag -fopenmp`, as .ci/run does); in a serial build the suite
+!> The concurrent solve is meaningful only when the tests and the library are built with OpenMP
+!> (the default, fpm.toml's openmp metapackage); in a serial build the suite
 !> says so on stdout and checks only that stickslip_thread_safe() reports a serial build.
 module test_openmp
     use, intrinsic :: iso_fortran_env, only: output_unit
@@ -41,7 +41,7 @@ contains
         call test_multi_case(t)
         if (.not. openmp) then
             write (output_unit, '(a)') "openmp: built without -fopenmp, the concurrent solve " // &
-                "is not tested (.ci/run builds the tests with OpenMP too)"
+                "is not tested (the default build, with OpenMP, tests it)"
             return
         end if
         call test_concurrent_solves(t)

@@ -35,7 +35,8 @@ program bench_robustness
     real(dp) :: step, scale, c0, c1, wall1, walln
     integer :: i, nstep, euler_steps, nthreads
     integer(int64) :: w0, w1, clock_rate
-    logical :: same
+    integer :: ndiff, nflags
+    real(dp) :: worst
 
     start = 'direct'
     step = 0.25_dp
@@ -108,14 +109,27 @@ program bench_robustness
         write (output_unit, '(a)') "error: "//error%message
         stop 1
     end if
-    same = size(rows) == size(serial)
-    if (same) same = all(rows%method == serial%method .and. rows%omega == serial%omega .and. &
-                         rows%mu == serial%mu .and. rows%iterations == serial%iterations .and. &
-                         (rows%converged .eqv. serial%converged) .and. &
-                         (rows%success .eqv. serial%success) .and. &
-                         (rows%err_amplitude == serial%err_amplitude .or. &
-                          (ieee_is_nan(rows%err_amplitude) .and. &
-                           ieee_is_nan(serial%err_amplitude))))
+    ! bitwise with the reference BLAS; OpenBLAS's kernels sum in an order that depends on
+    ! the arrays' alignment (different heaps per thread), so a row may differ by roundoff,
+    ! visibly only where the answer is not unique (a contact stuck all period)
+    if (size(rows) /= size(serial)) error stop "bench_robustness: row counts differ"
+    ndiff = 0
+    nflags = 0
+    worst = 0.0_dp
+    do i = 1, size(rows)
+        if (rows(i)%iterations /= serial(i)%iterations .or. &
+            (rows(i)%converged .neqv. serial(i)%converged) .or. &
+            (rows(i)%success .neqv. serial(i)%success)) nflags = nflags + 1
+        if (rows(i)%err_amplitude == serial(i)%err_amplitude .or. &
+            (ieee_is_nan(rows(i)%err_amplitude) .and. ieee_is_nan(serial(i)%err_amplitude))) cycle
+        ndiff = ndiff + 1
+        worst = max(worst, abs(rows(i)%err_amplitude - serial(i)%err_amplitude)/ &
+                    max(abs(serial(i)%err_amplitude), tiny(1.0_dp)))
+        write (output_unit, '(a,i0,1x,a,a,g0.4,a,g0.4,a,i0,a,g0.3,a,2es12.4)') "differs: row ", &
+            i, trim(rows(i)%method), " omega ", rows(i)%omega, " mu ", rows(i)%mu, " H ", &
+            rows(i)%harmonics, " rho ", rows(i)%rho, " err_amplitude n/1 threads ", &
+            rows(i)%err_amplitude, serial(i)%err_amplitude
+    end do
     write (output_unit, '(a,i0,a)') "| threads | wall [s] | speedup | sum of per-run CPU [s] "// &
         "| load average before (1, 5, 15 min) |"
     write (output_unit, '(a)') "|---|---|---|---|---|"
@@ -123,8 +137,10 @@ program bench_robustness
         sum(serial%cpu_seconds), " | "//load1//" |"
     write (output_unit, '(a,i0,a,f0.2,a,f0.2,a,f0.2,a)') "| ", nthreads, " | ", walln, " | ", &
         wall1/walln, " | ", sum(rows%cpu_seconds), " | "//loadn//" |"
-    write (output_unit, '(a,l1)') "rows identical on 1 and n threads (bitwise, cpu_seconds "// &
-        "aside): ", same
+    write (output_unit, '(a,i0,a,i0,a,i0,a,es9.2)') "rows on 1 and n threads: ", &
+        size(rows) - ndiff, " of ", size(rows), " identical bitwise (cpu_seconds aside); "// &
+        "converged/success/iterations differ in ", nflags, "; largest relative difference "// &
+        "of err_amplitude ", worst
     if (len_trim(csv_dir) > 0) then
         call make_directory(trim(csv_dir), error)
         if (.not. allocated(error)) call write_robustness_csv(trim(csv_dir), rows, error)

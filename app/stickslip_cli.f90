@@ -1,4 +1,5 @@
-!> The command line: `stickslip CASE.nml [--quiet] [--help] [--version]`. Parsing and the
+!> The command line: `stickslip CASE.nml [CASE.nml ...] [--quiet] [--help] [--version]`
+!> (several case files: a multi-case run, run_cases). Parsing and the
 !> whole run take the arguments as an array and write to units the caller gives, so tests run
 !> them in-process. Part of the program (app/), not of the library: it turns errors and
 !> findings into exit codes and stderr lines, prints progress, and draws the pictures

@@ -150,7 +150,10 @@ contains
     !> weighted-residual run (the options `hbm` with H and samples from `opts`) and every
     !> Euler run (the options `euler` with the steps from `opts`). A run that does not
     !> converge is a row with converged = F. Errors: stat input (invalid model or options);
-    !> stat numerical (no reference: its diagnosis).
+    !> stat numerical (no reference: its diagnosis). Built with OpenMP, the runs after the
+    !> reference share the threads (OMP_NUM_THREADS; the longest first), each computed as in
+    !> a serial run and stored in its serial place; cpu_seconds is the CPU time of the thread
+    !> that ran it.
     subroutine run_study(model, hbm, euler, ref_opts, opts, res, error, progress)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model

@@ -1,4 +1,4 @@
-!> The stickslip command: `stickslip CASE.nml [--quiet] [--help] [--version]`.
+!> The stickslip command: `stickslip CASE.nml [CASE.nml ...] [--quiet] [--help] [--version]`.
 !> Gathers the arguments, runs them (stickslip_cli, in app/) and exits with the code it
 !> returns.
 program main

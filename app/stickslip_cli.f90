@@ -1,4 +1,5 @@
-!> The command line: `stickslip CASE.nml [--quiet] [--help] [--version]`. Parsing and the
+!> The command line: `stickslip CASE.nml [CASE.nml ...] [--quiet] [--help] [--version]`
+!> (several case files: a multi-case run, run_cases). Parsing and the
 !> whole run take the arguments as an array and write to units the caller gives, so tests run
 !> them in-process. Part of the program (app/), not of the library: it turns errors and
 !> findings into exit codes and stderr lines, prints progress, and draws the pictures
@@ -37,8 +38,10 @@ module stickslip_cli
 
     !> What the command line asked for.
     type :: cli_options_t
-        !> Case file path.
+        !> Case file path (the first when several are given).
         character(len=:), allocatable :: case_path
+        !> Every case file path, in the order given (several: a multi-case run).
+        type(string_t), allocatable :: case_paths(:)
         !> No summary on standard output.
         logical :: quiet = .false.
         !> Print usage and exit.
@@ -47,11 +50,14 @@ module stickslip_cli
         logical :: version = .false.
     end type cli_options_t
 
-    !> A line of the human summary before emit writes it.
+    !> A line of the human summary before emit writes it (one per thread: the cases of a
+    !> multi-case run print their summaries at the same time).
     character(len=2000) :: buffer = ''
+    !$omp threadprivate(buffer)
 
     character(len=*), parameter :: usage = &
-        "usage: stickslip CASE.nml [--quiet] [--help] [--version]"//new_line('a')// &
+        "usage: stickslip CASE.nml [CASE.nml ...] [--quiet] [--help] [--version]"// &
+        new_line('a')// &
         "  Periodic response of a structure with Coulomb friction contacts by the"//new_line('a')// &
         "  weighted-residual (harmonic balance) method, implicit Euler or the exact"//new_line('a')// &
         "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all',"// &
@@ -59,7 +65,9 @@ module stickslip_cli
         new_line('a')//"  hbm.csv, coefficients.csv, euler.csv, reference.csv, events.csv,"// &
         new_line('a')//"  study.csv, frc.csv (+ frc.gp, frc.png), robustness.csv (+ maps),"// &
         new_line('a')//"  summary.nml. Warnings, errors and progress go to standard error;"// &
-        new_line('a')//"  --quiet: no summary and no progress."// &
+        new_line('a')//"  --quiet: no summary and no progress. Several case files run in"// &
+        new_line('a')//"  parallel (OMP_NUM_THREADS), their output printed case by case;"// &
+        new_line('a')//"  the exit code is the largest of theirs."// &
         new_line('a')// &
         "  Exit codes: 0 ok (also with warnings), 1 usage or input error, 2 numerical"// &
         new_line('a')//"  failure or an answer that cannot be trusted, 3 I/O error (or the"// &
@@ -69,8 +77,8 @@ module stickslip_cli
 
 contains
 
-    !> Parse the arguments (`--` ends the options: what follows is the case file). Errors
-    !> (stat input): an unknown option, no case file, more than one case file.
+    !> Parse the arguments (`--` ends the options: what follows are case files). Errors
+    !> (stat input): an unknown option, no case file.
     subroutine parse_args(args, opts, error)
         !> The arguments (without the program name).
         type(string_t), intent(in) :: args(:)
@@ -81,16 +89,11 @@ contains
         integer :: i
         logical :: options_end
         options_end = .false.
+        allocate (opts%case_paths(0))
         do i = 1, size(args)
             if (options_end) then
                 ! after "--" every argument is a file name (a case file named "-x.nml")
-                if (allocated(opts%case_path)) then
-                    call fatal_error(error, "one case file at a time (got '"//opts%case_path// &
-                                     "' and '"//args(i)%s//"')"//new_line('a')//usage, &
-                                     stickslip_stat%input)
-                    return
-                end if
-                opts%case_path = args(i)%s
+                opts%case_paths = [opts%case_paths, args(i)]
                 cycle
             end if
             select case (args(i)%s)
@@ -110,15 +113,10 @@ contains
                         return
                     end if
                 end if
-                if (allocated(opts%case_path)) then
-                    call fatal_error(error, "one case file at a time (got '"//opts%case_path// &
-                                     "' and '"//args(i)%s//"')"//new_line('a')//usage, &
-                                     stickslip_stat%input)
-                    return
-                end if
-                opts%case_path = args(i)%s
+                opts%case_paths = [opts%case_paths, args(i)]
             end select
         end do
+        if (size(opts%case_paths) > 0) opts%case_path = opts%case_paths(1)%s
         if (.not. (opts%help .or. opts%version .or. allocated(opts%case_path))) then
             call fatal_error(error, "no case file given"//new_line('a')//usage, &
                              stickslip_stat%input)
@@ -160,6 +158,10 @@ contains
                 write (out_unit, '(a)') "stickslip "//stickslip_version
                 return
             end if
+            if (size(opts%case_paths) > 1) then
+                code = run_cases(opts%case_paths, opts%quiet, out_unit, err_unit)
+                return
+            end if
             call read_case(opts%case_path, case, error)
         end if
         if (allocated(error)) then
@@ -184,6 +186,92 @@ contains
         call run_method(case, result, error, progress)
         code = report_run(case, result, error, opts%quiet, out_unit, err_unit)
     end function run_cli
+
+    !> A multi-case run: every case of `paths` read and run as `stickslip <path>` would, the
+    !> cases in parallel when built with OpenMP (OMP_NUM_THREADS threads, one case per thread
+    !> at a time; each writes its own &output directory). The output of each case is kept
+    !> apart and printed after all ran, in the order of `paths`: on `out_unit` (unless
+    !> `quiet`) a line `== <path>` and the case's summary; on `err_unit` the case's lines,
+    !> each prefixed by `<path>: `. No progress lines. Returns the largest exit code of the
+    !> cases (0 ok, 1 input, 2 numerical or untrusted, 3 I/O).
+    integer function run_cases(paths, quiet, out_unit, err_unit) result(code)
+        !> The case files.
+        type(string_t), intent(in) :: paths(:)
+        !> No summaries.
+        logical, intent(in) :: quiet
+        !> Unit for the summaries.
+        integer, intent(in) :: out_unit
+        !> Unit for warnings and errors.
+        integer, intent(in) :: err_unit
+        type(string_t), allocatable :: outs(:), errs(:)
+        integer, allocatable :: codes(:)
+        integer :: i, j, k
+        allocate (outs(size(paths)), errs(size(paths)), codes(size(paths)))
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(i)
+        do i = 1, size(paths)
+            call run_buffered(paths(i)%s, quiet, codes(i), outs(i)%s, errs(i)%s)
+        end do
+        !$omp end parallel do
+        do i = 1, size(paths)
+            if (.not. quiet) write (out_unit, '(a)') stderr_line("== "//paths(i)%s)
+            if (len(outs(i)%s) > 0) write (out_unit, '(a)', advance='no') outs(i)%s
+            ! every line of the case's standard error, prefixed by its path
+            j = 1
+            do while (j <= len(errs(i)%s))
+                k = index(errs(i)%s(j:), new_line('a'))
+                if (k == 0) k = len(errs(i)%s) - j + 2
+                write (err_unit, '(a)') stderr_line(paths(i)%s)//": "//errs(i)%s(j:j + k - 2)
+                j = j + k
+            end do
+        end do
+        code = maxval(codes)
+    end function run_cases
+
+    !> One case of a multi-case run, its summary and its standard-error lines written to
+    !> scratch files and returned as text (lines ended by new_line).
+    subroutine run_buffered(path, quiet, code, out, err)
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: quiet
+        integer, intent(out) :: code
+        character(len=:), allocatable, intent(out) :: out, err
+        type(error_type), allocatable :: error
+        type(case_t) :: case
+        type(run_result_t) :: result
+        type(progress_t) :: progress
+        integer :: uo, ue
+        open (newunit=uo, status='scratch', action='readwrite', form='formatted')
+        open (newunit=ue, status='scratch', action='readwrite', form='formatted')
+        call read_case(path, case, error)
+        if (allocated(error)) then
+            write (ue, '(a)') stderr_line("stickslip: error: "//error%message)
+            code = exit_code_of(error%stat)
+        else
+            progress%label = trim(case%method)
+            call run_method(case, result, error, progress)
+            code = report_run(case, result, error, quiet, uo, ue)
+        end if
+        out = slurp(uo)
+        err = slurp(ue)
+        close (uo)
+        close (ue)
+    end subroutine run_buffered
+
+    !> Every line of the scratch file on unit `u`, each ended by new_line.
+    function slurp(u) result(text)
+        integer, intent(in) :: u
+        character(len=:), allocatable :: text
+        character(len=1024) :: chunk
+        integer :: stat, n
+        text = ""
+        rewind (u)
+        do
+            read (u, '(a)', advance='no', iostat=stat, size=n) chunk
+            if (is_iostat_end(stat)) exit
+            text = text//chunk(1:n)
+            if (is_iostat_eor(stat)) text = text//new_line('a')
+            if (stat > 0) exit
+        end do
+    end function slurp
 
     !> After the method of `case` ran (run_method): draw its pictures, write one line on
     !> `err_unit` per warning and per distrust of the answer, then the error if any (and
@@ -315,7 +403,10 @@ contains
         character(len=*), intent(in) :: directory, script, pngs(:)
         integer, intent(in) :: err_unit
         integer :: status, k
+        ! one gnuplot at a time (the cases of a multi-case run draw from several threads)
+        !$omp critical (stickslip_cli_gnuplot)
         status = run_gnuplot(directory, script)
+        !$omp end critical (stickslip_cli_gnuplot)
         if (status == 0) then
             call rename_pictures(directory, pngs)
         else

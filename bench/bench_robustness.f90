@@ -7,9 +7,15 @@
 !> Options: --start direct|auto|ladder (&hbm start of the runs, default direct: a bare cold
 !> start; auto adds the harmonic ladder when it stalls), --step <omega step> (default 0.25),
 !> --euler <steps per period> (default 1000, 0: none), --scale <s> (M, C, K, forces and
-!> normal loads times s: a change of units), --csv <dir> (write robustness.csv there).
+!> normal loads times s: a change of units), --csv <dir> (write robustness.csv there),
+!> --threads <n> (default 2). All cores: the study runs twice in this process, on 1 OpenMP
+!> thread and on n, and the wall times, the speedup, the load average of the machine
+!> (/proc/loadavg) before each run and whether the rows are identical are printed first; the
+!> tables below are those of the n-thread run (built with OpenMP, the default).
 program bench_robustness
-    use, intrinsic :: iso_fortran_env, only: output_unit
+    use, intrinsic :: iso_fortran_env, only: output_unit, int64
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
+    !$ use omp_lib, only: omp_set_num_threads
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
     use stickslip_case, only: case_t, read_case
@@ -21,18 +27,23 @@ program bench_robustness
     implicit none
     type(case_t) :: c
     type(robustness_options_t) :: r
-    type(robustness_row_t), allocatable :: rows(:)
+    type(robustness_row_t), allocatable :: rows(:), serial(:)
     type(error_type), allocatable :: error
     character(len=256) :: arg, value, csv_dir
     character(len=8) :: start
-    real(dp) :: step, scale, c0, c1
-    integer :: i, nstep, euler_steps
+    character(len=:), allocatable :: load1, loadn
+    real(dp) :: step, scale, c0, c1, wall1, walln
+    integer :: i, nstep, euler_steps, nthreads
+    integer(int64) :: w0, w1, clock_rate
+    integer :: ndiff, nflags
+    real(dp) :: worst
 
     start = 'direct'
     step = 0.25_dp
     scale = 1.0_dp
     euler_steps = 1000
     csv_dir = ''
+    nthreads = 2
     i = 1
     do while (i <= command_argument_count())
         call get_command_argument(i, arg)
@@ -48,6 +59,8 @@ program bench_robustness
             read (value, *) euler_steps
         case ('--csv')
             csv_dir = value
+        case ('--threads')
+            read (value, *) nthreads
         case default
             write (output_unit, '(a)') "unknown option "//trim(arg)
             stop 1
@@ -73,13 +86,61 @@ program bench_robustness
     nstep = nint((6.0_dp - 0.5_dp)/step)
     r%omegas = [(0.5_dp + step*i, i=0, nstep)]
     if (euler_steps > 0) r%steps_per_period = [euler_steps]
-    call cpu_time(c0)
-    call run_robustness(c%model, c%hbm, c%euler, c%reference, r, rows, error)
-    call cpu_time(c1)
+    ! 1 thread, then nthreads, in this process (wall time; CPU of every thread summed)
+    !$ call omp_set_num_threads(1)
+    load1 = loadavg()
+    call system_clock(w0, clock_rate)
+    call run_robustness(c%model, c%hbm, c%euler, c%reference, r, serial, error)
+    call system_clock(w1)
+    wall1 = real(w1 - w0, dp)/real(clock_rate, dp)
     if (allocated(error)) then
         write (output_unit, '(a)') "error: "//error%message
         stop 1
     end if
+    !$ call omp_set_num_threads(nthreads)
+    loadn = loadavg()
+    call cpu_time(c0)
+    call system_clock(w0, clock_rate)
+    call run_robustness(c%model, c%hbm, c%euler, c%reference, r, rows, error)
+    call system_clock(w1)
+    call cpu_time(c1)
+    walln = real(w1 - w0, dp)/real(clock_rate, dp)
+    if (allocated(error)) then
+        write (output_unit, '(a)') "error: "//error%message
+        stop 1
+    end if
+    ! bitwise with the reference BLAS; OpenBLAS's kernels sum in an order that depends on
+    ! the arrays' alignment (different heaps per thread), so a row may differ by roundoff,
+    ! visibly only where the answer is not unique (a contact stuck all period)
+    if (size(rows) /= size(serial)) error stop "bench_robustness: row counts differ"
+    ndiff = 0
+    nflags = 0
+    worst = 0.0_dp
+    do i = 1, size(rows)
+        if (rows(i)%iterations /= serial(i)%iterations .or. &
+            (rows(i)%converged .neqv. serial(i)%converged) .or. &
+            (rows(i)%success .neqv. serial(i)%success)) nflags = nflags + 1
+        if (rows(i)%err_amplitude == serial(i)%err_amplitude .or. &
+            (ieee_is_nan(rows(i)%err_amplitude) .and. ieee_is_nan(serial(i)%err_amplitude))) cycle
+        ndiff = ndiff + 1
+        worst = max(worst, abs(rows(i)%err_amplitude - serial(i)%err_amplitude)/ &
+                    max(abs(serial(i)%err_amplitude), tiny(1.0_dp)))
+        write (output_unit, '(a,i0,1x,a,a,g0.4,a,g0.4,a,i0,a,g0.3,a,2es12.4)') "differs: row ", &
+            i, trim(rows(i)%method), " omega ", rows(i)%omega, " mu ", rows(i)%mu, " H ", &
+            rows(i)%harmonics, " rho ", rows(i)%rho, " err_amplitude n/1 threads ", &
+            rows(i)%err_amplitude, serial(i)%err_amplitude
+    end do
+    write (output_unit, '(a,i0,a)') "| threads | wall [s] | speedup | sum of per-run CPU [s] "// &
+        "| load average before (1, 5, 15 min) |"
+    write (output_unit, '(a)') "|---|---|---|---|---|"
+    write (output_unit, '(a,f0.2,a,f0.2,a)') "| 1 | ", wall1, " | 1 | ", &
+        sum(serial%cpu_seconds), " | "//load1//" |"
+    write (output_unit, '(a,i0,a,f0.2,a,f0.2,a,f0.2,a)') "| ", nthreads, " | ", walln, " | ", &
+        wall1/walln, " | ", sum(rows%cpu_seconds), " | "//loadn//" |"
+    write (output_unit, '(a,i0,a,i0,a,i0,a,es9.2)') "rows on 1 and n threads: ", &
+        size(rows) - ndiff, " of ", size(rows), " identical bitwise (cpu_seconds aside); "// &
+        "converged/success/iterations differ in ", nflags, "; largest relative difference "// &
+        "of err_amplitude ", worst
     if (len_trim(csv_dir) > 0) then
         call make_directory(trim(csv_dir), error)
         if (.not. allocated(error)) call write_robustness_csv(trim(csv_dir), rows, error)
@@ -88,7 +149,7 @@ program bench_robustness
 
     write (output_unit, '(a,i0,a,i0,a,a,a,g0.3,a,f0.1,a)') "seed case, ", size(r%omegas), &
         " omegas x ", size(r%mus), " mus, start = '", trim(start), "', units x ", scale, &
-        ", total ", c1 - c0, " s CPU"
+        ", total ", c1 - c0, " s CPU (all threads of the n-thread run)"
     call table('hbm-cold')
     call table('hbm-warm')
     call by_mu('hbm-cold')
@@ -97,6 +158,23 @@ program bench_robustness
     call timings()
 
 contains
+
+    !> The first three fields of /proc/loadavg ('?' where it cannot be read).
+    function loadavg() result(text)
+        character(len=:), allocatable :: text
+        character(len=100) :: line
+        integer :: u, stat, k
+        text = "?"
+        open (newunit=u, file="/proc/loadavg", action='read', status='old', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat) line
+        close (u)
+        if (stat /= 0) return
+        k = index(line, ' ')
+        k = k + index(line(k + 1:), ' ')
+        k = k + index(line(k + 1:), ' ')
+        text = trim(line(1:k - 1))
+    end function loadavg
 
     !> Success rate (converged, error within wrong_tol) per rho (rows) and H (columns).
     subroutine table(method)

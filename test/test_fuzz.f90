@@ -163,8 +163,10 @@ contains
         open (newunit=code, file="-fuzz_dash.nml", status='old')
         close (code, status='delete')
         call cli([character(len=20) :: "--", "a.nml", "b.nml"], code, out, err)
-        call check(t, code == 1 .and. index(err, "one case file at a time") > 0, &
-                   "fuzz: '--' and two files: a usage error", err)
+        ! two case files are a multi-case run: each missing file is its own error (I/O, 3)
+        call check(t, code == 3 .and. index(err, "a.nml: stickslip: error: a.nml") == 1 .and. &
+                   index(err, "b.nml: stickslip: error: b.nml") > 0, &
+                   "fuzz: '--' and two files: two cases, each an I/O error", err)
     end subroutine test_usage_lines
 
     !> The human summary puts back the E that ES drops from a three-digit exponent

@@ -1,19 +1,26 @@
 !> The library called from several OpenMP threads at once: every thread must get the serial
 !> answer (the solver's callback slot is threadprivate, the FFTW planner is serialized).
-!> Meaningful only when the tests and the library are built with OpenMP
-!> (`fpm test --profile debug --flag -fopenmp`, as .ci/run does); in a serial build the suite
+!> The concurrent solve is meaningful only when the tests and the library are built with OpenMP
+!> (the default, fpm.toml's openmp metapackage); in a serial build the suite
 !> says so on stdout and checks only that stickslip_thread_safe() reports a serial build.
 module test_openmp
     use, intrinsic :: iso_fortran_env, only: output_unit
-    !$ use omp_lib, only: omp_get_thread_num
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
+    !$ use omp_lib, only: omp_get_thread_num, omp_get_max_threads, omp_set_num_threads
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_version_info, only: stickslip_thread_safe
-    use testing, only: test_counter_t, check, check_close
-    use fixtures, only: seed_model
+    use stickslip_euler, only: euler_options_t
+    use stickslip_reference_start, only: reference_start_options_t
+    use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness
+    use stickslip_study, only: study_options_t, study_result_t, run_study
+    use stickslip_cli, only: string_t, run_cli
+    use stickslip_files, only: make_directory
+    use testing, only: test_counter_t, check, check_close, check_error
+    use fixtures, only: seed_model, scratch, write_lines, enter_project_root
     implicit none
     private
     public :: run_openmp_tests
@@ -27,9 +34,14 @@ contains
         !$ openmp = .true.
         call check(t, stickslip_thread_safe() .eqv. openmp, &
                    "openmp: stickslip_thread_safe() tells the build (tests and library built alike)")
+        ! the studies and multi-case runs on 1 and 2 threads (also meaningful serially: the
+        ! rows must not depend on the task order)
+        call test_robustness_threads(t)
+        call test_study_threads(t)
+        call test_multi_case(t)
         if (.not. openmp) then
             write (output_unit, '(a)') "openmp: built without -fopenmp, the concurrent solve " // &
-                "is not tested (.ci/run builds the tests with OpenMP too)"
+                "is not tested (the default build, with OpenMP, tests it)"
             return
         end if
         call test_concurrent_solves(t)
@@ -89,4 +101,213 @@ contains
         end do
         !$omp end parallel do
     end subroutine sweep
+
+    !> Set the number of OpenMP threads (nothing in a serial build).
+    subroutine set_threads(n)
+        integer, intent(in) :: n
+        !$ call omp_set_num_threads(n)
+        if (.false.) write (output_unit, *) n
+    end subroutine set_threads
+
+    !> Threads of the next parallel region (1 in a serial build).
+    integer function max_threads()
+        max_threads = 1
+        !$ max_threads = omp_get_max_threads()
+    end function max_threads
+
+    !> A small robustness grid (3 omegas x 2 mus, H = 5 and 10, rho = 0.2 and automatic,
+    !> warm starts, Euler at 200 steps) on 1 and on 2 threads: every row the same, in the same
+    !> order (cpu_seconds aside): counts and flags exactly, errors and rho to roundoff (1e-9
+    !> relative: bitwise with the reference BLAS, but OpenBLAS's kernels sum in an order that
+    !> depends on the arrays' alignment, which differs between the threads' heaps). The
+    !> contacts slip at every point: a contact stuck all period leaves its mean force
+    !> undetermined, and there roundoff may pick a visibly different admissible solution.
+    subroutine test_robustness_threads(t)
+        type(test_counter_t), intent(inout) :: t
+        type(robustness_options_t) :: r
+        type(robustness_row_t), allocatable :: one(:), two(:)
+        type(error_type), allocatable :: error
+        type(hbm_options_t) :: ho
+        type(euler_options_t) :: eo
+        type(reference_start_options_t) :: ro
+        integer :: k, saved
+        logical :: same
+        r%omegas = [3.0_dp, 4.0_dp, 4.5_dp]
+        r%mus = [0.2_dp, 0.45_dp]
+        r%harmonics = [5, 10]
+        r%rhos = [0.2_dp, 0.0_dp]
+        r%samples = [64]
+        r%steps_per_period = [200]
+        r%error_samples = 256
+        eo%max_periods = 100
+        saved = max_threads()
+        call set_threads(1)
+        call run_robustness(seed_model(), ho, eo, ro, r, one, error)
+        call check_error(t, error, "openmp: robustness on 1 thread", .false.)
+        if (allocated(error)) return
+        call set_threads(2)
+        call run_robustness(seed_model(), ho, eo, ro, r, two, error)
+        call set_threads(saved)
+        call check_error(t, error, "openmp: robustness on 2 threads", .false.)
+        if (allocated(error)) return
+        same = size(one) == size(two) .and. size(one) == 2*3*(1 + 2*2*2)
+        if (same) then
+            do k = 1, size(one)
+                same = same .and. one(k)%method == two(k)%method .and. &
+                       one(k)%omega == two(k)%omega .and. one(k)%mu == two(k)%mu .and. &
+                       one(k)%harmonics == two(k)%harmonics .and. &
+                       one(k)%samples == two(k)%samples .and. &
+                       (one(k)%converged .eqv. two(k)%converged) .and. &
+                       (one(k)%success .eqv. two(k)%success) .and. &
+                       one(k)%iterations == two(k)%iterations .and. &
+                       same_real(one(k)%rho, two(k)%rho) .and. &
+                       same_real(one(k)%err_amplitude, two(k)%err_amplitude)
+                if (.not. same) then
+                    write (output_unit, '(a,i0,1x,a,1x,a,2es24.16,2i6,1x,a,1x,a)') "openmp: row ", k, &
+                        one(k)%method, two(k)%method, one(k)%err_amplitude, two(k)%err_amplitude, &
+                        one(k)%iterations, two(k)%iterations, one(k)%diagnosis, two(k)%diagnosis
+                    exit
+                end if
+            end do
+        end if
+        call check(t, same, "openmp: robustness rows on 2 threads = on 1 thread (roundoff)")
+        call check(t, count(one%converged) > size(one)/2 .and. all(one%cpu_seconds >= 0.0_dp) &
+                   .and. all(two%cpu_seconds >= 0.0_dp), &
+                   "openmp: robustness grid mostly converged, CPU times >= 0")
+    end subroutine test_robustness_threads
+
+    !> The work-precision study (H = 2, 3, 5, 10, Euler at 100 and 200 steps) on 1 and on
+    !> 2 threads: the same rows, errors to roundoff (see test_robustness_threads).
+    subroutine test_study_threads(t)
+        type(test_counter_t), intent(inout) :: t
+        type(study_options_t) :: so
+        type(study_result_t) :: one, two
+        type(error_type), allocatable :: error
+        type(hbm_options_t) :: ho
+        type(euler_options_t) :: eo
+        type(reference_start_options_t) :: ro
+        integer :: k, saved
+        logical :: same
+        so%harmonics = [2, 3, 5, 10]
+        so%samples = [0]
+        so%steps_per_period = [100, 200]
+        so%error_samples = 512
+        so%repeats = 1
+        ho%rho = 0.2_dp
+        eo%max_periods = 100
+        saved = max_threads()
+        call set_threads(1)
+        call run_study(seed_model(), ho, eo, ro, so, one, error)
+        call check_error(t, error, "openmp: study on 1 thread", .false.)
+        if (allocated(error)) return
+        call set_threads(2)
+        call run_study(seed_model(), ho, eo, ro, so, two, error)
+        call set_threads(saved)
+        call check_error(t, error, "openmp: study on 2 threads", .false.)
+        if (allocated(error)) return
+        same = size(one%rows) == size(two%rows) .and. size(one%rows) == 6 .and. &
+               one%skipped == two%skipped
+        if (same) then
+            do k = 1, size(one%rows)
+                associate (a => one%rows(k), b => two%rows(k))
+                    same = same .and. a%method == b%method .and. a%parameter == b%parameter &
+                           .and. a%samples == b%samples .and. a%iterations == b%iterations &
+                           .and. (a%converged .eqv. b%converged) .and. &
+                           allocated(a%cmp%max_error) .and. allocated(b%cmp%max_error)
+                    if (same) same = all(same_real(a%cmp%max_error, b%cmp%max_error)) .and. &
+                                     all(same_real(a%cmp%rms_error, b%cmp%rms_error))
+                end associate
+            end do
+        end if
+        call check(t, same, "openmp: study rows on 2 threads = on 1 thread (roundoff)")
+        call check(t, all(one%rows(1:4)%method == 'hbm') .and. &
+                   all(one%rows(5:6)%method == 'euler') .and. &
+                   all(one%rows%parameter == [2, 3, 5, 10, 100, 200]), &
+                   "openmp: study rows in the serial order")
+    end subroutine test_study_threads
+
+    !> `stickslip a.nml bad.nml b.nml` on 2 threads: each good case writes its own
+    !> directory, the output comes case by case in argument order, whole lines, and the exit
+    !> code is the worst (1: bad.nml).
+    subroutine test_multi_case(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: a = scratch//"/multi_a.nml", b = scratch//"/multi_b.nml", &
+            bad = scratch//"/multi_bad.nml"
+        type(string_t), allocatable :: args(:)
+        character(len=:), allocatable :: out, err
+        type(error_type), allocatable :: error
+        integer :: code, saved, uo, ue, ka, kb
+        call enter_project_root()
+        call make_directory(scratch, error)
+        call check_error(t, error, "openmp: scratch directory", .false.)
+        if (allocated(error)) return
+        call write_lines(a, [character(len=100) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0 /", &
+            "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
+            "&hbm harmonics = 10, samples = 64, rho = 0.2 /", &
+            "&output directory = '"//scratch//"/multi_out_a' /"])
+        call write_lines(b, [character(len=100) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
+            "&forcing omega = 3.0, force_dof = 1, force_amplitude = 10.0 /", &
+            "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
+            "&hbm harmonics = 10, samples = 64, rho = 0.2 /", &
+            "&output directory = '"//scratch//"/multi_out_b' /"])
+        call write_lines(bad, [character(len=100) :: "&system ndof = -1 /"])
+        allocate (args(3))
+        args(1)%s = a
+        args(2)%s = bad
+        args(3)%s = b
+        saved = max_threads()
+        call set_threads(2)
+        open (newunit=uo, status='scratch')
+        open (newunit=ue, status='scratch')
+        code = run_cli(args, uo, ue)
+        call set_threads(saved)
+        out = slurp(uo)
+        err = slurp(ue)
+        close (uo)
+        close (ue)
+        call check(t, code == 1, "openmp: multi-case exit code is the worst (1)")
+        ka = index(out, "== "//a//new_line('a')//"stickslip ")
+        kb = index(out, "== "//b//new_line('a')//"stickslip ")
+        call check(t, ka == 1 .and. kb > ka .and. index(out, "== "//bad) > ka .and. &
+                   index(out, "== "//bad) < kb, "openmp: multi-case summaries in case order", out)
+        call check(t, index(err, new_line('a')//bad//": stickslip: error: "//bad// &
+                   ": &system") > 0 .and. index(err, a//": stickslip: warning: ") == 1 .and. &
+                   index(err, a//": ") < index(err, bad//": "), &
+                   "openmp: multi-case stderr lines prefixed by their case, in case order", err)
+        call check(t, summary_exists(scratch//"/multi_out_a") .and. &
+                   summary_exists(scratch//"/multi_out_b"), &
+                   "openmp: multi-case: each case wrote its own directory")
+    end subroutine test_multi_case
+
+    logical function summary_exists(dir)
+        character(len=*), intent(in) :: dir
+        inquire (file=dir//"/summary.nml", exist=summary_exists)
+    end function summary_exists
+
+    !> Every line of a scratch unit, new_line after each.
+    function slurp(u) result(text)
+        integer, intent(in) :: u
+        character(len=:), allocatable :: text
+        character(len=1024) :: chunk
+        integer :: stat, n
+        text = ""
+        rewind (u)
+        do
+            read (u, '(a)', advance='no', iostat=stat, size=n) chunk
+            if (is_iostat_end(stat)) exit
+            text = text//chunk(1:n)
+            if (is_iostat_eor(stat)) text = text//new_line('a')
+            if (stat > 0) exit
+        end do
+    end function slurp
+
+    !> Equal to roundoff (1e-9 relative), or both NaN.
+    elemental logical function same_real(x, y)
+        real(dp), intent(in) :: x, y
+        same_real = abs(x - y) <= 1.0e-9_dp*max(abs(x), abs(y)) .or. &
+                    (ieee_is_nan(x) .and. ieee_is_nan(y))
+    end function same_real
 end module test_openmp

@@ -25,6 +25,7 @@ module stickslip_robustness
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_rho, only: automatic_rho
     use stickslip_progress, only: progress_t
+    use stickslip_thread_clock, only: thread_cpu_seconds
     implicit none
     private
     public :: robustness_options_t, robustness_row_t, run_robustness
@@ -77,7 +78,7 @@ module stickslip_robustness
         !> Residual evaluations, all hybrj calls included ('hbm-*'), periods integrated
         !> ('euler').
         integer :: iterations = 0
-        !> CPU seconds of the run [s].
+        !> CPU seconds of the run, on the thread that ran it [s].
         real(dp) :: cpu_seconds = 0.0_dp
         !> Largest error of the displacements against the reference, max over DOFs and
         !> instants of |x - x_ref| relative to the amplitude max |x_ref| of that DOF (err_x
@@ -98,6 +99,11 @@ module stickslip_robustness
         character(len=:), allocatable :: diagnosis
         real(dp), allocatable :: x(:, :), v(:, :), r(:, :)
     end type point_reference_t
+
+    !> The error of one parallel task (the first in task order is returned).
+    type :: task_error_t
+        type(error_type), allocatable :: error
+    end type task_error_t
 
 contains
 
@@ -225,6 +231,11 @@ contains
     !> ordered by mu, then Euler before the weighted residual, then H, samples, rho, omega.
     !> Failures of runs and references are rows (converged = F, diagnosis). Errors: stat input
     !> (invalid model or options).
+    !> Built with OpenMP, the independent tasks run on every thread (OMP_NUM_THREADS): first
+    !> the grid points' references (with their Euler rows), then the omega sweeps of each
+    !> (mu, H, samples, rho), heaviest H first; every row is computed exactly as in a serial
+    !> run (same inputs, same warm-start chain), so the rows do not depend on the thread
+    !> count. cpu_seconds is the CPU time of the thread that ran the row.
     subroutine run_robustness(model, hbm_opts, euler_opts, ref_opts, opts, rows, error, &
                               progress)
         !> The structure, its contacts and forcing.
@@ -243,15 +254,10 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Progress hook: told after every run (rows so far of all, omega and mu).
         type(progress_t), intent(inout), optional :: progress
-        type(model_t) :: m
-        type(hbm_options_t) :: ho
-        type(euler_options_t) :: eo
-        type(point_reference_t), allocatable :: refs(:)
-        type(hbm_solution_t) :: cold, warm
-        real(dp), allocatable :: last_r(:, :)
-        real(dp) :: nan
-        integer :: nw, nrow, k, i, ih, is, ir, irow
-        logical :: have_last
+        type(point_reference_t), allocatable :: refs(:, :)
+        type(task_error_t), allocatable :: ref_errors(:), sweep_errors(:)
+        integer, allocatable :: order(:)
+        integer :: nw, nmu, ne, ncfg, nwarm, per_mu, nrow, done, t, n, h
 
         call validate_model(model, error)
         if (allocated(error)) return
@@ -262,213 +268,297 @@ contains
         call validate_options(hbm_opts, error)
         if (allocated(error)) return
 
-        nan = ieee_value(1.0_dp, ieee_quiet_nan)
         nw = size(opts%omegas)
-        nrow = size(opts%mus)*nw*(size(opts%steps_per_period) + size(opts%harmonics)* &
-               size(opts%samples)*size(opts%rhos)*merge(2, 1, opts%warm))
-        allocate (rows(nrow), refs(nw))
-        irow = 0
-        m = model
+        nmu = size(opts%mus)
+        ne = size(opts%steps_per_period)
+        ncfg = size(opts%harmonics)*size(opts%samples)*size(opts%rhos)
+        nwarm = merge(2, 1, opts%warm)
+        per_mu = nw*(ne + ncfg*nwarm)
+        nrow = nmu*per_mu
+        allocate (rows(nrow), refs(nw, nmu), ref_errors(nw*nmu), sweep_errors(nmu*ncfg))
+        done = 0
 
-        do k = 1, size(opts%mus)
-            m%mu = [(opts%mus(k), i=1, m%ncontact())]
-
-            ! the references of this mu, and the Euler runs beside each
-            do i = 1, nw
-                m%omega = opts%omegas(i)
-                call point_reference(refs(i), error)
-                if (allocated(error)) return
-            end do
-
-            ! the weighted residual, cold and warm, sweeping omega
-            do ih = 1, size(opts%harmonics)
-                do is = 1, size(opts%samples)
-                    do ir = 1, size(opts%rhos)
-                        ho = hbm_opts
-                        ho%harmonics = opts%harmonics(ih)
-                        ho%samples = robustness_samples(opts%samples(is), ho%harmonics, &
-                                                        hbm_opts%samples)
-                        ho%rho = opts%rhos(ir)
-                        ho%want_samples = .false.
-                        have_last = .false.
-                        do i = 1, nw
-                            m%omega = opts%omegas(i)
-                            call hbm_row('hbm-cold', refs(i), cold, error)
-                            if (allocated(error)) return
-                            if (.not. opts%warm) cycle
-                            if (have_last) then
-                                call hbm_row('hbm-warm', refs(i), warm, error, last_r)
-                                if (allocated(error)) return
-                            else
-                                call hbm_row('hbm-warm', refs(i), warm, error)
-                                if (allocated(error)) return
-                                rows(irow)%diagnosis = join(rows(irow)%diagnosis, &
-                                    "cold start: no converged solution at a previous omega")
-                            end if
-                            ! the start of the next omega: this omega's solution, warm first
-                            have_last = .false.
-                            if (warm%converged .and. allocated(warm%rcoef)) then
-                                last_r = warm%rcoef
-                                have_last = .true.
-                            else if (cold%converged .and. allocated(cold%rcoef)) then
-                                last_r = cold%rcoef
-                                have_last = .true.
-                            end if
-                        end do
-                    end do
-                end do
-            end do
+        ! the references of every grid point, and the Euler rows beside each
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(t)
+        do t = 1, nw*nmu
+            call reference_task(t)
         end do
-        if (irow /= nrow) error stop "run_robustness: row count mismatch"
+        !$omp end parallel do
+        do t = 1, size(ref_errors)
+            if (allocated(ref_errors(t)%error)) then
+                call move_alloc(ref_errors(t)%error, error)
+                return
+            end if
+        end do
+
+        ! the omega sweeps of every (mu, H, samples, rho), the largest H first (the longest
+        ! tasks first balance the threads); each task fills its own rows
+        allocate (order(0))
+        do h = maxval(opts%harmonics), 1, -1
+            order = [order, pack([(t, t=1, nmu*ncfg)], [(harmonics_of(t) == h, t=1, nmu*ncfg)])]
+        end do
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(n)
+        do n = 1, size(order)
+            call sweep_task(order(n))
+        end do
+        !$omp end parallel do
+        do t = 1, size(sweep_errors)
+            if (allocated(sweep_errors(t)%error)) then
+                call move_alloc(sweep_errors(t)%error, error)
+                return
+            end if
+        end do
 
     contains
 
-        !> The reference at the current (omega, mu), sampled on the error grid, and the
-        !> Euler rows of that point. A reference that fails is recorded, not raised.
-        subroutine point_reference(pr, error)
-            type(point_reference_t), intent(out) :: pr
-            type(error_type), allocatable, intent(out) :: error
-            type(reference_result_t) :: ref
-            integer :: j
-            call solve_reference_from_starts(m, ref_opts, ref, error, hbm_opts=hbm_opts, &
-                                             euler_opts=euler_opts)
-            if (allocated(error)) then
-                if (error%stat /= stickslip_stat%numerical) return
-                pr%diagnosis = "no reference: "//error%message
-                deallocate (error)
-            else if (.not. ref%converged) then
-                pr%diagnosis = "no reference: "//ref%diagnosis
-            else
-                call sample_reference(ref, opts%error_samples, pr%x, pr%v, pr%r, error)
-                if (allocated(error)) return
-                pr%ok = .true.
-                pr%diagnosis = ""
-            end if
-            do j = 1, size(opts%steps_per_period)
-                eo = euler_opts
-                eo%steps_per_period = opts%steps_per_period(j)
-                call euler_row(ref, pr, error)
-                if (allocated(error)) return
+        !> H of sweep task t ((mu, H, samples, rho) in row order).
+        integer function harmonics_of(t)
+            integer, intent(in) :: t
+            integer :: c
+            c = mod(t - 1, ncfg)
+            harmonics_of = opts%harmonics(c/(size(opts%samples)*size(opts%rhos)) + 1)
+        end function harmonics_of
+
+        !> The reference of grid point t ((mu, omega) in row order) and its Euler rows.
+        subroutine reference_task(t)
+            integer, intent(in) :: t
+            type(model_t) :: m
+            integer :: i, k, base
+            k = (t - 1)/nw + 1
+            i = mod(t - 1, nw) + 1
+            m = model
+            m%mu = [(opts%mus(k), base=1, m%ncontact())]
+            m%omega = opts%omegas(i)
+            base = (k - 1)*per_mu + (i - 1)*ne
+            call point_reference(m, hbm_opts, euler_opts, ref_opts, opts, opts%mus(k), &
+                                 refs(i, k), rows(base + 1:base + ne), ref_errors(t)%error)
+            do base = 1, ne
+                call tick(opts%omegas(i), opts%mus(k))
             end do
-        end subroutine point_reference
+        end subroutine reference_task
 
-        !> One weighted-residual run with the options ho at the current (omega, mu).
-        subroutine hbm_row(method, pr, sol, error, r_start)
-            character(len=*), intent(in) :: method
-            type(point_reference_t), intent(in) :: pr
-            type(hbm_solution_t), intent(out) :: sol
-            type(error_type), allocatable, intent(out) :: error
-            real(dp), intent(in), optional :: r_start(:, :)
-            real(dp), allocatable :: xs(:, :), vs(:, :), rs(:, :)
-            type(comparison_t) :: cmp
-            real(dp) :: c0, c1
-            irow = irow + 1
-            associate (row => rows(irow))
-                row%method = method
-                row%omega = m%omega
-                row%mu = opts%mus(k)
-                row%harmonics = ho%harmonics
-                row%rho_auto = ho%rho == 0.0_dp
-                row%rho = ho%rho
-                if (row%rho_auto) row%rho = automatic_rho(m)
-                row%samples = ho%samples
-                row%err_amplitude = nan
-                row%diagnosis = ""
-                call cpu_time(c0)
-                call solve_periodic(m, ho, sol, error, r_start)
-                call cpu_time(c1)
-                row%cpu_seconds = c1 - c0
-                if (allocated(error)) then
-                    if (error%stat /= stickslip_stat%numerical) return
-                    row%diagnosis = "failed: "//error%message
-                    deallocate (error)
-                    return
+        !> The cold and warm omega sweep of task t ((mu, H, samples, rho) in row order).
+        subroutine sweep_task(t)
+            integer, intent(in) :: t
+            type(model_t) :: m
+            type(hbm_options_t) :: ho
+            type(hbm_solution_t) :: cold, warm
+            type(error_type), allocatable :: error
+            real(dp), allocatable :: last_r(:, :)
+            logical :: have_last
+            integer :: k, c, ih, is, ir, i, irow
+            k = (t - 1)/ncfg + 1
+            c = mod(t - 1, ncfg)
+            ir = mod(c, size(opts%rhos)) + 1
+            is = mod(c/size(opts%rhos), size(opts%samples)) + 1
+            ih = c/(size(opts%rhos)*size(opts%samples)) + 1
+            m = model
+            m%mu = [(opts%mus(k), i=1, m%ncontact())]
+            ho = hbm_opts
+            ho%harmonics = opts%harmonics(ih)
+            ho%samples = robustness_samples(opts%samples(is), ho%harmonics, hbm_opts%samples)
+            ho%rho = opts%rhos(ir)
+            ho%want_samples = .false.
+            have_last = .false.
+            do i = 1, nw
+                m%omega = opts%omegas(i)
+                irow = (k - 1)*per_mu + nw*ne + (c*nw + i - 1)*nwarm + 1
+                call hbm_run('hbm-cold', m, ho, opts%mus(k), opts, refs(i, k), cold, &
+                             rows(irow), error)
+                if (allocated(error)) exit
+                call tick(m%omega, opts%mus(k))
+                if (.not. opts%warm) cycle
+                if (have_last) then
+                    call hbm_run('hbm-warm', m, ho, opts%mus(k), opts, refs(i, k), warm, &
+                                 rows(irow + 1), error, last_r)
+                    if (allocated(error)) exit
+                else
+                    call hbm_run('hbm-warm', m, ho, opts%mus(k), opts, refs(i, k), warm, &
+                                 rows(irow + 1), error)
+                    if (allocated(error)) exit
+                    rows(irow + 1)%diagnosis = join(rows(irow + 1)%diagnosis, &
+                        "cold start: no converged solution at a previous omega")
                 end if
-                row%rho = sol%rho
-                row%converged = sol%converged
-                row%iterations = sol%nfev
-                if (.not. sol%converged) then
-                    block
-                        character(len=80) :: buf
-                        write (buf, '(a,i0,a,es10.2e3)') "not converged: hybrj info ", &
-                            sol%info, "; ||F||/fscale = ", sol%fnorm/max(sol%fscale, tiny(1.0_dp))
-                        row%diagnosis = trim(buf)
-                    end block
+                call tick(m%omega, opts%mus(k))
+                ! the start of the next omega: this omega's solution, warm first
+                have_last = .false.
+                if (warm%converged .and. allocated(warm%rcoef)) then
+                    last_r = warm%rcoef
+                    have_last = .true.
+                else if (cold%converged .and. allocated(cold%rcoef)) then
+                    last_r = cold%rcoef
+                    have_last = .true.
                 end if
-                if (pr%ok .and. allocated(sol%xcoef)) then
-                    call evaluate_series(sol, opts%error_samples, xs, vs, rs, error)
-                    if (allocated(error)) return
-                    call compare_samples('hbm', xs, vs, rs, 'reference', pr%x, pr%v, pr%r, &
-                                         cmp, error)
-                    if (allocated(error)) return
-                    row%err_amplitude = cmp%worst('x')
-                end if
-                call judge(row, pr)
-            end associate
-        end subroutine hbm_row
+            end do
+            if (allocated(error)) call move_alloc(error, sweep_errors(t)%error)
+        end subroutine sweep_task
 
-        !> One implicit Euler run with the options eo at the current (omega, mu).
-        subroutine euler_row(ref, pr, error)
-            type(reference_result_t), intent(in) :: ref
-            type(point_reference_t), intent(in) :: pr
-            type(error_type), allocatable, intent(out) :: error
-            type(euler_result_t) :: es
-            type(comparison_t) :: cmp
-            real(dp), allocatable :: xe(:, :), ve(:, :), re(:, :)
-            real(dp) :: c0, c1
-            irow = irow + 1
-            associate (row => rows(irow))
-                row%method = 'euler'
-                row%omega = m%omega
-                row%mu = opts%mus(k)
-                row%harmonics = 0
-                row%rho = nan
-                row%samples = eo%steps_per_period
-                row%err_amplitude = nan
-                row%diagnosis = ""
-                call cpu_time(c0)
-                call integrate_euler(m, eo, es, error)
-                call cpu_time(c1)
-                row%cpu_seconds = c1 - c0
-                if (allocated(error)) then
-                    if (error%stat /= stickslip_stat%numerical) return
-                    row%diagnosis = "failed: "//error%message
-                    deallocate (error)
-                    return
-                end if
-                row%converged = es%periodic
-                row%iterations = es%periods
-                if (.not. es%periodic) row%diagnosis = "not periodic: "//es%diagnosis
-                if (pr%ok .and. allocated(es%x)) then
-                    call sample_reference(ref, eo%steps_per_period, xe, ve, re, error)
-                    if (allocated(error)) return
-                    call compare_samples('euler', es%x, es%v, es%r, 'reference', xe, ve, re, &
-                                         cmp, error)
-                    if (allocated(error)) return
-                    row%err_amplitude = cmp%worst('x')
-                end if
-                call judge(row, pr)
-            end associate
-        end subroutine euler_row
-
-        !> success and the diagnosis of a finished run.
-        subroutine judge(row, pr)
-            type(robustness_row_t), intent(inout) :: row
-            type(point_reference_t), intent(in) :: pr
+        !> One more row is done: tell the progress hook (one thread at a time).
+        subroutine tick(omega, mu)
+            real(dp), intent(in) :: omega, mu
             character(len=80) :: buf
-            row%success = robustness_success(row, opts%wrong_tol)
-            if (row%converged .and. .not. row%success) then
-                write (buf, '(a,es10.2e3,a,es10.2e3)') "wrong solution: err_amplitude ", &
-                    row%err_amplitude, " > wrong_tol ", opts%wrong_tol
-                row%diagnosis = join(row%diagnosis, trim(buf))
-            end if
-            if (.not. pr%ok) row%diagnosis = join(row%diagnosis, pr%diagnosis)
-            if (present(progress)) then
-                write (buf, '(a,g0.4,a,g0.4)') "omega = ", row%omega, ", mu = ", row%mu
-                call progress%report(irow, nrow, trim(buf))
-            end if
-        end subroutine judge
+            if (.not. present(progress)) return
+            !$omp critical (stickslip_robustness_progress)
+            done = done + 1
+            write (buf, '(a,g0.4,a,g0.4)') "omega = ", omega, ", mu = ", mu
+            call progress%report(done, nrow, trim(buf))
+            !$omp end critical (stickslip_robustness_progress)
+        end subroutine tick
     end subroutine run_robustness
+
+    !> The reference at the grid point of `m` (its omega and mu set), sampled on the error
+    !> grid, and the Euler rows of that point (one per opts%steps_per_period). A reference
+    !> that fails is recorded in `pr`, not raised.
+    subroutine point_reference(m, hbm_opts, euler_opts, ref_opts, opts, mu, pr, erows, error)
+        type(model_t), intent(in) :: m
+        type(hbm_options_t), intent(in) :: hbm_opts
+        type(euler_options_t), intent(in) :: euler_opts
+        type(reference_start_options_t), intent(in) :: ref_opts
+        type(robustness_options_t), intent(in) :: opts
+        real(dp), intent(in) :: mu
+        type(point_reference_t), intent(out) :: pr
+        type(robustness_row_t), intent(inout) :: erows(:)
+        type(error_type), allocatable, intent(out) :: error
+        type(reference_result_t) :: ref
+        type(euler_options_t) :: eo
+        integer :: j
+        call solve_reference_from_starts(m, ref_opts, ref, error, hbm_opts=hbm_opts, &
+                                         euler_opts=euler_opts)
+        if (allocated(error)) then
+            if (error%stat /= stickslip_stat%numerical) return
+            pr%diagnosis = "no reference: "//error%message
+            deallocate (error)
+        else if (.not. ref%converged) then
+            pr%diagnosis = "no reference: "//ref%diagnosis
+        else
+            call sample_reference(ref, opts%error_samples, pr%x, pr%v, pr%r, error)
+            if (allocated(error)) return
+            pr%ok = .true.
+            pr%diagnosis = ""
+        end if
+        do j = 1, size(opts%steps_per_period)
+            eo = euler_opts
+            eo%steps_per_period = opts%steps_per_period(j)
+            call euler_run(m, eo, mu, opts, ref, pr, erows(j), error)
+            if (allocated(error)) return
+        end do
+    end subroutine point_reference
+
+    !> One weighted-residual run of `m` with the options ho (its row: `row`).
+    subroutine hbm_run(method, m, ho, mu, opts, pr, sol, row, error, r_start)
+        character(len=*), intent(in) :: method
+        type(model_t), intent(in) :: m
+        type(hbm_options_t), intent(in) :: ho
+        real(dp), intent(in) :: mu
+        type(robustness_options_t), intent(in) :: opts
+        type(point_reference_t), intent(in) :: pr
+        type(hbm_solution_t), intent(out) :: sol
+        type(robustness_row_t), intent(inout) :: row
+        type(error_type), allocatable, intent(out) :: error
+        real(dp), intent(in), optional :: r_start(:, :)
+        real(dp), allocatable :: xs(:, :), vs(:, :), rs(:, :)
+        type(comparison_t) :: cmp
+        real(dp) :: c0, c1
+        character(len=80) :: buf
+        row%method = method
+        row%omega = m%omega
+        row%mu = mu
+        row%harmonics = ho%harmonics
+        row%rho_auto = ho%rho == 0.0_dp
+        row%rho = ho%rho
+        if (row%rho_auto) row%rho = automatic_rho(m)
+        row%samples = ho%samples
+        row%err_amplitude = ieee_value(1.0_dp, ieee_quiet_nan)
+        row%diagnosis = ""
+        c0 = thread_cpu_seconds()
+        call solve_periodic(m, ho, sol, error, r_start)
+        c1 = thread_cpu_seconds()
+        row%cpu_seconds = c1 - c0
+        if (allocated(error)) then
+            if (error%stat /= stickslip_stat%numerical) return
+            row%diagnosis = "failed: "//error%message
+            deallocate (error)
+            return
+        end if
+        row%rho = sol%rho
+        row%converged = sol%converged
+        row%iterations = sol%nfev
+        if (.not. sol%converged) then
+            write (buf, '(a,i0,a,es10.2e3)') "not converged: hybrj info ", &
+                sol%info, "; ||F||/fscale = ", sol%fnorm/max(sol%fscale, tiny(1.0_dp))
+            row%diagnosis = trim(buf)
+        end if
+        if (pr%ok .and. allocated(sol%xcoef)) then
+            call evaluate_series(sol, opts%error_samples, xs, vs, rs, error)
+            if (allocated(error)) return
+            call compare_samples('hbm', xs, vs, rs, 'reference', pr%x, pr%v, pr%r, &
+                                 cmp, error)
+            if (allocated(error)) return
+            row%err_amplitude = cmp%worst('x')
+        end if
+        call judge(row, pr, opts%wrong_tol)
+    end subroutine hbm_run
+
+    !> One implicit Euler run of `m` with the options eo (its row: `row`).
+    subroutine euler_run(m, eo, mu, opts, ref, pr, row, error)
+        type(model_t), intent(in) :: m
+        type(euler_options_t), intent(in) :: eo
+        real(dp), intent(in) :: mu
+        type(robustness_options_t), intent(in) :: opts
+        type(reference_result_t), intent(in) :: ref
+        type(point_reference_t), intent(in) :: pr
+        type(robustness_row_t), intent(inout) :: row
+        type(error_type), allocatable, intent(out) :: error
+        type(euler_result_t) :: es
+        type(comparison_t) :: cmp
+        real(dp), allocatable :: xe(:, :), ve(:, :), re(:, :)
+        real(dp) :: c0, c1
+        row%method = 'euler'
+        row%omega = m%omega
+        row%mu = mu
+        row%harmonics = 0
+        row%rho = ieee_value(1.0_dp, ieee_quiet_nan)
+        row%samples = eo%steps_per_period
+        row%err_amplitude = ieee_value(1.0_dp, ieee_quiet_nan)
+        row%diagnosis = ""
+        c0 = thread_cpu_seconds()
+        call integrate_euler(m, eo, es, error)
+        c1 = thread_cpu_seconds()
+        row%cpu_seconds = c1 - c0
+        if (allocated(error)) then
+            if (error%stat /= stickslip_stat%numerical) return
+            row%diagnosis = "failed: "//error%message
+            deallocate (error)
+            return
+        end if
+        row%converged = es%periodic
+        row%iterations = es%periods
+        if (.not. es%periodic) row%diagnosis = "not periodic: "//es%diagnosis
+        if (pr%ok .and. allocated(es%x)) then
+            call sample_reference(ref, eo%steps_per_period, xe, ve, re, error)
+            if (allocated(error)) return
+            call compare_samples('euler', es%x, es%v, es%r, 'reference', xe, ve, re, &
+                                 cmp, error)
+            if (allocated(error)) return
+            row%err_amplitude = cmp%worst('x')
+        end if
+        call judge(row, pr, opts%wrong_tol)
+    end subroutine euler_run
+
+    !> success and the diagnosis of a finished run.
+    subroutine judge(row, pr, wrong_tol)
+        type(robustness_row_t), intent(inout) :: row
+        type(point_reference_t), intent(in) :: pr
+        real(dp), intent(in) :: wrong_tol
+        character(len=80) :: buf
+        row%success = robustness_success(row, wrong_tol)
+        if (row%converged .and. .not. row%success) then
+            write (buf, '(a,es10.2e3,a,es10.2e3)') "wrong solution: err_amplitude ", &
+                row%err_amplitude, " > wrong_tol ", wrong_tol
+            row%diagnosis = join(row%diagnosis, trim(buf))
+        end if
+        if (.not. pr%ok) row%diagnosis = join(row%diagnosis, pr%diagnosis)
+    end subroutine judge
 
     !> A run succeeds when it converged and its error is at most `wrong_tol` (or unknown:
     !> no reference).

@@ -18,6 +18,7 @@ module stickslip_study
         validate_reference_start_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_progress, only: progress_t
+    use stickslip_thread_clock, only: thread_cpu_seconds
     implicit none
     private
     public :: study_options_t, study_row_t, study_result_t, run_study, validate_study_options
@@ -55,7 +56,7 @@ module stickslip_study
         integer :: repeats = 0, iterations = 0
         !> Converged ('hbm') or periodic ('euler').
         logical :: converged = .false.
-        !> Median CPU seconds of one run [s].
+        !> Median CPU seconds of one run, on the thread that ran it [s].
         real(dp) :: cpu_seconds = 0.0_dp
         !> Errors against the reference (allocated arrays only when the run produced a
         !> solution, converged or not).
@@ -66,7 +67,7 @@ module stickslip_study
     type :: study_result_t
         !> The exact reference all errors are measured against.
         type(reference_result_t) :: reference
-        !> CPU seconds of the reference (its start included) [s].
+        !> CPU seconds of the reference (its start included), on the calling thread [s].
         real(dp) :: reference_seconds = 0.0_dp
         !> The runs, weighted residual first.
         type(study_row_t), allocatable :: rows(:)
@@ -76,6 +77,11 @@ module stickslip_study
         !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
         type(diagnostics_t) :: diagnostics
     end type study_result_t
+
+    !> The error of one parallel run (the first in row order is returned).
+    type :: task_error_t
+        type(error_type), allocatable :: error
+    end type task_error_t
 
 contains
 
@@ -144,7 +150,10 @@ contains
     !> weighted-residual run (the options `hbm` with H and samples from `opts`) and every
     !> Euler run (the options `euler` with the steps from `opts`). A run that does not
     !> converge is a row with converged = F. Errors: stat input (invalid model or options);
-    !> stat numerical (no reference: its diagnosis).
+    !> stat numerical (no reference: its diagnosis). Built with OpenMP, the runs after the
+    !> reference share the threads (OMP_NUM_THREADS; the longest first), each computed as in
+    !> a serial run and stored in its serial place; cpu_seconds is the CPU time of the thread
+    !> that ran it.
     subroutine run_study(model, hbm, euler, ref_opts, opts, res, error, progress)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
@@ -164,10 +173,12 @@ contains
         type(progress_t), intent(inout), optional :: progress
         type(hbm_options_t) :: ho
         type(euler_options_t) :: eo
-        type(study_row_t) :: row
-        real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :), xs(:, :), vs(:, :), rs(:, :)
+        type(hbm_options_t), allocatable :: hos(:)
+        type(euler_options_t), allocatable :: eos(:)
+        type(task_error_t), allocatable :: errors(:)
+        real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
         real(dp) :: c0, c1
-        integer :: i, j, ns
+        integer :: i, j, ns, n, ntask, done
 
         call validate_model(model, error)
         if (allocated(error)) return
@@ -178,10 +189,10 @@ contains
         call validate_options(hbm, error)
         if (allocated(error)) return
 
-        call cpu_time(c0)
+        c0 = thread_cpu_seconds()
         call solve_reference_from_starts(model, ref_opts, res%reference, error, hbm_opts=hbm, &
                                          euler_opts=euler)
-        call cpu_time(c1)
+        c1 = thread_cpu_seconds()
         res%reference_seconds = c1 - c0
         if (allocated(error)) return
         ! the judge's own checks (the runs' errors are the study's measurements, not
@@ -192,11 +203,14 @@ contains
                              "converge: "//res%reference%diagnosis, stickslip_stat%numerical)
             return
         end if
-        allocate (res%rows(0))
 
-        ! weighted residual: every (H, samples) pair, errors on the fine grid
+        ! weighted residual: every (H, samples) pair, errors on the fine grid; then implicit
+        ! Euler from rest, errors on its own grid. The runs are independent: built with
+        ! OpenMP they share the threads (the last, longest ones first), each row computed as
+        ! in a serial run.
         call sample_reference(res%reference, opts%error_samples, xr, vr, rr, error)
         if (allocated(error)) return
+        allocate (hos(0), eos(0))
         do i = 1, size(opts%harmonics)
             do j = 1, size(opts%samples)
                 ho = hbm
@@ -216,25 +230,45 @@ contains
                 end if
                 ho%samples = ns
                 ho%want_samples = .false.
-                call hbm_row(ho, row, error)
-                if (allocated(error)) return
-                res%rows = [res%rows, row]
-                if (present(progress)) call progress%report(size(res%rows) + res%skipped, &
-                    size(opts%harmonics)*size(opts%samples) + size(opts%steps_per_period), &
-                    "hbm H = "//itoa(ho%harmonics)//", samples = "//itoa(ns))
+                hos = [hos, ho]
             end do
         end do
-
-        ! implicit Euler from rest: errors on its own grid
         do i = 1, size(opts%steps_per_period)
             eo = euler
             eo%steps_per_period = opts%steps_per_period(i)
-            call euler_row(eo, row, error)
-            if (allocated(error)) return
-            res%rows = [res%rows, row]
-            if (present(progress)) call progress%report(size(res%rows) + res%skipped, &
-                size(opts%harmonics)*size(opts%samples) + size(opts%steps_per_period), &
-                "euler steps_per_period = "//itoa(eo%steps_per_period))
+            eos = [eos, eo]
+        end do
+        ntask = size(hos) + size(eos)
+        allocate (res%rows(ntask), errors(ntask))
+        done = res%skipped
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(n)
+        do n = ntask, 1, -1
+            if (n <= size(hos)) then
+                call hbm_row(hos(n), res%rows(n), errors(n)%error)
+            else
+                call euler_row(eos(n - size(hos)), res%rows(n), errors(n)%error)
+            end if
+            if (present(progress)) then
+                !$omp critical (stickslip_study_progress)
+                done = done + 1
+                if (n <= size(hos)) then
+                    call progress%report(done, size(opts%harmonics)*size(opts%samples) + &
+                        size(opts%steps_per_period), "hbm H = "//itoa(hos(n)%harmonics)// &
+                        ", samples = "//itoa(hos(n)%samples))
+                else
+                    call progress%report(done, size(opts%harmonics)*size(opts%samples) + &
+                        size(opts%steps_per_period), "euler steps_per_period = "// &
+                        itoa(eos(n - size(hos))%steps_per_period))
+                end if
+                !$omp end critical (stickslip_study_progress)
+            end if
+        end do
+        !$omp end parallel do
+        do n = 1, ntask
+            if (allocated(errors(n)%error)) then
+                call move_alloc(errors(n)%error, error)
+                return
+            end if
         end do
 
     contains
@@ -251,19 +285,20 @@ contains
             type(study_row_t), intent(out) :: row
             type(error_type), allocatable, intent(out) :: error
             type(hbm_solution_t) :: sol, again
-            real(dp) :: times(opts%repeats)
+            real(dp) :: times(opts%repeats), c0, c1
+            real(dp), allocatable :: xs(:, :), vs(:, :), rs(:, :)
             integer :: k
-            call cpu_time(c0)
+            c0 = thread_cpu_seconds()
             call solve_periodic(model, ho, sol, error)
-            call cpu_time(c1)
+            c1 = thread_cpu_seconds()
             if (allocated(error)) return
             times(1) = c1 - c0
             row%repeats = 1
             do k = 2, opts%repeats
                 if (times(1) >= opts%repeat_below) exit
-                call cpu_time(c0)
+                c0 = thread_cpu_seconds()
                 call solve_periodic(model, ho, again, error)
-                call cpu_time(c1)
+                c1 = thread_cpu_seconds()
                 if (allocated(error)) return
                 times(k) = c1 - c0
                 row%repeats = k
@@ -285,20 +320,20 @@ contains
             type(study_row_t), intent(out) :: row
             type(error_type), allocatable, intent(out) :: error
             type(euler_result_t) :: es, again
-            real(dp) :: times(opts%repeats)
+            real(dp) :: times(opts%repeats), c0, c1
             real(dp), allocatable :: xe(:, :), ve(:, :), re(:, :)
             integer :: k
-            call cpu_time(c0)
+            c0 = thread_cpu_seconds()
             call integrate_euler(model, eo, es, error)
-            call cpu_time(c1)
+            c1 = thread_cpu_seconds()
             if (allocated(error)) return
             times(1) = c1 - c0
             row%repeats = 1
             do k = 2, opts%repeats
                 if (times(1) >= opts%repeat_below) exit
-                call cpu_time(c0)
+                c0 = thread_cpu_seconds()
                 call integrate_euler(model, eo, again, error)
-                call cpu_time(c1)
+                c1 = thread_cpu_seconds()
                 if (allocated(error)) return
                 times(k) = c1 - c0
                 row%repeats = k

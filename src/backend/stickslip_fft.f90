@@ -28,13 +28,14 @@
 !> cache). In a build without OpenMP the critical section is a no-op and the library is
 !> serial-only (README, "Threads").
 module stickslip_fft
+    use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: iso_c_binding, only: c_ptr, c_int, c_double, c_double_complex, &
         c_null_ptr, c_associated, c_size_t, c_loc, c_f_pointer
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     implicit none
     private
-    public :: fft_plan_t, fft_cached_lengths, fft_cache_capacity
+    public :: fft_plan_t, fft_cached_lengths, fft_cache_capacity, dft_forward, dft_inverse
 
     integer(c_int), parameter :: fftw_estimate = 64
     integer(c_int), parameter :: fftw_forward = -1, fftw_backward = 1
@@ -258,12 +259,17 @@ contains
         else
             ! the plans' alignment through aligned temporaries
             call aligned_work(nt, px, pc, xt, ct)
+            if (.not. (c_associated(px) .and. c_associated(pc))) then
+                ! no memory for them (cannot happen in practice): the same transform by sums
+                call free_work(px, pc)
+                call dft_forward(x(1:nt), c(1:nc))
+                return
+            end if
             xt = x(1:nt)
             call execute_forward(self, px, pc)
             if (mod(nt, 2) == 0) call split_spectrum(self%w, ct)
             c(1:nc) = ct
-            call fftw_free(px)
-            call fftw_free(pc)
+            call free_work(px, pc)
         end if
     end subroutine fft_forward
 
@@ -286,12 +292,17 @@ contains
             call execute_inverse(self, c_loc(c(1)), c_loc(x(1)))
         else
             call aligned_work(nt, px, pc, xt, ct)
+            if (.not. (c_associated(px) .and. c_associated(pc))) then
+                ! no memory for them (cannot happen in practice): the same transform by sums
+                call free_work(px, pc)
+                call dft_inverse(c(1:nc), x(1:nt))
+                return
+            end if
             ct = c(1:nc)
             if (mod(nt, 2) == 0) call join_spectrum(self%w, ct)
             call execute_inverse(self, pc, px)
             x(1:nt) = xt
-            call fftw_free(px)
-            call fftw_free(pc)
+            call free_work(px, pc)
         end if
     end subroutine fft_inverse
 
@@ -382,8 +393,7 @@ contains
     end function aligned
 
     !> fftw_malloc'd work arrays of nt (rounded up to even) reals and nt/2 + 1 complexes
-    !> (error stop if memory is exhausted: an impossible state for arrays the caller already
-    !> holds twice over).
+    !> (px or pc null when memory is exhausted: the caller then falls back to naive sums).
     subroutine aligned_work(nt, px, pc, xt, ct)
         integer, intent(in) :: nt
         type(c_ptr), intent(out) :: px, pc
@@ -391,11 +401,55 @@ contains
         complex(c_double_complex), pointer, intent(out) :: ct(:)
         px = fftw_malloc(int(8, c_size_t)*int(2*(nt/2 + 1), c_size_t))
         pc = fftw_malloc(int(16, c_size_t)*int(nt/2 + 1, c_size_t))
-        if (.not. (c_associated(px) .and. c_associated(pc))) &
-            error stop "stickslip_fft: out of memory for an aligned work array"
+        nullify (xt, ct)
+        if (.not. (c_associated(px) .and. c_associated(pc))) return
         call c_f_pointer(px, xt, [nt])
         call c_f_pointer(pc, ct, [nt/2 + 1])
     end subroutine aligned_work
+
+    !> Free what aligned_work got (either may be null).
+    subroutine free_work(px, pc)
+        type(c_ptr), intent(inout) :: px, pc
+        if (c_associated(px)) call fftw_free(px)
+        if (c_associated(pc)) call fftw_free(pc)
+        px = c_null_ptr
+        pc = c_null_ptr
+    end subroutine free_work
+
+    !> c_k = sum_j x_j exp(-2 pi i j k / nt), k = 0 .. nt/2, by direct sums (O(nt^2); the
+    !> fallback when no aligned work memory can be had).
+    pure subroutine dft_forward(x, c)
+        real(dp), intent(in) :: x(:)
+        complex(dp), intent(out) :: c(:)
+        integer :: j, k, nt
+        real(dp) :: a
+        nt = size(x)
+        do k = 0, size(c) - 1
+            c(k + 1) = (0.0_dp, 0.0_dp)
+            do j = 0, nt - 1
+                a = -two_pi*real(modulo(int(j, int64)*k, int(nt, int64)), dp)/nt
+                c(k + 1) = c(k + 1) + x(j + 1)*cmplx(cos(a), sin(a), dp)
+            end do
+        end do
+    end subroutine dft_forward
+
+    !> The unnormalized inverse of dft_forward as FFTW's c2r computes it (the imaginary
+    !> parts of c_0 and, nt even, c_nt/2 ignored), by direct sums.
+    pure subroutine dft_inverse(c, x)
+        complex(dp), intent(in) :: c(:)
+        real(dp), intent(out) :: x(:)
+        integer :: j, k, nt
+        real(dp) :: a
+        nt = size(x)
+        do j = 0, nt - 1
+            x(j + 1) = real(c(1), dp)
+            do k = 1, (nt - 1)/2
+                a = two_pi*real(modulo(int(j, int64)*k, int(nt, int64)), dp)/nt
+                x(j + 1) = x(j + 1) + 2.0_dp*real(c(k + 1)*cmplx(cos(a), sin(a), dp), dp)
+            end do
+            if (mod(nt, 2) == 0) x(j + 1) = x(j + 1) + real(c(nt/2 + 1), dp)*(1 - 2*mod(j, 2))
+        end do
+    end subroutine dft_inverse
 
     !> Forget the plans (safe to call on an unplanned object). Cached plans stay in the
     !> cache for the next object of that length; plans the object owns are destroyed.

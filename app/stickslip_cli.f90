@@ -294,7 +294,9 @@ contains
         code = 0
         call draw_pictures(case, result, error, err_unit)
         if (allocated(error)) then
-            call report_findings(result%diagnostics, err_unit, code, error%message)
+            ! an input error stops the run before any answer: nothing to report about one
+            if (error%stat /= stickslip_stat%input) &
+                call report_findings(result%diagnostics, err_unit, code, error%message)
         else
             call report_findings(result%diagnostics, err_unit, code)
         end if

@@ -121,6 +121,14 @@ contains
         call compare_paths(t, seed_model(), 31, .false., "seed", .true.)
         call compare_paths(t, seed_model(), 64, .false., "seed", .true.)
         call compare_paths(t, seed_model(), 63, .true., "seed", .true.)
+        ! a forcing harmonic above the ladder's first rung (3): the rungs start at 5
+        block
+            type(model_t) :: m
+            m = seed_model()
+            m%force_harmonic = [5]
+            m%omega = 0.9_dp
+            call compare_paths(t, m, 31, .true., "seed forced at 5 omega", .true.)
+        end block
     end subroutine test_seed
 
     subroutine test_chain(t)

@@ -470,7 +470,8 @@ contains
         nc = prob%nc
         allocate (rfull(nb, nc))
         rfull = reshape(y, [nb, nc])
-        h = ladder_first
+        ! the lowest rung must hold every forcing harmonic
+        h = max(ladder_first, maxval([0, s%force_harmonic]))
         do while (h < opts%harmonics)
             ! the lower basis is a subset of prob's: its dynamics without a factorization
             call new_condensed_problem(low, prob%dyn, prob%limit, h, opts%odd_only, &
@@ -491,7 +492,8 @@ contains
         call solve_stage(prob, y, opts, target_norm, sol, error)
     end subroutine solve_ladder
 
-    !> The ladder of the Newton path: levels H, H/2, H/4, ... down to `ladder_first`
+    !> The ladder of the Newton path: levels H, H/2, H/4, ... down to `ladder_first` (or the
+    !> highest forcing harmonic when larger)
     !> (integer halving: 3, 7, 15 for H = 15), solved from the lowest up, each stage
     !> warm-started from the one below; the lowest is cold (hybrj) unless `warm` (y holds
     !> a start).
@@ -506,18 +508,20 @@ contains
         logical, intent(in) :: warm
         type(hb_problem_t) :: low
         real(dp), allocatable :: ylow(:), rfull(:, :)
-        integer :: levels(32), nlev, i, nbl, nb, nc
+        integer :: levels(32), nlev, i, nbl, nb, nc, hmin
         real(dp) :: low_target
 
         nb = prob%basis%nb
         nc = prob%nc
         allocate (rfull(nb, nc))
         rfull = reshape(y, [nb, nc])
+        ! halving down to ladder_first, but never below a forcing harmonic
+        hmin = max(ladder_first, maxval([0, s%force_harmonic]))
         nlev = 1
         levels(1) = opts%harmonics
-        do while (levels(nlev) > ladder_first .and. nlev < size(levels))
+        do while (levels(nlev) > hmin .and. nlev < size(levels))
             nlev = nlev + 1
-            levels(nlev) = max(ladder_first, levels(nlev - 1)/2)
+            levels(nlev) = max(hmin, levels(nlev - 1)/2)
         end do
         low_target = max(target_norm, 1.0e-6_dp*sol%fscale)
         do i = nlev, 2, -1

@@ -188,12 +188,17 @@ contains
         call new_dynamics(dd, dm, basis, error)
         call check(t, allocated(error), "sparse none: dense path finds the resonance")
         call basis%destroy()
+        ! refused as singular, or (w1 holds roundoff of the eigen-solver: with another BLAS
+        ! kernel, e.g. under valgrind, the distance may land just above the singular
+        ! threshold) reported as a near resonance; either way named
         call solve_periodic_sparse(sm, opts, [integer ::], ss, error)
-        call check(t, allocated(error), "sparse none: resonance refused")
-        if (allocated(error)) call check(t, index(error%message, "undamped resonance at "// &
-                                                  "harmonic h = 1") > 0, &
-                                         "sparse none: resonance named with its harmonic", &
-                                         error%message)
+        if (allocated(error)) then
+            call check(t, index(error%message, "undamped resonance at harmonic h = 1") > 0, &
+                       "sparse none: resonance named with its harmonic", error%message)
+        else
+            call check(t, ss%diagnostics%has("near_resonance"), &
+                       "sparse none: resonance refused or reported near")
+        end if
         ! near it (relative 1e-8): a near_resonance finding, as the dense path
         sm%model%omega = w1*(1.0_dp + 1.0e-8_dp)
         call solve_periodic_sparse(sm, opts, [integer ::], ss, error)

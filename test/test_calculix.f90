@@ -21,7 +21,8 @@ module test_calculix
     use testing, only: test_counter_t, check, check_close
     use stickslip_files, only: make_directory
     use stickslip_plot_scripts, only: write_frc_plot_script
-    use fixtures, only: project_path, scratch_dir
+    use fixtures, only: project_path, scratch_dir, write_lines
+    use test_cli, only: cli
     implicit none
     private
     public :: run_calculix_tests
@@ -54,8 +55,39 @@ contains
         call test_dof_map(t)
         call test_full_frequencies(t, kmat, mmat, reference)
         call test_reduced_frequency(t, reference)
+        call test_retrace(t)
         call test_more_modes(t, kmat, mmat, reference)
     end subroutine run_calculix_tests
+
+    !> The example's sweep at H = 45 (1024 samples, checks off) turns back at a kink of the
+    !> sampled friction equations near 555 rad/s and would retrace its curve down to the
+    !> start ("the branch left the range", exit 2); the sweep steps past the kink instead
+    !> and reaches 620 rad/s.
+    subroutine test_retrace(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: dir, out, err
+        character(len=4096) :: lines(8), arg(1)
+        integer :: code
+        dir = scratch_dir()//"/calculix_retrace"
+        lines(1) = "&system mass_file = '"//project_path("examples/calculix_beam/mass.mtx")//"',"
+        lines(2) = "  stiffness_file = '"//project_path("examples/calculix_beam/stiffness.mtx")// &
+                   "', rayleigh_alpha = 2.0 /"
+        lines(3) = "&forcing omega = 534.7, force_dof = 2244, force_amplitude = 0.2 /"
+        lines(4) = "&friction contact_dof = 2409, mu = 0.5, normal_load = 0.24 /"
+        lines(5) = "&hbm harmonics = 45, odd_only = T, samples = 1024 /"
+        lines(6) = "&sweep parameter = 'omega', start = 470.0, stop = 620.0, max_step = 1.5, "// &
+                   "stability = F, truncation = F /"
+        lines(7) = "&output directory = '"//dir//"', dofs = 2409, 2244 /"
+        lines(8) = "&run method = 'sweep' /"
+        call write_lines(dir//".nml", lines)
+        ! through a variable: gfortran 12 sizes a typed constructor of a deferred-length
+        ! expression by the expression and copies the declared length into it
+        arg(1) = dir//".nml"
+        call cli(arg, code, out, err)
+        call check(t, code == 0, "calculix H = 45 sweep: complete (exit 0)", err)
+        call check(t, index(out, "retraced itself") > 0, &
+                   "calculix H = 45 sweep: the retrace noted and stepped past", out)
+    end subroutine test_retrace
 
     !> frc.gp of the example's sweep (full-model labels 2409, 2244) titles its curves
     !> amp_2409 and amp_2244 as plain text: gnuplot's enhanced mode would make "_2" a

@@ -14,7 +14,7 @@
 module stickslip_sweep
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
+    use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
@@ -45,6 +45,11 @@ module stickslip_sweep
 
     !> Dynamics kept by a friction family in omega (distinct omega values).
     integer, parameter, public :: dynamics_cache_size = 4
+    !> Points in a row after a turn back that must retrace the curve before the sweep takes
+    !> the turn for a kink (not a fold) and steps past it; at most max_retrace_jumps times.
+    integer, parameter :: max_retrace_hits = 3, max_retrace_jumps = 5
+    !> Relative amplitude agreement that makes a point lie on the curve already traced.
+    real(dp), parameter :: retrace_tolerance = 1.0e-3_dp
 
     !> Options of a sweep (&sweep).
     type :: sweep_options_t
@@ -357,7 +362,10 @@ contains
         type(continuation_report_t) :: rep
         type(hbm_solution_t) :: sol
         type(hbm_options_t) :: ho
-        real(dp) :: c0, c1, tl_before, weight
+        real(dp) :: c0, c1, tl_before, weight, dir
+        type(continuation_state_t) :: state_before, before_turn
+        integer :: turn_points, retrace_hits, jumps
+        logical :: turned
         integer :: nb, nc
         character(len=40) :: buf
         type(model_t) :: m0
@@ -489,12 +497,30 @@ contains
             end if
         end if
 
+        ! A turn back in the parameter is a fold, or a kink of the sampled friction equations
+        ! where the corrector came back onto the branch already traced: then the points
+        ! after the turn retrace the earlier ones. After max_retrace_hits of them in a row the
+        ! sweep returns to the last point before the turn and steps the parameter past it.
+        dir = sign(1.0_dp, opts%stop - opts%start)
+        turned = .false.
+        turn_points = 0
+        retrace_hits = 0
+        jumps = 0
         do while (res%state%reason == reason_running)
             tl_before = res%state%tl
+            state_before = res%state
             call continuation_step(fam, co, res%state, rep, error)
             if (allocated(error)) exit
             if (rep%accepted) then
-                if (tl_before*res%state%tl < 0.0_dp) res%folds = res%folds + 1
+                if (tl_before*res%state%tl < 0.0_dp) then
+                    res%folds = res%folds + 1
+                    turned = tl_before*dir > 0.0_dp
+                    if (turned) then
+                        before_turn = state_before
+                        turn_points = res%npoints
+                        retrace_hits = 0
+                    end if
+                end if
                 if (rep%recovered) then
                     call add_point("recovered")
                 else if (res%state%reason == reason_end) then
@@ -505,6 +531,30 @@ contains
                     call add_point("ok")
                 end if
                 if (allocated(error)) exit
+                if (turned .and. jumps < max_retrace_jumps .and. &
+                    res%state%reason /= reason_end) then
+                    if (retraces(res%points(res%npoints), res%points(1:turn_points))) then
+                        retrace_hits = retrace_hits + 1
+                    else
+                        retrace_hits = 0
+                    end if
+                    if (retrace_hits >= max_retrace_hits) then
+                        ! not a fold: back before the turn, a parameter step past it
+                        res%state = before_turn
+                        res%state%ty = 0.0_dp
+                        res%state%tl = dir
+                        res%state%ds = min(2.0_dp*before_turn%ds, co%max_step)
+                        res%state%points = res%npoints
+                        res%folds = res%folds - 1
+                        jumps = jumps + 1
+                        turned = .false.
+                        call res%diagnostics%add(level_note, "retrace", "sweep: the curve "// &
+                            "turned back at "//trim(opts%parameter)//" = "// &
+                            rtoa6(before_turn%lambda)//" and retraced itself (a kink of the "// &
+                            "sampled friction equations, not a fold): continued past it by "// &
+                            "a parameter step")
+                    end if
+                end if
             end if
             if (res%state%reason /= reason_running) then
                 if (len(rep%message) > 0) res%diagnosis = rep%message
@@ -629,6 +679,41 @@ contains
             end if
         end subroutine add_point
     end subroutine run_sweep
+
+    !> Whether point p lies on the curve of the points `earlier` (in continuation order):
+    !> some pair of consecutive earlier points brackets p's parameter and their amplitudes,
+    !> interpolated linearly, agree with p's to retrace_tolerance of the largest.
+    pure logical function retraces(p, earlier)
+        type(frc_point_t), intent(in) :: p
+        type(frc_point_t), intent(in) :: earlier(:)
+        integer :: k
+        real(dp) :: w, scale
+        retraces = .false.
+        do k = 1, size(earlier) - 1
+            associate (a => earlier(k), b => earlier(k + 1))
+                if ((p%parameter - a%parameter)*(p%parameter - b%parameter) > 0.0_dp) cycle
+                if (a%parameter == b%parameter) cycle
+                if (size(a%amplitude) /= size(p%amplitude) .or. &
+                    size(b%amplitude) /= size(p%amplitude)) cycle
+                w = (p%parameter - a%parameter)/(b%parameter - a%parameter)
+                scale = max(maxval(abs(a%amplitude)), maxval(abs(b%amplitude)), tiny(1.0_dp))
+                if (maxval(abs(p%amplitude - ((1.0_dp - w)*a%amplitude + w*b%amplitude))) <= &
+                    retrace_tolerance*scale) then
+                    retraces = .true.
+                    return
+                end if
+            end associate
+        end do
+    end function retraces
+
+    !> A real with 6 significant digits.
+    function rtoa6(x) result(text)
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: text
+        character(len=32) :: buf
+        write (buf, '(g0.6)') x
+        text = trim(adjustl(buf))
+    end function rtoa6
 
     !> Count the failed checks of one point: its solution's diagnostics (warnings and
     !> distrust) and its truncation estimate (stickslip_checks thresholds; NaN: not

@@ -8,12 +8,14 @@ module fixtures
     use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char, c_size_t, c_ptr, &
         c_associated
     use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type
     use stickslip_model, only: model_t
     implicit none
     private
     public :: seed_model, damped_seed, chain_model, one_dof_model
     public :: scratch_dir, project_path, project_root, enter_project_root
     public :: scratch, write_lines, first_line, good_system, good_forcing, good_friction, sweep_case
+    public :: msg, rt
 
     !> Scratch directory of the suites that write files, relative to the project root that
     !> they enter first (enter_project_root). A constant: gfortran 12 corrupts memory on
@@ -304,4 +306,21 @@ contains
         close (u)
         if (stat == 0) line = trim(buf)
     end function first_line
+
+    !> The message of an error, '' when none (for test messages).
+    function msg(error) result(s)
+        type(error_type), allocatable, intent(in) :: error
+        character(len=:), allocatable :: s
+        s = ""
+        if (allocated(error)) s = error%message
+    end function msg
+
+    !> A real as es10.3 text (for test messages).
+    function rt(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=32) :: buf
+        write (buf, '(es10.3)') x
+        s = trim(adjustl(buf))
+    end function rt
 end module fixtures

@@ -28,7 +28,7 @@ module test_directions
     use stickslip_files, only: make_directory
     use test_cli, only: cli
     use testing, only: test_counter_t, check, check_close, check_error
-    use fixtures, only: chain_model, damped_seed, enter_project_root, scratch, write_lines, &
+    use fixtures, only: rt, chain_model, damped_seed, enter_project_root, scratch, write_lines, &
         first_line
     implicit none
     private
@@ -783,12 +783,4 @@ contains
         same = size(a) == size(b)
         if (same) same = all(a == b)
     end function same
-
-    function rt(x) result(s)
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: s
-        character(len=32) :: buf
-        write (buf, '(es10.3)') x
-        s = trim(adjustl(buf))
-    end function rt
 end module test_directions

@@ -7,7 +7,7 @@
 !> residual on the reduced example beam converges to the exact reference on the same model.
 module test_reduction
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type
+    use stickslip_error, only: error_type, itoa
     use stickslip_lapack, only: dgesv, dpotrf
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_to_dense, &
         sparse_scaled_sum
@@ -20,7 +20,7 @@ module test_reduction
     use stickslip_matrix_market, only: write_matrix_market
     use testing, only: test_counter_t, check, check_close
     use stickslip_cli, only: run_cli, string_t
-    use fixtures, only: enter_project_root, scratch, write_lines, project_path
+    use fixtures, only: enter_project_root, scratch, write_lines, project_path, msg, rt
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
     use stickslip_case_reduction, only: error_frequencies
     implicit none
@@ -227,7 +227,7 @@ contains
         if (allocated(error)) return
         call check(t, rep%modes == expected .and. rep%modes > 0 .and. rep%modes < 248, &
                    "reduction: rule keeps the modes below 3 H omega", &
-                   "kept "//it(rep%modes)//", expected "//it(expected))
+                   "kept "//itoa(rep%modes)//", expected "//itoa(expected))
         call check(t, rep%highest_mode_frequency < 9.0_dp*w .and. &
                    abs(rep%frequency_limit - 9.0_dp*w) < 1.0e-12_dp, "reduction: rule limit")
         call receptance_error(k, m, red, [125, 250], [0, 0], [w, 2.0_dp*w, 3.0_dp*w], err3, &
@@ -276,7 +276,7 @@ contains
         call check(t, rep%modes > rep_plain%modes .and. &
                    rep%highest_mode_frequency**2 <= 9.0_dp*w*20.0_dp*(1.0_dp + 1.0e-12_dp), &
                    "reduction: damped rule keeps the damping-dominated modes", &
-                   it(rep_plain%modes)//" -> "//it(rep%modes))
+                   itoa(rep_plain%modes)//" -> "//itoa(rep%modes))
         call check(t, err_rule < 0.02_dp .and. err_rule < 0.5_dp*err_plain, &
                    "reduction: damped rule error small", rt(err_plain)//" -> "//rt(err_rule))
     end subroutine test_rule_damped
@@ -298,7 +298,7 @@ contains
         if (allocated(error)) return
         call check(t, rep%modes > 20 .and. rep%highest_mode_frequency < 3.0_dp .and. &
                    .not. rep%capped, "reduction: 3000 DOFs batches pass the limit", &
-                   "modes "//it(rep%modes)//" highest "//rt(rep%highest_mode_frequency))
+                   "modes "//itoa(rep%modes)//" highest "//rt(rep%highest_mode_frequency))
         call receptance_error(k, m, red, [1500, 3000], [0, 0], [0.3_dp, 0.6_dp, 1.0_dp], err, &
                               error, cmat=c)
         call check(t, .not. allocated(error) .and. err < 0.05_dp, &
@@ -424,7 +424,7 @@ contains
         call check(t, diff <= max(10.0_dp*err, 1.0e-8_dp)*scale, &
                    "reduction: residual reduced vs full agree to the reduction error", &
                    "diff/scale "//rt(diff/scale)//" reduction error "//rt(err)//" modes "// &
-                   it(rep%modes))
+                   itoa(rep%modes))
         diff = maxval(abs(sr%rcoef(:, 1) - sf%rcoef(:, 1)))
         call check(t, diff <= max(10.0_dp*err, 1.0e-8_dp)*maxval(abs(sf%rcoef(:, 1))), &
                    "reduction: contact force reduced vs full", rt(diff))
@@ -463,8 +463,8 @@ contains
             call check(t, r%method == 'craig-bampton' .and. r%full_dof == 3000 .and. &
                        r%boundary_dof == 2 .and. r%reduced_dof == 2 + r%modes .and. &
                        cs%model%ndof == r%reduced_dof .and. r%modes > 0, &
-                       "reduction case: reduced sizes", "reduced "//it(r%reduced_dof)// &
-                       " modes "//it(r%modes))
+                       "reduction case: reduced sizes", "reduced "//itoa(r%reduced_dof)// &
+                       " modes "//itoa(r%modes))
             call check(t, r%error >= 0.0_dp .and. r%error < 0.05_dp, &
                        "reduction case: reduction error measured and small", rt(r%error))
             call check(t, r%highest_mode_frequency < 3.0_dp*3*0.03_dp, &
@@ -509,7 +509,7 @@ contains
             close (uo)
             close (ue)
             call check(t, code == 0, "reduction case: the command line exits 0 ('auto', "// &
-                       "N = 3000)", it(code))
+                       "N = 3000)", itoa(code))
             keys = .false.
             open (newunit=u, file=scratch//"/out_cb/summary.nml", status='old', &
                   action='read', iostat=stat)
@@ -593,29 +593,6 @@ contains
                                          "reduction case: bad method named", error%message)
     end subroutine test_case_file
 
-    function msg(error) result(s)
-        type(error_type), allocatable, intent(in) :: error
-        character(len=:), allocatable :: s
-        s = ""
-        if (allocated(error)) s = error%message
-    end function msg
-
-    function rt(x) result(s)
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: s
-        character(len=32) :: buf
-        write (buf, '(es10.3)') x
-        s = trim(buf)
-    end function rt
-
-    function it(i) result(s)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=16) :: buf
-        write (buf, '(i0)') i
-        s = trim(buf)
-    end function it
-
     !> The weighted residual on a reduced beam (examples/beam_mm, Craig-Bampton with 3
     !> fixed-interface modes: 5 reduced DOFs, a fixed model) against the exact event-driven
     !> reference on the same reduced model, compared on the contact and forced DOFs (full
@@ -650,11 +627,11 @@ contains
             cs%hbm%harmonics = hs(j)
             call solve_side_by_side(cs%model, cs%hbm, cs%euler, cs%reference, res, error, &
                                     observe=cs%reduction%output_rows)
-            call check(t, .not. allocated(error), "beam reference: H = "//it(hs(j))// &
+            call check(t, .not. allocated(error), "beam reference: H = "//itoa(hs(j))// &
                        " solves", msg(error))
             if (allocated(error)) return
             call check(t, res%hbm%converged .and. res%reference%converged, &
-                       "beam reference: H = "//it(hs(j))//" hbm and reference converge", &
+                       "beam reference: H = "//itoa(hs(j))//" hbm and reference converge", &
                        res%diagnosis)
             if (.not. (res%hbm%converged .and. res%reference%converged)) return
             ! comparisons(1): hbm vs reference; quantities x79, x77 (ascending full numbers)

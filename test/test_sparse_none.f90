@@ -6,7 +6,7 @@
 module test_sparse_none
     use stickslip_kinds, only: dp
     use stickslip_lapack, only: dgetrf, dgetrs
-    use stickslip_error, only: error_type
+    use stickslip_error, only: error_type, itoa
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense
     use stickslip_model, only: model_t
     use stickslip_sparse_model, only: sparse_model_t, validate_sparse_model
@@ -25,7 +25,7 @@ module test_sparse_none
     use stickslip_matrix_market, only: write_matrix_market, write_matrix_market_array, &
         read_matrix_market
     use stickslip_cli, only: run_cli, string_t
-    use fixtures, only: enter_project_root, scratch, scratch_dir, write_lines
+    use fixtures, only: enter_project_root, scratch, scratch_dir, write_lines, msg, rt
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
@@ -307,8 +307,8 @@ contains
             if (allocated(error)) return
             n = min(rs%npoints, rd%npoints)
             call check(t, rs%npoints == rd%npoints .and. n > 3, "sparse none sweep: same "// &
-                       "number of points ("//trim(so%parameter)//")", it(rs%npoints)//" vs "// &
-                       it(rd%npoints))
+                       "number of points ("//trim(so%parameter)//")", itoa(rs%npoints)//" vs "// &
+                       itoa(rd%npoints))
             dmax = 0.0_dp
             do k = 1, n
                 dmax = max(dmax, abs(rs%points(k)%parameter - rd%points(k)%parameter)/ &
@@ -414,7 +414,7 @@ contains
         code = run_cli(args, uo, ue)
         close (uo)
         close (ue)
-        call check(t, code == 0, "sparse none cli: exits 0", it(code))
+        call check(t, code == 0, "sparse none cli: exits 0", itoa(code))
         open (newunit=u, file=scratch//"/out_none/hbm.csv", status='old', action='read', &
               iostat=stat)
         line = ""
@@ -472,7 +472,7 @@ contains
             code = run_cli(args, uo, ue)
             close (uo)
             close (ue)
-            call check(t, code == 0, "sparse none files: exits 0", it(code))
+            call check(t, code == 0, "sparse none files: exits 0", itoa(code))
             rows = 0
             same_rows = 0
             open (newunit=ua, file=scratch//"/out_none/hbm.csv", status='old', action='read', &
@@ -489,7 +489,7 @@ contains
             close (ua, iostat=sa)
             close (ub, iostat=sb)
             call check(t, rows > 1 .and. same_rows == rows, "sparse none files: hbm.csv "// &
-                       "equals the DOF-list case's", it(same_rows)//" of "//it(rows))
+                       "equals the DOF-list case's", itoa(same_rows)//" of "//itoa(rows))
             call read_matrix_market(scratch//"/out_none_files/full_field.mtx", field, error)
             if (.not. allocated(error)) call sparse_to_dense(field, dense_field, error)
             call check(t, .not. allocated(error), "sparse none files: full_field.mtx reads", &
@@ -518,7 +518,7 @@ contains
         code = run_cli(args, uo, ue)
         close (uo)
         close (ue)
-        call check(t, code == 0 .or. code == 2, "sparse none cli: the sweep runs", it(code))
+        call check(t, code == 0 .or. code == 2, "sparse none cli: the sweep runs", itoa(code))
         open (newunit=u, file=scratch//"/out_none_sweep/frc.csv", status='old', &
               action='read', iostat=stat)
         line = ""
@@ -622,27 +622,4 @@ contains
                    "solution as modes are added", rt(err(1))//" "//rt(err(2))//" "// &
                    rt(err(3))//" "//rt(err(4)))
     end subroutine test_craig_bampton_converges
-
-    function it(i) result(s)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=16) :: buf
-        write (buf, '(i0)') i
-        s = trim(buf)
-    end function it
-
-    function msg(error) result(s)
-        type(error_type), allocatable, intent(in) :: error
-        character(len=:), allocatable :: s
-        s = ""
-        if (allocated(error)) s = error%message
-    end function msg
-
-    function rt(x) result(s)
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: s
-        character(len=32) :: buf
-        write (buf, '(es10.3)') x
-        s = trim(buf)
-    end function rt
 end module test_sparse_none

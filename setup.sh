@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
-pkgs=(gfortran liblapack-dev libfftw3-dev minpack-dev libopenblas0-serial libopenblas-serial-dev libopenblas-dev libsuitesparse-dev libarpack2-dev gnuplot-nox)
+pkgs=(gfortran liblapack-dev libfftw3-dev minpack-dev libopenblas0-pthread libopenblas-pthread-dev libopenblas-dev libsuitesparse-dev libarpack2-dev gnuplot-nox)
 missing=()
 for p in "${pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -25,6 +25,8 @@ module stickslip_cli
     use stickslip_summary, only: energy_balance_error, reference_balance_error
     use stickslip_gnuplot, only: run_gnuplot, rename_pictures
     use stickslip_files, only: remove_file
+    use stickslip_blas_threads, only: limit_blas_threads, parallel_threads, blas_library
+    !$ use omp_lib, only: omp_get_max_threads
     implicit none
     private
     public :: string_t, cli_options_t, parse_args, run_cli, report_run, stderr_line, &
@@ -148,6 +150,7 @@ contains
         integer :: k
 
         code = 0
+        call limit_blas_threads()
         call parse_args(args, opts, error)
         if (.not. allocated(error)) then
             if (opts%help) then
@@ -156,9 +159,11 @@ contains
             end if
             if (opts%version) then
                 write (out_unit, '(a)') "stickslip "//stickslip_version
+                write (out_unit, '(a)') "BLAS/LAPACK: "//blas_library()
                 return
             end if
             if (size(opts%case_paths) > 1) then
+                call note_serial_blas(err_unit)
                 code = run_cases(opts%case_paths, opts%quiet, out_unit, err_unit)
                 return
             end if
@@ -182,10 +187,31 @@ contains
             progress%interval = progress_interval
         end if
         progress%label = trim(case%method)
+        if (case%method == 'study' .or. case%method == 'robustness') &
+            call note_serial_blas(err_unit)
         call progress%begin()
         call run_method(case, result, error, progress)
         code = report_run(case, result, error, opts%quiet, out_unit, err_unit)
     end function run_cli
+
+    !> A `stickslip: note:` line on `err_unit` when OMP_NUM_THREADS asks for several threads
+    !> but the linked BLAS is not safe from several threads at once (OpenBLAS's serial
+    !> build), so that the parallel loops run on one thread (parallel_threads); nothing
+    !> otherwise.
+    subroutine note_serial_blas(err_unit)
+        !> Unit for the note.
+        integer, intent(in) :: err_unit
+        integer :: wanted
+        character(len=12) :: buf
+        wanted = 1
+        !$ wanted = omp_get_max_threads()
+        if (wanted <= 1 .or. parallel_threads() == wanted) return
+        write (buf, '(i0)') wanted
+        write (err_unit, '(a)') "stickslip: note: running on 1 thread instead of "//trim(buf)// &
+            ": the linked BLAS/LAPACK, "//blas_library()//", gives wrong answers when "// &
+            "called from several threads at once (install libopenblas0-pthread; README "// &
+            "'BLAS/LAPACK')"
+    end subroutine note_serial_blas
 
     !> A multi-case run: every case of `paths` read and run as `stickslip <path>` would, the
     !> cases in parallel when built with OpenMP (OMP_NUM_THREADS threads, one case per thread
@@ -206,8 +232,10 @@ contains
         type(string_t), allocatable :: outs(:), errs(:)
         integer, allocatable :: codes(:)
         integer :: i, j, k
+        integer :: nthreads
         allocate (outs(size(paths)), errs(size(paths)), codes(size(paths)))
-        !$omp parallel do schedule(dynamic, 1) default(shared) private(i)
+        nthreads = parallel_threads()
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(i) num_threads(nthreads)
         do i = 1, size(paths)
             call run_buffered(paths(i)%s, quiet, codes(i), outs(i)%s, errs(i)%s)
         end do

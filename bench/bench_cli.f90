@@ -24,9 +24,11 @@ program bench_cli
     use stickslip_dynamics, only: dynamics_t
     use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_csv, only: write_hbm_csv, write_coefficients_csv
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     character(len=512) :: mode, path, dir
 
+    call limit_blas_threads()
     call get_command_argument(1, mode)
     call get_command_argument(2, path)
     call get_command_argument(3, dir)

@@ -20,6 +20,7 @@ program bench_euler
     use stickslip_contact_solve, only: contact_forces
     use stickslip_case, only: case_t, read_case
     use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     type(case_t) :: c, cx
     integer :: icase
@@ -35,6 +36,7 @@ program bench_euler
     character(len=32) :: arg
     logical :: seed_only
 
+    call limit_blas_threads()
     repeats = 5
     nargs = command_argument_count()
     if (nargs >= 1) then

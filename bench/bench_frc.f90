@@ -18,6 +18,7 @@ program bench_frc
     use stickslip_sweep, only: sweep_result_t, run_sweep
     use stickslip_hbm, only: solve_periodic
     use stickslip_solution, only: hbm_solution_t
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     type(case_t) :: c
     type(error_type), allocatable :: error
@@ -29,6 +30,7 @@ program bench_frc
         "H=30, 128 samples, + stability", "H=30, 128 samples, + both", &
         "H=30, 1024 samples, no stability"]
 
+    call limit_blas_threads()
     repeats = 3
     if (command_argument_count() > 0) then
         call get_command_argument(1, arg)

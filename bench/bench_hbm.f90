@@ -14,6 +14,7 @@ program bench_hbm
     use stickslip_hbm, only: solve_periodic
     use stickslip_case, only: case_t, read_case
     use stickslip_study, only: median
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     integer, parameter :: hs(8) = [5, 10, 20, 30, 50, 100, 200, 256]
     type(model_t) :: m
@@ -26,6 +27,7 @@ program bench_hbm
     character(len=32) :: arg
     logical :: sweep
 
+    call limit_blas_threads()
     sweep = .false.
     do i = 1, command_argument_count()
         call get_command_argument(i, arg)

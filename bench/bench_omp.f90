@@ -13,6 +13,7 @@ program bench_omp
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_case, only: case_t, read_case
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     integer, parameter :: npoints = 64
     type(case_t) :: c
@@ -21,6 +22,7 @@ program bench_omp
     integer :: nfail
     integer(int64) :: c0, c1, c2, rate
 
+    call limit_blas_threads()
     call read_case("examples/seed.nml", c, read_error)
     if (allocated(read_error)) then
         write (output_unit, '(a)') "error: "//read_error%message

@@ -37,6 +37,7 @@ program bench_reduction
     use stickslip_arpack, only: eigen_options_t, eigen_report_t
     use stickslip_sparse_eigen, only: sparse_eigenpairs, sparse_eigenpairs_below, &
         eigen_range_report_t
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
 
     !> Plate: length, height, thickness [m], Young's modulus [Pa], Poisson ratio, density.
@@ -56,6 +57,7 @@ program bench_reduction
     character(len=32) :: arg
     integer :: stat
 
+    call limit_blas_threads()
     max_level = 3
     repeats = 3
     if (command_argument_count() >= 1) then

@@ -24,6 +24,7 @@ program bench_robustness
     use stickslip_csv, only: write_robustness_csv
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
         default_robustness_options
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     type(case_t) :: c
     type(robustness_options_t) :: r
@@ -38,6 +39,7 @@ program bench_robustness
     integer :: ndiff, nflags
     real(dp) :: worst
 
+    call limit_blas_threads()
     start = 'direct'
     step = 0.25_dp
     scale = 1.0_dp

@@ -21,6 +21,7 @@ program bench_solver
     use stickslip_case, only: case_t, read_case
     use stickslip_study, only: median
     use stickslip_lapack, only: dgetrf, dgeqrf, dorgqr
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     integer, parameter :: seed_h(8) = [10, 20, 35, 50, 75, 100, 200, 256]
     type(case_t) :: c
@@ -30,6 +31,7 @@ program bench_solver
     character(len=32) :: arg
     logical :: quick, profile
 
+    call limit_blas_threads()
     quick = .false.
     profile = .false.
     do i = 1, command_argument_count()

@@ -15,6 +15,7 @@ program bench_study
     use stickslip_error, only: error_type
     use stickslip_case, only: case_t, read_case
     use stickslip_study, only: study_result_t, run_study
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     character(len=*), parameter :: cases(2) = [character(len=28) :: &
         "examples/seed_study.nml", "examples/chain4_study.nml"]
@@ -29,6 +30,7 @@ program bench_study
     integer :: i, k, nthreads
     logical :: same
 
+    call limit_blas_threads()
     nthreads = 2
     if (command_argument_count() >= 2) then
         call get_command_argument(1, arg)

@@ -43,6 +43,7 @@ program tester
     use test_calculix, only: run_calculix_tests
     use test_solver, only: run_solver_tests
     use test_csv_format, only: run_csv_format_tests
+    use stickslip_blas_threads, only: limit_blas_threads
     implicit none
     type(test_counter_t) :: t
     integer :: n, i, ran
@@ -54,6 +55,8 @@ program tester
     do i = 1, size(wanted)
         call get_command_argument(i, wanted(i))
     end do
+    ! as the stickslip program does: one BLAS thread (OpenBLAS's pthreads build)
+    call limit_blas_threads()
     ran = 0
     if (selected("basis")) call run_basis_tests(t)
     if (selected("hbm")) call run_hbm_tests(t)

@@ -25,6 +25,7 @@ module stickslip_robustness
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_rho, only: automatic_rho
     use stickslip_progress, only: progress_t
+    use stickslip_blas_threads, only: parallel_threads
     use stickslip_thread_clock, only: thread_cpu_seconds
     implicit none
     private
@@ -257,7 +258,7 @@ contains
         type(point_reference_t), allocatable :: refs(:, :)
         type(task_error_t), allocatable :: ref_errors(:), sweep_errors(:)
         integer, allocatable :: order(:)
-        integer :: nw, nmu, ne, ncfg, nwarm, per_mu, nrow, done, t, n, h
+        integer :: nw, nmu, ne, ncfg, nwarm, per_mu, nrow, done, t, n, h, nthreads
 
         call validate_model(model, error)
         if (allocated(error)) return
@@ -277,9 +278,10 @@ contains
         nrow = nmu*per_mu
         allocate (rows(nrow), refs(nw, nmu), ref_errors(nw*nmu), sweep_errors(nmu*ncfg))
         done = 0
+        nthreads = parallel_threads()
 
         ! the references of every grid point, and the Euler rows beside each
-        !$omp parallel do schedule(dynamic, 1) default(shared) private(t)
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(t) num_threads(nthreads)
         do t = 1, nw*nmu
             call reference_task(t)
         end do
@@ -297,7 +299,7 @@ contains
         do h = maxval(opts%harmonics), 1, -1
             order = [order, pack([(t, t=1, nmu*ncfg)], [(harmonics_of(t) == h, t=1, nmu*ncfg)])]
         end do
-        !$omp parallel do schedule(dynamic, 1) default(shared) private(n)
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(n) num_threads(nthreads)
         do n = 1, size(order)
             call sweep_task(order(n))
         end do

@@ -18,6 +18,7 @@ module stickslip_study
         validate_reference_start_options
     use stickslip_compare, only: comparison_t, compare_samples, evaluate_series
     use stickslip_progress, only: progress_t
+    use stickslip_blas_threads, only: parallel_threads
     use stickslip_thread_clock, only: thread_cpu_seconds
     implicit none
     private
@@ -178,7 +179,7 @@ contains
         type(task_error_t), allocatable :: errors(:)
         real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
         real(dp) :: c0, c1
-        integer :: i, j, ns, n, ntask, done
+        integer :: i, j, ns, n, ntask, done, nthreads
 
         call validate_model(model, error)
         if (allocated(error)) return
@@ -241,7 +242,8 @@ contains
         ntask = size(hos) + size(eos)
         allocate (res%rows(ntask), errors(ntask))
         done = res%skipped
-        !$omp parallel do schedule(dynamic, 1) default(shared) private(n)
+        nthreads = parallel_threads()
+        !$omp parallel do schedule(dynamic, 1) default(shared) private(n) num_threads(nthreads)
         do n = ntask, 1, -1
             if (n <= size(hos)) then
                 call hbm_row(hos(n), res%rows(n), errors(n)%error)

@@ -1,0 +1,151 @@
+!> Which BLAS/LAPACK the process linked, whether it may be called from several threads at
+!> once, and how many threads stickslip's own parallel loops may use with it.
+!>
+!> stickslip links `-llapack -lblas`, whatever library the system provides under those names
+!> (Debian's alternatives: reference LAPACK or a variant of OpenBLAS; MKL; a vendor's). The
+!> library is asked at run time through the dynamic linker (`dlsym`, looking up OpenBLAS's own
+!> entry points; nothing is linked that another BLAS lacks):
+!> - OpenBLAS's serial build (Debian `libopenblas0-serial`, `openblas_get_parallel() == 0`) is
+!>   compiled without locking: two threads calling LU or matrix products at once may share one
+!>   work buffer and get wrong answers (measured: 56-102 of 4000 concurrent 60 x 60 `dgetrf` +
+!>   `dgetrs` differed from the serial result on 2 threads, none with the pthreads build or
+!>   the reference LAPACK). With it, every parallel loop of stickslip runs on one thread.
+!> - OpenBLAS's pthreads build (Debian `libopenblas0-pthread`, what setup.sh installs) is
+!>   thread-safe; it would itself start threads for every call, so `limit_blas_threads` sets
+!>   it to one thread unless the environment sets OPENBLAS_NUM_THREADS.
+!> - OpenBLAS's OpenMP build runs single-threaded inside OpenMP parallel regions; safe.
+!> - Any other BLAS (reference, MKL, ...) is taken as thread-safe.
+!> No state is kept: every function asks the dynamic linker again (a few microseconds).
+module stickslip_blas_threads
+    use, intrinsic :: iso_c_binding, only: c_ptr, c_funptr, c_null_ptr, c_null_char, c_char, &
+        c_int, c_associated, c_f_procpointer, c_f_pointer
+    !$ use omp_lib, only: omp_get_max_threads
+    implicit none
+    private
+    public :: blas_library, blas_thread_safe, limit_blas_threads, parallel_threads
+
+    interface
+        !> glibc's symbol lookup (in libc itself since glibc 2.34).
+        function c_dlsym(handle, name) bind(c, name='dlsym')
+            import :: c_ptr, c_funptr, c_char
+            type(c_ptr), value :: handle
+            character(kind=c_char), intent(in) :: name(*)
+            type(c_funptr) :: c_dlsym
+        end function c_dlsym
+
+        function c_strlen(s) bind(c, name='strlen')
+            import :: c_ptr, c_int
+            type(c_ptr), value :: s
+            integer(c_int) :: c_strlen
+        end function c_strlen
+    end interface
+
+    abstract interface
+        !> int openblas_get_parallel(void)
+        function int_getter() bind(c)
+            import :: c_int
+            integer(c_int) :: int_getter
+        end function int_getter
+        !> char *openblas_get_config(void)
+        function string_getter() bind(c)
+            import :: c_ptr
+            type(c_ptr) :: string_getter
+        end function string_getter
+        !> void openblas_set_num_threads(int)
+        subroutine int_setter(n) bind(c)
+            import :: c_int
+            integer(c_int), value :: n
+        end subroutine int_setter
+    end interface
+
+    !> openblas_get_parallel(): not OpenBLAS, serial, pthreads, OpenMP.
+    integer, parameter :: not_openblas = -1, openblas_serial = 0, openblas_pthreads = 1, &
+        openblas_openmp = 2
+
+contains
+
+    !> A one-line description of the BLAS the process linked: OpenBLAS's configuration string
+    !> and its threading ("OpenBLAS 0.3.21 ... SkylakeX MAX_THREADS=64 (pthreads build)"), or
+    !> "not OpenBLAS (reference, MKL or another)". No errors.
+    function blas_library() result(text)
+        character(len=:), allocatable :: text
+        procedure(string_getter), pointer :: get_config
+        type(c_funptr) :: f
+        type(c_ptr) :: s
+        character(kind=c_char), pointer :: chars(:)
+        integer :: n, i
+        f = c_dlsym(c_null_ptr, "openblas_get_config"//c_null_char)
+        if (.not. c_associated(f)) then
+            text = "not OpenBLAS (reference, MKL or another)"
+            return
+        end if
+        call c_f_procpointer(f, get_config)
+        s = get_config()
+        if (.not. c_associated(s)) then
+            text = "OpenBLAS"
+        else
+            n = c_strlen(s)
+            call c_f_pointer(s, chars, [n])
+            allocate (character(len=n) :: text)
+            do i = 1, n
+                text(i:i) = chars(i)
+            end do
+        end if
+        select case (openblas_threading())
+        case (openblas_serial)
+            text = text//" (serial build)"
+        case (openblas_pthreads)
+            text = text//" (pthreads build)"
+        case (openblas_openmp)
+            text = text//" (OpenMP build)"
+        end select
+    end function blas_library
+
+    !> False when the linked BLAS is known to give wrong answers if called from several threads
+    !> at once (OpenBLAS's serial build, compiled without locking, as Debian ships it); true
+    !> otherwise. No errors.
+    logical function blas_thread_safe()
+        blas_thread_safe = openblas_threading() /= openblas_serial
+    end function blas_thread_safe
+
+    !> If the linked BLAS is OpenBLAS's pthreads build and the environment does not set
+    !> OPENBLAS_NUM_THREADS, make its calls single-threaded (openblas_set_num_threads(1)):
+    !> stickslip's matrices are small and its parallelism is its own (OpenMP over cases, study
+    !> points), so BLAS threads only oversubscribe the cores. Process-wide; call it once before
+    !> any parallel work (the stickslip program and the test driver do). Nothing for any other
+    !> BLAS. No errors.
+    subroutine limit_blas_threads()
+        procedure(int_setter), pointer :: set_threads
+        type(c_funptr) :: f
+        integer :: length, stat
+        if (openblas_threading() /= openblas_pthreads) return
+        call get_environment_variable("OPENBLAS_NUM_THREADS", length=length, status=stat)
+        if (stat == 0 .and. length > 0) return
+        f = c_dlsym(c_null_ptr, "openblas_set_num_threads"//c_null_char)
+        if (.not. c_associated(f)) return
+        call c_f_procpointer(f, set_threads)
+        call set_threads(1_c_int)
+    end subroutine limit_blas_threads
+
+    !> Threads a parallel loop of stickslip may use: the OpenMP maximum
+    !> (OMP_NUM_THREADS), or 1 when the linked BLAS is not thread-safe (see
+    !> blas_thread_safe) or the library is built without OpenMP. No errors.
+    integer function parallel_threads()
+        parallel_threads = 1
+        !$ parallel_threads = omp_get_max_threads()
+        if (parallel_threads > 1) then
+            if (.not. blas_thread_safe()) parallel_threads = 1
+        end if
+    end function parallel_threads
+
+    !> openblas_get_parallel() of the linked OpenBLAS, or not_openblas.
+    integer function openblas_threading()
+        procedure(int_getter), pointer :: get_parallel
+        type(c_funptr) :: f
+        openblas_threading = not_openblas
+        f = c_dlsym(c_null_ptr, "openblas_get_parallel"//c_null_char)
+        if (.not. c_associated(f)) return
+        call c_f_procpointer(f, get_parallel)
+        openblas_threading = int(get_parallel())
+    end function openblas_threading
+end module stickslip_blas_threads

@@ -262,10 +262,6 @@ contains
                    all(rows(3:6)%rho == 5.0_dp) .and. all(rows(7:10)%rho_auto) .and. &
                    all(rows([3, 4, 7, 8])%omega == 4.5_dp) .and. &
                    all(rows([5, 6, 9, 10])%omega == 4.0_dp), "robustness grid: row order")
-        do k = 1, size(rows)
-            print '(i3,1x,a10,3g12.4,l2,l2,i5,g12.4,1x,a)', k, rows(k)%method, rows(k)%omega, rows(k)%mu, rows(k)%rho, &
-              rows(k)%converged, rows(k)%success, rows(k)%iterations, rows(k)%err_amplitude, trim(rows(k)%diagnosis)
-        end do
         ok = .true.
         do k = 1, size(rows)
             if (rows(k)%method == 'euler') then

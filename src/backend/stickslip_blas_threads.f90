@@ -12,7 +12,9 @@
 !>   the reference LAPACK). With it, every parallel loop of stickslip runs on one thread.
 !> - OpenBLAS's pthreads build (Debian `libopenblas0-pthread`, what setup.sh installs) is
 !>   thread-safe; it would itself start threads for every call, so `limit_blas_threads` sets
-!>   it to one thread unless the environment sets OPENBLAS_NUM_THREADS.
+!>   it to one thread unless the environment sets OPENBLAS_NUM_THREADS, and stops the worker
+!>   threads it started when loaded (they spin in sched_yield for a while otherwise: 0.09 s
+!>   of system time in a 0.2 s run).
 !> - OpenBLAS's OpenMP build runs single-threaded inside OpenMP parallel regions; safe.
 !> - Any other BLAS (reference, MKL, ...) is taken as thread-safe.
 !> No state is kept: every function asks the dynamic linker again (a few microseconds).
@@ -41,7 +43,7 @@ module stickslip_blas_threads
     end interface
 
     abstract interface
-        !> int openblas_get_parallel(void)
+        !> int openblas_get_parallel(void), int blas_thread_shutdown_(void)
         function int_getter() bind(c)
             import :: c_int
             integer(c_int) :: int_getter
@@ -116,6 +118,7 @@ contains
     !> BLAS. No errors.
     subroutine limit_blas_threads()
         procedure(int_setter), pointer :: set_threads
+        procedure(int_getter), pointer :: shutdown
         type(c_funptr) :: f
         integer :: length, stat
         if (openblas_threading() /= openblas_pthreads) return
@@ -125,6 +128,13 @@ contains
         if (.not. c_associated(f)) return
         call c_f_procpointer(f, set_threads)
         call set_threads(1_c_int)
+        ! the worker threads started when the library was loaded would otherwise spin
+        ! (sched_yield) for a while with nothing to do: stop them (OpenBLAS starts them again
+        ! if a call ever asks for threads)
+        f = c_dlsym(c_null_ptr, "blas_thread_shutdown_"//c_null_char)
+        if (.not. c_associated(f)) return
+        call c_f_procpointer(f, shutdown)
+        stat = int(shutdown())
     end subroutine limit_blas_threads
 
     !> Threads a parallel loop of stickslip may use: the OpenMP maximum

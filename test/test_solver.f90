@@ -33,6 +33,7 @@ contains
         type(test_counter_t), intent(inout) :: t
         call test_newton_kink(t)
         call test_newton_singular(t)
+        call test_newton_mixed(t)
         call test_options(t)
         call test_seed(t)
         call test_chain(t)
@@ -274,6 +275,63 @@ contains
         if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
                                          "newton ftarget = 0 is an input error")
     end subroutine test_newton_kink
+
+    !> Chord steps and single-precision factorizations (n >= single_min_unknowns) reach the
+    !> root of the all-double Newton iteration; a Jacobian that single precision cannot hold
+    !> (the pivot screen turned off) is factorized again in double precision after its step
+    !> fails, and the iteration still converges. (A Jacobian of condition 1e10 converged in
+    !> single precision alone: its step errors lie where ||F|| hardly sees them.)
+    subroutine test_newton_mixed(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 240
+        type(kink_t) :: sys
+        type(newton_options_t) :: opts, plain
+        type(newton_report_t) :: rep, rep_plain
+        type(error_type), allocatable :: error
+        real(dp) :: x(n), x_plain(n), root(n)
+        integer :: i, j
+        allocate (sys%a(n, n))
+        do j = 1, n
+            do i = 1, n
+                sys%a(i, j) = 0.3_dp*sin(real(3*i + 7*j, dp))/sqrt(real(n, dp))
+            end do
+            sys%a(j, j) = sys%a(j, j) + 2.0_dp
+        end do
+        root = [(cos(real(5*i, dp)), i=1, n)]
+        sys%b = matmul(sys%a, root) + max(root, 0.0_dp)
+        opts%ftarget = 1.0e-11_dp
+        plain = opts
+        plain%chord_ratio = 0.0_dp
+        plain%single_min_unknowns = 0
+        x = -root
+        call solve_newton(sys, x, opts, rep, error)
+        call check_error(t, error, "newton mixed runs", .false.)
+        x_plain = -root
+        call solve_newton(sys, x_plain, plain, rep_plain, error)
+        call check_error(t, error, "newton plain runs", .false.)
+        call check(t, rep%outcome == newton_converged .and. rep%single_lus >= 1 .and. &
+                   rep_plain%outcome == newton_converged .and. rep_plain%single_lus == 0 .and. &
+                   rep_plain%chord_steps == 0 .and. rep%double_retries == 0, &
+                   "newton mixed: single-precision LUs, converged")
+        call check_close(t, x, root, "newton mixed: the root", rtol=1.0e-10_dp, atol=1.0e-10_dp)
+        call check_close(t, x, x_plain, "newton mixed = all-double Newton", rtol=1.0e-10_dp, &
+                         atol=1.0e-10_dp)
+        ! a Jacobian beyond single precision's range (entries 1e40) with the pivot screen
+        ! turned off: the single-precision step is NaN and fails, the same step in double
+        ! precision is taken
+        sys%a = 1.0e40_dp*sys%a
+        sys%b = matmul(sys%a, root) + max(root, 0.0_dp)
+        opts%single_pivot_min = 0.0_dp
+        opts%ftarget = 1.0e-11_dp*1.0e40_dp
+        x = root + 0.01_dp
+        call solve_newton(sys, x, opts, rep, error)
+        call check_error(t, error, "newton out of single range runs", .false.)
+        call check(t, rep%outcome == newton_converged .and. rep%single_lus >= 1 .and. &
+                   rep%double_retries >= 1, &
+                   "newton out of single range: the single step failed, double converged")
+        call check_close(t, x, root, "newton out of single range: the root", &
+                         rtol=1.0e-10_dp, atol=1.0e-10_dp)
+    end subroutine test_newton_mixed
 
     !> A singular Jacobian is an outcome (the caller falls back), not an error.
     subroutine test_newton_singular(t)

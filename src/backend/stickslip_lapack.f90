@@ -1,11 +1,11 @@
 !> Explicit interfaces to the few LAPACK routines stickslip calls (system liblapack).
 !> Only interfaces: no state, no wrappers that hide `info`.
 module stickslip_lapack
-    use stickslip_kinds, only: dp
+    use stickslip_kinds, only: dp, sp
     implicit none
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
-        zgesv, dsygv
+        zgesv, dsygv, sgetrf, sgetrs
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -137,6 +137,26 @@ module stickslip_lapack
             real(dp), intent(out) :: work(*)
             integer, intent(out) :: info
         end subroutine dsygv
+        !> LU factorization of a general single-precision matrix with partial pivoting.
+        subroutine sgetrf(m, n, a, lda, ipiv, info)
+            import :: sp
+            integer, intent(in) :: m, n, lda
+            real(sp), intent(inout) :: a(lda, *)
+            integer, intent(out) :: ipiv(*)
+            integer, intent(out) :: info
+        end subroutine sgetrf
+
+        !> Solve with the single-precision LU factors from sgetrf.
+        subroutine sgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)
+            import :: sp
+            character(len=1), intent(in) :: trans
+            integer, intent(in) :: n, nrhs, lda, ldb
+            real(sp), intent(in) :: a(lda, *)
+            integer, intent(in) :: ipiv(*)
+            real(sp), intent(inout) :: b(ldb, *)
+            integer, intent(out) :: info
+        end subroutine sgetrs
+
         !> Reciprocal condition number estimate of a real matrix from its LU factors.
         subroutine dgecon(norm, n, a, lda, anorm, rcond, work, iwork, info)
             import :: dp

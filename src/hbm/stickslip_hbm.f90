@@ -526,7 +526,8 @@ contains
         low_target = max(target_norm, 1.0e-6_dp*sol%fscale)
         do i = nlev, 2, -1
             call new_condensed_problem(low, prob%dyn, prob%limit, levels(i), opts%odd_only, &
-                                       opts%samples, opts%rho, error, s%force_harmonic)
+                                       level_samples(opts%samples, opts%harmonics, levels(i)), &
+                                       opts%rho, error, s%force_harmonic)
             if (allocated(error)) return
             nbl = low%basis%nb
             ylow = reshape(rfull(1:nbl, :), [nbl*nc])
@@ -538,6 +539,19 @@ contains
         y = reshape(rfull, [nb*nc])
         call solve_stage(prob, y, opts, target_norm, sol, error, warm .or. nlev > 1)
     end subroutine solve_halving_ladder
+
+    !> Samples of a lower level of the halving ladder: the requested samples per harmonic
+    !> kept (samples h / H, up to a power of two, at least 64), never more than `samples`.
+    !> A level is only a warm start; its cost goes with its samples (the residual, the
+    !> Jacobian and, for the cold hybrj stage, every evaluation).
+    pure integer function level_samples(samples, harmonics, h) result(nt)
+        integer, intent(in) :: samples, harmonics, h
+        nt = 64
+        do while (real(nt, dp)*real(harmonics, dp) < real(samples, dp)*real(h, dp))
+            nt = 2*nt
+        end do
+        nt = max(min(nt, samples), 2*h + 1)
+    end function level_samples
 
     !> Settle undetermined mean forces, recover every DOF, energies, stick statistics and
     !> samples.

@@ -13,6 +13,8 @@ module test_solver
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_newton, only: newton_options_t, newton_report_t, solve_newton, &
         newton_converged, newton_singular
+    use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
+    use stickslip_powell, only: solve_powell
     use fixtures, only: seed_model, chain_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
@@ -27,6 +29,14 @@ module test_solver
         procedure :: jacobian => kink_jacobian
     end type kink_t
 
+    !> Broyden's tridiagonal function (a smooth MINPACK test problem):
+    !> F_i = (3 - 2 x_i) x_i - x_{i-1} - 2 x_{i+1} + 1, x_0 = x_{n+1} = 0.
+    type, extends(nonlinear_system_t) :: broyden_t
+    contains
+        procedure :: residual => broyden_residual
+        procedure :: jacobian => broyden_jacobian
+    end type broyden_t
+
 contains
 
     subroutine run_solver_tests(t)
@@ -34,6 +44,7 @@ contains
         call test_newton_kink(t)
         call test_newton_singular(t)
         call test_newton_mixed(t)
+        call test_powell(t)
         call test_options(t)
         call test_seed(t)
         call test_chain(t)
@@ -332,6 +343,92 @@ contains
         call check_close(t, x, root, "newton out of single range: the root", &
                          rtol=1.0e-10_dp, atol=1.0e-10_dp)
     end subroutine test_newton_mixed
+
+    !> Powell's hybrid method on LAPACK's QR (solve_powell) against MINPACK's hybrj: the same
+    !> iterates up to roundoff, so the same evaluation counts, info and answer, on a smooth
+    !> system (Broyden tridiagonal, n = 60, from x = -1) and on a piecewise-linear one (the
+    !> kink system, n = 240); mode 2 without diag is an input error.
+    subroutine test_powell(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 60, nk = 240
+        type(broyden_t) :: smooth
+        type(kink_t) :: kink
+        type(hybrj_options_t) :: opts
+        type(hybrj_report_t) :: rep_h, rep_p
+        type(error_type), allocatable :: error
+        real(dp) :: xh(n), xp(n), root(nk), kh(nk), kp(nk)
+        integer :: i, j
+        xh = -1.0_dp
+        xp = -1.0_dp
+        opts%xtol = 1.0e-13_dp
+        call solve_hybrj(smooth, xh, opts, rep_h, error)
+        call check_error(t, error, "powell: hybrj on Broyden's function runs", .false.)
+        call solve_powell(smooth, xp, opts, rep_p, error)
+        call check_error(t, error, "powell: solve_powell on Broyden's function runs", .false.)
+        call check(t, rep_p%info == rep_h%info .and. rep_p%info == 1 .and. &
+                   rep_p%nfev == rep_h%nfev .and. rep_p%njev == rep_h%njev, &
+                   "powell: Broyden's function, same info and counts as hybrj")
+        call check_close(t, xp, xh, "powell: Broyden's function, hybrj's root", &
+                         rtol=1.0e-12_dp, atol=1.0e-12_dp)
+        call check(t, rep_p%fnorm < 1.0e-12_dp, "powell: Broyden's function, ||F|| ~ 0")
+        allocate (kink%a(nk, nk))
+        do j = 1, nk
+            do i = 1, nk
+                kink%a(i, j) = 0.3_dp*sin(real(3*i + 7*j, dp))/sqrt(real(nk, dp))
+            end do
+            kink%a(j, j) = kink%a(j, j) + 2.0_dp
+        end do
+        root = [(cos(real(5*i, dp)), i=1, nk)]
+        kink%b = matmul(kink%a, root) + max(root, 0.0_dp)
+        kh = -root
+        kp = -root
+        opts%ftarget = 1.0e-10_dp
+        call solve_hybrj(kink, kh, opts, rep_h, error)
+        call check_error(t, error, "powell: hybrj on the kink system runs", .false.)
+        call solve_powell(kink, kp, opts, rep_p, error)
+        call check_error(t, error, "powell: solve_powell on the kink system runs", .false.)
+        call check(t, rep_p%target_met .and. rep_h%target_met .and. &
+                   rep_p%nfev == rep_h%nfev .and. rep_p%njev == rep_h%njev, &
+                   "powell: kink system, target met with hybrj's counts")
+        call check_close(t, kp, root, "powell: kink system root", rtol=1.0e-9_dp, &
+                         atol=1.0e-9_dp)
+        opts%mode = 2
+        call solve_powell(smooth, xp, opts, rep_p, error)
+        call check_error(t, error, "powell: mode 2 without diag rejected", .true.)
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
+                                         "powell: mode 2 without diag is an input error")
+    end subroutine test_powell
+
+    subroutine broyden_residual(self, x, f, stat)
+        class(broyden_t), intent(inout) :: self
+        real(dp), intent(in) :: x(:)
+        real(dp), intent(out) :: f(:)
+        integer, intent(inout) :: stat
+        integer :: i, n
+        n = size(x)
+        do i = 1, n
+            f(i) = (3.0_dp - 2.0_dp*x(i))*x(i) + 1.0_dp
+            if (i > 1) f(i) = f(i) - x(i - 1)
+            if (i < n) f(i) = f(i) - 2.0_dp*x(i + 1)
+        end do
+        if (stat /= 0) return
+    end subroutine broyden_residual
+
+    subroutine broyden_jacobian(self, x, jac, stat)
+        class(broyden_t), intent(inout) :: self
+        real(dp), intent(in) :: x(:)
+        real(dp), intent(out) :: jac(:, :)
+        integer, intent(inout) :: stat
+        integer :: i, n
+        n = size(x)
+        jac = 0.0_dp
+        do i = 1, n
+            jac(i, i) = 3.0_dp - 4.0_dp*x(i)
+            if (i > 1) jac(i, i - 1) = -1.0_dp
+            if (i < n) jac(i, i + 1) = -2.0_dp
+        end do
+        if (stat /= 0) return
+    end subroutine broyden_jacobian
 
     !> A singular Jacobian is an outcome (the caller falls back), not an error.
     subroutine test_newton_singular(t)

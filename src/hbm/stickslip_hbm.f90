@@ -17,6 +17,7 @@ module stickslip_hbm
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem, new_condensed_problem
     use stickslip_dynamics, only: dynamics_t, near_singular_threshold
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
+    use stickslip_powell, only: solve_powell
     use stickslip_newton, only: newton_options_t, newton_report_t, solve_newton, &
         newton_converged
     use stickslip_rho, only: automatic_rho, rho_fraction
@@ -430,7 +431,12 @@ contains
         hopts%mode = 1
         if (opts%stop_at_tol) hopts%ftarget = target_norm
         do call_no = 1, max_calls_per_stage
-            call solve_hybrj(prob, y, hopts, report, error)
+            ! the Newton path's Powell stages run hybrj's algorithm on LAPACK's blocked QR
+            if (use_newton(opts, prob%n)) then
+                call solve_powell(prob, y, hopts, report, error)
+            else
+                call solve_hybrj(prob, y, hopts, report, error)
+            end if
             sol%nfev = sol%nfev + report%nfev
             sol%njev = sol%njev + report%njev
             sol%hybrj_calls = sol%hybrj_calls + 1

@@ -10,6 +10,7 @@
 !> every attempt's diagnosis.
 module stickslip_reference_start
     use stickslip_kinds, only: dp
+    use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_diagnostics, only: level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
@@ -103,7 +104,7 @@ contains
         do attempt = 1, 2
             if (attempt == 1 .and. opts%start == 'euler') cycle
             if (attempt == 2 .and. opts%start == 'hbm') exit
-            call cpu_time(c0)
+            c0 = thread_cpu_seconds()
             if (attempt == 1) then
                 if (given_hbm()) then
                     call shoot("hbm", hbm_start%x, hbm_start%v)
@@ -113,7 +114,7 @@ contains
                     ho%harmonics = max(ho%harmonics, maxval([0, model%force_harmonic]))
                     if (ho%samples < 2*ho%harmonics + 1) ho%samples = 4*ho%harmonics
                     call solve_periodic(model, ho, hs, start_error)
-                    call cpu_time(c1)
+                    c1 = thread_cpu_seconds()
                     start_seconds = start_seconds + (c1 - c0)
                     if (allocated(start_error)) then
                         call note("the weighted-residual start failed: "//start_error%message)
@@ -130,7 +131,7 @@ contains
                 else
                     if (present(euler_opts)) eo = euler_opts
                     call integrate_euler(model, eo, es, start_error)
-                    call cpu_time(c1)
+                    c1 = thread_cpu_seconds()
                     start_seconds = start_seconds + (c1 - c0)
                     if (allocated(start_error)) then
                         call note("the implicit Euler start failed: "//start_error%message)

@@ -14,6 +14,7 @@
 module stickslip_sweep
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
     use stickslip_kinds, only: dp
+    use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
@@ -373,7 +374,7 @@ contains
         type(point_tally_t) :: tally
         integer :: k
 
-        call cpu_time(c0)
+        c0 = thread_cpu_seconds()
         if (present(sparse)) then
             call validate_sparse_model(sparse, error)
             if (allocated(error)) return
@@ -651,9 +652,9 @@ contains
             end if
             call tally%add_point(ps%diagnostics, pt%truncation, pt%parameter)
             if (opts%stability) then
-                call cpu_time(s0)
+                s0 = thread_cpu_seconds()
                 call periodic_stability(m, ps, ref, fl, error)
-                call cpu_time(s1)
+                s1 = thread_cpu_seconds()
                 res%stability_seconds = res%stability_seconds + (s1 - s0)
                 if (allocated(error)) return
                 if (fl%verdict /= 'unknown') then
@@ -668,7 +669,7 @@ contains
             end if
             res%npoints = res%npoints + 1
             res%points(res%npoints) = pt
-            call cpu_time(c1)
+            c1 = thread_cpu_seconds()
             res%seconds = res%seconds + (c1 - c0)
             c0 = c1
             if (present(observer)) call observer%observe(res, error)

@@ -12,6 +12,7 @@
 module stickslip_reference
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
+    use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
@@ -270,7 +271,7 @@ contains
         integer :: n, nc, ns, j, k, ksec, nsamp
         character(len=400) :: buf
 
-        call cpu_time(c0)
+        c0 = thread_cpu_seconds()
         n = model%ndof
         nc = model%ncontact()
         ns = size(xs, 1)
@@ -364,7 +365,7 @@ contains
                 "bracket_steps"
             res%diagnosis = trim(buf)
         end if
-        call cpu_time(c1)
+        c1 = thread_cpu_seconds()
         res%seconds = res%seconds + (c1 - c0)
     end subroutine shoot_from
 

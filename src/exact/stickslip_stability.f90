@@ -22,6 +22,7 @@
 module stickslip_stability
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
+    use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_lapack, only: dgeev
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction
@@ -109,7 +110,7 @@ contains
         complex(dp) :: z
         character(len=240) :: buf
 
-        call cpu_time(c0)
+        c0 = thread_cpu_seconds()
         if (present(tol)) fl%tol = tol
         allocate (fl%multipliers(0))
         fl%verdict = 'unknown'
@@ -200,7 +201,7 @@ contains
         end if
         if (fl%nzero > 0) fl%diagnosis = fl%diagnosis//"; "//itoa(fl%nzero)// &
             " zero multiplier(s): directions removed by stick phases"
-        call cpu_time(c1)
+        c1 = thread_cpu_seconds()
         fl%seconds = c1 - c0
 
     contains
@@ -264,7 +265,7 @@ contains
         real(dp) :: c0, c1, ampx, ampv, distance, ftol
         character(len=200) :: buf
 
-        call cpu_time(c0)
+        c0 = thread_cpu_seconds()
         ftol = default_floquet_tol
         if (present(tol)) ftol = tol
         if (.not. (allocated(sol%x) .and. allocated(sol%v))) then
@@ -318,7 +319,7 @@ contains
             fl%asymptotic = .false.
         end if
         call give_ref()
-        call cpu_time(c1)
+        c1 = thread_cpu_seconds()
         fl%seconds = c1 - c0
 
     contains
@@ -331,7 +332,7 @@ contains
             fl%stable = .false.
             fl%asymptotic = .false.
             fl%diagnosis = why
-            call cpu_time(c1)
+            c1 = thread_cpu_seconds()
             fl%seconds = c1 - c0
         end subroutine unknown
 

@@ -3,6 +3,7 @@
 !> on a common time grid (&run method = 'all').
 module stickslip_side_by_side
     use stickslip_kinds, only: dp
+    use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
@@ -75,15 +76,15 @@ contains
 
         ho = hbm
         ho%want_samples = .true.
-        call cpu_time(c0)
+        c0 = thread_cpu_seconds()
         call solve_periodic(model, ho, res%hbm, error)
-        call cpu_time(c1)
+        c1 = thread_cpu_seconds()
         res%hbm_seconds = c1 - c0
         if (allocated(error)) return
 
-        call cpu_time(c0)
+        c0 = thread_cpu_seconds()
         call integrate_euler(model, euler, res%euler, error)
-        call cpu_time(c1)
+        c1 = thread_cpu_seconds()
         res%euler_seconds = c1 - c0
         if (allocated(error)) return
 

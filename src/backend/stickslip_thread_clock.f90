@@ -1,8 +1,9 @@
-!> CPU time of the calling thread, for the run times a study reports while its runs share the
-!> process with other OpenMP threads (Fortran's cpu_time counts the whole process: with two
-!> threads busy it would double every run's time). Linux/POSIX clock_gettime with
-!> CLOCK_THREAD_CPUTIME_ID; where that clock is missing, cpu_time (the process) instead.
-!> Knows nothing of the methods.
+!> CPU time of the calling thread, for every run time stickslip reports (the summary's
+!> hbm/euler/reference/stability/sweep CPU seconds, the studies' per-run times): runs share
+!> the process with other OpenMP threads (the cases of a multi-case run, the points of a
+!> study), and Fortran's cpu_time counts the whole process (with two threads busy it would
+!> double every run's time). Linux/POSIX clock_gettime with CLOCK_THREAD_CPUTIME_ID; where
+!> that clock is missing, cpu_time (the process) instead. Knows nothing of the methods.
 module stickslip_thread_clock
     use, intrinsic :: iso_c_binding, only: c_int, c_long
     use stickslip_kinds, only: dp

@@ -10,10 +10,11 @@
 !> backtracking only breaks the cycles of full steps between pieces (seen on the seed case
 !> at H = 200: 25 full steps between ||F|| = 3e-5 and 0.2, against 5 LUs with it). It is
 !> not meant for a cold start (measured: many more LUs, or failure): the caller falls back
-!> to Powell's hybrid method (stickslip_minpack) when this returns without meeting ftarget,
-!> which happens when the Jacobian is singular (a contact stuck over the whole period
-!> leaves its mean force undetermined), when no step length lowers ||F|| (a roundoff floor
-!> above ftarget) or after max_iterations steps. x returns the best point met.
+!> to Powell's hybrid method (stickslip_powell, stickslip_minpack) when this returns without
+!> meeting ftarget, which happens when the Jacobian is singular (a contact stuck over the
+!> whole period leaves its mean force undetermined), when no step length lowers ||F|| (a
+!> roundoff floor above ftarget) or after max_iterations steps. x returns the best point
+!> met.
 !>
 !> Chord steps (a Shamanskii-type reuse of the factorization): after a Newton step, the next
 !> step first tries the LU of the last Jacobian, x <- x - J_old^-1 F(x) (one triangular
@@ -215,27 +216,7 @@ contains
                 end if
             end if
             call lu_solve()
-            ! backtracking on ||F|| (Armijo on ||F||^2/2, whose slope along the Newton step
-            ! is -||F||^2): the full step first; halving breaks the cycles of full steps
-            ! between pieces near a kink
-            t = 1.0_dp
-            accepted = .false.
-            do ls = 0, opts%max_halvings
-                xt = x - t*step
-                call sys%residual(xt, ft, stat)
-                report%nfev = report%nfev + 1
-                if (stat /= 0) then
-                    stat = 0
-                    fnorm = huge(1.0_dp)
-                else
-                    fnorm = norm2(ft)
-                end if
-                if (fnorm <= sqrt(1.0_dp - 2.0e-4_dp*t)*best) then
-                    accepted = .true.
-                    exit
-                end if
-                t = 0.5_dp*t
-            end do
+            call backtrack()
             if (.not. accepted .and. retry) then
                 ! the single-precision step failed: the same Newton step in double precision
                 ! (jac still holds the Jacobian: only its single-precision copy was factorized)
@@ -248,23 +229,7 @@ contains
                     exit
                 end if
                 call lu_solve()
-                t = 1.0_dp
-                do ls = 0, opts%max_halvings
-                    xt = x - t*step
-                    call sys%residual(xt, ft, stat)
-                    report%nfev = report%nfev + 1
-                    if (stat /= 0) then
-                        stat = 0
-                        fnorm = huge(1.0_dp)
-                    else
-                        fnorm = norm2(ft)
-                    end if
-                    if (fnorm <= sqrt(1.0_dp - 2.0e-4_dp*t)*best) then
-                        accepted = .true.
-                        exit
-                    end if
-                    t = 0.5_dp*t
-                end do
+                call backtrack()
             end if
             if (.not. accepted) then
                 report%outcome = newton_stalled
@@ -300,6 +265,31 @@ contains
             report%rcond = rcond
             have_lu = rcond >= opts%rcond_min
         end subroutine factorize_double
+
+        !> Backtracking on ||F|| along -step (Armijo on ||F||^2/2, whose slope along the
+        !> Newton step is -||F||^2): the full step first, halved at most max_halvings times;
+        !> halving breaks the cycles of full steps between pieces near a kink. accepted,
+        !> xt, ft and fnorm tell the outcome.
+        subroutine backtrack()
+            t = 1.0_dp
+            accepted = .false.
+            do ls = 0, opts%max_halvings
+                xt = x - t*step
+                call sys%residual(xt, ft, stat)
+                report%nfev = report%nfev + 1
+                if (stat /= 0) then
+                    stat = 0
+                    fnorm = huge(1.0_dp)
+                else
+                    fnorm = norm2(ft)
+                end if
+                if (fnorm <= sqrt(1.0_dp - 2.0e-4_dp*t)*best) then
+                    accepted = .true.
+                    return
+                end if
+                t = 0.5_dp*t
+            end do
+        end subroutine backtrack
 
         !> Smallest over largest |pivot| of the single-precision factors.
         real(dp) function pivot_ratio()

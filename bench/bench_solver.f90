@@ -86,7 +86,7 @@ program bench_solver
         plate_contacts, " contacts"
     call compare(trim(plate_name), plate, 15, 0.0_dp, plate_hybrj, plate_newton)
     write (output_unit, '(a)') ""
-    write (output_unit, '(a,i0,a,f0.1,a,f0.2,a)') "plate: ", plate%ndof, &
+    write (output_unit, '(a,i0,a,f0.1,a,f4.2,a)') "plate: ", plate%ndof, &
         " reduced DOFs, w1 = ", plate_w1, " rad/s, omega = ", plate_omega, &
         " w1; stick fraction per contact (tip first):"
     call print_fractions("hybrj ", plate_hybrj)

@@ -5,7 +5,9 @@
 !> transverse (y) DOFs of the upper edge (the first at the tip, the others spread over the
 !> outer half), a harmonic transverse force at the lower tip corner and mass-proportional
 !> damping (1 % at the first resonance w1). The matrices are assembled in-process from
-!> triplets into sparse_matrix_t (no files).
+!> triplets into sparse_matrix_t (no files) by bench/bench_plate.f90 (module
+!> stickslip_bench_plate, shared with bench_solver), which also places the contacts and the
+!> force and builds the reduced dense model.
 !>
 !> For each case: the Craig-Bampton reduction with the default mode-count rule (&hbm
 !> harmonics = 30, sweep up to 1.1 w1: every fixed-interface mode below 3 x 30 x 1.1 w1),
@@ -30,24 +32,20 @@ program bench_reduction
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use stickslip, only: dp, error_type, model_t, sparse_matrix_t, new_sparse_from_triplets, &
         reduction_options_t, reduction_report_t, reduced_model_t, craig_bampton, &
-        receptance_error, reduced_dof_of, hbm_options_t, hbm_solution_t, solve_periodic, &
+        receptance_error, hbm_options_t, hbm_solution_t, solve_periodic, &
         sweep_options_t, sweep_result_t, run_sweep, reference_options_t
     use stickslip_study, only: median
     use stickslip_umfpack, only: sparse_lu_t
-    use stickslip_arpack, only: eigen_options_t, eigen_report_t
-    use stickslip_sparse_eigen, only: sparse_eigenpairs, sparse_eigenpairs_below, &
-        eigen_range_report_t
+    use stickslip_arpack, only: eigen_options_t
+    use stickslip_sparse_eigen, only: sparse_eigenpairs_below, eigen_range_report_t
     use stickslip_blas_threads, only: limit_blas_threads
+    use stickslip_bench_plate, only: plate, first_frequency, plate_damping, case_dofs, &
+        plate_model
     implicit none
 
-    !> Plate: length, height, thickness [m], Young's modulus [Pa], Poisson ratio, density.
-    real(dp), parameter :: plate_l = 0.4_dp, plate_h = 0.1_dp, thick = 0.01_dp, &
-                           young = 210.0e9_dp, poisson = 0.3_dp, density = 7800.0_dp
     !> Elements through the height per level (nx = 4 ny): N = 2 nx (ny + 1).
     integer, parameter :: levels(3) = [11, 35, 112]
     integer, parameter :: contact_counts(3) = [1, 5, 20]
-    !> Force amplitude [N], friction coefficient, total friction limit / force amplitude.
-    real(dp), parameter :: force = 100.0_dp, mu = 0.3_dp, friction_share = 0.3_dp
     integer, parameter :: harmonics = 30, sweep_steps = 30, max_points = 20
 
     type(sparse_matrix_t) :: kmat, mmat, cmat
@@ -84,12 +82,13 @@ program bench_reduction
     do lev = 1, min(max_level, size(levels))
         ny = levels(lev)
         nx = 4*ny
-        call plate(kmat, mmat)
+        call plate(nx, ny, kmat, mmat, error)
+        if (allocated(error)) call fail("plate")
         call say("plate assembled")
-        call first_frequency(kmat, mmat, w1)
+        call first_frequency(kmat, mmat, w1, error)
+        if (allocated(error)) call fail("first frequency")
         call say("first frequency")
-        cmat = mmat
-        cmat%val = 2.0_dp*0.01_dp*w1*mmat%val
+        cmat = plate_damping(mmat, w1)
         do ic = 1, size(contact_counts)
             call run_case(lev, contact_counts(ic), base_point(ic), point(lev, ic), &
                           reduction(lev, ic), solve(lev, ic))
@@ -119,122 +118,6 @@ contains
         stop 1
     end subroutine fail
 
-    !> The plate mesh: nx x ny Q4 elements, nodes (i, j), i = 0..nx along x, j = 0..ny along
-    !> y, the nodes i = 0 clamped; free node p = (i - 1)(ny + 1) + j + 1 has DOFs 2p - 1 (x)
-    !> and 2p (y).
-    subroutine plate(k, m)
-        type(sparse_matrix_t), intent(out) :: k, m
-        real(dp) :: ke(8, 8), me(8, 8)
-        integer, allocatable :: ri(:), ci(:)
-        real(dp), allocatable :: kv(:), mv(:)
-        integer :: i, j, a, b, t, n, dofs(8), nodes(4), q
-        call element(plate_l/nx, plate_h/ny, ke, me)
-        n = 2*nx*(ny + 1)
-        allocate (ri(64*nx*ny), ci(64*nx*ny), kv(64*nx*ny), mv(64*nx*ny))
-        t = 0
-        do i = 1, nx
-            do j = 1, ny
-                ! counter-clockwise: (i-1, j-1), (i, j-1), (i, j), (i-1, j)
-                nodes = [node(i - 1, j - 1), node(i, j - 1), node(i, j), node(i - 1, j)]
-                do q = 1, 4
-                    dofs(2*q - 1) = merge(2*nodes(q) - 1, 0, nodes(q) > 0)
-                    dofs(2*q) = merge(2*nodes(q), 0, nodes(q) > 0)
-                end do
-                do b = 1, 8
-                    if (dofs(b) == 0) cycle
-                    do a = 1, 8
-                        if (dofs(a) == 0) cycle
-                        t = t + 1
-                        ri(t) = dofs(a)
-                        ci(t) = dofs(b)
-                        kv(t) = ke(a, b)
-                        mv(t) = me(a, b)
-                    end do
-                end do
-            end do
-        end do
-        call new_sparse_from_triplets(k, n, n, ri(1:t), ci(1:t), kv(1:t), error)
-        if (allocated(error)) call fail("K")
-        call new_sparse_from_triplets(m, n, n, ri(1:t), ci(1:t), mv(1:t), error)
-        if (allocated(error)) call fail("M")
-    end subroutine plate
-
-    !> The free-node number of mesh node (ii, jj), 0 for a clamped node.
-    pure integer function node(ii, jj)
-        integer, intent(in) :: ii, jj
-        node = 0
-        if (ii > 0) node = (ii - 1)*(ny + 1) + jj + 1
-    end function node
-
-    !> Stiffness and consistent mass of a rectangular a x b Q4 plane-stress element (2 x 2
-    !> Gauss points, exact for both), DOFs (x1, y1, .., x4, y4), nodes counter-clockwise from
-    !> the lower left corner.
-    pure subroutine element(a, b, ke, me)
-        real(dp), intent(in) :: a, b
-        real(dp), intent(out) :: ke(8, 8), me(8, 8)
-        real(dp), parameter :: xi_n(4) = [-1.0_dp, 1.0_dp, 1.0_dp, -1.0_dp], &
-                               eta_n(4) = [-1.0_dp, -1.0_dp, 1.0_dp, 1.0_dp]
-        real(dp) :: d(3, 3), bm(3, 8), nm(2, 8), g(2), xi, eta, shape(4), dx(4), dy(4), w
-        integer :: p, q, i
-        g = [-1.0_dp, 1.0_dp]/sqrt(3.0_dp)
-        d = reshape([1.0_dp, poisson, 0.0_dp, poisson, 1.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, &
-                     0.5_dp*(1.0_dp - poisson)], [3, 3])*young/(1.0_dp - poisson**2)
-        ke = 0.0_dp
-        me = 0.0_dp
-        w = 0.25_dp*a*b*thick
-        do p = 1, 2
-            do q = 1, 2
-                xi = g(p)
-                eta = g(q)
-                do i = 1, 4
-                    shape(i) = 0.25_dp*(1.0_dp + xi*xi_n(i))*(1.0_dp + eta*eta_n(i))
-                    dx(i) = 0.25_dp*xi_n(i)*(1.0_dp + eta*eta_n(i))*2.0_dp/a
-                    dy(i) = 0.25_dp*eta_n(i)*(1.0_dp + xi*xi_n(i))*2.0_dp/b
-                end do
-                bm = 0.0_dp
-                nm = 0.0_dp
-                do i = 1, 4
-                    bm(1, 2*i - 1) = dx(i)
-                    bm(2, 2*i) = dy(i)
-                    bm(3, 2*i - 1) = dy(i)
-                    bm(3, 2*i) = dx(i)
-                    nm(1, 2*i - 1) = shape(i)
-                    nm(2, 2*i) = shape(i)
-                end do
-                ke = ke + w*matmul(transpose(bm), matmul(d, bm))
-                me = me + w*density*matmul(transpose(nm), nm)
-            end do
-        end do
-    end subroutine element
-
-    !> The first natural frequency of the clamped plate [rad/s] (not timed).
-    subroutine first_frequency(k, m, w)
-        type(sparse_matrix_t), intent(in) :: k, m
-        real(dp), intent(out) :: w
-        real(dp), allocatable :: values(:), vectors(:, :)
-        type(eigen_report_t) :: rep
-        ! symmetric: the CSR arrays are also the compressed columns
-        call sparse_eigenpairs(k%nrows, k%row_start, k%col, k%val, m%row_start, m%col, &
-                               m%val, 1, 0.0_dp, eigen_options_t(), values, vectors, rep, error)
-        if (allocated(error)) call fail("first frequency")
-        w = sqrt(values(1))
-    end subroutine first_frequency
-
-    !> The model data of the case: contacts and force in full DOF numbers.
-    subroutine case_dofs(nc, contact, forced)
-        integer, intent(in) :: nc
-        integer, allocatable, intent(out) :: contact(:)
-        integer, intent(out) :: forced
-        integer :: c, i
-        allocate (contact(nc))
-        do c = 1, nc
-            i = nx
-            if (nc > 1) i = nint(nx*(1.0_dp - 0.5_dp*real(c - 1, dp)/real(nc - 1, dp)))
-            contact(c) = 2*((i - 1)*(ny + 1) + ny + 1)
-        end do
-        forced = 2*((nx - 1)*(ny + 1) + 1)
-    end subroutine case_dofs
-
     !> One case: reduce, measure the error, solve, sweep; a row of the table.
     subroutine run_case(lev, nc, base, point, reduction, solve)
         integer, intent(in) :: lev, nc
@@ -253,7 +136,7 @@ contains
         integer, allocatable :: contact(:)
         integer :: forced, r, nrep, nsolve, nsweep, k
         real(dp) :: t0, t1, tred(repeats), tsolve(5), tsweep(repeats), terr, err
-        call case_dofs(nc, contact, forced)
+        call case_dofs(nx, ny, nc, contact, forced)
         opts = reduction_options_t(highest_frequency=harmonics*1.1_dp*w1)
         nrep = repeats
         if (lev == 3) nrep = 1
@@ -272,19 +155,7 @@ contains
         if (allocated(error)) call fail("receptance_error")
         terr = t1 - t0
         ! the reduced dense model
-        model%ndof = rm%nr
-        model%mass = rm%mass
-        model%stiffness = rm%stiffness
-        model%damping = rm%damping
-        model%omega = w1
-        model%force_dof = [reduced_dof_of(rm, forced)]
-        model%force_harmonic = [1]
-        model%force_amplitude = [force]
-        model%force_phase = [0.0_dp]
-        model%contact_dof = [(reduced_dof_of(rm, contact(k)), k=1, nc)]
-        model%contact_dof2 = [(0, k=1, nc)]
-        model%mu = [(mu, k=1, nc)]
-        model%normal_load = [(friction_share*force/(mu*nc), k=1, nc)]
+        model = plate_model(rm, contact, forced, w1)
         call say("error measure")
         ho = hbm_options_t()
         ho%harmonics = harmonics
@@ -346,7 +217,7 @@ contains
         type(eigen_range_report_t) :: erep
         integer :: forced, n, ni, row, p, t, nev
         real(dp) :: t0, t1, tlu, teig, limit
-        call case_dofs(1, contact, forced)
+        call case_dofs(nx, ny, 1, contact, forced)
         n = kmat%nrows
         allocate (loc(n))
         loc = 0

@@ -6,8 +6,16 @@
 !> the ratio hybrj / newton. Cases: the seed case (examples/seed.nml's model, rho = 0.2 as
 !> in bench_hbm) at H = 10 .. 256 (all harmonics; the small ones place the crossover used
 !> by solver = 'auto'), a chain of 20 masses with a ground contact on each at H = 15
-!> (620 unknowns). Then one factorization of a random dense matrix by the LAPACK kernels
-!> the candidates use (dgetrf; dgeqrf + dorgqr for a Powell hybrid on blocked QR).
+!> (620 unknowns) and H = 7, and a Craig-Bampton-reduced FE model at H = 15 (620 unknowns):
+!> the cantilever steel plate of bench_reduction at its smallest mesh (44 x 11 Q4 elements,
+!> N = 1056 DOFs; bench/bench_plate.f90) with 20 contacts, reduced for H = 15 by
+!> bench_reduction's rule (every fixed-interface mode below 3 x 15 x 1.1 w1: 35 reduced
+!> DOFs), 1024 samples and automatic rho like the chain, at omega = 0.3 w1 (at w1 every
+!> contact slips over the whole period save the reversal instants; at 0.3 w1, with its third
+!> harmonic near w1, every contact sticks over part of the period), with the stick fractions
+!> of both solutions printed under the table. Then one factorization of a random dense
+!> matrix by the LAPACK kernels the candidates use (dgetrf; dgeqrf + dorgqr for a Powell
+!> hybrid on blocked QR).
 !> Run from the project root: fpm run --example bench_solver --profile release
 !> [-- --quick] (--quick: fewer repeats, skips H = 256 with hybrj; --profile-newton: only the
 !> Newton path on the chain at H = 15, 20 times, for perf).
@@ -22,13 +30,20 @@ program bench_solver
     use stickslip_study, only: median
     use stickslip_lapack, only: dgetrf, dgeqrf, dorgqr
     use stickslip_blas_threads, only: limit_blas_threads
+    use stickslip_bench_plate, only: reduced_plate
     implicit none
     integer, parameter :: seed_h(8) = [10, 20, 35, 50, 75, 100, 200, 256]
+    !> The plate case: the smallest mesh of bench_reduction, contacts, omega / w1.
+    integer, parameter :: plate_nx = 44, plate_ny = 11, plate_contacts = 20
+    real(dp), parameter :: plate_omega = 0.3_dp
     type(case_t) :: c
-    type(model_t) :: chain
+    type(model_t) :: chain, plate
+    type(hbm_solution_t) :: plate_hybrj, plate_newton
     type(error_type), allocatable :: error
-    integer :: i
+    integer :: i, plate_n
+    real(dp) :: plate_w1
     character(len=32) :: arg
+    character(len=80) :: plate_name
     logical :: quick, profile
 
     call limit_blas_threads()
@@ -61,6 +76,21 @@ program bench_solver
     end do
     call compare("chain, 20 contacts", chain, 15, 0.0_dp)
     call compare("chain, 20 contacts", chain, 7, 0.0_dp)
+    call reduced_plate(plate_nx, plate_ny, plate_contacts, 15, plate_omega, plate, plate_w1, &
+                       plate_n, error)
+    if (allocated(error)) then
+        write (output_unit, '(a)') "error: plate: "//error%message
+        stop 1
+    end if
+    write (plate_name, '(a,i0,a,i0,a)') "CB-reduced plate (N = ", plate_n, " DOFs), ", &
+        plate_contacts, " contacts"
+    call compare(trim(plate_name), plate, 15, 0.0_dp, plate_hybrj, plate_newton)
+    write (output_unit, '(a)') ""
+    write (output_unit, '(a,i0,a,f0.1,a,f4.2,a)') "plate: ", plate%ndof, &
+        " reduced DOFs, w1 = ", plate_w1, " rad/s, omega = ", plate_omega, &
+        " w1; stick fraction per contact (tip first):"
+    call print_fractions("hybrj ", plate_hybrj)
+    call print_fractions("newton", plate_newton)
 
     write (output_unit, '(a)') ""
     write (output_unit, '(a)') "one factorization of a dense n x n matrix (median over repeats)"
@@ -73,11 +103,13 @@ program bench_solver
 contains
 
     !> Solve `m` at `h` harmonics with both solvers; print medians and their ratio.
-    subroutine compare(name, m, h, rho)
+    subroutine compare(name, m, h, rho, hybrj_sol, newton_sol)
         character(len=*), intent(in) :: name
         type(model_t), intent(in) :: m
         integer, intent(in) :: h
         real(dp), intent(in) :: rho
+        !> The solutions of hybrj and of the Newton path (last repeat), when wanted.
+        type(hbm_solution_t), intent(out), optional :: hybrj_sol, newton_sol
         type(hbm_options_t) :: o
         type(hbm_solution_t) :: sh, sn
         real(dp) :: th, tn, dr
@@ -95,7 +127,26 @@ contains
             sn%nb*size(m%mu), 1.0e3_dp*th, 1.0e3_dp*tn, th/tn, sh%njev, sn%njev, &
             sn%newton_calls, sn%newton_fallbacks, dr, note(sh%converged, sn%converged)
         flush (output_unit)
+        if (present(hybrj_sol)) hybrj_sol = sh
+        if (present(newton_sol)) newton_sol = sn
     end subroutine compare
+
+    !> One line: the solver, convergence, the contacts stuck all period / slipping all period
+    !> (stick fraction 1 / at most 2 samples: the reversal instants) / stick-slip, and the
+    !> stick fraction of every contact.
+    subroutine print_fractions(solver, s)
+        character(len=*), intent(in) :: solver
+        type(hbm_solution_t), intent(in) :: s
+        integer :: nc, stuck, slipping
+        real(dp) :: eps
+        nc = size(s%stick_fraction)
+        eps = 2.5_dp/max(s%samples, 1)
+        stuck = count(s%stick_fraction >= 1.0_dp - eps)
+        slipping = count(s%stick_fraction <= eps)
+        write (output_unit, '(2x,a,": converged ",l1,", stuck ",i0,", slipping ",i0, &
+            &", stick-slip ",i0,":",*(1x,f4.2))') solver, s%converged, stuck, slipping, &
+            nc - stuck - slipping, s%stick_fraction
+    end subroutine print_fractions
 
     !> Only the Newton path on the 20-contact chain at H = 15, 20 times (for a profiler).
     subroutine profile_newton(m)

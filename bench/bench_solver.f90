@@ -17,7 +17,8 @@
 !> matrix by the LAPACK kernels the candidates use (dgetrf; dgeqrf + dorgqr for a Powell
 !> hybrid on blocked QR).
 !> Run from the project root: fpm run --example bench_solver --profile release
-!> [-- --quick] (--quick: fewer repeats, skips H = 256 with hybrj; --profile-newton: only the
+!> [-- --quick] (--quick: fewer repeats, skips H = 256 with hybrj; --plate-scan: only the
+!> plate, over omega / w1 = 0.15 .. 1, both solvers; --profile-newton: only the
 !> Newton path on the chain at H = 15, 20 times, for perf).
 program bench_solver
     use, intrinsic :: iso_fortran_env, only: output_unit, int64
@@ -44,15 +45,17 @@ program bench_solver
     real(dp) :: plate_w1
     character(len=32) :: arg
     character(len=80) :: plate_name
-    logical :: quick, profile
+    logical :: quick, profile, scan
 
     call limit_blas_threads()
     quick = .false.
     profile = .false.
+    scan = .false.
     do i = 1, command_argument_count()
         call get_command_argument(i, arg)
         if (arg == '--quick') quick = .true.
         if (arg == '--profile-newton') profile = .true.
+        if (arg == '--plate-scan') scan = .true.
     end do
     call read_case("examples/seed.nml", c, error)
     if (allocated(error)) then
@@ -62,6 +65,10 @@ program bench_solver
     chain = contact_chain(20, 0.3_dp)
     if (profile) then
         call profile_newton(chain)
+        stop
+    end if
+    if (scan) then
+        call plate_scan()
         stop
     end if
 
@@ -147,6 +154,31 @@ contains
             &", stick-slip ",i0,":",*(1x,f4.2))') solver, s%converged, stuck, slipping, &
             nc - stuck - slipping, s%stick_fraction
     end subroutine print_fractions
+
+    !> The plate with 20 contacts at H = 15 over omega / w1 = 0.15 .. 1 (each point reduced
+    !> for its own omega, as bench_reduction does): both solvers side by side, one table.
+    subroutine plate_scan()
+        real(dp), parameter :: ratios(8) = [0.15_dp, 0.2_dp, 0.25_dp, 0.3_dp, 0.4_dp, &
+                                            0.5_dp, 0.7_dp, 1.0_dp]
+        type(model_t) :: m
+        type(hbm_solution_t) :: sh, sn
+        real(dp) :: w1
+        integer :: k, n
+        character(len=40) :: name
+        write (output_unit, '(a)') "| omega / w1 | H | unknowns | hybrj [ms] | newton [ms] | "// &
+            "ratio | hybrj njev | newton LUs (calls, fallbacks) | max |dr| / mu N |"
+        write (output_unit, '(a)') "|---|---|---|---|---|---|---|---|---|"
+        do k = 1, size(ratios)
+            call reduced_plate(plate_nx, plate_ny, plate_contacts, 15, ratios(k), m, w1, n, &
+                               error)
+            if (allocated(error)) then
+                write (output_unit, '(a)') "error: plate: "//error%message
+                stop 1
+            end if
+            write (name, '(f4.2)') ratios(k)
+            call compare(trim(name), m, 15, 0.0_dp, sh, sn)
+        end do
+    end subroutine plate_scan
 
     !> Only the Newton path on the 20-contact chain at H = 15, 20 times (for a profiler).
     subroutine profile_newton(m)

@@ -1,0 +1,202 @@
+!> Events of the exact flow (stickslip_flow): their kinds, and the location of the earliest
+!> one in a step of a contact mode (stickslip_flow_modes) on its exact solution.
+!>
+!> Events, all zeros of functions linear in y:
+!> - slip -> stick or reversal: a slipping contact's velocity s_j w_j^T v reaches zero. The new
+!>   mode of every contact at zero velocity (the stuck ones and this one) is the unique
+!>   solution of Coulomb's law at acceleration level, min 1/2 r^T D r + b^T r over the box
+!>   |r_k| <= mu_k N_k, D = W_Z^T M^{-1} W_Z symmetric positive definite for independent
+!>   contact directions (so the mode determination is sound for any number of contacts).
+!> - stick -> slip: a stuck force reaches the limit, mu_j N_j -/+ r_j = 0; the contact slips
+!>   against the force, s_j = -sign(r_j) (the force is continuous, the others are unchanged).
+!> Events are bracketed on a grid of `steps` per period (with the slopes of the event
+!> functions at both ends: a dip below zero between two positive values is caught too) and
+!> located to roundoff by safeguarded Newton iteration on the exact solution.
+module stickslip_flow_events
+    use stickslip_kinds, only: dp
+    use stickslip_flow_modes, only: mode_t, flow_modes_t, propagate
+    implicit none
+    private
+    public :: event_stick, event_slip, event_reversal, event_graze, event_kind, event_name
+    public :: find_event
+
+    !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
+    !> reverses without sticking; a slipping contact's velocity touches zero and it goes on.
+    integer, parameter :: event_stick = 1, event_slip = 2, event_reversal = 3, event_graze = 4
+
+contains
+
+    !> Kind of the change of one contact's code at an event: one of event_stick,
+    !> event_slip, event_reversal, event_graze.
+    pure integer function event_kind(old, new)
+        !> The contact's code before and after the event (0 stuck, +1 / -1 slipping).
+        integer, intent(in) :: old, new
+        if (new == 0) then
+            event_kind = event_stick
+        else if (old == 0) then
+            event_kind = event_slip
+        else if (old == -new) then
+            event_kind = event_reversal
+        else
+            event_kind = event_graze
+        end if
+    end function event_kind
+
+    !> Name of an event kind, as written to events.csv.
+    pure function event_name(kind) result(name)
+        !> One of event_stick, event_slip, event_reversal, event_graze.
+        integer, intent(in) :: kind
+        character(len=:), allocatable :: name
+        select case (kind)
+        case (event_stick)
+            name = "stick"
+        case (event_slip)
+            name = "slip"
+        case (event_reversal)
+            name = "reversal"
+        case default
+            name = "graze"
+        end select
+    end function event_name
+
+    !> The earliest event in (ta, tb] of the mode md, if any: its time te, state ye, contact
+    !> jev, kind kev (0: slip velocity reaches zero; +1 / -1: stuck force reaches -/+ the
+    !> limit, the slip direction that follows) and the row c of its event function. States
+    !> and rows in balanced coordinates.
+    subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, jev, kev, c)
+        !> The dynamics md belongs to.
+        class(flow_modes_t), intent(in) :: self
+        !> The contact mode of the step.
+        type(mode_t), intent(in) :: md
+        !> Start time [s] and state of the step, end time [s] and state (exp(b (tb - ta)) ya).
+        real(dp), intent(in) :: ta, ya(:), tb, yb(:)
+        !> Whether an event lies in (ta, tb].
+        logical, intent(out) :: found
+        !> With found: the event's time [s] and state.
+        real(dp), intent(out) :: te, ye(:)
+        !> With found: the event's contact and kind (0, +1 or -1).
+        integer, intent(out) :: jev, kev
+        !> With found: the row of the event function (its value at y is c . y).
+        real(dp), intent(out) :: c(:)
+        real(dp) :: tau, best, gscale
+        integer :: j, side
+        found = .false.
+        best = huge(1.0_dp)
+        jev = 0
+        kev = 0
+        do j = 1, self%nc
+            if (self%limit(j) <= 0.0_dp) cycle
+            if (md%code(j) /= 0) then
+                gscale = self%vref(j)
+                call test(2*j - 1, 0)
+            else
+                gscale = self%limit(j)
+                do side = 1, 2
+                    call test(2*j - 2 + side, 2*side - 3)
+                end do
+            end if
+        end do
+        if (found) then
+            te = ta + best
+            call propagate(md, self%delta, best, ya, ye)
+            ye(2*self%n + 1:) = self%se*self%exo(te)
+        end if
+
+    contains
+
+        subroutine test(col, kind)
+            integer, intent(in) :: col, kind
+            real(dp) :: ga, gb, da, db, thr, tmin, h
+            associate (r => md%rows(:, col))
+                h = tb - ta
+                ga = dot_product(r, ya)
+                gb = dot_product(r, yb)
+                da = dot_product(md%drows(:, col), ya)
+                db = dot_product(md%drows(:, col), yb)
+                thr = 1.0e-9_dp*gscale*self%omega
+                if (gb <= 0.0_dp) then
+                    tau = first_crossing(md, self%delta, ya, r, 0, h)
+                else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
+                    ! a dip between two positive values: does its minimum go below zero?
+                    tmin = first_crossing(md, self%delta, ya, -r, 1, h)
+                    if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
+                    tau = first_crossing(md, self%delta, ya, r, 0, tmin)
+                else
+                    return
+                end if
+                if (tau < best) then
+                    best = tau
+                    found = .true.
+                    jev = j
+                    kev = kind
+                    c = r
+                end if
+            end associate
+        end subroutine test
+    end subroutine find_event
+
+    !> g(tau) = r . exp(b tau) y0.
+    real(dp) function value_at(md, delta, y0, r, tau) result(g)
+        type(mode_t), intent(in) :: md
+        real(dp), intent(in) :: delta, y0(:), r(:), tau
+        real(dp) :: y(size(y0))
+        call propagate(md, delta, tau, y0, y)
+        g = dot_product(r, y)
+    end function value_at
+
+    !> A crossing of zero of g(tau) = r . b^order exp(b tau) y0 in (0, hi], taken to be
+    !> positive at 0 and known to be <= 0 at hi: safeguarded Newton iteration (bisection
+    !> when a Newton step leaves the bracket or stalls) until the bracket is a few ulps of
+    !> the period wide. Returns the end of the bracket where g <= 0.
+    real(dp) function first_crossing(md, delta, y0, r, order, hi0) result(hi)
+        type(mode_t), intent(in) :: md
+        real(dp), intent(in) :: delta, y0(:), r(:)
+        integer, intent(in) :: order
+        real(dp), intent(in) :: hi0
+        real(dp) :: lo, tau, g, dg, step, old_step, tol, row(size(r)), row1(size(r))
+        real(dp) :: y(size(y0))
+        integer :: iter, k
+        row = r
+        do k = 1, order
+            row = matmul(row, md%b)
+        end do
+        row1 = matmul(row, md%b)
+        lo = 0.0_dp
+        hi = hi0
+        tol = 4.0_dp*epsilon(1.0_dp)*hi0 + tiny(1.0_dp)
+        tau = hi
+        call propagate(md, delta, tau, y0, y)
+        g = dot_product(row, y)
+        dg = dot_product(row1, y)
+        old_step = hi - lo
+        step = old_step
+        do iter = 1, 200
+            if (hi - lo <= tol) exit
+            ! Newton from tau, unless it leaves (lo, hi) or does not halve the bracket
+            if (dg /= 0.0_dp .and. abs(2.0_dp*g) < abs(old_step*dg)) then
+                old_step = step
+                step = g/dg
+                tau = tau - step
+                if (.not. (tau > lo .and. tau < hi)) then
+                    tau = 0.5_dp*(lo + hi)
+                    old_step = step
+                    step = hi - lo
+                end if
+            else
+                old_step = step
+                step = 0.5_dp*(hi - lo)
+                tau = 0.5_dp*(lo + hi)
+            end if
+            call propagate(md, delta, tau, y0, y)
+            g = dot_product(row, y)
+            dg = dot_product(row1, y)
+            if (g > 0.0_dp) then
+                lo = tau
+            else
+                hi = tau
+            end if
+            if (g == 0.0_dp) exit
+        end do
+    end function first_crossing
+
+end module stickslip_flow_events

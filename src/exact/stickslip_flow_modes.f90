@@ -44,7 +44,8 @@ module stickslip_flow_modes
         real(dp), allocatable :: a(:, :)
         !> Friction forces r = force y, n_c x na.
         real(dp), allocatable :: force(:, :)
-        !> The same dynamics in the balanced coordinates of the flow (flow_modes_t%tb): b = tb a tb^-1.
+        !> The same dynamics in the balanced coordinates of the flow (flow_modes_t%tb):
+        !> b = tb a tb^-1.
         real(dp), allocatable :: b(:, :)
         !> Event rows in balanced coordinates, na x 2 n_c: column 2j-1 the slip velocity
         !> code_j w_j^T v of a slipping contact j; columns 2j-1, 2j the margins

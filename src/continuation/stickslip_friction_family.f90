@@ -35,12 +35,17 @@ module stickslip_friction_family
 
     !> The projected friction equations as a family in the parameter.
     type, extends(parametric_system_t) :: friction_family_t
+        !> The model at the family's current parameter.
         type(model_t) :: model
+        !> Weighted-residual options of the points (rho fixed along the family).
         type(hbm_options_t) :: opts
+        !> 'omega', 'force_amplitude', 'mu' or 'normal_load'.
         character(len=16) :: parameter = ''
+        !> The condensed friction equations (basis, dynamics, limits, work arrays).
         type(hb_problem_t) :: prob
         !> Dynamics at unit amplitude of forcing term 1 ('force_amplitude').
         type(dynamics_t) :: unit
+        !> The parameter the problem is set at, when have_current.
         real(dp) :: current = 0.0_dp
         logical :: have_current = .false.
         !> How many times the family factorized the dynamic stiffnesses Z_h of its basis
@@ -52,10 +57,12 @@ module stickslip_friction_family
         !> looked up exactly (==), the oldest entry is replaced.
         type(dynamics_t) :: cached(dynamics_cache_size)
         real(dp) :: cached_omega(dynamics_cache_size) = 0.0_dp
+        !> Per cached entry, the clock when last used (0: empty); the clock counts look-ups.
         integer :: cached_age(dynamics_cache_size) = 0
         integer :: clock = 0
         !> s(K), s(M) of the model (see dynamics_t%smin_k; -1: not yet known).
         real(dp) :: singular_values(2) = -1.0_dp
+        !> The forcing amplitudes of the case [N], and work arrays of the Jacobian.
         real(dp), allocatable :: amplitude0(:), rs(:, :), vs(:, :), ss(:, :), dv(:, :), &
                                  dvs(:)
         complex(dp), allocatable :: cw(:)
@@ -170,8 +177,12 @@ contains
 
     !> Move the family to parameter p (rebuild or rescale what depends on it).
     subroutine family_set(self, p, stat)
+        !> The family.
         class(friction_family_t), intent(inout) :: self
+        !> The parameter value.
         real(dp), intent(in) :: p
+        !> Set to 1 when the family has no point there (p not finite or out of range,
+        !> singular dynamics).
         integer, intent(inout) :: stat
         if (self%have_current .and. p == self%current) return
         if (.not. ieee_is_finite(p)) then
@@ -216,8 +227,11 @@ contains
     !> the cache when p was met before (exactly), else factorized and cached. stat = 1 when
     !> Z_h is singular there.
     subroutine set_omega_dynamics(self, p, stat)
+        !> The family in omega.
         class(friction_family_t), intent(inout) :: self
+        !> omega [rad/s].
         real(dp), intent(in) :: p
+        !> Set to 1 when Z_h is singular.
         integer, intent(inout) :: stat
         type(error_type), allocatable :: error
         integer :: k
@@ -266,7 +280,9 @@ contains
     !> fscale): near a resonance the residual cannot be computed more accurately than that
     !> allows.
     real(dp) function family_scale(self, lambda) result(s)
+        !> The family.
         class(friction_family_t), intent(inout) :: self
+        !> The parameter value (0 returned when the family has no point there).
         real(dp), intent(in) :: lambda
         integer :: stat
         stat = 0
@@ -280,15 +296,20 @@ contains
 
     !> Release the FFT plans.
     subroutine family_destroy(self)
+        !> The family.
         class(friction_family_t), intent(inout) :: self
         call self%prob%destroy()
     end subroutine family_destroy
 
     !> F(y, lambda): the projected friction equations at parameter lambda.
     subroutine family_residual(self, y, lambda, f, stat)
+        !> The family.
         class(friction_family_t), intent(inout) :: self
+        !> Friction-force coefficients R [N], and the parameter value.
         real(dp), intent(in) :: y(:), lambda
+        !> The residual (huge when the family has no point at lambda).
         real(dp), intent(out) :: f(:)
+        !> Nonzero on failure.
         integer, intent(inout) :: stat
         call self%set(lambda, stat)
         if (stat /= 0) then
@@ -300,9 +321,13 @@ contains
 
     !> dF/dy (the exact generalized Jacobian of a single solve) and dF/dlambda.
     subroutine family_jacobian(self, y, lambda, jy, jl, stat)
+        !> The family.
         class(friction_family_t), intent(inout) :: self
+        !> Friction-force coefficients R [N], and the parameter value.
         real(dp), intent(in) :: y(:), lambda
+        !> dF/dy and dF/dlambda.
         real(dp), intent(out) :: jy(:, :), jl(:)
+        !> Nonzero on failure (no point at lambda, dF/dlambda not finite).
         integer, intent(inout) :: stat
         integer :: j, nb, nc
         call self%set(lambda, stat)
@@ -345,10 +370,15 @@ contains
     !> Recovery at a fixed parameter: the harmonic ladder (warm starts from fewer harmonics,
     !> the lowest stage starting from the truncated y).
     subroutine family_recover(self, y, lambda, ok, error)
+        !> The family.
         class(friction_family_t), intent(inout) :: self
+        !> Friction-force coefficients R [N]: the start, the solution when ok.
         real(dp), intent(inout) :: y(:)
+        !> The parameter value.
         real(dp), intent(in) :: lambda
+        !> A solution was found.
         logical, intent(out) :: ok
+        !> Set on failure (not for a singular dynamic stiffness: then not ok).
         type(error_type), allocatable, intent(out) :: error
         type(model_t) :: m
         type(hbm_options_t) :: o

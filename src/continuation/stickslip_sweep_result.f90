@@ -76,8 +76,11 @@ module stickslip_sweep_result
         !> See the curve so far; an error stops the sweep.
         subroutine observe_iface(self, res, error)
             import :: sweep_observer_t, sweep_result_t, error_type
+            !> The observer.
             class(sweep_observer_t), intent(inout) :: self
+            !> The curve so far, its last point just added.
             type(sweep_result_t), intent(in) :: res
+            !> Set to stop the sweep.
             type(error_type), allocatable, intent(out) :: error
         end subroutine observe_iface
     end interface

@@ -1,0 +1,224 @@
+!> One point of a forced-response curve, from the accepted state of the continuation: the
+!> point solved for its outputs (amplitudes, dissipation, contact statistics) and checked
+!> (harmonic truncation estimate, Floquet stability), and the tally of the checks the
+!> points of a curve failed (the 'points_<key>' items of sweep_result_t%diagnostics).
+module stickslip_sweep_point
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
+    use stickslip_kinds, only: dp
+    use stickslip_thread_clock, only: thread_cpu_seconds
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
+    use stickslip_error, only: error_type
+    use stickslip_model, only: model_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_hbm_sparse, only: solve_periodic_sparse
+    use stickslip_continuation, only: continuation_state_t
+    use stickslip_reference, only: reference_options_t
+    use stickslip_stability, only: floquet_t, periodic_stability
+    use stickslip_truncation, only: truncation_t, estimate_truncation
+    use stickslip_checks, only: truncation_warning, truncation_untrusted
+    use stickslip_sweep_options, only: sweep_options_t, set_sweep_parameter
+    use stickslip_sweep_result, only: frc_point_t
+    use stickslip_friction_family, only: friction_family_t
+    implicit none
+    private
+    public :: point_tally_t, evaluate_point
+
+    !> Which checks the points of a curve failed: per diagnostics key, how many points, the
+    !> worst level and the parameter of the first (sweep_result_t%diagnostics gets one
+    !> item per key, 'points_<key>').
+    type :: point_tally_t
+        !> The diagnostics keys of the failed checks ('truncation' for the estimate).
+        character(len=48), allocatable :: key(:)
+        !> Per key: points that failed the check, and the worst level (level_*).
+        integer, allocatable :: count(:), level(:)
+        !> Per key: the parameter of the first point that failed it.
+        real(dp), allocatable :: first(:)
+        !> Points counted.
+        integer :: points = 0
+    contains
+        procedure :: add_point => tally_add_point
+        procedure :: report => tally_report
+    end type point_tally_t
+
+contains
+
+    !> Solve the accepted point `state` of the family's curve for its outputs (with
+    !> opts%observe, the amplitudes of those combinations), with opts%truncation its harmonic
+    !> truncation estimate (dense models only) and with opts%stability its Floquet
+    !> multipliers from the exact reference (options `ref`); count its failed checks in
+    !> `tally`. When the family is at the point's parameter, its dynamics are reused (no new
+    !> factorization). Errors: those of the solve, the truncation estimate and the stability.
+    subroutine evaluate_point(fam, opts, ref, state, status, nfev, pt, tally, &
+                              stability_seconds, error)
+        !> The family of the curve (its sparse model, if any, is set to the point).
+        type(friction_family_t), intent(inout) :: fam
+        !> Sweep options.
+        type(sweep_options_t), intent(in) :: opts
+        !> Options of the exact reference used for the stability.
+        type(reference_options_t), intent(in) :: ref
+        !> The accepted continuation state (parameter, arclength, friction coefficients).
+        type(continuation_state_t), intent(in) :: state
+        !> The point's status ('start', 'ok', 'halved', 'recovered', 'end').
+        character(len=*), intent(in) :: status
+        !> Corrector evaluations spent on the point.
+        integer, intent(in) :: nfev
+        !> The point.
+        type(frc_point_t), intent(out) :: pt
+        !> The tally of the curve's failed checks, one point more.
+        type(point_tally_t), intent(inout) :: tally
+        !> CPU seconds of the stability so far [s], increased by this point's.
+        real(dp), intent(inout) :: stability_seconds
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(floquet_t) :: fl
+        type(truncation_t) :: est
+        type(model_t) :: m
+        type(hbm_solution_t) :: ps
+        type(hbm_options_t) :: po
+        real(dp) :: s0, s1
+        integer :: k, nb, nc
+        logical :: at_point
+        nb = fam%prob%basis%nb
+        nc = fam%model%ncontact()
+        m = fam%model
+        call set_sweep_parameter(m, opts%parameter, state%lambda, fam%amplitude0)
+        po = fam%opts
+        po%want_samples = .true.
+        po%start = 'direct'
+        ! the family's dynamics are at this parameter (the tangent was just computed
+        ! there): the point and its truncation estimate need no new factorization
+        at_point = fam%have_current .and. fam%current == state%lambda
+        if (allocated(fam%sparse)) then
+            fam%sparse%model = m
+            if (at_point) then
+                call solve_periodic_sparse(fam%sparse, po, fam%kept, ps, error, &
+                                           r_start=reshape(state%y, [nb, nc]), &
+                                           dyn=fam%prob%dyn)
+            else
+                call solve_periodic_sparse(fam%sparse, po, fam%kept, ps, error, &
+                                           r_start=reshape(state%y, [nb, nc]))
+            end if
+        else if (at_point) then
+            call solve_periodic(m, po, ps, error, &
+                                r_start=reshape(state%y, [nb, nc]), dyn=fam%prob%dyn)
+        else
+            call solve_periodic(m, po, ps, error, &
+                                r_start=reshape(state%y, [nb, nc]))
+        end if
+        if (allocated(error)) return
+        pt%parameter = state%lambda
+        pt%arclength = state%arclength
+        if (allocated(opts%observe)) then
+            pt%amplitude = maxval(abs(matmul(ps%x, transpose(opts%observe))), dim=1)
+        else
+            pt%amplitude = [(maxval(abs(ps%x(:, k))), k=1, size(ps%x, 2))]
+        end if
+        pt%diss_friction = ps%diss_friction
+        pt%diss_damping = ps%diss_damping
+        pt%dissipation = ps%diss_friction + ps%diss_damping
+        pt%rmax = [(maxval(abs(ps%r(:, k))), k=1, nc)]
+        pt%stick = ps%stick_fraction
+        pt%harmonics = ps%harmonics
+        pt%residual = ps%fnorm/max(ps%fscale, tiny(1.0_dp))
+        pt%status = status
+        pt%nfev = nfev
+        pt%floquet_max = ieee_value(1.0_dp, ieee_quiet_nan)
+        pt%stable = -1
+        pt%truncation = ieee_value(1.0_dp, ieee_quiet_nan)
+        if (opts%truncation .and. .not. allocated(fam%sparse)) then
+            if (at_point) then
+                call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn, &
+                                         observe=opts%observe)
+            else
+                call estimate_truncation(m, po, ps, est, error, observe=opts%observe)
+            end if
+            if (allocated(error)) return
+            if (est%available) pt%truncation = est%estimate
+        end if
+        call tally%add_point(ps%diagnostics, pt%truncation, pt%parameter)
+        if (opts%stability) then
+            s0 = thread_cpu_seconds()
+            call periodic_stability(m, ps, ref, fl, error)
+            s1 = thread_cpu_seconds()
+            stability_seconds = stability_seconds + (s1 - s0)
+            if (allocated(error)) return
+            if (fl%verdict /= 'unknown') then
+                pt%floquet_max = fl%max_modulus
+                pt%stable = merge(1, 0, fl%stable)
+            end if
+        end if
+    end subroutine evaluate_point
+
+    !> Count the failed checks of one point: its solution's diagnostics (warnings and
+    !> distrust) and its truncation estimate (stickslip_checks thresholds; NaN: not
+    !> computed).
+    subroutine tally_add_point(self, diag, truncation, parameter)
+        !> The tally, one point more.
+        class(point_tally_t), intent(inout) :: self
+        !> The diagnostics of the point's solution.
+        type(diagnostics_t), intent(in) :: diag
+        !> The point's relative truncation error estimate (NaN: not computed), and its
+        !> parameter value.
+        real(dp), intent(in) :: truncation, parameter
+        integer :: k
+        if (.not. allocated(self%key)) allocate (self%key(0), self%count(0), self%level(0), &
+                                                 self%first(0))
+        self%points = self%points + 1
+        if (allocated(diag%items)) then
+            do k = 1, size(diag%items)
+                if (diag%items(k)%level >= level_warning) &
+                    call count_key(diag%items(k)%key, diag%items(k)%level)
+            end do
+        end if
+        if (ieee_is_finite(truncation)) then
+            if (truncation > truncation_untrusted) then
+                call count_key("truncation", level_untrusted)
+            else if (truncation > truncation_warning) then
+                call count_key("truncation", level_warning)
+            end if
+        end if
+
+    contains
+
+        subroutine count_key(key, level)
+            character(len=*), intent(in) :: key
+            integer, intent(in) :: level
+            integer :: i
+            i = findloc(self%key, key, 1)
+            if (i == 0) then
+                self%key = [character(len=48) :: self%key, key]
+                self%count = [self%count, 0]
+                self%level = [self%level, level]
+                self%first = [self%first, parameter]
+                i = size(self%key)
+            end if
+            self%count(i) = self%count(i) + 1
+            self%level(i) = max(self%level(i), level)
+        end subroutine count_key
+    end subroutine tally_add_point
+
+    !> One diagnostics item per failed check, key 'points_<key>': a warning naming how many
+    !> points failed it and where the first one is (the curve is usable elsewhere); untrusted
+    !> when every point of the curve failed a check at level untrusted.
+    subroutine tally_report(self, parameter, diag)
+        !> The tally of the curve.
+        class(point_tally_t), intent(in) :: self
+        !> The swept parameter's name.
+        character(len=*), intent(in) :: parameter
+        !> The curve's diagnostics, added to.
+        type(diagnostics_t), intent(inout) :: diag
+        integer :: i, level
+        character(len=300) :: buf
+        if (.not. allocated(self%key)) return
+        do i = 1, size(self%key)
+            level = level_warning
+            if (self%level(i) == level_untrusted .and. self%count(i) == self%points) &
+                level = level_untrusted
+            write (buf, '(i0,a,i0,a,es13.5e3,a)') self%count(i), " of ", self%points, &
+                " points failed the check '"//trim(self%key(i))//"' (the first at "// &
+                trim(parameter)//" = ", self%first(i), "): see the points' columns"
+            call diag%add(level, "points_"//trim(self%key(i)), trim(buf))
+        end do
+    end subroutine tally_report
+end module stickslip_sweep_point

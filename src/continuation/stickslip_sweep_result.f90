@@ -1,0 +1,110 @@
+!> A forced-response curve: its points (frc_point_t), the curve with the continuation state
+!> and how it ended (sweep_result_t), the observer called after every point (a checkpoint
+!> writer extends it), and words for why the continuation stopped. Data only: run_sweep
+!> (stickslip_sweep) fills them.
+module stickslip_sweep_result
+    use stickslip_kinds, only: dp
+    use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_error, only: error_type
+    use stickslip_continuation, only: continuation_state_t, reason_running, reason_end, &
+        reason_failures, reason_max_points, reason_left
+    implicit none
+    private
+    public :: frc_point_t, sweep_result_t, sweep_observer_t, reason_text
+
+    !> One point of a forced-response curve.
+    type :: frc_point_t
+        !> Parameter value.
+        real(dp) :: parameter = 0.0_dp
+        !> Arclength from the start (parameter units).
+        real(dp) :: arclength = 0.0_dp
+        !> max_t |x_k(t)| per DOF [m].
+        real(dp), allocatable :: amplitude(:)
+        !> Energy dissipated per period: friction + viscous, and each [J].
+        real(dp) :: dissipation = 0.0_dp, diss_friction = 0.0_dp, diss_damping = 0.0_dp
+        !> max_t |r_j(t)| [N] and stick fraction per contact.
+        real(dp), allocatable :: rmax(:), stick(:)
+        !> Harmonic count H of the point.
+        integer :: harmonics = 0
+        !> ||F|| / fscale of the point.
+        real(dp) :: residual = 0.0_dp
+        !> 'start', 'ok' (corrected in the first try), 'halved' (after step halvings),
+        !> 'recovered' (harmonic ladder), 'end' (the end of the range).
+        character(len=12) :: status = ''
+        !> Corrector evaluations spent on the point.
+        integer :: nfev = 0
+        !> Largest Floquet multiplier modulus (NaN when not computed).
+        real(dp) :: floquet_max = 0.0_dp
+        !> 1 stable, 0 unstable, -1 unknown or not computed.
+        integer :: stable = -1
+        !> Relative harmonic truncation error estimate (NaN when not computed).
+        real(dp) :: truncation = 0.0_dp
+    end type frc_point_t
+
+    !> A forced-response curve.
+    type :: sweep_result_t
+        !> The points, in continuation order (npoints of them are filled).
+        type(frc_point_t), allocatable :: points(:)
+        integer :: npoints = 0
+        !> The continuation state at the end (or at the interruption).
+        type(continuation_state_t) :: state
+        !> The run resumed from a checkpoint with this many points.
+        integer :: resumed_points = 0
+        !> Why it stopped, in words; the end of the range is the only complete outcome.
+        logical :: complete = .false.
+        character(len=:), allocatable :: diagnosis
+        !> CPU seconds: all, and the stability part.
+        real(dp) :: seconds = 0.0_dp, stability_seconds = 0.0_dp
+        !> Turning points passed (sign changes of the parameter's tangent component).
+        integer :: folds = 0
+        !> Factorizations of the dynamic stiffnesses by the continuation of this run (see
+        !> friction_family_t%factorizations; the points' own solves reuse them).
+        integer :: factorizations = 0
+        !> Warnings about the curve ('' when none): undamped_resonance_notes.
+        character(len=:), allocatable :: notes
+        !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
+        type(diagnostics_t) :: diagnostics
+    end type sweep_result_t
+
+    !> Called after every point; a checkpoint writer extends it.
+    type, abstract :: sweep_observer_t
+    contains
+        procedure(observe_iface), deferred :: observe
+    end type sweep_observer_t
+
+    abstract interface
+        !> See the curve so far; an error stops the sweep.
+        subroutine observe_iface(self, res, error)
+            import :: sweep_observer_t, sweep_result_t, error_type
+            !> The observer.
+            class(sweep_observer_t), intent(inout) :: self
+            !> The curve so far, its last point just added.
+            type(sweep_result_t), intent(in) :: res
+            !> Set to stop the sweep.
+            type(error_type), allocatable, intent(out) :: error
+        end subroutine observe_iface
+    end interface
+
+contains
+
+    !> Words for a continuation_state_t%reason.
+    pure function reason_text(reason) result(text)
+        !> reason_* of stickslip_continuation.
+        integer, intent(in) :: reason
+        character(len=:), allocatable :: text
+        select case (reason)
+        case (reason_running)
+            text = "interrupted"
+        case (reason_end)
+            text = "reached the end of the range"
+        case (reason_failures)
+            text = "stopped after failed points"
+        case (reason_max_points)
+            text = "stopped at max_points before the end of the range"
+        case (reason_left)
+            text = "the branch left the range"
+        case default
+            text = "unknown"
+        end select
+    end function reason_text
+end module stickslip_sweep_result

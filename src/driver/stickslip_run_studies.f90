@@ -1,0 +1,235 @@
+!> The runs of a case that solve it many times: &run method 'study' (the work-precision
+!> study: study.csv, with its reference's reference.csv and events.csv), 'sweep' (the
+!> forced-response curve: frc.csv, frc.gp, resumable from frc.checkpoint) and
+!> 'robustness' (the grid of cold and warm starts: robustness.csv, robustness.gp). Each
+!> runs under the lock of the output directory, with an optional progress hook, and writes
+!> its table, plot script and summary.nml.
+module stickslip_run_studies
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_progress, only: progress_t
+    use stickslip_case, only: case_t, selected_dofs
+    use stickslip_hbm_sparse, only: kept_dofs
+    use stickslip_study, only: study_options_t, study_result_t, run_study, default_study_options
+    use stickslip_sweep, only: sweep_result_t, run_sweep, sweep_options_t
+    use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness, &
+        default_robustness_options
+    use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, read_checkpoint, &
+        remove_checkpoint
+    use stickslip_files, only: directory_lock_t, release_lock, remove_stale_results
+    use stickslip_csv, only: write_study_csv, write_frc_csv, write_robustness_csv
+    use stickslip_summary, only: write_study_summary, write_sweep_summary, &
+        write_robustness_summary
+    use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script
+    use stickslip_run_findings, only: study_findings
+    use stickslip_run_output, only: open_output, after_method, name_case_file, &
+        write_reference_files, sparse_columns, recovers, output_columns, boundary_columns
+    implicit none
+    private
+    public :: run_study_case, run_sweep_case, run_robustness_case
+
+contains
+
+    !> Run the work-precision study of `case` (&study) and write study.csv, reference.csv,
+    !> events.csv and summary.nml into case%directory. Errors: stat input (invalid case),
+    !> stat numerical (no reference: nothing to measure errors against; summary.nml is
+    !> written when the reference was attempted), stat io.
+    subroutine run_study_case(case, res, error, progress)
+        !> The case to study.
+        type(case_t), intent(in) :: case
+        !> The study.
+        type(study_result_t), intent(out) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress hook, told after every run of the study.
+        type(progress_t), intent(inout), optional :: progress
+        type(directory_lock_t) :: lock
+        call open_output(case, lock, error)
+        if (allocated(error)) return
+        call study_run(case, res, error, progress)
+        call release_lock(lock)
+        call name_case_file(case, error, &
+                            ['hbm     ', 'euler   ', 'ref_opts', 'opts    ', 'basis   '], &
+                            ['hbm      ', 'euler    ', 'reference', 'study    ', 'hbm      '])
+    end subroutine run_study_case
+
+    subroutine study_run(case, res, error, progress)
+        type(case_t), intent(in) :: case
+        type(study_result_t), intent(out) :: res
+        type(error_type), allocatable, intent(out) :: error
+        type(progress_t), intent(inout), optional :: progress
+        type(error_type), allocatable :: io_error
+        type(study_options_t) :: opts
+        opts = case%study
+        if (.not. allocated(opts%harmonics)) opts = default_study_options()
+        call run_study(case%model, case%hbm, case%euler, case%reference, opts, res, error, &
+                       progress)
+        if (allocated(error)) then
+            if (error%stat == stickslip_stat%input) return
+            if (error%stat /= stickslip_stat%numerical .or. &
+                .not. allocated(res%reference%diagnosis)) then
+                call remove_stale_results(case%directory, [character(len=24) ::])
+                return
+            end if
+            ! the reference failed: its report is still worth a summary
+            call remove_stale_results(case%directory, [character(len=24) ::])
+            call write_study_summary(case%directory, case, res, io_error, study_findings(res))
+            if (allocated(io_error)) call move_alloc(io_error, error)
+            return
+        end if
+        call remove_stale_results(case%directory, [character(len=24) :: "study.csv", &
+                                  "reference.csv", "events.csv"])
+        call write_study_csv(case%directory, res, case%model%ndof, case%model%ncontact(), error, &
+                             boundary_columns(case), selected_dofs(case))
+        if (allocated(error)) return
+        call write_reference_files(case, res%reference, error)
+        if (allocated(error)) return
+        call write_study_summary(case%directory, case, res, error, study_findings(res))
+    end subroutine study_run
+
+    !> Continue the periodic solution of `case` over the &sweep range and write frc.csv,
+    !> frc.gp (the gnuplot script of frc.png) and summary.nml into case%directory. The curve
+    !> is saved in frc.checkpoint after its first point, then at most once a second; with
+    !> &sweep resume (the default) a run of the same case that finds a checkpoint goes on
+    !> from it. The checkpoint is removed once the files are written. A curve that stopped
+    !> before the end of the range is written too, and an error with stat numerical is
+    !> returned with the diagnosis. Errors: stat input (invalid case, a checkpoint of
+    !> another case or a damaged one), stat numerical (no solution at the start), stat io.
+    subroutine run_sweep_case(case, res, error, progress)
+        !> The case (with its &sweep group).
+        type(case_t), intent(in) :: case
+        !> The curve.
+        type(sweep_result_t), intent(out) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress hook, told after every point of the curve.
+        type(progress_t), intent(inout), optional :: progress
+        type(directory_lock_t) :: lock
+        call open_output(case, lock, error)
+        if (allocated(error)) return
+        call sweep_run(case, res, error, progress)
+        call release_lock(lock)
+        call name_case_file(case, error, ['hbm  ', 'ref  ', 'opts ', 'basis'], &
+                            ['hbm      ', 'reference', 'sweep    ', 'hbm      '])
+    end subroutine run_sweep_case
+
+    subroutine sweep_run(case, res, error, progress)
+        type(case_t), intent(in) :: case
+        type(sweep_result_t), intent(out) :: res
+        type(error_type), allocatable, intent(out) :: error
+        type(progress_t), intent(inout), optional :: progress
+        type(checkpoint_writer_t) :: writer
+        type(sweep_result_t) :: saved
+        logical :: found
+        logical :: wanted
+        integer, allocatable :: kept(:), cols(:)
+        integer :: ncols
+
+        type(sweep_options_t) :: opts
+        integer :: namp
+
+        ! a reduced model's amplitudes are those of the selected full-model DOFs
+        opts = case%sweep%sweep_options_t
+        namp = case%model%ndof
+        if (recovers(case)) then
+            opts%observe = case%reduction%output_rows
+            namp = size(opts%observe, 1)
+        end if
+        writer%directory = case%directory
+        writer%fingerprint = case_fingerprint(case)
+        found = .false.
+        ! the points hold an amplitude per DOF of the model, or per kept DOF of the exact
+        ! sparse condensation (the selection, then the contact and forced DOFs)
+        ncols = namp
+        cols = output_columns(case)
+        if (allocated(case%sparse_model)) then
+            kept = kept_dofs(case%sparse_model, selected_dofs(case), error)
+            if (allocated(error)) return
+            ncols = size(kept)
+            cols = sparse_columns(kept, selected_dofs(case))
+        end if
+        if (case%sweep%resume) then
+            call read_checkpoint(case%directory, writer%fingerprint, ncols, &
+                                 case%model%ncontact(), saved, found, error)
+            if (allocated(error)) return
+        end if
+        if (allocated(case%sparse_model)) then
+            if (found) then
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               case%sweep%sweep_options_t, res, error, observer=writer, &
+                               resume=saved, progress=progress, sparse=case%sparse_model, &
+                               dofs=selected_dofs(case))
+            else
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               case%sweep%sweep_options_t, res, error, observer=writer, &
+                               progress=progress, sparse=case%sparse_model, &
+                               dofs=selected_dofs(case))
+            end if
+        else if (found) then
+            call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                           opts, res, error, observer=writer, resume=saved, progress=progress)
+        else
+            call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                           opts, res, error, observer=writer, progress=progress)
+        end if
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
+        call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
+        call write_frc_csv(case%directory, res, error, cols, selected_dofs(case))
+        if (allocated(error)) return
+        call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
+                                   ncols, error, cols, selected_dofs(case))
+        if (allocated(error)) return
+        call write_sweep_summary(case%directory, case, res, error)
+        if (allocated(error)) return
+        call remove_checkpoint(case%directory)
+        if (.not. res%complete) call fatal_error(error, "sweep: "//res%diagnosis// &
+                                                 " (frc.csv holds the points computed)", &
+                                                 stickslip_stat%numerical)
+    end subroutine sweep_run
+
+    !> Run the robustness study of `case` (&robustness: omega x mu x H x rho x samples, cold
+    !> and warm starts, Euler) and write robustness.csv, robustness.gp (the gnuplot script of
+    !> the maps robustness_cold.png and robustness_warm.png) and summary.nml into
+    !> case%directory. Failed runs are rows, not errors. Errors: stat input (invalid case),
+    !> stat io.
+    subroutine run_robustness_case(case, rows, error, progress)
+        !> The case (with its &robustness group, or the default grid).
+        type(case_t), intent(in) :: case
+        !> The runs.
+        type(robustness_row_t), allocatable, intent(out) :: rows(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress hook, told after every run of the grid.
+        type(progress_t), intent(inout), optional :: progress
+        type(directory_lock_t) :: lock
+        call open_output(case, lock, error)
+        if (allocated(error)) return
+        call robustness_run(case, rows, error, progress)
+        call release_lock(lock)
+        call name_case_file(case, error, &
+                            ['hbm_opts  ', 'euler_opts', 'ref_opts  ', 'opts      ', 'basis     '], &
+                            ['hbm       ', 'euler     ', 'reference ', 'robustness', 'hbm       '])
+    end subroutine run_robustness_case
+
+    subroutine robustness_run(case, rows, error, progress)
+        type(case_t), intent(in) :: case
+        type(robustness_row_t), allocatable, intent(out) :: rows(:)
+        type(error_type), allocatable, intent(out) :: error
+        type(progress_t), intent(inout), optional :: progress
+        type(robustness_options_t) :: opts
+        logical :: wanted
+        opts = case%robustness
+        if (.not. allocated(opts%omegas)) opts = default_robustness_options()
+        call run_robustness(case%model, case%hbm, case%euler, case%reference, opts, rows, &
+                            error, progress)
+        call after_method(case, error, wanted)
+        if (.not. wanted) return
+        call remove_stale_results(case%directory, [character(len=24) :: "robustness.csv", &
+                                  "robustness.gp"])
+        call write_robustness_csv(case%directory, rows, error)
+        if (allocated(error)) return
+        call write_robustness_plot_script(case%directory, opts, error)
+        if (allocated(error)) return
+        call write_robustness_summary(case%directory, case, rows, error)
+    end subroutine robustness_run
+end module stickslip_run_studies

@@ -14,6 +14,7 @@ module test_cli
     use stickslip_driver, only: run_result_t, run_method
     use stickslip_progress, only: progress_t
     use stickslip_summary, only: write_summary
+    use stickslip_version_info, only: stickslip_version
     use testing, only: test_counter_t, check, check_close, check_error
     use fixtures, only: enter_project_root, first_line, project_path, scratch, write_lines, &
         good_system, good_forcing, good_friction, sweep_case
@@ -31,6 +32,7 @@ contains
         call make_directory(scratch, error)
         call check_error(t, error, "cli: scratch directory", .false.)
         if (allocated(error)) return
+        call test_version_line(t)
         call test_cli_examples(t)
         call test_methods_cli(t)
         call test_stale_results(t)
@@ -40,6 +42,19 @@ contains
         call test_progress(t)
         call test_odd_directory(t)
     end subroutine run_cli_tests
+
+    !> `--version`: exit 0, `stickslip <version>`, then the BLAS/LAPACK line (nothing on
+    !> stderr).
+    subroutine test_version_line(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: out, err
+        integer :: code
+        call cli([character(len=20) :: "--version"], code, out, err)
+        call check(t, code == 0 .and. len(err) == 0 .and. &
+                   index(out, "stickslip "//stickslip_version//new_line('a')// &
+                         "BLAS/LAPACK: ") == 1, "cli: --version names the version and the BLAS", &
+                   out)
+    end subroutine test_version_line
 
     !> A second run into the same directory leaves only its own result files: a run that
     !> fails (summary only) removes the first run's hbm.csv and coefficients.csv; a run of

@@ -59,10 +59,13 @@ contains
         call test_more_modes(t, kmat, mmat, reference)
     end subroutine run_calculix_tests
 
-    !> The example's sweep at H = 45 (1024 samples, checks off) turns back at a kink of the
-    !> sampled friction equations near 555 rad/s and would retrace its curve down to the
-    !> start ("the branch left the range", exit 2); the sweep steps past the kink instead
-    !> and reaches 620 rad/s.
+    !> The example's sweep at H = 45 (1024 samples, checks off) reaches 620 rad/s. With
+    !> OpenBLAS's AVX-512 kernels it turns back at a kink of the sampled friction equations
+    !> near 555 rad/s and would retrace its curve down to the start ("the branch left the
+    !> range", exit 2); the sweep notes the retrace and steps past the kink instead. With
+    !> other kernels (AVX2: OPENBLAS_CORETYPE=Haswell or Zen) the roundoff differs and the
+    !> curve does not turn there at all; then no note is expected, and no fold either. (The
+    !> retrace logic itself is tested on synthetic curves in suite continuation.)
     subroutine test_retrace(t)
         type(test_counter_t), intent(inout) :: t
         character(len=:), allocatable :: dir, out, err
@@ -85,8 +88,8 @@ contains
         arg(1) = dir//".nml"
         call cli(arg, code, out, err)
         call check(t, code == 0, "calculix H = 45 sweep: complete (exit 0)", err)
-        call check(t, index(out, "retraced itself") > 0, &
-                   "calculix H = 45 sweep: the retrace noted and stepped past", out)
+        call check(t, index(out, "retraced itself") > 0 .or. index(out, "folds passed 0") > 0, &
+                   "calculix H = 45 sweep: a retrace noted and stepped past, or no turn", out)
     end subroutine test_retrace
 
     !> frc.gp of the example's sweep (full-model labels 2409, 2244) titles its curves

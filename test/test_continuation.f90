@@ -15,6 +15,7 @@ module test_continuation
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep, &
         friction_family_t, new_friction_family, set_sweep_parameter, sweep_parameter_value, &
         undamped_resonance_notes
+    use stickslip_sweep_retrace, only: fold_watch_t, new_fold_watch
     use stickslip_checks, only: sampling_notes
     use testing, only: test_counter_t, check, check_close, check_error
     use fixtures, only: seed_model, damped_seed
@@ -41,7 +42,60 @@ contains
         call test_bad_sweep(t)
         call test_notes(t)
         call test_recovery(t)
+        call test_retrace_watch(t)
     end subroutine run_continuation_tests
+
+    !> The fold watch of a sweep on synthetic curves (amplitude = parameter, a sweep from 0
+    !> to 2): a turn back whose next 3 points lie on the curve already traced is a kink: the
+    !> state goes back before the turn with a parameter step forward, the fold is uncounted
+    !> and a 'retrace' note is added; a turn back onto another branch (a true fold) is left
+    !> alone.
+    subroutine test_retrace_watch(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sweep_result_t) :: res
+        type(fold_watch_t) :: watch
+        type(continuation_state_t) :: before
+        integer :: k
+        logical :: kink_ok, fold_ok
+        do k = 1, 2
+            call new_fold_watch(watch, 0.0_dp, 2.0_dp)
+            res = sweep_result_t()
+            allocate (res%points(20))
+            ! ten points forward, lambda = 0.1 .. 1.0
+            do while (res%npoints < 10)
+                res%npoints = res%npoints + 1
+                res%points(res%npoints)%parameter = 0.1_dp*res%npoints
+                res%points(res%npoints)%amplitude = [0.1_dp*res%npoints]
+            end do
+            before%y = [1.0_dp]
+            before%ty = [0.5_dp]
+            before%lambda = 1.0_dp
+            before%tl = 1.0_dp
+            before%ds = 0.1_dp
+            before%points = 10
+            res%state = before
+            res%state%tl = -1.0_dp
+            call watch%accepted(before, res)
+            ! three points back: on the curve (k = 1) or on another branch (k = 2)
+            do while (res%npoints < 13)
+                res%npoints = res%npoints + 1
+                res%points(res%npoints)%parameter = 1.0_dp - 0.05_dp*(res%npoints - 10)
+                res%points(res%npoints)%amplitude = [merge(1.0_dp, 2.0_dp, k == 1)* &
+                                                     res%points(res%npoints)%parameter]
+                call watch%check_retrace(res, 0.5_dp, "omega")
+            end do
+            if (k == 1) then
+                kink_ok = res%folds == 0 .and. res%state%lambda == 1.0_dp .and. &
+                          res%state%tl == 1.0_dp .and. abs(res%state%ds - 0.2_dp) < 1.0e-15_dp &
+                          .and. all(res%state%ty == 0.0_dp) .and. res%diagnostics%has("retrace")
+            else
+                fold_ok = res%folds == 1 .and. res%state%tl == -1.0_dp .and. &
+                          .not. res%diagnostics%has("retrace")
+            end if
+        end do
+        call check(t, kink_ok, "retrace: a turn back onto the traced curve is stepped past")
+        call check(t, fold_ok, "retrace: a turn back onto another branch stays a fold")
+    end subroutine test_retrace_watch
 
     !> The recovery of a failed point: the harmonic ladder at a fixed parameter, from a bad
     !> start, lands on the solution a separate solve finds.

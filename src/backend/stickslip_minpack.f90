@@ -13,7 +13,7 @@ module stickslip_minpack
     use stickslip_nonlinear, only: nonlinear_system_t
     implicit none
     private
-    public :: hybrj_options_t, hybrj_report_t, solve_hybrj
+    public :: hybrj_options_t, hybrj_report_t, solve_hybrj, check_hybrj_options
 
     !> Options passed to hybrj.
     type :: hybrj_options_t
@@ -110,21 +110,8 @@ contains
         real(dp), allocatable :: fvec(:), fjac(:, :), diag(:), r(:), qtf(:), wa(:, :)
 
         n = size(x)
-        if (n < 1) then
-            call fatal_error(error, "solve_hybrj: no unknowns", stickslip_stat%input)
-            return
-        end if
-        if (opts%mode == 2) then
-            if (.not. allocated(opts%diag)) then
-                call fatal_error(error, "solve_hybrj: mode 2 needs diag", stickslip_stat%input)
-                return
-            end if
-            if (size(opts%diag) /= n .or. any(.not. (opts%diag > 0.0_dp))) then
-                call fatal_error(error, "solve_hybrj: diag must have n positive entries", &
-                                 stickslip_stat%input)
-                return
-            end if
-        end if
+        call check_hybrj_options(opts, n, "solve_hybrj", error)
+        if (allocated(error)) return
         maxfev = opts%maxfev
         if (maxfev <= 0) maxfev = 200*(n + 1)
         lr = n*(n + 1)/2
@@ -168,6 +155,33 @@ contains
         end if
         deallocate (session)
     end subroutine solve_hybrj
+
+    !> Errors (stat input, the message starting with `who`) for options Powell's hybrid
+    !> method cannot run with on n unknowns: n < 1, xtol < 0, factor <= 0, mode 2 without n
+    !> positive diag entries. Shared by solve_hybrj and solve_powell.
+    subroutine check_hybrj_options(opts, n, who, error)
+        !> The options.
+        type(hybrj_options_t), intent(in) :: opts
+        !> Number of unknowns.
+        integer, intent(in) :: n
+        !> The solver's name, for the message.
+        character(len=*), intent(in) :: who
+        !> Set when the options cannot be used.
+        type(error_type), allocatable, intent(out) :: error
+        if (n < 1) then
+            call fatal_error(error, who//": no unknowns", stickslip_stat%input)
+        else if (.not. (opts%xtol >= 0.0_dp .and. opts%factor > 0.0_dp)) then
+            call fatal_error(error, who//": xtol must be >= 0 and factor > 0", &
+                             stickslip_stat%input)
+        else if (opts%mode == 2) then
+            if (.not. allocated(opts%diag)) then
+                call fatal_error(error, who//": mode 2 needs diag", stickslip_stat%input)
+            else if (size(opts%diag) /= n .or. any(.not. (opts%diag > 0.0_dp))) then
+                call fatal_error(error, who//": diag must have n positive entries", &
+                                 stickslip_stat%input)
+            end if
+        end if
+    end subroutine check_hybrj_options
 
     !> The legacy callback: dispatch to the active system.
     subroutine hybrj_thunk(n, x, fvec, fjac, ldfjac, iflag)

@@ -164,14 +164,7 @@ contains
                 tries = tries + 1
                 call lu_solve()
                 xt = x - step
-                call sys%residual(xt, ft, stat)
-                report%nfev = report%nfev + 1
-                if (stat /= 0) then
-                    stat = 0
-                    fnorm = huge(1.0_dp)
-                else
-                    fnorm = norm2(ft)
-                end if
+                fnorm = trial_norm()
                 if (fnorm <= opts%chord_ratio*norm2(f)) then
                     report%chord_steps = report%chord_steps + 1
                     x = xt
@@ -275,14 +268,7 @@ contains
             accepted = .false.
             do ls = 0, opts%max_halvings
                 xt = x - t*step
-                call sys%residual(xt, ft, stat)
-                report%nfev = report%nfev + 1
-                if (stat /= 0) then
-                    stat = 0
-                    fnorm = huge(1.0_dp)
-                else
-                    fnorm = norm2(ft)
-                end if
+                fnorm = trial_norm()
                 if (fnorm <= sqrt(1.0_dp - 2.0e-4_dp*t)*best) then
                     accepted = .true.
                     return
@@ -290,6 +276,19 @@ contains
                 t = 0.5_dp*t
             end do
         end subroutine backtrack
+
+        !> ft = F(xt) and its norm, counted in report%nfev; huge when the system's callback
+        !> refuses the point (a NaN there: a step too far, not an error).
+        real(dp) function trial_norm()
+            call sys%residual(xt, ft, stat)
+            report%nfev = report%nfev + 1
+            if (stat /= 0) then
+                stat = 0
+                trial_norm = huge(1.0_dp)
+            else
+                trial_norm = norm2(ft)
+            end if
+        end function trial_norm
 
         !> Smallest over largest |pivot| of the single-precision factors.
         real(dp) function pivot_ratio()

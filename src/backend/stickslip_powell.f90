@@ -18,7 +18,7 @@ module stickslip_powell
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_nonlinear, only: nonlinear_system_t
-    use stickslip_minpack, only: hybrj_options_t, hybrj_report_t
+    use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, check_hybrj_options
     use stickslip_lapack, only: dgeqrf, dorgqr
     implicit none
     private
@@ -92,26 +92,8 @@ contains
         character(len=80) :: buf
 
         n = size(x)
-        if (n < 1) then
-            call fatal_error(error, "solve_powell: no unknowns", stickslip_stat%input)
-            return
-        end if
-        if (.not. (opts%xtol >= 0.0_dp .and. opts%factor > 0.0_dp)) then
-            call fatal_error(error, "solve_powell: xtol must be >= 0 and factor > 0", &
-                             stickslip_stat%input)
-            return
-        end if
-        if (opts%mode == 2) then
-            if (.not. allocated(opts%diag)) then
-                call fatal_error(error, "solve_powell: mode 2 needs diag", stickslip_stat%input)
-                return
-            end if
-            if (size(opts%diag) /= n .or. any(.not. (opts%diag > 0.0_dp))) then
-                call fatal_error(error, "solve_powell: diag must have n positive entries", &
-                                 stickslip_stat%input)
-                return
-            end if
-        end if
+        call check_hybrj_options(opts, n, "solve_powell", error)
+        if (allocated(error)) return
         maxfev = opts%maxfev
         if (maxfev <= 0) maxfev = 200*(n + 1)
         lr = n*(n + 1)/2

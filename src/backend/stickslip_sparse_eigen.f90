@@ -16,7 +16,7 @@
 !> its factorization and a copy of M: one per thread; `release()` frees the factorization.
 module stickslip_sparse_eigen
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_umfpack, only: sparse_lu_t
     use stickslip_arpack, only: shift_invert_operator_t, eigen_options_t, eigen_report_t, &
         smallest_eigenpairs
@@ -189,7 +189,7 @@ contains
         call csc_combine(n, kcol, krow, kval, 1.0_dp, mcol, mrow, mval, -sigma, scol, srow, sval)
         call self%lu%factorize(n, scol, srow, sval, error)
         if (allocated(error)) then
-            error%message = "K - sigma M, sigma = "//real_text(sigma)//": "//error%message
+            error%message = "K - sigma M, sigma = "//real_text(sigma, '(es12.5)')//": "//error%message
             return
         end if
         self%sigma = sigma
@@ -357,13 +357,4 @@ contains
         p = min(max(p, 0.25_dp), 2.0_dp)
         nev = ceiling(1.15_dp*m*(max(limit, hi)/hi)**p) + 8
     end function estimated_count
-
-    !> A real number as short text.
-    pure function real_text(x) result(s)
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: s
-        character(len=32) :: buf
-        write (buf, '(es12.5)') x
-        s = trim(adjustl(buf))
-    end function real_text
 end module stickslip_sparse_eigen

@@ -5,6 +5,7 @@
 !> sweep returns to the last point before the turn and steps the parameter past it.
 module stickslip_sweep_retrace
     use stickslip_kinds, only: dp
+    use stickslip_error, only: real_text
     use stickslip_diagnostics, only: level_note
     use stickslip_continuation, only: continuation_state_t, reason_end
     use stickslip_sweep_result, only: frc_point_t, sweep_result_t
@@ -104,7 +105,7 @@ contains
                 self%turned = .false.
                 call res%diagnostics%add(level_note, "retrace", "sweep: the curve "// &
                     "turned back at "//trim(parameter)//" = "// &
-                    rtoa6(self%before_turn%lambda)//" and retraced itself (a kink of the "// &
+                    real_text(self%before_turn%lambda)//" and retraced itself (a kink of the "// &
                     "sampled friction equations, not a fold): continued past it by "// &
                     "a parameter step")
             end if
@@ -138,14 +139,4 @@ contains
             end associate
         end do
     end function retraces
-
-    !> A real with 6 significant digits.
-    function rtoa6(x) result(text)
-        !> The value.
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: text
-        character(len=32) :: buf
-        write (buf, '(g0.6)') x
-        text = trim(adjustl(buf))
-    end function rtoa6
 end module stickslip_sweep_retrace

@@ -1,9 +1,10 @@
 !> Error handling: an allocatable `error_type` returned as the last argument of anything that
 !> can fail. Library code never stops and never prints; only the app turns errors into exit codes.
 module stickslip_error
+    use stickslip_kinds, only: dp
     implicit none
     private
-    public :: error_type, fatal_error, stickslip_stat, exit_code_of, itoa
+    public :: error_type, fatal_error, stickslip_stat, exit_code_of, itoa, real_text
 
     !> Error categories (`error_type%stat`).
     type :: stat_enum_t
@@ -73,4 +74,21 @@ contains
         write (buf, '(i0)') i
         s = trim(buf)
     end function itoa
+
+    !> A real as text without blanks, for messages: written with the edit descriptor `edit`
+    !> (default '(g0.6)', six significant digits; e.g. '(es12.5)'). No errors.
+    pure function real_text(x, edit) result(s)
+        !> The value.
+        real(dp), intent(in) :: x
+        !> A Fortran edit descriptor with its parentheses, at most 32 characters wide.
+        character(len=*), intent(in), optional :: edit
+        character(len=:), allocatable :: s
+        character(len=40) :: buf
+        if (present(edit)) then
+            write (buf, edit) x
+        else
+            write (buf, '(g0.6)') x
+        end if
+        s = trim(adjustl(buf))
+    end function real_text
 end module stickslip_error

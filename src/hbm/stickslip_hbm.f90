@@ -12,7 +12,7 @@
 module stickslip_hbm
     use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, real_text
     use stickslip_model, only: model_t, validate_model, force_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
@@ -256,8 +256,10 @@ contains
             end select
             if (allocated(error)) then
                 if (error%stat == stickslip_stat%numerical .and. rho_out_of_band(s, o%rho)) &
-                    error%message = error%message//" (rho = "//rtoa(o%rho)// &
-                    " is far from the contact mobility "//rtoa(o%rho/rho_ratio(s, o%rho))// &
+                    error%message = error%message//" (rho = "// &
+                                    real_text(o%rho, '(es12.3e3)')// &
+                                    " is far from the contact mobility "// &
+                                    real_text(o%rho/rho_ratio(s, o%rho), '(es12.3e3)')// &
                     " m/(N s): use &hbm rho = 0, the automatic choice)"
                 call prob%destroy()
                 return
@@ -326,13 +328,4 @@ contains
         rs = max(min(maxval(prob%limit), rstop), 1.0e-6_dp*rstop)
         fscale = min(vnorm, prob%rho*rs)
     end function condensed_convergence_scale
-
-    !> A real as short text.
-    function rtoa(x) result(text)
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: text
-        character(len=24) :: buf
-        write (buf, '(es12.3e3)') x
-        text = trim(adjustl(buf))
-    end function rtoa
 end module stickslip_hbm

@@ -147,6 +147,7 @@ contains
 
     !> Climb from `ladder_first` harmonics, doubling, each stage warm-started from the one
     !> before (the lower basis is a prefix of the higher one), up to the requested basis.
+    !> hybrj's path: every stage by Powell's method (solve_stage without `warm`).
     subroutine solve_ladder(s, opts, prob, y, target_norm, sol, error)
         !> The structure (its forcing harmonics).
         type(condensed_structure_t), intent(in) :: s
@@ -162,42 +163,23 @@ contains
         type(hbm_solution_t), intent(inout) :: sol
         !> Set as by solve_stage, or when a lower basis cannot be built.
         type(error_type), allocatable, intent(out) :: error
-        type(hb_problem_t) :: low
-        real(dp), allocatable :: ylow(:), rlow(:, :), rfull(:, :)
-        integer :: h, nbl, nb, nc
-        real(dp) :: low_target
-
-        nb = prob%basis%nb
-        nc = prob%nc
-        allocate (rfull(nb, nc))
-        rfull = reshape(y, [nb, nc])
+        integer :: rungs(32), nr
         ! the lowest rung must hold every forcing harmonic
-        h = max(ladder_first, maxval([0, s%force_harmonic]))
-        do while (h < opts%harmonics)
-            ! the lower basis is a subset of prob's: its dynamics without a factorization
-            call new_condensed_problem(low, prob%dyn, prob%limit, h, opts%odd_only, &
-                                       opts%samples, opts%rho, error, s%force_harmonic)
-            if (allocated(error)) return
-            nbl = low%basis%nb
-            rlow = rfull(1:nbl, :)
-            ylow = reshape(rlow, [nbl*nc])
-            ! the stages only need to be good starts: a looser target
-            low_target = max(target_norm, 1.0e-6_dp*sol%fscale)
-            call solve_stage(low, ylow, opts, low_target, sol, error)
-            call low%destroy()
-            if (allocated(error)) return
-            rfull(1:nbl, :) = reshape(ylow, [nbl, nc])
-            h = 2*h
+        nr = 0
+        rungs(1) = max(ladder_first, maxval([0, s%force_harmonic]))
+        do while (rungs(nr + 1) < opts%harmonics .and. nr + 1 < size(rungs))
+            nr = nr + 1
+            rungs(nr + 1) = 2*rungs(nr)
         end do
-        y = reshape(rfull, [nb*nc])
-        call solve_stage(prob, y, opts, target_norm, sol, error)
+        call climb(s, opts, prob, y, target_norm, sol, error, rungs(1:nr))
     end subroutine solve_ladder
 
     !> The ladder of the Newton path: levels H, H/2, H/4, ... down to `ladder_first` (or the
     !> highest forcing harmonic when larger)
     !> (integer halving: 3, 7, 15 for H = 15), solved from the lowest up, each stage
     !> warm-started from the one below; the lowest is cold (hybrj) unless `warm` (y holds
-    !> a start).
+    !> a start). The lower levels use samples in proportion to their harmonics
+    !> (level_samples).
     subroutine solve_halving_ladder(s, opts, prob, y, target_norm, sol, error, warm)
         !> The structure (its forcing harmonics).
         type(condensed_structure_t), intent(in) :: s
@@ -215,15 +197,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> y holds a start (the lowest level is then warm too).
         logical, intent(in) :: warm
-        type(hb_problem_t) :: low
-        real(dp), allocatable :: ylow(:), rfull(:, :)
-        integer :: levels(32), nlev, i, nbl, nb, nc, hmin
-        real(dp) :: low_target
-
-        nb = prob%basis%nb
-        nc = prob%nc
-        allocate (rfull(nb, nc))
-        rfull = reshape(y, [nb, nc])
+        integer :: levels(32), nlev, hmin
         ! halving down to ladder_first, but never below a forcing harmonic
         hmin = max(ladder_first, maxval([0, s%force_harmonic]))
         nlev = 1
@@ -232,22 +206,69 @@ contains
             nlev = nlev + 1
             levels(nlev) = max(hmin, levels(nlev - 1)/2)
         end do
+        call climb(s, opts, prob, y, target_norm, sol, error, levels(nlev:2:-1), warm)
+    end subroutine solve_halving_ladder
+
+    !> Solve on the lower bases `rungs` (harmonic counts, ascending, all below the requested
+    !> one), each warm-started from the one below, to a looser target (they only need to be
+    !> good starts), then on the requested basis. With `warm` (the Newton path): a stage is
+    !> warm (Newton first) when a lower one was solved or y held a start, and the rungs use
+    !> level_samples; without it (hybrj's path): Powell's method throughout, at the
+    !> requested samples.
+    subroutine climb(s, opts, prob, y, target_norm, sol, error, rungs, warm)
+        !> The structure (its forcing harmonics).
+        type(condensed_structure_t), intent(in) :: s
+        !> Solver options in effect (rho > 0).
+        type(hbm_options_t), intent(in) :: opts
+        !> The projected friction equations on the requested basis.
+        type(hb_problem_t), intent(inout) :: prob
+        !> Friction-force coefficients [N]: the start on entry, the last iterate on return.
+        real(dp), intent(inout) :: y(:)
+        !> The residual to reach on the requested basis [m/s].
+        real(dp), intent(in) :: target_norm
+        !> Its convergence report (sol%fscale set on entry).
+        type(hbm_solution_t), intent(inout) :: sol
+        !> Set as by solve_stage, or when a lower basis cannot be built.
+        type(error_type), allocatable, intent(out) :: error
+        !> The lower harmonic counts, ascending.
+        integer, intent(in) :: rungs(:)
+        !> Present on the Newton path: y holds a start.
+        logical, intent(in), optional :: warm
+        type(hb_problem_t) :: low
+        real(dp), allocatable :: ylow(:), rfull(:, :)
+        integer :: i, nbl, nb, nc, nt
+        real(dp) :: low_target
+
+        nb = prob%basis%nb
+        nc = prob%nc
+        allocate (rfull(nb, nc))
+        rfull = reshape(y, [nb, nc])
         low_target = max(target_norm, 1.0e-6_dp*sol%fscale)
-        do i = nlev, 2, -1
-            call new_condensed_problem(low, prob%dyn, prob%limit, levels(i), opts%odd_only, &
-                                       level_samples(opts%samples, opts%harmonics, levels(i)), &
-                                       opts%rho, error, s%force_harmonic)
+        do i = 1, size(rungs)
+            nt = opts%samples
+            if (present(warm)) nt = level_samples(opts%samples, opts%harmonics, rungs(i))
+            ! the lower basis is a subset of prob's: its dynamics without a factorization
+            call new_condensed_problem(low, prob%dyn, prob%limit, rungs(i), opts%odd_only, &
+                                       nt, opts%rho, error, s%force_harmonic)
             if (allocated(error)) return
             nbl = low%basis%nb
             ylow = reshape(rfull(1:nbl, :), [nbl*nc])
-            call solve_stage(low, ylow, opts, low_target, sol, error, warm .or. i < nlev)
+            if (present(warm)) then
+                call solve_stage(low, ylow, opts, low_target, sol, error, warm .or. i > 1)
+            else
+                call solve_stage(low, ylow, opts, low_target, sol, error)
+            end if
             call low%destroy()
             if (allocated(error)) return
             rfull(1:nbl, :) = reshape(ylow, [nbl, nc])
         end do
         y = reshape(rfull, [nb*nc])
-        call solve_stage(prob, y, opts, target_norm, sol, error, warm .or. nlev > 1)
-    end subroutine solve_halving_ladder
+        if (present(warm)) then
+            call solve_stage(prob, y, opts, target_norm, sol, error, warm .or. size(rungs) > 0)
+        else
+            call solve_stage(prob, y, opts, target_norm, sol, error)
+        end if
+    end subroutine climb
 
     !> Samples of a lower level of the halving ladder: the requested samples per harmonic
     !> kept (samples h / H, up to a power of two, at least 64), never more than `samples`.

@@ -8,7 +8,7 @@
 module stickslip_case_model
     use, intrinsic :: iso_c_binding, only: c_char, c_size_t, c_ptr, c_null_char, c_associated
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_model, only: model_t
     use stickslip_namelist, only: nml_file_t
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_integers, &
@@ -269,7 +269,7 @@ contains
             call get_real(nml, "system", name, x, error)
             if (allocated(error)) return
             if (.not. (x >= 0.0_dp .and. x <= huge(x))) call group_error(nml, error, &
-                "&system "//name//" = "//rtoa_short(x)//": must be finite and >= 0")
+                "&system "//name//" = "//real_text(x)//": must be finite and >= 0")
         end subroutine take_factor
 
         !> Error when the inline variable `inline` is given beside `file`.
@@ -351,7 +351,7 @@ contains
                 if (.not. (sparse_symmetry_defect(s) <= 1.0e-12_dp)) then
                     call group_error(nml, error, "&system "//name//" '"//path//"': M is "// &
                                      "not symmetric (max |M(i,j) - M(j,i)| is "// &
-                                     rtoa_short(sparse_symmetry_defect(s))//" of its "// &
+                                     real_text(sparse_symmetry_defect(s))//" of its "// &
                                      "largest entry)")
                     return
                 end if
@@ -477,13 +477,6 @@ contains
         end do
     end function working_directory
 
-    pure function rtoa_short(x) result(s)
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: s
-        character(len=32) :: buf
-        write (buf, '(g0.6)') x
-        s = trim(adjustl(buf))
-    end function rtoa_short
 
     !> Read &forcing (required): omega (required), and either force_dof (at least one),
     !> force_amplitude (one per force_dof, required), or force_file (a Matrix Market file, N x

@@ -6,7 +6,7 @@
 !> Re-exported by stickslip_reduction.
 module stickslip_reduction_error
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets
     use stickslip_umfpack, only: sparse_zlu_t
     use stickslip_lapack, only: zgesv
@@ -165,7 +165,7 @@ contains
                 call zlu%refactorize(zval, error)
             end if
             if (allocated(error)) then
-                error%message = "receptance_error: full model at w = "//rtext(w)//" rad/s: "// &
+                error%message = "receptance_error: full model at w = "//real_text(w, '(es12.5)')//" rad/s: "// &
                                 error%message
                 call zlu%release()
                 return
@@ -181,7 +181,7 @@ contains
             call zgesv(nr, nc, zr, nr, ipiv, gr, nr, info)
             if (info /= 0) then
                 call fatal_error(error, "receptance_error: reduced model singular at w = "// &
-                                 rtext(w)//" rad/s", stickslip_stat%numerical)
+                                 real_text(w, '(es12.5)')//" rad/s", stickslip_stat%numerical)
                 call zlu%release()
                 return
             end if
@@ -229,13 +229,4 @@ contains
             end do
         end subroutine positions
     end subroutine receptance_error_directions
-
-    !> x in es12.5 without blanks (frequencies in error messages).
-    pure function rtext(x) result(s)
-        real(dp), intent(in) :: x
-        character(len=:), allocatable :: s
-        character(len=32) :: buf
-        write (buf, '(es12.5)') x
-        s = trim(adjustl(buf))
-    end function rtext
 end module stickslip_reduction_error

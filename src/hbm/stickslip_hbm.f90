@@ -21,7 +21,7 @@ module stickslip_hbm
     use stickslip_condensed_structure, only: condensed_structure_t, rho_ratio, &
         rho_out_of_band, rho_ratio_min, rho_ratio_max
     use stickslip_hbm_strategy, only: newton_min_unknowns, ladder_first, use_newton, &
-        solve_stage, solve_ladder, solve_halving_ladder
+        solve_stage, solve_ladder, doubling_rungs, halving_rungs
     use stickslip_hbm_finish, only: finish_solution, check_solution, energy_warning, &
         energy_untrusted, dissipation_warning, dissipation_untrusted, force_excess_warning, &
         force_excess_untrusted
@@ -224,8 +224,8 @@ contains
             ! Newton only from warm starts: r_start, or the halving ladder H/2^k
             select case (opts%start)
             case ('ladder')
-                call solve_halving_ladder(s, o, prob, y, target_norm, sol, error, &
-                                          present(r_start))
+                call solve_ladder(s, o, prob, y, target_norm, sol, error, &
+                                  halving_rungs(s, o), present(r_start))
             case ('direct')
                 call solve_stage(prob, y, opts, target_norm, sol, error, present(r_start))
             case default
@@ -234,24 +234,26 @@ contains
                     if (.not. allocated(error) .and. .not. sol%converged .and. &
                         opts%harmonics > ladder_first) then
                         y = reshape(vzero, [prob%n])
-                        call solve_halving_ladder(s, o, prob, y, target_norm, sol, error, &
-                                                  .true.)
+                        call solve_ladder(s, o, prob, y, target_norm, sol, error, &
+                                          halving_rungs(s, o), .true.)
                     end if
                 else
-                    call solve_halving_ladder(s, o, prob, y, target_norm, sol, error, .false.)
+                    call solve_ladder(s, o, prob, y, target_norm, sol, error, &
+                                      halving_rungs(s, o), .false.)
                 end if
             end select
         else
             select case (opts%start)
             case ('ladder')
-                call solve_ladder(s, o, prob, y, target_norm, sol, error)
+                call solve_ladder(s, o, prob, y, target_norm, sol, error, doubling_rungs(s, o))
             case default
                 call solve_stage(prob, y, opts, target_norm, sol, error)
                 if (.not. allocated(error) .and. .not. sol%converged .and. opts%start == 'auto' &
                     .and. opts%harmonics > ladder_first) then
                     y = 0.0_dp
                     if (present(r_start)) y = reshape(vzero, [prob%n])
-                    call solve_ladder(s, o, prob, y, target_norm, sol, error)
+                    call solve_ladder(s, o, prob, y, target_norm, sol, error, &
+                                      doubling_rungs(s, o))
                 end if
             end select
             if (allocated(error)) then

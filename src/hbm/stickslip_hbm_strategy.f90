@@ -1,8 +1,9 @@
 !> The nonlinear solve strategy of the weighted-residual method on projected friction
 !> equations already built: one stage on a fixed basis (solve_stage: semismooth Newton from a
-!> warm start, Powell's hybrid method on LAPACK's QR or MINPACK's hybrj, restarts), the
-!> doubling ladder of warm starts of the hybrj path (solve_ladder) and the halving ladder of
-!> the Newton path (solve_halving_ladder), and which path a problem takes (use_newton).
+!> warm start, Powell's hybrid method on LAPACK's QR or MINPACK's hybrj, restarts), a ladder
+!> of warm starts from fewer harmonics (solve_ladder) on the doubling rungs of the hybrj path
+!> (doubling_rungs) or the halving rungs of the Newton path (halving_rungs), and which path a
+!> problem takes (use_newton).
 !> Called by solve_condensed (stickslip_hbm), which chooses the start and judges the answer;
 !> knows nothing of recovery, energies or checks (stickslip_hbm_finish).
 module stickslip_hbm_strategy
@@ -18,7 +19,7 @@ module stickslip_hbm_strategy
     implicit none
     private
     public :: newton_min_unknowns, ladder_first
-    public :: use_newton, solve_stage, solve_ladder, solve_halving_ladder
+    public :: use_newton, solve_stage, solve_ladder, doubling_rungs, halving_rungs
 
     !> Number of unknowns (basis size x contacts) from which &hbm solver = 'auto' takes the
     !> semismooth Newton path (warm starts, LU) instead of hybrj: where it starts to win
@@ -145,77 +146,50 @@ contains
         end do
     end subroutine solve_stage
 
-    !> Climb from `ladder_first` harmonics, doubling, each stage warm-started from the one
-    !> before (the lower basis is a prefix of the higher one), up to the requested basis.
-    !> hybrj's path: every stage by Powell's method (solve_stage without `warm`).
-    subroutine solve_ladder(s, opts, prob, y, target_norm, sol, error)
+    !> The rungs of hybrj's ladder: from `ladder_first` harmonics (or the highest forcing
+    !> harmonic when larger), doubling, below the requested count (3, 6, 12 for H = 15).
+    pure function doubling_rungs(s, opts) result(rungs)
         !> The structure (its forcing harmonics).
         type(condensed_structure_t), intent(in) :: s
-        !> Solver options in effect (rho > 0).
+        !> Solver options in effect (the requested harmonics).
         type(hbm_options_t), intent(in) :: opts
-        !> The projected friction equations on the requested basis.
-        type(hb_problem_t), intent(inout) :: prob
-        !> Friction-force coefficients [N]: the start on entry, the last iterate on return.
-        real(dp), intent(inout) :: y(:)
-        !> The residual to reach on the requested basis [m/s].
-        real(dp), intent(in) :: target_norm
-        !> Its convergence report (sol%fscale set on entry).
-        type(hbm_solution_t), intent(inout) :: sol
-        !> Set as by solve_stage, or when a lower basis cannot be built.
-        type(error_type), allocatable, intent(out) :: error
-        integer :: rungs(32), nr
-        ! the lowest rung must hold every forcing harmonic
-        nr = 0
-        rungs(1) = max(ladder_first, maxval([0, s%force_harmonic]))
-        do while (rungs(nr + 1) < opts%harmonics .and. nr + 1 < size(rungs))
-            nr = nr + 1
-            rungs(nr + 1) = 2*rungs(nr)
+        integer, allocatable :: rungs(:)
+        integer :: h
+        allocate (rungs(0))
+        h = max(ladder_first, maxval([0, s%force_harmonic]))
+        do while (h < opts%harmonics)
+            rungs = [rungs, h]
+            h = 2*h
         end do
-        call climb(s, opts, prob, y, target_norm, sol, error, rungs(1:nr))
-    end subroutine solve_ladder
+    end function doubling_rungs
 
-    !> The ladder of the Newton path: levels H, H/2, H/4, ... down to `ladder_first` (or the
-    !> highest forcing harmonic when larger)
-    !> (integer halving: 3, 7, 15 for H = 15), solved from the lowest up, each stage
-    !> warm-started from the one below; the lowest is cold (hybrj) unless `warm` (y holds
-    !> a start). The lower levels use samples in proportion to their harmonics
-    !> (level_samples).
-    subroutine solve_halving_ladder(s, opts, prob, y, target_norm, sol, error, warm)
+    !> The rungs of the Newton path's ladder: H/2, H/4, ... (integer halving) down to
+    !> `ladder_first` (or the highest forcing harmonic when larger), ascending (3, 7 for
+    !> H = 15).
+    pure function halving_rungs(s, opts) result(rungs)
         !> The structure (its forcing harmonics).
         type(condensed_structure_t), intent(in) :: s
-        !> Solver options in effect (rho > 0).
+        !> Solver options in effect (the requested harmonics).
         type(hbm_options_t), intent(in) :: opts
-        !> The projected friction equations on the requested basis.
-        type(hb_problem_t), intent(inout) :: prob
-        !> Friction-force coefficients [N]: the start on entry, the last iterate on return.
-        real(dp), intent(inout) :: y(:)
-        !> The residual to reach on the requested basis [m/s].
-        real(dp), intent(in) :: target_norm
-        !> Its convergence report (sol%fscale set on entry).
-        type(hbm_solution_t), intent(inout) :: sol
-        !> Set as by solve_stage, or when a lower basis cannot be built.
-        type(error_type), allocatable, intent(out) :: error
-        !> y holds a start (the lowest level is then warm too).
-        logical, intent(in) :: warm
-        integer :: levels(32), nlev, hmin
-        ! halving down to ladder_first, but never below a forcing harmonic
+        integer, allocatable :: rungs(:)
+        integer :: h, hmin
+        allocate (rungs(0))
         hmin = max(ladder_first, maxval([0, s%force_harmonic]))
-        nlev = 1
-        levels(1) = opts%harmonics
-        do while (levels(nlev) > hmin .and. nlev < size(levels))
-            nlev = nlev + 1
-            levels(nlev) = max(hmin, levels(nlev - 1)/2)
+        h = opts%harmonics
+        do while (h > hmin)
+            h = max(hmin, h/2)
+            rungs = [h, rungs]
         end do
-        call climb(s, opts, prob, y, target_norm, sol, error, levels(nlev:2:-1), warm)
-    end subroutine solve_halving_ladder
+    end function halving_rungs
 
-    !> Solve on the lower bases `rungs` (harmonic counts, ascending, all below the requested
-    !> one), each warm-started from the one below, to a looser target (they only need to be
-    !> good starts), then on the requested basis. With `warm` (the Newton path): a stage is
-    !> warm (Newton first) when a lower one was solved or y held a start, and the rungs use
-    !> level_samples; without it (hybrj's path): Powell's method throughout, at the
-    !> requested samples.
-    subroutine climb(s, opts, prob, y, target_norm, sol, error, rungs, warm)
+    !> A harmonic ladder: solve on the lower bases `rungs` (harmonic counts, ascending, all
+    !> below the requested one; doubling_rungs or halving_rungs), each warm-started from the
+    !> one below (a lower basis is a prefix of a higher one), to a looser target (they only
+    !> need to be good starts), then on the requested basis. With `warm` (the Newton path):
+    !> a stage is warm (Newton first) when a lower one was solved or y held a start, and the
+    !> rungs use level_samples; without it (hybrj's path): Powell's method throughout, at
+    !> the requested samples.
+    subroutine solve_ladder(s, opts, prob, y, target_norm, sol, error, rungs, warm)
         !> The structure (its forcing harmonics).
         type(condensed_structure_t), intent(in) :: s
         !> Solver options in effect (rho > 0).
@@ -268,7 +242,7 @@ contains
         else
             call solve_stage(prob, y, opts, target_norm, sol, error)
         end if
-    end subroutine climb
+    end subroutine solve_ladder
 
     !> Samples of a lower level of the halving ladder: the requested samples per harmonic
     !> kept (samples h / H, up to a power of two, at least 64), never more than `samples`.

@@ -167,12 +167,7 @@ contains
                 fnorm = trial_norm()
                 if (fnorm <= opts%chord_ratio*norm2(f)) then
                     report%chord_steps = report%chord_steps + 1
-                    x = xt
-                    f = ft
-                    if (fnorm < best) then
-                        best = fnorm
-                        xbest = x
-                    end if
+                    call move_to_trial()
                     cycle
                 end if
             end if
@@ -228,12 +223,7 @@ contains
                 report%outcome = newton_stalled
                 exit
             end if
-            x = xt
-            f = ft
-            if (fnorm < best) then
-                best = fnorm
-                xbest = x
-            end if
+            call move_to_trial()
         end do
         x = xbest
         report%fnorm = best
@@ -276,6 +266,17 @@ contains
                 t = 0.5_dp*t
             end do
         end subroutine backtrack
+
+        !> The iterate moves to the trial point xt (F = ft, ||F|| = fnorm); the best point
+        !> met is kept.
+        subroutine move_to_trial()
+            x = xt
+            f = ft
+            if (fnorm < best) then
+                best = fnorm
+                xbest = x
+            end if
+        end subroutine move_to_trial
 
         !> ft = F(xt) and its norm, counted in report%nfev; huge when the system's callback
         !> refuses the point (a NaN there: a step too far, not an error).

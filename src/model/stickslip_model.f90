@@ -7,14 +7,25 @@
 !> from dense matrices (contact_direction, force_shape: oblique or local-frame contacts,
 !> distributed loads). Every method reads them only through contact_velocity_direction and
 !> force_direction, so both forms give the same results (bitwise for unit columns).
+!>
+!> Contact laws beyond rigid Coulomb friction under a constant normal load (doc/contacts.md):
+!> a contact may have a normal direction n_j (a unilateral, Signorini contact: gap
+!> g_j = gap_j + n_j^T x >= 0, normal force lambda_j >= 0 acting as n_j lambda_j, lambda_j g_j
+!> = 0; friction limit mu_j lambda_j(t)), a second tangential direction (2D friction in the
+!> plane of w_j and t2_j, the force in the disk of radius mu N), a normal contact stiffness
+!> and a tangential contact stiffness (Jenkins element). All of it is optional: a model
+!> without these fields is the model of before, and every method gives the same numbers.
 module stickslip_model
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_lapack, only: dpotrf
     implicit none
     private
     public :: model_t, validate_model, contact_velocity_direction, force_direction
+    public :: contact_normal_direction, contact_tangent2_direction, is_unilateral, is_planar, &
+        contact_gap, contact_preload, normal_stiffness_of, tangential_stiffness_of, &
+        has_contact_laws, preload_force
 
     !> A structure with friction contacts, forced at angular frequency `omega`.
     !> Field names follow the case-file namelist variables (README).
@@ -52,8 +63,31 @@ module stickslip_model
         real(dp), allocatable :: contact_direction(:, :)
         !> Friction coefficient of each contact (>= 0).
         real(dp), allocatable :: mu(:)
-        !> Normal load of each contact (>= 0) [N].
+        !> Normal load of each contact (>= 0) [N]; 0 for a unilateral contact (its normal
+        !> force comes from its gap and preload).
         real(dp), allocatable :: normal_load(:)
+        !> Normal directions, N x n_c (optional): column j nonzero makes contact j unilateral,
+        !> with gap g_j = gap(j) + normal_direction(:, j)^T x >= 0 [m] and a normal force
+        !> lambda_j >= 0 acting on the structure as normal_direction(:, j) lambda_j; a zero
+        !> column (or no array) keeps the constant normal_load(j).
+        real(dp), allocatable :: normal_direction(:, :)
+        !> Second tangential directions, N x n_c (optional): column j nonzero makes contact j
+        !> slip in a plane (2D friction): slip velocity (w_j^T x', t2_j^T x'), friction force
+        !> (r_j, s_j) acting as w_j r_j + t2_j s_j, in the disk |(r_j, s_j)| <= mu_j N_j.
+        !> Orthogonal to w_j and of the same length.
+        real(dp), allocatable :: tangent2_direction(:, :)
+        !> Initial gap of each unilateral contact at x = 0 [m] (default 0).
+        real(dp), allocatable :: gap(:)
+        !> Static preload of each unilateral contact [N] (>= 0, default 0): a constant force
+        !> -preload(j) normal_direction(:, j) pressing the contact closed; the static solve
+        !> with it gives the mean normal force.
+        real(dp), allocatable :: preload(:)
+        !> Normal contact stiffness of each unilateral contact [N/m] (>= 0; 0 = rigid, the
+        !> Signorini law): lambda = max(0, -k_n g) for k_n > 0.
+        real(dp), allocatable :: normal_stiffness(:)
+        !> Tangential contact stiffness of each contact [N/m] (>= 0; 0 = rigid Coulomb): a
+        !> spring k_t in series with the Coulomb slider (Jenkins element), in 1D and 2D.
+        real(dp), allocatable :: tangential_stiffness(:)
     contains
         !> Number of contacts.
         procedure :: ncontact
@@ -121,6 +155,134 @@ contains
         f = 0.0_dp
         f(model%force_dof(i)) = 1.0_dp
     end function force_direction
+
+    !> Normal direction n_j of contact j (zeros for a contact under a constant normal load).
+    pure function contact_normal_direction(model, j) result(nv)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index (1..ncontact()).
+        integer, intent(in) :: j
+        real(dp) :: nv(model%ndof)
+        nv = 0.0_dp
+        if (allocated(model%normal_direction)) then
+            if (size(model%normal_direction, 2) >= j) nv = model%normal_direction(:, j)
+        end if
+    end function contact_normal_direction
+
+    !> Second tangential direction t2_j of contact j (zeros for 1D friction).
+    pure function contact_tangent2_direction(model, j) result(tv)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index (1..ncontact()).
+        integer, intent(in) :: j
+        real(dp) :: tv(model%ndof)
+        tv = 0.0_dp
+        if (allocated(model%tangent2_direction)) then
+            if (size(model%tangent2_direction, 2) >= j) tv = model%tangent2_direction(:, j)
+        end if
+    end function contact_tangent2_direction
+
+    !> Contact j has a normal direction (unilateral contact, varying normal force).
+    pure logical function is_unilateral(model, j)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index.
+        integer, intent(in) :: j
+        is_unilateral = .false.
+        if (allocated(model%normal_direction)) then
+            if (size(model%normal_direction, 2) >= j) &
+                is_unilateral = any(model%normal_direction(:, j) /= 0.0_dp)
+        end if
+    end function is_unilateral
+
+    !> Contact j slips in a plane (2D friction).
+    pure logical function is_planar(model, j)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index.
+        integer, intent(in) :: j
+        is_planar = .false.
+        if (allocated(model%tangent2_direction)) then
+            if (size(model%tangent2_direction, 2) >= j) &
+                is_planar = any(model%tangent2_direction(:, j) /= 0.0_dp)
+        end if
+    end function is_planar
+
+    !> Initial gap of contact j [m] (0 when not given).
+    pure real(dp) function contact_gap(model, j)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index.
+        integer, intent(in) :: j
+        contact_gap = entry_or_zero(model%gap, j)
+    end function contact_gap
+
+    !> Static preload of contact j [N] (0 when not given).
+    pure real(dp) function contact_preload(model, j)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index.
+        integer, intent(in) :: j
+        contact_preload = entry_or_zero(model%preload, j)
+    end function contact_preload
+
+    !> Normal contact stiffness of contact j [N/m] (0: rigid).
+    pure real(dp) function normal_stiffness_of(model, j)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index.
+        integer, intent(in) :: j
+        normal_stiffness_of = entry_or_zero(model%normal_stiffness, j)
+    end function normal_stiffness_of
+
+    !> Tangential contact stiffness of contact j [N/m] (0: rigid).
+    pure real(dp) function tangential_stiffness_of(model, j)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Contact index.
+        integer, intent(in) :: j
+        tangential_stiffness_of = entry_or_zero(model%tangential_stiffness, j)
+    end function tangential_stiffness_of
+
+    !> Some contact of the model is unilateral, planar or has a contact stiffness: the
+    !> methods take their general contact path (otherwise the rigid constant-load path of
+    !> before, bitwise unchanged).
+    pure logical function has_contact_laws(model)
+        !> The model.
+        type(model_t), intent(in) :: model
+        integer :: j
+        has_contact_laws = .false.
+        do j = 1, model%ncontact()
+            if (is_unilateral(model, j) .or. is_planar(model, j) .or. &
+                tangential_stiffness_of(model, j) /= 0.0_dp) then
+                has_contact_laws = .true.
+                return
+            end if
+        end do
+    end function has_contact_laws
+
+    !> The static preload force on the structure, -sum_j preload_j n_j (N-vector) [N].
+    pure function preload_force(model) result(f)
+        !> The model.
+        type(model_t), intent(in) :: model
+        real(dp) :: f(model%ndof)
+        integer :: j
+        f = 0.0_dp
+        do j = 1, model%ncontact()
+            if (contact_preload(model, j) /= 0.0_dp) &
+                f = f - contact_preload(model, j)*contact_normal_direction(model, j)
+        end do
+    end function preload_force
+
+    !> a(j) when a is allocated with at least j entries, else 0.
+    pure real(dp) function entry_or_zero(a, j)
+        real(dp), allocatable, intent(in) :: a(:)
+        integer, intent(in) :: j
+        entry_or_zero = 0.0_dp
+        if (allocated(a)) then
+            if (size(a) >= j) entry_or_zero = a(j)
+        end if
+    end function entry_or_zero
 
     !> Check a model for consistency: sizes, finite values, M symmetric positive definite,
     !> C and K symmetric-shaped and finite, DOF indices in range, mu >= 0, normal loads >= 0,
@@ -299,8 +461,169 @@ contains
                 return
             end if
         end do
+        call check_contact_laws(error)
 
     contains
+
+        !> The optional contact-law data: one entry per contact, finite, signs; normal and
+        !> second tangential directions N x n_c; per contact, a unilateral contact has no
+        !> normal_load and a gap >= 0 unless preloaded, its tangential directions are
+        !> orthogonal to its normal; a contact without normal has no gap, preload or normal
+        !> stiffness; a second tangential direction is orthogonal to the first and as long.
+        subroutine check_contact_laws(error)
+            type(error_type), allocatable, intent(out) :: error
+            integer :: nc, q
+            real(dp) :: w(n), nv(n), t2(n)
+            nc = model%ncontact()
+            call check_list("gap", model%gap, .false.)
+            if (allocated(error)) return
+            call check_list("preload", model%preload, .true.)
+            if (allocated(error)) return
+            call check_list("normal_stiffness", model%normal_stiffness, .true.)
+            if (allocated(error)) return
+            call check_list("tangential_stiffness", model%tangential_stiffness, .true.)
+            if (allocated(error)) return
+            call check_columns("normal_direction", model%normal_direction)
+            if (allocated(error)) return
+            call check_columns("tangent2_direction", model%tangent2_direction)
+            if (allocated(error)) return
+            do q = 1, nc
+                w = contact_velocity_direction(model, q)
+                if (is_unilateral(model, q)) then
+                    nv = contact_normal_direction(model, q)
+                    if (model%normal_load(q) /= 0.0_dp) then
+                        call fatal_error(error, "model%normal_load("//itoa(q)//") = "// &
+                                         real_text(model%normal_load(q), '(g0.6)')// &
+                                         ": contact "//itoa(q)//" is unilateral (it has a "// &
+                                         "normal direction): its normal force comes from "// &
+                                         "its gap and preload, not from a given normal "// &
+                                         "load; set it to 0", stickslip_stat%input)
+                        return
+                    end if
+                    if (contact_gap(model, q) < 0.0_dp .and. contact_preload(model, q) == 0.0_dp) then
+                        call fatal_error(error, "model%gap("//itoa(q)//") = "// &
+                                         real_text(contact_gap(model, q), '(g0.6)')// &
+                                         ": a negative gap (an initial interference) "// &
+                                         "needs a preload: give model%preload("//itoa(q)// &
+                                         ") > 0, or a gap >= 0", stickslip_stat%input)
+                        return
+                    end if
+                    if (.not. orthogonal(w, nv)) then
+                        call fatal_error(error, "model%normal_direction(:, "//itoa(q)// &
+                                         "): not orthogonal to the tangential direction of "// &
+                                         "contact "//itoa(q)//" (cosine "// &
+                                         cosine_text(w, nv)//"): the slip directions must "// &
+                                         "lie in the contact plane", stickslip_stat%input)
+                        return
+                    end if
+                    if (is_planar(model, q)) then
+                        t2 = contact_tangent2_direction(model, q)
+                        if (.not. orthogonal(t2, nv)) then
+                            call fatal_error(error, "model%tangent2_direction(:, "//itoa(q)// &
+                                             "): not orthogonal to the normal direction of "// &
+                                             "contact "//itoa(q)//" (cosine "// &
+                                             cosine_text(t2, nv)//"): the slip directions "// &
+                                             "must lie in the contact plane", &
+                                             stickslip_stat%input)
+                            return
+                        end if
+                    end if
+                else
+                    if (contact_gap(model, q) /= 0.0_dp) then
+                        call no_normal("gap", q)
+                        return
+                    end if
+                    if (contact_preload(model, q) /= 0.0_dp) then
+                        call no_normal("preload", q)
+                        return
+                    end if
+                    if (normal_stiffness_of(model, q) /= 0.0_dp) then
+                        call no_normal("normal_stiffness", q)
+                        return
+                    end if
+                end if
+                if (is_planar(model, q)) then
+                    t2 = contact_tangent2_direction(model, q)
+                    if (.not. orthogonal(w, t2)) then
+                        call fatal_error(error, "model%tangent2_direction(:, "//itoa(q)// &
+                                         "): not orthogonal to the first tangential "// &
+                                         "direction of contact "//itoa(q)//" (cosine "// &
+                                         cosine_text(w, t2)//")", stickslip_stat%input)
+                        return
+                    end if
+                    if (abs(norm2(t2) - norm2(w)) > 1.0e-8_dp*norm2(w)) then
+                        call fatal_error(error, "model%tangent2_direction(:, "//itoa(q)// &
+                                         "): length "//real_text(norm2(t2), '(g0.6)')// &
+                                         " differs from the first tangential direction's "// &
+                                         real_text(norm2(w), '(g0.6)')//": the friction "// &
+                                         "disk needs two orthogonal directions of equal "// &
+                                         "length", stickslip_stat%input)
+                        return
+                    end if
+                end if
+            end do
+        end subroutine check_contact_laws
+
+        !> A per-contact list: none, or one finite entry per contact (>= 0 when signed).
+        subroutine check_list(name, a, nonnegative)
+            character(len=*), intent(in) :: name
+            real(dp), allocatable, intent(in) :: a(:)
+            logical, intent(in) :: nonnegative
+            integer :: q
+            if (.not. allocated(a)) return
+            if (size(a) == 0) return
+            if (size(a) /= model%ncontact()) then
+                call fatal_error(error, "model%"//name//": "//itoa(size(a))//" entries, "// &
+                                 "expected one per contact ("//itoa(model%ncontact())//")", &
+                                 stickslip_stat%input)
+                return
+            end if
+            do q = 1, size(a)
+                if (.not. finite(a(q)) .or. (nonnegative .and. a(q) < 0.0_dp)) then
+                    call fatal_error(error, "model%"//name//"("//itoa(q)//") = "// &
+                                     real_text(a(q), "(g0.6)")//": must be finite"// &
+                                     trim(merge(" and >= 0", "         ", nonnegative)), &
+                                     stickslip_stat%input)
+                    return
+                end if
+            end do
+        end subroutine check_list
+
+        !> N x n_c directions (or none): the size and finite entries.
+        subroutine check_columns(name, a)
+            character(len=*), intent(in) :: name
+            real(dp), allocatable, intent(in) :: a(:, :)
+            if (.not. allocated(a)) return
+            if (size(a) == 0) return
+            if (size(a, 2) /= model%ncontact()) then
+                call fatal_error(error, "model%"//name//": "//itoa(size(a, 2))//" columns, "// &
+                                 "expected one per contact ("//itoa(model%ncontact())//")", &
+                                 stickslip_stat%input)
+                return
+            end if
+            call check_shape(name, a, .false., error)
+        end subroutine check_columns
+
+        subroutine no_normal(name, q)
+            character(len=*), intent(in) :: name
+            integer, intent(in) :: q
+            call fatal_error(error, "model%"//name//"("//itoa(q)//"): contact "//itoa(q)// &
+                             " has no normal direction (it carries the constant "// &
+                             "normal_load): give its normal direction, or leave "//name// &
+                             " at 0", stickslip_stat%input)
+        end subroutine no_normal
+
+        !> |a . b| <= 1e-8 |a| |b|.
+        pure logical function orthogonal(a, b)
+            real(dp), intent(in) :: a(:), b(:)
+            orthogonal = abs(dot_product(a, b)) <= 1.0e-8_dp*norm2(a)*norm2(b)
+        end function orthogonal
+
+        function cosine_text(a, b) result(text)
+            real(dp), intent(in) :: a(:), b(:)
+            character(len=:), allocatable :: text
+            text = real_text(dot_product(a, b)/(norm2(a)*norm2(b)), '(g0.6)')
+        end function cosine_text
 
         !> An N x m matrix of directions: ndof rows, finite, (nonzero_columns) no zero column.
         subroutine check_shape(name, a, nonzero_columns, error)

@@ -20,6 +20,7 @@ program tester
     use test_version_info, only: run_version_info_tests
     use test_friction, only: run_friction_tests
     use test_contact_law, only: run_contact_law_tests
+    use test_contact_case, only: run_contact_case_tests
     use test_fft, only: run_fft_tests
     use test_expm, only: run_expm_tests
     use test_lapack, only: run_lapack_tests
@@ -76,6 +77,7 @@ program tester
     if (selected("version_info")) call run_version_info_tests(t)
     if (selected("friction")) call run_friction_tests(t)
     if (selected("contact_law")) call run_contact_law_tests(t)
+    if (selected("contact_case")) call run_contact_case_tests(t)
     if (selected("fft")) call run_fft_tests(t)
     if (selected("expm")) call run_expm_tests(t)
     if (selected("lapack")) call run_lapack_tests(t)

@@ -23,6 +23,7 @@ module stickslip_driver
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t
+    use stickslip_model, only: has_contact_laws
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t
     use stickslip_euler, only: euler_result_t
@@ -98,6 +99,15 @@ contains
                              "matrices of a small or reduced model, but &reduction method = "// &
                              "'none' keeps this model sparse (only methods 'hbm' and 'sweep' run on it); "// &
                              "use &reduction method = 'craig-bampton'", stickslip_stat%input)
+            call name_case_file(case, error)
+            return
+        end if
+        ! contact laws (doc/contacts.md) run only in the methods that handle them so far
+        if (has_contact_laws(case%model)) then
+            call fatal_error(error, "&friction: contact laws (a normal direction, a second "// &
+                             "tangential direction or a tangential_stiffness) are not yet "// &
+                             "handled by &run method = '"//result%method//"'", &
+                             stickslip_stat%input)
             call name_case_file(case, error)
             return
         end if

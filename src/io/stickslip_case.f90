@@ -20,13 +20,14 @@ module stickslip_case
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance
     use stickslip_namelist_values, only: get_logical
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
-        read_friction_group, max_dof, max_terms, group_error, system_files_t, max_file_dof, &
+        max_dof, max_terms, group_error, system_files_t, max_file_dof, &
         sparse_system_t
     use stickslip_case_reduction, only: reduction_case_t, read_reduction_group, &
         reduce_case_model
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
         read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
+    use stickslip_case_friction, only: read_friction_group, friction_form_t
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t
     implicit none
@@ -52,6 +53,9 @@ module stickslip_case
         character(len=:), allocatable :: path
         !> The structure, its contacts and forcing.
         type(model_t) :: model
+        !> How &friction gave the contact-law directions (DOF lists in full-model numbers,
+        !> inline, or file names), for the echo and messages.
+        type(friction_form_t) :: friction_form
         !> &system mass_file, stiffness_file, damping_file, rayleigh_alpha, rayleigh_beta as
         !> read (the matrices themselves are in model; C includes the Rayleigh terms).
         type(system_files_t) :: system_files
@@ -137,7 +141,7 @@ contains
         if (allocated(error)) return
         call read_forcing_group(nml, case%model, error, case%system_files)
         if (allocated(error)) return
-        call read_friction_group(nml, case%model, error, case%system_files)
+        call read_friction_group(nml, case%model, error, case%system_files, case%friction_form)
         if (allocated(error)) return
         call read_hbm_group(nml, case%hbm, case%checks, error)
         if (allocated(error)) return
@@ -183,6 +187,10 @@ contains
                                   "direction_file", case%system_files%direction_path)
             call name_column_file(error, "&forcing force_shape", "&forcing force_file", &
                                   case%system_files%force_path)
+            call name_direction_form(error, "normal", case%friction_form%normal, &
+                                     case%friction_form%normal_path)
+            call name_direction_form(error, "tangent2", case%friction_form%tangent2, &
+                                     case%friction_form%tangent2_path)
             return
         end if
 
@@ -307,6 +315,32 @@ contains
         error%message = error%message(1:k - 1)//variable//" '"//path//"'"// &
                         error%message(k + len(component):)
     end subroutine name_column_file
+
+    !> In a message about "<kind>_direction(:, j)" name the variable the case gave:
+    !> "<kind>_dof(j)" (form 'dof'), "<kind>_file '<path>' column j" (form 'file'); the
+    !> inline form keeps its name.
+    subroutine name_direction_form(error, kind, form, path)
+        type(error_type), intent(inout) :: error
+        character(len=*), intent(in) :: kind, form
+        character(len=:), allocatable, intent(in) :: path
+        character(len=:), allocatable :: head
+        integer :: k, e
+        head = kind//"_direction(:, "
+        k = index(error%message, head)
+        if (k == 0) return
+        e = index(error%message(k + len(head):), ")")
+        if (e == 0) return
+        e = k + len(head) + e - 1
+        select case (form)
+        case ('dof')
+            error%message = error%message(1:k - 1)//kind//"_dof("// &
+                            error%message(k + len(head):e)//error%message(e + 1:)
+        case ('file')
+            if (.not. allocated(path)) return
+            error%message = error%message(1:k - 1)//kind//"_file '"//path//"' column "// &
+                            error%message(k + len(head):e - 1)//error%message(e + 1:)
+        end select
+    end subroutine name_direction_form
 
     !> Every group known and given once (groups named summary* are the results echoed in
     !> a summary.nml: ignored). Errors name the group (and suggest the closest known one)
@@ -566,6 +600,22 @@ contains
                 end if
                 call put(unit, "  mu = "//rlist(m%mu), stat, msg)
                 call put(unit, "  normal_load = "//rlist(m%normal_load), stat, msg)
+                call put_directions("normal", case%friction_form%normal, &
+                                    case%friction_form%normal_dof, &
+                                    case%friction_form%normal_dof2, &
+                                    case%friction_form%normal_absolute, m%normal_direction)
+                call put_directions("tangent2", case%friction_form%tangent2, &
+                                    case%friction_form%tangent2_dof, &
+                                    case%friction_form%tangent2_dof2, &
+                                    case%friction_form%tangent2_absolute, &
+                                    m%tangent2_direction)
+                if (allocated(m%gap)) call put(unit, "  gap = "//rlist(m%gap), stat, msg)
+                if (allocated(m%preload)) call put(unit, "  preload = "//rlist(m%preload), &
+                                                   stat, msg)
+                if (allocated(m%normal_stiffness)) call put(unit, "  normal_stiffness = "// &
+                                                            rlist(m%normal_stiffness), stat, msg)
+                if (allocated(m%tangential_stiffness)) call put(unit, &
+                    "  tangential_stiffness = "//rlist(m%tangential_stiffness), stat, msg)
             end if
             call put(unit, "/", stat, msg)
             call put(unit, "&reduction", stat, msg)
@@ -660,6 +710,34 @@ contains
                 end associate
             end if
         end associate
+
+    contains
+
+        !> The normal or second tangential directions in the form the case gave them; a
+        !> matrix set in memory (no form) as a comment.
+        subroutine put_directions(kind, form, dof, dof2, absolute, d)
+            character(len=*), intent(in) :: kind, form
+            integer, allocatable, intent(in) :: dof(:), dof2(:)
+            character(len=:), allocatable, intent(in) :: absolute
+            real(dp), allocatable, intent(in) :: d(:, :)
+            select case (form)
+            case ('dof')
+                call put(unit, "  "//kind//"_dof = "//ilist(dof), stat, msg)
+                call put(unit, "  "//kind//"_dof2 = "//ilist(dof2), stat, msg)
+            case ('file')
+                call put(unit, "  "//kind//"_file = "//quoted(absolute), stat, msg)
+            case ('inline')
+                call put(unit, "  "//kind//"_direction = "//rlist(reshape(d, [size(d)])), &
+                         stat, msg)
+            case default
+                if (allocated(d)) then
+                    if (any(d /= 0.0_dp)) call put(unit, "  ! "//kind//"_direction ("// &
+                                                   itoa(size(d, 1))//" x "//itoa(size(d, 2))// &
+                                                   ") set in memory: give it as "//kind// &
+                                                   "_file", stat, msg)
+                end if
+            end select
+        end subroutine put_directions
     end subroutine write_case
 
     !> Write one line to `unit` unless an earlier write failed (stat /= 0); record the first

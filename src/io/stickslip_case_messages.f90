@@ -10,13 +10,15 @@ module stickslip_case_messages
     public :: case_message, to_case_message, model_group
 
     !> Components of a model_t and the case-file group each comes from.
-    character(len=*), parameter :: model_components(15) = [character(len=17) :: 'ndof', 'mass', &
+    character(len=*), parameter :: model_components(21) = [character(len=20) :: 'ndof', 'mass', &
         'stiffness', 'damping', 'omega', 'force_dof', 'force_harmonic', 'force_amplitude', &
         'force_phase', 'contact_dof', 'contact_dof2', 'mu', 'normal_load', 'force_shape', &
-        'contact_direction']
-    character(len=*), parameter :: model_groups(15) = [character(len=8) :: 'system', 'system', &
+        'contact_direction', 'normal_direction', 'tangent2_direction', 'gap', 'preload', &
+        'normal_stiffness', 'tangential_stiffness']
+    character(len=*), parameter :: model_groups(21) = [character(len=8) :: 'system', 'system', &
         'system', 'system', 'forcing', 'forcing', 'forcing', 'forcing', 'forcing', 'friction', &
-        'friction', 'friction', 'friction', 'forcing', 'friction']
+        'friction', 'friction', 'friction', 'forcing', 'friction', 'friction', 'friction', &
+        'friction', 'friction', 'friction', 'friction']
 
 contains
 

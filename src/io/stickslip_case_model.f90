@@ -1,4 +1,5 @@
-!> Readers of the case-file groups that build the model: &system, &forcing, &friction. Each
+!> Readers of the case-file groups that build the model: &system, &forcing (&friction in
+!> stickslip_case_friction, with the shared helpers here). Each
 !> reads one group of a parsed namelist file into `model_t`, with messages that start
 !> "<path>[:<line>]: &<group> <variable>: ". The whole-model checks (symmetry, definiteness,
 !> DOF ranges) are validate_model's, called by read_case once the three groups are read.
@@ -18,7 +19,8 @@ module stickslip_case_model
     use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size
     implicit none
     private
-    public :: read_system_group, read_forcing_group, read_friction_group
+    public :: read_system_group, read_forcing_group
+    public :: take_reals, take_integers, take_file_variable, read_column_file, not_beside_file
     public :: max_dof, max_terms, group_error, max_file_dof, system_files_t, resolve_path
     public :: sparse_system_t
 
@@ -558,63 +560,6 @@ contains
             if (from_file) per = "column of force_file"
         end function per_file
     end subroutine read_forcing_group
-
-    !> Read &friction (optional: no group, no contact): either contact_dof with contact_dof2
-    !> (default 0: the ground), or direction_file (a Matrix Market file, N x n_c, column j the
-    !> direction w_j of contact j, relative paths against the case file's folder, no zero
-    !> column; contact_dof/contact_dof2 not allowed beside it); mu and normal_load one per
-    !> contact (required when there are contacts).
-    subroutine read_friction_group(nml, model, error, files)
-        !> The parsed case file.
-        type(nml_file_t), intent(in) :: nml
-        !> The model (ndof set): the contacts set (none when the group, contact_dof and
-        !> direction_file are absent).
-        type(model_t), intent(inout) :: model
-        !> Set on the first problem found.
-        type(error_type), allocatable, intent(out) :: error
-        !> The file variables: direction_file, direction_path, direction_absolute set when
-        !> given.
-        type(system_files_t), intent(inout), optional :: files
-        logical :: found
-        integer :: nc
-        character(len=:), allocatable :: given, path, absolute, per
-        call check_names(nml, "friction", [character(len=14) :: "contact_dof", "contact_dof2", &
-                                          "mu", "normal_load", "direction_file"], error)
-        if (allocated(error)) return
-        call take_file_variable(nml, "friction", "direction_file", given, path, absolute, error)
-        if (allocated(error)) return
-        if (allocated(path)) then
-            call not_beside_file(nml, "friction", "contact_dof", "direction_file", error)
-            if (allocated(error)) return
-            call not_beside_file(nml, "friction", "contact_dof2", "direction_file", error)
-            if (allocated(error)) return
-            call read_column_file(nml, "friction", "direction_file", path, model%ndof, .true., &
-                                  model%contact_direction, error)
-            if (allocated(error)) return
-            if (present(files)) then
-                files%direction_file = given
-                files%direction_path = path
-                files%direction_absolute = absolute
-            end if
-            nc = size(model%contact_direction, 2)
-            allocate (model%contact_dof(0), model%contact_dof2(0))
-            per = "column of direction_file"
-        else
-            call get_integers(nml, "friction", "contact_dof", model%contact_dof, found, &
-                              max_terms, error)
-            if (allocated(error)) return
-            if (.not. found) allocate (model%contact_dof(0))
-            nc = size(model%contact_dof)
-            per = "contact_dof"
-        end if
-        call take_reals(nml, "friction", "mu", nc, .true., 0.0_dp, model%mu, error, per)
-        if (allocated(error)) return
-        call take_reals(nml, "friction", "normal_load", nc, .true., 0.0_dp, model%normal_load, &
-                        error, per)
-        if (allocated(error)) return
-        if (.not. allocated(path)) call take_integers(nml, "friction", "contact_dof2", nc, 0, &
-                                                      model%contact_dof2, error)
-    end subroutine read_friction_group
 
     !> `count` reals of a per-term list (one per force_dof or contact_dof, or `per`); `default`
     !> for each when absent and not required.

@@ -157,7 +157,7 @@ contains
         character(len=:), allocatable :: parameter
         logical :: found_start, found_stop
         integer :: n, k, h, i
-        real(dp), allocatable :: reduced_shape(:, :)
+        real(dp), allocatable :: reduced_shape(:, :), law_directions(:, :)
 
         n = model%ndof
         call check_range("&forcing force_dof", model%force_dof)
@@ -171,6 +171,11 @@ contains
                 model%force_dof]
         if (allocated(model%contact_direction)) bset = [bset, &
             pack([(i, i=1, n)], any(model%contact_direction /= 0.0_dp, dim=2))]
+        ! the normal and second tangential directions of the contact laws
+        if (allocated(model%normal_direction)) bset = [bset, &
+            pack([(i, i=1, n)], any(model%normal_direction /= 0.0_dp, dim=2))]
+        if (allocated(model%tangent2_direction)) bset = [bset, &
+            pack([(i, i=1, n)], any(model%tangent2_direction /= 0.0_dp, dim=2))]
         ! the DOFs the user asks for are boundary DOFs too: exact static response there
         if (output_given) then
             call check_range("&output dofs", output_dofs)
@@ -231,7 +236,23 @@ contains
         end if
         red%report%error_frequencies = freqs
         d2 = model%contact_dof2
-        if (allocated(model%contact_direction) .and. size(freqs) > 0) then
+        law_directions = all_contact_directions(model)
+        if (size(law_directions, 2) > 0 .and. size(freqs) > 0) then
+            ! contact laws: the receptance over every force channel (tangential and normal)
+            if (sparse%has_damping) then
+                call receptance_error(sparse%stiffness, sparse%mass, rm, law_directions, &
+                                      freqs, err, error, cmat=sparse%damping)
+            else
+                call receptance_error(sparse%stiffness, sparse%mass, rm, law_directions, &
+                                      freqs, err, error)
+            end if
+            if (allocated(error)) then
+                error%message = nml%path//": &reduction: reduction error measure: "// &
+                                error%message
+                return
+            end if
+            red%report%error = err
+        else if (allocated(model%contact_direction) .and. size(freqs) > 0) then
             if (sparse%has_damping) then
                 call receptance_error(sparse%stiffness, sparse%mass, rm, &
                                       model%contact_direction, freqs, err, error, &
@@ -285,6 +306,16 @@ contains
             call reduce_vectors(rm, model%force_shape, reduced_shape, error)
             if (allocated(error)) return
             call move_alloc(reduced_shape, model%force_shape)
+        end if
+        if (allocated(model%normal_direction)) then
+            call reduce_vectors(rm, model%normal_direction, reduced_shape, error)
+            if (allocated(error)) return
+            call move_alloc(reduced_shape, model%normal_direction)
+        end if
+        if (allocated(model%tangent2_direction)) then
+            call reduce_vectors(rm, model%tangent2_direction, reduced_shape, error)
+            if (allocated(error)) return
+            call move_alloc(reduced_shape, model%tangent2_direction)
         end if
         ! the rows of T for the output DOFs: column r of them is T(dofs, :) e_r
         if (.not. output_given) output_dofs = rm%boundary
@@ -450,4 +481,41 @@ contains
             end if
         end associate
     end subroutine reduction_findings
+    !> Every force channel direction of the model's contacts when it has normal or second
+    !> tangential directions (the tangential columns w_j, then the nonzero normal and second
+    !> tangential columns), N x m; N x 0 for a model without them (its error is measured on
+    !> the contact directions as before). The model is not validated yet: DOF lists are
+    !> read with their ranges checked by the caller.
+    function all_contact_directions(model) result(d)
+        type(model_t), intent(in) :: model
+        real(dp), allocatable :: d(:, :)
+        integer :: j, n, nc
+        real(dp), allocatable :: col(:)
+        n = model%ndof
+        allocate (d(n, 0))
+        if (.not. (allocated(model%normal_direction) .or. allocated(model%tangent2_direction))) &
+            return
+        nc = size(model%mu)
+        allocate (col(n))
+        do j = 1, nc
+            if (allocated(model%contact_direction)) then
+                col = model%contact_direction(:, j)
+            else
+                col = 0.0_dp
+                col(model%contact_dof(j)) = 1.0_dp
+                if (model%contact_dof2(j) > 0) col(model%contact_dof2(j)) = -1.0_dp
+            end if
+            d = reshape([d, col], [n, size(d, 2) + 1])
+        end do
+        if (allocated(model%normal_direction)) call append(model%normal_direction)
+        if (allocated(model%tangent2_direction)) call append(model%tangent2_direction)
+    contains
+        subroutine append(a)
+            real(dp), intent(in) :: a(:, :)
+            integer :: k
+            do k = 1, size(a, 2)
+                if (any(a(:, k) /= 0.0_dp)) d = reshape([d, a(:, k)], [n, size(d, 2) + 1])
+            end do
+        end subroutine append
+    end function all_contact_directions
 end module stickslip_case_reduction

@@ -234,7 +234,8 @@ contains
     !> The DOFs the result files hold when &output dofs is absent: every DOF, 1..N, when
     !> N <= max_dof (64, the inline limit: the files of small models are unchanged);
     !> otherwise the contact DOFs (contact_dof and the nonzero contact_dof2, or every DOF
-    !> where a column of contact_direction is nonzero) and the forced DOFs (force_dof; none
+    !> where a column of contact_direction is nonzero, and the DOFs of the normal and second
+    !> tangential directions) and the forced DOFs (force_dof; none
     !> for the load shapes of force_shape), in increasing order without duplicates.
     pure function default_output_dofs(model) result(dofs)
         !> The model.
@@ -255,9 +256,22 @@ contains
             if (size(model%contact_direction, 1) == model%ndof) touched = touched .or. &
                 any(model%contact_direction /= 0.0_dp, dim=2)
         end if
+        touched = touched .or. nonzero_rows(model%normal_direction)
+        touched = touched .or. nonzero_rows(model%tangent2_direction)
         dofs = pack([(i, i=1, model%ndof)], touched)
 
     contains
+
+        !> The rows of an N x m matrix with a nonzero entry (none when not allocated or of
+        !> another size).
+        pure function nonzero_rows(a) result(rows)
+            real(dp), allocatable, intent(in) :: a(:, :)
+            logical :: rows(model%ndof)
+            rows = .false.
+            if (.not. allocated(a)) return
+            if (size(a, 1) /= model%ndof) return
+            rows = any(a /= 0.0_dp, dim=2)
+        end function nonzero_rows
 
         !> `flags` with the entries of `list` in range set (0: no second DOF).
         pure function marked(flags, list) result(out)

@@ -96,6 +96,8 @@ contains
         ! directions and load shapes from files: the echo holds only the file names
         if (allocated(case%model%contact_direction)) call mix(case%model%contact_direction)
         if (allocated(case%model%force_shape)) call mix(case%model%force_shape)
+        if (allocated(case%model%normal_direction)) call mix(case%model%normal_direction)
+        if (allocated(case%model%tangent2_direction)) call mix(case%model%tangent2_direction)
         write (fp, '(2z8.8)') h
 
     contains

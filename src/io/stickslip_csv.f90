@@ -20,11 +20,12 @@ module stickslip_csv
     use stickslip_robustness, only: robustness_row_t
     use stickslip_case, only: ltoa
     use stickslip_files, only: open_temporary, close_and_rename
+    use stickslip_contact_set, only: contact_set_t
     implicit none
     private
     public :: write_hbm_csv, write_samples_csv, write_coefficients_csv, write_events_csv
     public :: write_study_csv, write_frc_csv, write_robustness_csv, real_fmt
-    public :: format_real, real_width
+    public :: format_real, real_width, contact_columns
 
     !> Edit descriptor of every real in the result files: full double precision.
     character(len=*), parameter :: real_fmt = 'es25.17e3'
@@ -70,7 +71,7 @@ contains
     !> Write `dir`/`name`: header t,x1..xN,v1..vN,r1..rC (with `dofs`: t,x<d>..,v<d>..,r1..rC
     !> for the DOFs d selected, in their order) and one row per instant, full double
     !> precision (the format of hbm.csv, also used for euler.csv). Error: stat io.
-    subroutine write_samples_csv(dir, name, t, x, v, r, error, dofs, labels)
+    subroutine write_samples_csv(dir, name, t, x, v, r, error, dofs, labels, contacts, gap)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> File name.
@@ -90,15 +91,24 @@ contains
         !> Column numbers of the selected DOFs (size of the selection; default: the DOF
         !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
         integer, intent(in), optional :: labels(:)
+        !> The contacts' channel layout: with contact laws, r holds the channel forces
+        !> (instants x n_channel) and the columns are contact_columns' (r<j>, r<j>_2,
+        !> normal<j>, gap<j>); absent or plain: r1..rC.
+        type(contact_set_t), intent(in), optional :: contacts
+        !> Gap of each contact, instants x n_c [m] (with `contacts`).
+        real(dp), intent(in), optional :: gap(:, :)
         integer :: u, k, i, n, nc, stat, ncol, pos
         character(len=512) :: msg
         character(len=:), allocatable :: header, line
-        integer, allocatable :: sel(:), numbers(:)
+        integer, allocatable :: sel(:), numbers(:), channel(:), gap_of(:)
+        character(len=16), allocatable :: rnames(:)
 
         sel = selection(size(x, 2), dofs)
         numbers = column_numbers(sel, labels)
         n = size(sel)
-        nc = size(r, 2)
+        call contact_columns(size(r, 2), rnames, channel, gap_of, contacts)
+        if (.not. present(gap)) gap_of = 0*gap_of
+        nc = size(rnames)
         header = "t"
         do i = 1, n
             header = header//",x"//itoa(numbers(i))
@@ -107,7 +117,7 @@ contains
             header = header//",v"//itoa(numbers(i))
         end do
         do i = 1, nc
-            header = header//",r"//itoa(i)
+            header = header//","//trim(rnames(i))
         end do
         ncol = 1 + 2*n + nc
         allocate (character(len=ncol*(real_width + 1)) :: line)
@@ -126,7 +136,13 @@ contains
                 call put(v(k, sel(i)))
             end do
             do i = 1, nc
-                call put(r(k, i))
+                if (channel(i) > 0) then
+                    call put(r(k, channel(i)))
+                else if (gap_of(i) > 0) then
+                    call put(gap(k, gap_of(i)))
+                else
+                    call put(0.0_dp)
+                end if
             end do
             write (u, '(a)', iostat=stat, iomsg=msg) line(1:pos - 1)
         end do
@@ -160,18 +176,23 @@ contains
         character(len=512) :: msg
         character(len=:), allocatable :: header, kind
         character(len=80) :: fmt
-        integer, allocatable :: sel(:), numbers(:)
+        integer, allocatable :: sel(:), numbers(:), channel(:), gap_of(:)
+        character(len=16), allocatable :: rnames(:)
 
         sel = selection(size(sol%xcoef, 2), dofs)
         numbers = column_numbers(sel, labels)
         n = size(sel)
-        nc = size(sol%rcoef, 2)
+        call contact_columns(size(sol%rcoef, 2), rnames, channel, gap_of)
+        ! the gap is not a force channel: no coefficients column
+        rnames = pack(rnames, channel > 0)
+        channel = pack(channel, channel > 0)
+        nc = size(channel)
         header = "harmonic,kind"
         do i = 1, n
             header = header//",x"//itoa(numbers(i))
         end do
         do i = 1, nc
-            header = header//",r"//itoa(i)
+            header = header//","//trim(rnames(i))
         end do
         write (fmt, '(a,i0,a)') '(i0,",",a,",",', n + nc, '(' // real_fmt // ',:,","))'
         call open_temporary(dir, "coefficients.csv", u, error)
@@ -187,7 +208,7 @@ contains
                 kind = "cos"
             end if
             write (u, fmt, iostat=stat, iomsg=msg) sol%harmonic(k), kind, sol%xcoef(k, sel), &
-                sol%rcoef(k, :)
+                sol%rcoef(k, channel)
         end do
         call close_and_rename(dir, "coefficients.csv", u, stat, msg, error)
     end subroutine write_coefficients_csv
@@ -548,4 +569,58 @@ contains
         end if
         t = t//'"'
     end function csv_quote
+    !> The contact columns of the sample files for `nr` force columns: r1..r<nr> (channel
+    !> k for column k) without `contacts` or for a plain contact set; with contact laws,
+    !> r<j> (each contact's first tangential channel), then r<j>_2 (the second tangential
+    !> channel of each planar contact), normal<j> (the normal force channel of each
+    !> unilateral contact) and gap<j> (its gap: channel 0, gap_of = j).
+    subroutine contact_columns(nr, names, channel, gap_of, contacts)
+        !> Force columns of the result (channels).
+        integer, intent(in) :: nr
+        !> Column names.
+        character(len=16), allocatable, intent(out) :: names(:)
+        !> The channel of each column (0 for a gap column).
+        integer, allocatable, intent(out) :: channel(:), gap_of(:)
+        !> The contacts' channel layout.
+        type(contact_set_t), intent(in), optional :: contacts
+        integer :: j, k
+        logical :: laws
+        laws = .false.
+        if (present(contacts)) laws = .not. contacts%plain .and. contacts%nchannel == nr
+        if (.not. laws) then
+            allocate (names(nr), channel(nr), gap_of(nr))
+            do k = 1, nr
+                names(k) = "r"//itoa(k)
+                channel(k) = k
+            end do
+            gap_of = 0
+            return
+        end if
+        associate (cs => contacts)
+            allocate (names(0), channel(0), gap_of(0))
+            do j = 1, cs%ncontact
+                call add("r"//itoa(j), cs%first(j), 0)
+            end do
+            do j = 1, cs%ncontact
+                if (cs%ntangent(j) == 2) call add("r"//itoa(j)//"_2", cs%first(j) + 1, 0)
+            end do
+            do j = 1, cs%ncontact
+                if (cs%normal(j) > 0) call add("normal"//itoa(j), cs%normal(j), 0)
+            end do
+            do j = 1, cs%ncontact
+                if (cs%normal(j) > 0) call add("gap"//itoa(j), 0, j)
+            end do
+        end associate
+    contains
+        subroutine add(name, c, g)
+            character(len=*), intent(in) :: name
+            integer, intent(in) :: c, g
+            character(len=16) :: word
+            word = name
+            names = [names, word]
+            channel = [channel, c]
+            gap_of = [gap_of, g]
+        end subroutine add
+    end subroutine contact_columns
+
 end module stickslip_csv

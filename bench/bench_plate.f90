@@ -21,7 +21,7 @@ module stickslip_bench_plate
     implicit none
     private
     public :: plate, plate_node, element, first_frequency, plate_damping, case_dofs, &
-              plate_model, reduced_plate
+              plate_model, reduced_plate, reduced_plate_unilateral
 
     !> Plate length along x [m].
     real(dp), parameter, public :: plate_l = 0.4_dp
@@ -276,4 +276,65 @@ contains
         if (allocated(error)) return
         model = plate_model(rm, contact, forced, omega_ratio*w1)
     end subroutine reduced_plate
+    !> The reduced plate with `nc` unilateral contacts (doc/contacts.md) on the upper-edge
+    !> nodes of case_dofs: each presses on an obstacle above its node (normal direction -e_y,
+    !> gap 0, elastic normal stiffness `kn`, preload `preload`) and rubs along x (friction
+    !> coefficient mu on the node's x DOF); with `constant_load`, the same contacts as plain
+    !> friction under the constant normal load `preload` (the contact that never opens). The
+    !> force of plate_model on the lower tip corner. Boundary DOFs: the contacts' x and y
+    !> DOFs and the forced DOF.
+    subroutine reduced_plate_unilateral(nx, ny, nc, harmonics, omega_ratio, kn, preload, &
+                                        constant_load, model, w1, n, error)
+        !> Elements along x (the length) and along y (the height) [-].
+        integer, intent(in) :: nx, ny
+        !> Number of contacts [-].
+        integer, intent(in) :: nc
+        !> Harmonics the reduction is meant for (sets its highest frequency) [-].
+        integer, intent(in) :: harmonics
+        !> Excitation frequency / w1 [-].
+        real(dp), intent(in) :: omega_ratio
+        !> Normal contact stiffness [N/m] (0: rigid) and preload [N] of every contact.
+        real(dp), intent(in) :: kn, preload
+        !> Plain friction under the constant normal load `preload` instead.
+        logical, intent(in) :: constant_load
+        !> The reduced model.
+        type(model_t), intent(out) :: model
+        !> First natural frequency of the full plate [rad/s].
+        real(dp), intent(out) :: w1
+        !> DOFs of the full plate model [-].
+        integer, intent(out) :: n
+        !> Allocated on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(sparse_matrix_t) :: k, m, c
+        type(reduction_options_t) :: opts
+        type(reduction_report_t) :: rep
+        type(reduced_model_t) :: rm
+        integer, allocatable :: ydof(:), xdof(:)
+        integer :: forced, j
+        w1 = 0.0_dp
+        n = 2*nx*(ny + 1)
+        call plate(nx, ny, k, m, error)
+        if (allocated(error)) return
+        call first_frequency(k, m, w1, error)
+        if (allocated(error)) return
+        c = plate_damping(m, w1)
+        call case_dofs(nx, ny, nc, ydof, forced)
+        xdof = ydof - 1
+        opts = reduction_options_t(highest_frequency=harmonics*1.1_dp*w1)
+        call craig_bampton(k, m, [xdof, ydof, forced], opts, rm, rep, error, cmat=c)
+        if (allocated(error)) return
+        model = plate_model(rm, xdof, forced, omega_ratio*w1)
+        if (constant_load) then
+            model%normal_load = [(preload, j=1, nc)]
+            return
+        end if
+        model%normal_load = [(0.0_dp, j=1, nc)]
+        allocate (model%normal_direction(model%ndof, nc))
+        model%normal_direction = 0.0_dp
+        do j = 1, nc
+            model%normal_direction(reduced_dof_of(rm, ydof(j)), j) = -1.0_dp
+        end do
+        model%preload = [(preload, j=1, nc)]
+        model%normal_stiffness = [(kn, j=1, nc)]
+    end subroutine reduced_plate_unilateral
 end module stickslip_bench_plate

@@ -21,6 +21,7 @@ program tester
     use test_friction, only: run_friction_tests
     use test_contact_law, only: run_contact_law_tests
     use test_contact_case, only: run_contact_case_tests
+    use test_file_faults, only: run_file_faults_tests
     use test_fft, only: run_fft_tests
     use test_expm, only: run_expm_tests
     use test_lapack, only: run_lapack_tests
@@ -78,6 +79,7 @@ program tester
     if (selected("friction")) call run_friction_tests(t)
     if (selected("contact_law")) call run_contact_law_tests(t)
     if (selected("contact_case")) call run_contact_case_tests(t)
+    if (selected("file_faults")) call run_file_faults_tests(t)
     if (selected("fft")) call run_fft_tests(t)
     if (selected("expm")) call run_expm_tests(t)
     if (selected("lapack")) call run_lapack_tests(t)

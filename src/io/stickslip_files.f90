@@ -7,6 +7,7 @@
 !> rename, link, unlink, getpid, kill, getpgid) through bind(C); never starts a process.
 module stickslip_files
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     implicit none
     private
@@ -200,6 +201,7 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         integer :: stat
+        integer(int64) :: logical_size, disk_size
         character(len=512) :: msg
         character(len=4096) :: temporary
         if (stat_write /= 0) then
@@ -209,10 +211,27 @@ contains
             return
         end if
         inquire (unit=unit, name=temporary)
+        ! gfortran reports neither a full file system (ENOSPC) nor a file size limit (EFBIG)
+        ! on write, flush or close: it drops the bytes. Compare the size it believes it
+        ! wrote with the size of the file on disk.
+        flush (unit, iostat=stat)
+        logical_size = -1
+        if (stat == 0) inquire (unit=unit, size=logical_size, iostat=stat)
         close (unit, iostat=stat, iomsg=msg)
         if (stat /= 0) then
+            stat = c_unlink(trim(temporary)//c_null_char)
             call fatal_error(error, dir//'/'//name//": close failed: "//trim(msg), &
                              stickslip_stat%io)
+            return
+        end if
+        disk_size = -2
+        inquire (file=trim(temporary), size=disk_size, iostat=stat)
+        if (logical_size < 0 .or. disk_size /= logical_size) then
+            stat = c_unlink(trim(temporary)//c_null_char)
+            call fatal_error(error, dir//'/'//name//": write failed: "//itoa_64(disk_size)// &
+                             " of "//itoa_64(logical_size)//" bytes reached the disk (the "// &
+                             "file system is full, or a file size limit was reached); the "// &
+                             "old file, if any, is kept", stickslip_stat%io)
             return
         end if
         if (c_rename(trim(temporary)//c_null_char, dir//'/'//name//c_null_char) /= 0) then
@@ -339,4 +358,12 @@ contains
         if (lock_owner(lock%path) == process_id()) call remove_file(lock%path)
         lock%held = .false.
     end subroutine release_lock
+    !> Decimal text of a 64-bit integer.
+    pure function itoa_64(k) result(text)
+        integer(int64), intent(in) :: k
+        character(len=:), allocatable :: text
+        character(len=24) :: buf
+        write (buf, '(i0)') k
+        text = trim(buf)
+    end function itoa_64
 end module stickslip_files

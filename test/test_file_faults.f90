@@ -1,0 +1,122 @@
+!> Results written completely or not at all when the disk refuses bytes: gfortran reports
+!> neither a full file system nor a file size limit on write or close (it drops the bytes),
+!> so close_and_rename compares the size it wrote with the size on disk. Simulated here by a
+!> file size limit (setrlimit RLIMIT_FSIZE, soft limit lowered and restored, SIGXFSZ
+!> ignored as the program does): the writer returns an io error naming the file, the
+!> temporary is removed and the old file kept whole.
+module test_file_faults
+    use, intrinsic :: iso_c_binding, only: c_int, c_long, c_funptr, c_intptr_t
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_files, only: make_directory
+    use stickslip_csv, only: write_samples_csv
+    use fixtures, only: enter_project_root, scratch, first_line
+    use testing, only: test_counter_t, check
+    implicit none
+    private
+    public :: run_file_faults_tests
+
+    !> struct rlimit of Linux (rlim_t is unsigned long).
+    type, bind(c) :: rlimit_t
+        integer(c_long) :: cur, max
+    end type rlimit_t
+
+    integer(c_int), parameter :: rlimit_fsize = 1, sigxfsz = 25
+
+    interface
+        function c_getrlimit(resource, rlim) bind(c, name='getrlimit') result(stat)
+            import :: c_int, rlimit_t
+            integer(c_int), value :: resource
+            type(rlimit_t), intent(out) :: rlim
+            integer(c_int) :: stat
+        end function c_getrlimit
+        function c_setrlimit(resource, rlim) bind(c, name='setrlimit') result(stat)
+            import :: c_int, rlimit_t
+            integer(c_int), value :: resource
+            type(rlimit_t), intent(in) :: rlim
+            integer(c_int) :: stat
+        end function c_setrlimit
+        function c_signal(sig, handler) bind(c, name='signal') result(old)
+            import :: c_int, c_funptr
+            integer(c_int), value :: sig
+            type(c_funptr), value :: handler
+            type(c_funptr) :: old
+        end function c_signal
+    end interface
+
+contains
+
+    subroutine run_file_faults_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call enter_project_root()
+        call test_size_limit(t)
+    end subroutine run_file_faults_tests
+
+    !> A file size limit below the file's size: io error, no temporary, the old file kept.
+    subroutine test_size_limit(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/file_faults"
+        type(error_type), allocatable :: error
+        type(rlimit_t) :: saved, small
+        type(c_funptr) :: old_handler, ignore
+        real(dp) :: tt(400), x(400, 2), v(400, 2), r(400, 1)
+        integer :: k, stat
+        character(len=:), allocatable :: head
+        call make_directory(dir, error)
+        call check(t, .not. allocated(error), "file_faults: scratch directory")
+        if (allocated(error)) return
+        do k = 1, 400
+            tt(k) = k
+        end do
+        x = 1.0_dp
+        v = 2.0_dp
+        r = 3.0_dp
+        ! a complete old file
+        call write_samples_csv(dir, "samples.csv", tt(1:2), x(1:2, :), v(1:2, :), r(1:2, :), &
+                               error)
+        call check(t, .not. allocated(error), "file_faults: the old file written")
+        if (c_getrlimit(rlimit_fsize, saved) /= 0) then
+            call check(t, .false., "file_faults: getrlimit")
+            return
+        end if
+        small = saved
+        small%cur = 8192
+        ignore = transfer(1_c_intptr_t, ignore)
+        old_handler = c_signal(sigxfsz, ignore)
+        stat = c_setrlimit(rlimit_fsize, small)
+        call write_samples_csv(dir, "samples.csv", tt, x, v, r, error)
+        stat = c_setrlimit(rlimit_fsize, saved)
+        old_handler = c_signal(sigxfsz, old_handler)
+        call check(t, allocated(error), "file_faults: a write beyond the size limit fails")
+        if (.not. allocated(error)) return
+        call check(t, error%stat == stickslip_stat%io .and. &
+                   index(error%message, "samples.csv: write failed") > 0 .and. &
+                   index(error%message, "bytes reached the disk") > 0, &
+                   "file_faults: one io error naming the file", error%message)
+        ! the old file is kept whole, no temporary is left
+        head = first_line(dir//"/samples.csv")
+        call check(t, head == "t,x1,x2,v1,v2,r1", "file_faults: the old file kept", head)
+        call check(t, .not. any_temporary(dir), "file_faults: no temporary left")
+    end subroutine test_size_limit
+
+    !> A temporary samples.csv.*.tmp is left in `dir`.
+    logical function any_temporary(dir)
+        character(len=*), intent(in) :: dir
+        integer :: k, pid
+        logical :: exists
+        any_temporary = .false.
+        pid = getpid()
+        do k = 1, 5
+            inquire (file=dir//"/samples.csv."//itoa(pid)//"."//itoa(k)//".tmp", exist=exists)
+            any_temporary = any_temporary .or. exists
+        end do
+    contains
+        pure function itoa(i) result(s)
+            integer, intent(in) :: i
+            character(len=:), allocatable :: s
+            character(len=12) :: buf
+            write (buf, '(i0)') i
+            s = trim(buf)
+        end function itoa
+    end function any_temporary
+end module test_file_faults

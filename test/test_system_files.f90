@@ -324,6 +324,30 @@ contains
         call bad(t, "'none' reads large files sparse", "&system mass_file = 'huge.mtx', "// &
                  "stiffness_file = 'huge.mtx' / &reduction method = 'none' /", &
                  [character(len=80) :: "huge.mtx:3:", "end of file"])
+        ! size claims the entries cannot back fail at once (issue 17): a mass matrix
+        ! needs its N diagonal entries; a stiffness of another size than M is named
+        call write_lines(dir//"/m_claims.mtx", [character(len=60) :: &
+            "%%MatrixMarket matrix coordinate real symmetric", "% claims 1e9 DOFs", &
+            "1000000000 1000000000 2", "1 1 1", "2 2 1"])
+        call bad(t, "a size the entries cannot back", "&system mass_file = 'm_claims.mtx', "// &
+                 "stiffness_file = 'm_claims.mtx' /", [character(len=80) :: &
+                 "&system mass_file '"//dir//"/m_claims.mtx':3:", "1000000000 x 1000000000", &
+                 "with 2 entries", "needs its 1000000000 diagonal entries"])
+        call write_lines(dir//"/k_claims.mtx", [character(len=60) :: &
+            "%%MatrixMarket matrix coordinate real symmetric", "2147483647 2147483647 2", &
+            "1 1 1", "2 2 1"])
+        call bad(t, "a stiffness claiming 2**31-1 rows", "&system mass_file = 'm8.mtx', "// &
+                 "stiffness_file = 'k_claims.mtx' /", [character(len=80) :: &
+                 "&system stiffness_file '"//dir//"/k_claims.mtx'", "2147483647 x 2147483647", &
+                 "N = 8", "sizes must agree"])
+        ! a size line announcing 10**8 entries of a file holding 2: read as the entries
+        ! come, it ends at the end of the file, without allocating for 10**8 first
+        call write_lines(dir//"/m_e8.mtx", [character(len=60) :: &
+            "%%MatrixMarket matrix coordinate real symmetric", "100000000 100000000 100000000", &
+            "1 1 1", "2 2 1"])
+        call bad(t, "10**8 entries announced, 2 given", "&system mass_file = 'm_e8.mtx', "// &
+                 "stiffness_file = 'm_e8.mtx' /", [character(len=80) :: "m_e8.mtx:4:", &
+                 "end of file after 2 of the 100000000 entries"])
         ! a damping file of another size than the model
         call bad(t, "damping size", "&system mass_file = 'm8.mtx', stiffness_file = "// &
                  "'k8.mtx', damping_file = 'k4.mtx' /", [character(len=80) :: &

@@ -1,10 +1,16 @@
 !> Error handling: an allocatable `error_type` returned as the last argument of anything that
 !> can fail. Library code never stops and never prints; only the app turns errors into exit codes.
 module stickslip_error
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
     implicit none
     private
     public :: error_type, fatal_error, stickslip_stat, exit_code_of, itoa, real_text
+
+    !> Decimal text of an integer (default or 64-bit kind).
+    interface itoa
+        module procedure itoa_default, itoa_int64
+    end interface itoa
 
     !> Error categories (`error_type%stat`).
     type :: stat_enum_t
@@ -66,14 +72,24 @@ contains
     end function exit_code_of
 
     !> Decimal text of an integer.
-    pure function itoa(i) result(s)
+    pure function itoa_default(i) result(s)
         !> The integer.
         integer, intent(in) :: i
         character(len=:), allocatable :: s
         character(len=24) :: buf
         write (buf, '(i0)') i
         s = trim(buf)
-    end function itoa
+    end function itoa_default
+
+    !> Decimal text of a 64-bit integer.
+    pure function itoa_int64(i) result(s)
+        !> The integer.
+        integer(int64), intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function itoa_int64
 
     !> A real as text without blanks, for messages: written with the edit descriptor `edit`
     !> (default '(g0.6)', six significant digits; e.g. '(es12.5)'). No errors.

@@ -8,6 +8,7 @@
 !> reduction of stickslip_case_reduction.
 module stickslip_case_model
     use, intrinsic :: iso_c_binding, only: c_char, c_size_t, c_ptr, c_null_char, c_associated
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_model, only: model_t
@@ -296,10 +297,26 @@ contains
             integer, intent(in) :: n
             real(dp), allocatable, intent(out) :: a(:, :)
             type(sparse_matrix_t) :: s
-            integer :: rows, cols
-            call read_matrix_market_size(path, rows, cols, error)
+            integer :: rows, cols, line
+            integer(int64) :: entries
+            call read_matrix_market_size(path, rows, cols, error, entries, line)
             if (allocated(error)) then
                 error%message = nml%path//": &system "//name//": "//error%message
+                return
+            end if
+            ! a size the entries cannot back fails before anything of that size is made
+            if (name == "mass_file" .and. entries < int(rows, int64)) then
+                call group_error(nml, error, "&system "//name//" '"//path//"':"//itoa(line)// &
+                                 ": the size line claims a "//itoa(rows)//" x "//itoa(cols)// &
+                                 " matrix with "//itoa(entries)//" entries, but a positive "// &
+                                 "definite mass matrix needs its "//itoa(rows)//" diagonal "// &
+                                 "entries")
+                return
+            end if
+            if (n > 0 .and. (rows /= n .or. cols /= n)) then
+                call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
+                                 itoa(rows)//" x "//itoa(cols)//" matrix, but the model "// &
+                                 "has N = "//itoa(n)//" DOFs: sizes must agree")
                 return
             end if
             if (rows > max_file_dof .and. rows == cols) then
@@ -322,10 +339,20 @@ contains
             character(len=*), intent(in) :: path, name
             integer, intent(in) :: n
             type(sparse_matrix_t), intent(out) :: s
-            integer :: rows, cols
-            call read_matrix_market_size(path, rows, cols, error)
+            integer :: rows, cols, line
+            integer(int64) :: entries
+            call read_matrix_market_size(path, rows, cols, error, entries, line)
             if (allocated(error)) then
                 error%message = nml%path//": &system "//name//": "//error%message
+                return
+            end if
+            ! a size the entries cannot back fails before anything of that size is made
+            if (name == "mass_file" .and. entries < int(rows, int64)) then
+                call group_error(nml, error, "&system "//name//" '"//path//"':"//itoa(line)// &
+                                 ": the size line claims a "//itoa(rows)//" x "//itoa(cols)// &
+                                 " matrix with "//itoa(entries)//" entries, but a positive "// &
+                                 "definite mass matrix needs its "//itoa(rows)//" diagonal "// &
+                                 "entries")
                 return
             end if
             if (rows /= cols) then

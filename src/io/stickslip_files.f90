@@ -228,8 +228,8 @@ contains
         inquire (file=trim(temporary), size=disk_size, iostat=stat)
         if (logical_size < 0 .or. disk_size /= logical_size) then
             stat = c_unlink(trim(temporary)//c_null_char)
-            call fatal_error(error, dir//'/'//name//": write failed: "//itoa_64(disk_size)// &
-                             " of "//itoa_64(logical_size)//" bytes reached the disk (the "// &
+            call fatal_error(error, dir//'/'//name//": write failed: "//itoa(disk_size)// &
+                             " of "//itoa(logical_size)//" bytes reached the disk (the "// &
                              "file system is full, or a file size limit was reached); the "// &
                              "old file, if any, is kept", stickslip_stat%io)
             return
@@ -358,12 +358,4 @@ contains
         if (lock_owner(lock%path) == process_id()) call remove_file(lock%path)
         lock%held = .false.
     end subroutine release_lock
-    !> Decimal text of a 64-bit integer.
-    pure function itoa_64(k) result(text)
-        integer(int64), intent(in) :: k
-        character(len=:), allocatable :: text
-        character(len=24) :: buf
-        write (buf, '(i0)') k
-        text = trim(buf)
-    end function itoa_64
 end module stickslip_files

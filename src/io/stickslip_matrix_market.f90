@@ -53,27 +53,39 @@ contains
     !> The size of the matrix of the Matrix Market file `path` from its header and size line
     !> only (the entries are not read), e.g. to refuse a model too large before reading it.
     !> Errors: those of the header and the size line (see the module).
-    subroutine read_matrix_market_size(path, nrows, ncols, error)
+    subroutine read_matrix_market_size(path, nrows, ncols, error, entries, size_line)
         !> Path of the file.
         character(len=*), intent(in) :: path
         !> Rows and columns announced.
         integer, intent(out) :: nrows, ncols
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> The entries the size line announces (coordinate), or rows x cols (array).
+        integer(int64), intent(out), optional :: entries
+        !> Line number of the size line.
+        integer, intent(out), optional :: size_line
         type(sparse_matrix_t) :: a
-        call read_file(path, .true., a, error)
+        integer(int64) :: announced
+        integer :: line_of_size
+        announced = 0
+        line_of_size = 0
+        call read_file(path, .true., a, error, entries_out=announced, size_line_out=line_of_size)
         nrows = a%nrows
         ncols = a%ncols
+        if (present(entries)) entries = announced
+        if (present(size_line)) size_line = line_of_size
     end subroutine read_matrix_market_size
 
     !> The reader: the whole file, or (size_only) the header and size line (a%nrows,
     !> a%ncols set, no entries).
-    subroutine read_file(path, size_only, a, error, symmetric)
+    subroutine read_file(path, size_only, a, error, symmetric, entries_out, size_line_out)
         character(len=*), intent(in) :: path
         logical, intent(in) :: size_only
         type(sparse_matrix_t), intent(out) :: a
         type(error_type), allocatable, intent(out) :: error
         logical, intent(out), optional :: symmetric
+        integer(int64), intent(out), optional :: entries_out
+        integer, intent(out), optional :: size_line_out
         integer :: u, stat, line_no, size_line, k, m, n, i, j, tri_line, tri, nvals, ntok
         integer(int64) :: announced
         character(len=:), allocatable :: line, tok(:)
@@ -208,6 +220,14 @@ contains
             end if
         end if
 
+        if (present(size_line_out)) size_line_out = size_line
+        if (present(entries_out)) then
+            if (format == "coordinate") then
+                entries_out = announced
+            else
+                entries_out = int(m, int64)*int(n, int64)
+            end if
+        end if
         if (size_only) then
             close (u)
             a%nrows = m
@@ -215,7 +235,10 @@ contains
             return
         end if
         ! the entries
-        allocate (rows(nvals), cols(nvals), vals(nvals), lines(nvals))
+        ! grown as the entries arrive (doubling up to nvals): a size line that claims more
+        ! than the file holds costs nothing before the end of the file says so
+        allocate (rows(min(nvals, 4096)), cols(min(nvals, 4096)), vals(min(nvals, 4096)), &
+                  lines(min(nvals, 4096)))
         tri = 0
         tri_line = 0
         i = 1
@@ -268,6 +291,7 @@ contains
                 end if
                 if (.not. value_of(tok(1), v, line_no)) return
             end if
+            if (k > size(rows)) call grow(min(2*size(rows), nvals))
             rows(k) = i
             cols(k) = j
             vals(k) = v
@@ -305,6 +329,25 @@ contains
         if (allocated(error)) error%message = path//": "//error%message
 
     contains
+
+        !> The entry arrays enlarged to `m` entries, their contents kept.
+        subroutine grow(m)
+            integer, intent(in) :: m
+            integer, allocatable :: ibig(:)
+            real(dp), allocatable :: rbig(:)
+            allocate (ibig(m))
+            ibig(1:size(rows)) = rows
+            call move_alloc(ibig, rows)
+            allocate (ibig(m))
+            ibig(1:size(cols)) = cols
+            call move_alloc(ibig, cols)
+            allocate (ibig(m))
+            ibig(1:size(lines)) = lines
+            call move_alloc(ibig, lines)
+            allocate (rbig(m))
+            rbig(1:size(vals)) = vals
+            call move_alloc(rbig, vals)
+        end subroutine grow
 
         !> The next line into `line` (stat /= 0 at the end of the file); skips `%` comments
         !> and blank lines when `skip`. Sets error on a read failure, an overlong line, a

@@ -7,7 +7,7 @@
 !> residual on the reduced example beam converges to the exact reference on the same model.
 module test_reduction
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, itoa
+    use stickslip_error, only: error_type, itoa, stickslip_stat
     use stickslip_lapack, only: dgesv, dpotrf
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_to_dense, &
         sparse_scaled_sum
@@ -306,6 +306,32 @@ contains
         mr = red%mass
         call dpotrf('U', size(mr, 1), mr, size(mr, 1), info)
         call check(t, info == 0, "reduction: reduced M SPD (3000 DOFs)")
+        ! sizes bounded (issue 17): more modes than a reduction keeps, asked for by number or
+        ! by a max_frequency far above the spectrum, is an input error naming the option,
+        ! found from the lowest modes (not after computing the 500 the cap allows)
+        call craig_bampton(k, m, [1500, 3000], reduction_options_t(modes=600), red, rep, error)
+        call check(t, allocated(error), "reduction: modes above max_modes refused")
+        if (allocated(error)) call check(t, index(error%message, "options%modes = 600") > 0 &
+                                         .and. error%stat == stickslip_stat%input, &
+                                         "reduction: modes above max_modes named", error%message)
+        call craig_bampton(k, m, [1500, 3000], reduction_options_t(max_frequency=1.0e300_dp), &
+                           red, rep, error)
+        call check(t, allocated(error), "reduction: max_frequency = 1e300 refused")
+        if (allocated(error)) call check(t, index(error%message, &
+                                         "options%max_frequency = 1.000E+300") > 0 .and. &
+                                         index(error%message, "about 2998 fixed-interface") > 0, &
+                                         "reduction: max_frequency = 1e300 named with the "// &
+                                         "interior's modes", error%message)
+        ! the chain's modes below 150 rad/s: w_k = 2 sqrt(k/m) sin(k pi / (2 (n + 1))), about
+        ! 1/3 of 2998 of them: far above the cap, estimated from the lowest twenty
+        call craig_bampton(k, m, [1500, 3000], reduction_options_t(max_frequency=150.0_dp), &
+                           red, rep, error)
+        call check(t, allocated(error), "reduction: a max_frequency with too many modes "// &
+                   "below it refused")
+        if (allocated(error)) call check(t, index(error%message, "more than "// &
+                                         "options%max_modes = 500") > 0, &
+                                         "reduction: too many modes below max_frequency "// &
+                                         "named", error%message)
     end subroutine test_large
 
     !> damping_ratio alone gives the modal damping 2 zeta w_k on the modal diagonal and

@@ -348,6 +348,10 @@ contains
         call bad(t, "10**8 entries announced, 2 given", "&system mass_file = 'm_e8.mtx', "// &
                  "stiffness_file = 'm_e8.mtx' /", [character(len=80) :: "m_e8.mtx:4:", &
                  "end of file after 2 of the 100000000 entries"])
+        call bad(t, "reduction modes bounded", "&system mass_file = 'm8.mtx', "// &
+                 "stiffness_file = 'k8.mtx' / &reduction method = 'craig-bampton', "// &
+                 "modes = 2147483647 /", [character(len=80) :: &
+                 "&reduction modes = 2147483647", "must be <= 500"])
         ! a damping file of another size than the model
         call bad(t, "damping size", "&system mass_file = 'm8.mtx', stiffness_file = "// &
                  "'k8.mtx', damping_file = 'k4.mtx' /", [character(len=80) :: &

@@ -35,6 +35,10 @@ module stickslip_sparse_eigen
         !> max_count was reached with every value returned still <= lambda_max: there may be
         !> more below the limit than returned.
         logical :: capped = .false.
+        !> With stop_above: the count below lambda_max estimated from the lowest eigenvalues
+        !> (N(lambda) ~ lambda^p, no margin) when it exceeds max_count (then capped and only
+        !> those lowest values are returned); 0 otherwise.
+        integer :: estimated = 0
         !> Lanczos runs (ARPACK from its start) and sparse factorizations made.
         integer :: runs = 0
         integer :: factorizations = 0
@@ -283,7 +287,8 @@ contains
     !> fitted, not assumed), and one run asks for that many with a margin (repeated with a
     !> new estimate if it fell short). Errors as `sparse_eigenpairs`; max_count < 1 (input).
     subroutine sparse_eigenpairs_below(n, kcol, krow, kval, mcol, mrow, mval, lambda_max, &
-                                       max_count, sigma, opts, values, vectors, report, error)
+                                       max_count, sigma, opts, values, vectors, report, error, &
+                                       stop_above)
         !> Order of K and M (>= 2).
         integer, intent(in) :: n
         !> K: column pointers, row numbers, values (1-based, both triangles).
@@ -308,6 +313,10 @@ contains
         type(eigen_range_report_t), intent(out) :: report
         !> Error (last).
         type(error_type), allocatable, intent(out) :: error
+        !> Stop after the first run when the count below lambda_max is estimated above
+        !> max_count (report%estimated, report%capped), instead of computing max_count
+        !> eigenpairs that cannot all be kept anyway.
+        logical, intent(in), optional :: stop_above
         type(sparse_shift_invert_t) :: op
         type(eigen_report_t) :: rep
         type(eigen_options_t) :: o
@@ -331,6 +340,19 @@ contains
             report%iterations = report%iterations + rep%iterations
             if (allocated(error)) exit
             if (values(nev) > lambda_max .or. nev >= cap) exit
+            if (present(stop_above)) then
+                if (stop_above .and. report%runs == 1 .and. nev >= 2) then
+                    ! the estimate without its margin: (count - 8) / 1.15
+                    report%estimated = int((estimated_count(values, lambda_max) - 8)/1.15_dp)
+                    if (report%estimated > max_count) then
+                        report%capped = .true.
+                        call op%release()
+                        report%below = count(values <= lambda_max)
+                        return
+                    end if
+                    report%estimated = 0
+                end if
+            end if
             nev = max(nev + 10, min(cap, estimated_count(values, lambda_max)))
             nev = min(nev, cap)
         end do
@@ -355,6 +377,7 @@ contains
         if (hi > lo*(1.0_dp + 1.0e-6_dp) .and. k < m) &
             p = log(real(m, dp)/real(k, dp))/log(hi/lo)
         p = min(max(p, 0.25_dp), 2.0_dp)
-        nev = ceiling(1.15_dp*m*(max(limit, hi)/hi)**p) + 8
+        ! a limit far above the spectrum seen (1e300) must not overflow the count
+        nev = int(min(1.15_dp*m*exp(min(p*log(max(limit, hi)/hi), 40.0_dp)) + 9.0_dp, 1.0e9_dp))
     end function estimated_count
 end module stickslip_sparse_eigen

@@ -87,6 +87,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: method
         character(len=*), parameter :: g = "reduction"
+        type(reduction_options_t), parameter :: defaults = reduction_options_t()
         call check_names(nml, g, [character(len=13) :: "method", "modes", "max_frequency", &
                                  "damping_ratio"], error)
         if (allocated(error)) return
@@ -106,6 +107,13 @@ contains
         if (red%modes < 0) then
             call group_error(nml, error, "&reduction modes = "//itoa(red%modes)//": must be "// &
                              ">= 0 (0: all fixed-interface modes below 3 H omega)")
+            return
+        end if
+        if (red%modes > defaults%max_modes) then
+            call group_error(nml, error, "&reduction modes = "//itoa(red%modes)//": must be "// &
+                             "<= "//itoa(defaults%max_modes)//" (the most "// &
+                             "fixed-interface modes a reduction keeps: the reduced model is "// &
+                             "dense)")
             return
         end if
         call get_real(nml, g, "max_frequency", red%max_frequency, error)
@@ -222,8 +230,20 @@ contains
             call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, error)
         end if
         if (allocated(error)) then
-            error%message = nml%path//": &reduction method = '"//trim(red%method)//"': "// &
-                            error%message
+            if (index(error%message, "craig_bampton: options%") == 1) then
+                ! an option of &reduction at fault: name it
+                error%message = nml%path//": &reduction "// &
+                                error%message(len("craig_bampton: options%") + 1:)
+                k = index(error%message, "options%max_modes")
+                if (k > 0) error%message = error%message(1:k - 1)//"the"// &
+                                           error%message(k + len("options%max_modes = ") - 1:)
+                k = index(error%message, "the number of modes")
+                if (k > 0) error%message = error%message(1:k - 1)//"modes"// &
+                                           error%message(k + len("the number of modes"):)
+            else
+                error%message = nml%path//": &reduction method = '"//trim(red%method)// &
+                                "': "//error%message
+            end if
             return
         end if
 

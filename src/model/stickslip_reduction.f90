@@ -48,7 +48,7 @@ module stickslip_reduction
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
     use stickslip_umfpack, only: sparse_lu_t
     use stickslip_arpack, only: eigen_options_t, eigen_report_t
@@ -178,6 +178,13 @@ contains
                 return
             end if
         end if
+        if (options%modes > options%max_modes) then
+            call fatal_error(error, "craig_bampton: options%modes = "//itoa(options%modes)// &
+                             ": must be <= "//itoa(options%max_modes)//" (options%max_modes: "// &
+                             "the most fixed-interface modes of a reduction; the reduced "// &
+                             "model is dense)", stickslip_stat%input)
+            return
+        end if
         if (options%modes < 0 .or. .not. (options%max_frequency >= 0.0_dp) .or. &
             .not. (options%damping_ratio >= 0.0_dp) .or. &
             .not. (options%cutoff_factor > 0.0_dp)) then
@@ -268,20 +275,29 @@ contains
                 if (allocated(error)) return
                 nm = last_kept(lam, vec)
                 if (nm > options%max_modes) then
+                    if (options%max_frequency > 0.0_dp) then
+                        call too_many_below(nm)
+                        return
+                    end if
                     nm = options%max_modes
                     report%capped = .true.
                 end if
             else
                 ! every mode below the limit in one Lanczos pass (stickslip_sparse_eigen
                 ! estimates the count), more only while the damped test keeps the highest
-                lmax = limit**2
+                lmax = min(limit, sqrt(0.1_dp*huge(1.0_dp)))**2
                 do
                     call sparse_eigenpairs_below(ni, kiit%row_start, kiit%col, kiit%val, &
                                                  miit%row_start, miit%col, miit%val, lmax, &
                                                  options%max_modes, 0.0_dp, eopts, lam, vec, &
-                                                 rrep, error)
+                                                 rrep, error, &
+                                                 stop_above=options%max_frequency > 0.0_dp)
                     if (allocated(error)) then
                         error%message = "craig_bampton: fixed-interface modes: "//error%message
+                        return
+                    end if
+                    if (rrep%estimated > 0) then
+                        call too_many_below(rrep%estimated)
                         return
                     end if
                     nm = last_kept(lam, vec)
@@ -504,6 +520,18 @@ contains
             r = 0.5_dp*(r + transpose(r))
             deallocate (at)
         end subroutine project
+
+        !> Error: an explicit max_frequency with more modes below it than max_modes.
+        subroutine too_many_below(count)
+            integer, intent(in) :: count
+            call fatal_error(error, "craig_bampton: options%max_frequency = "// &
+                             real_text(options%max_frequency, '(es10.3e3)')//" rad/s: about "// &
+                             itoa(min(count, ni))//" fixed-interface modes lie below "// &
+                             "it (estimated "// &
+                             "from the lowest ones), more than options%max_modes = "// &
+                             itoa(options%max_modes)//" a reduction keeps: lower it, or "// &
+                             "give the number of modes", stickslip_stat%input)
+        end subroutine too_many_below
     end subroutine craig_bampton
 
     !> y = A x for a CSR matrix A and a dense block x.

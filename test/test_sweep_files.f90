@@ -2,13 +2,14 @@
 !> the checkpoint of an interrupted run and its resumption, and bad &sweep input; the
 !> robustness study through the CLI (&robustness, robustness.csv, the maps' script).
 module test_sweep_files
+    use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_case, only: case_t, read_case
     use stickslip_sweep, only: sweep_result_t, run_sweep
     use stickslip_driver, only: run_sweep_case
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
-    use stickslip_files, only: make_directory
+    use stickslip_files, only: make_directory, remove_file
     use test_cli, only: cli
     use fixtures, only: enter_project_root, scratch, write_lines, sweep_case
     use testing, only: test_counter_t, check, check_close, check_error
@@ -23,6 +24,14 @@ module test_sweep_files
     contains
         procedure :: observe => killed_observe
     end type killed_writer_t
+
+    interface
+        function c_symlink(target, path) bind(c, name='symlink') result(stat)
+            import :: c_int, c_char
+            character(kind=c_char), intent(in) :: target(*), path(*)
+            integer(c_int) :: stat
+        end function c_symlink
+    end interface
 
 
 contains
@@ -208,9 +217,10 @@ contains
         character(len=4000) :: line
         character(len=24) :: fields(9)
         integer :: u, stat, n, k
-        character(len=*), parameter :: names(7) = [character(len=24) :: "huge unknowns", &
+        character(len=*), parameter :: names(11) = [character(len=24) :: "huge unknowns", &
             "huge points", "negative points", "other ndof", "negative count", "truncated", &
-            "garbage counts"]
+            "garbage counts", "fewer points", "a NaN value", "a link to /dev/zero", &
+            "an empty file"]
         call write_lines(dir//".nml", [sweep_case, "&output directory = '"//dir//"' /"])
         call read_case(dir//".nml", c, error)
         if (allocated(error)) return
@@ -250,9 +260,24 @@ contains
                 line = join(fields(1:5))//" -1 "//join(fields(7:))
             case (7)
                 line = "x y z"
+            case (8)
+                ! the point count lowered (3 -> 2) with the continuation state left at 3
+                line = join(fields(1:3))//" 2 "//join(fields(5:))
             end select
             if (k == 6) then
                 call write_lines(dir//"/"//checkpoint_name, saved(1:n - 1))
+            else if (k == 9) then
+                ! the first value of the continuation state (lambda) made NaN
+                line = saved(4)
+                line = "NaN "//line(index(adjustl(line), " ") + 1:)
+                call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:3), &
+                                 line, saved(5:n)])
+            else if (k == 10) then
+                call remove_file(dir//"/"//checkpoint_name)
+                call execute_symlink("/dev/zero", dir//"/"//checkpoint_name)
+            else if (k == 11) then
+                call remove_file(dir//"/"//checkpoint_name)
+                call write_lines(dir//"/"//checkpoint_name, [character(len=1) ::])
             else
                 call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:2), line, saved(4:n)])
             end if
@@ -265,12 +290,20 @@ contains
                                              trim(names(k)))
         end do
         ! the intact file still resumes
+        call remove_file(dir//"/"//checkpoint_name)
         call write_lines(dir//"/"//checkpoint_name, saved)
         call run_sweep_case(c, resumed, error)
         call check_error(t, error, "damaged checkpoint: the intact one resumes", .false.)
         if (.not. allocated(error)) call check(t, resumed%resumed_points == 3, &
                                                "damaged checkpoint: 3 points resumed")
     contains
+        !> A symbolic link `path` -> `target` (symlink(2)); the old file removed first.
+        subroutine execute_symlink(target, path)
+            character(len=*), intent(in) :: target, path
+            integer(c_int) :: r
+            r = c_symlink(target//c_null_char, path//c_null_char)
+            call check(t, r == 0, "damaged checkpoint: symlink made")
+        end subroutine execute_symlink
         function join(f) result(s)
             character(len=*), intent(in) :: f(:)
             character(len=:), allocatable :: s

@@ -7,6 +7,7 @@
 !> precision.
 module stickslip_checkpoint
     use, intrinsic :: iso_fortran_env, only: int64
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_case, only: case_t, write_case
@@ -195,6 +196,14 @@ contains
         path = directory//'/'//checkpoint_name
         inquire (file=path, exist=found, size=bytes)
         if (.not. found) return
+        ! a checkpoint is a non-empty regular file: an empty file, a device (a link to
+        ! /dev/zero would be read forever) or a pipe is refused before it is read
+        if (bytes <= 0) then
+            call fatal_error(error, path//": a damaged checkpoint (empty, or not a regular "// &
+                             "file): delete it, or set &sweep resume = .false.", &
+                             stickslip_stat%input)
+            return
+        end if
         open (newunit=u, file=path, status='old', action='read', iostat=stat, iomsg=msg)
         if (stat /= 0) then
             call fatal_error(error, path//": cannot open: "//trim(msg), stickslip_stat%io)
@@ -232,6 +241,11 @@ contains
                 problem = "its number of points ("//itoa(npoints)//") is out of bounds"
             else if (min(st%points, st%failures, st%rejected, res%folds) < 0) then
                 problem = "a negative count"
+            else if (st%points /= npoints) then
+                ! every point of the curve is saved: a count that differs from the
+                ! continuation's would resume with a gap in frc.csv
+                problem = "it holds "//itoa(npoints)//" points, but its continuation "// &
+                          "state counts "//itoa(st%points)
             end if
             if (len(problem) == 0) then
                 res%npoints = npoints
@@ -268,6 +282,35 @@ contains
             res%npoints = 0
             call fatal_error(error, path//": a damaged checkpoint (unreadable: "// &
                              trim(msg)//"): delete it, or set &sweep resume = .false.", &
+                             stickslip_stat%input)
+            return
+        end if
+        ! the values: finite where a curve holds numbers (floquet_max and truncation are NaN
+        ! when not computed), and the last point where the continuation state stands
+        problem = ""
+        associate (st => res%state)
+            if (.not. all(ieee_is_finite([st%lambda, st%tl, st%ds, st%arclength, st%y, &
+                                          st%ty]))) problem = "a value of its continuation "// &
+                                                               "state is not a finite number"
+            do k = 1, res%npoints
+                if (len(problem) > 0) exit
+                associate (q => res%points(k))
+                    if (.not. all(ieee_is_finite([q%parameter, q%arclength, q%dissipation, &
+                                                  q%diss_friction, q%diss_damping, &
+                                                  q%residual, q%amplitude, q%rmax, &
+                                                  q%stick]))) &
+                        problem = "point "//itoa(k)//" holds a value that is not a finite number"
+                end associate
+            end do
+            if (len(problem) == 0) then
+                if (res%points(res%npoints)%parameter /= st%lambda) problem = "its last "// &
+                    "point is not where its continuation state stands"
+            end if
+        end associate
+        if (len(problem) > 0) then
+            res%npoints = 0
+            call fatal_error(error, path//": a damaged checkpoint ("//problem// &
+                             "): delete it, or set &sweep resume = .false.", &
                              stickslip_stat%input)
         end if
     end subroutine read_checkpoint

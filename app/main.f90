@@ -4,12 +4,13 @@
 program main
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use stickslip_cli, only: string_t, run_cli
-    use stickslip_signals, only: ignore_file_size_signal
+    use stickslip_signals, only: ignore_file_size_signal, install_signal_handlers
     implicit none
     type(string_t), allocatable :: args(:)
     integer :: i, n, code
 
     call ignore_file_size_signal()
+    call install_signal_handlers()
     allocate (args(command_argument_count()))
     do i = 1, size(args)
         call get_command_argument(i, length=n)

@@ -26,6 +26,7 @@ module stickslip_cli
     use stickslip_gnuplot, only: run_gnuplot, rename_pictures
     use stickslip_files, only: remove_file
     use stickslip_blas_threads, only: limit_blas_threads, parallel_threads, blas_library
+    use stickslip_signals, only: register_output_directory
     !$ use omp_lib, only: omp_get_max_threads
     implicit none
     private
@@ -168,6 +169,7 @@ contains
                 return
             end if
             call read_case(opts%case_path, case, error)
+            if (.not. allocated(error)) call register_output_directory(case%directory)
         end if
         if (allocated(error)) then
             ! a usage error carries the usage text (our own, several lines) after its message
@@ -274,6 +276,7 @@ contains
             write (ue, '(a)') stderr_line("stickslip: error: "//error%message)
             code = exit_code_of(error%stat)
         else
+            call register_output_directory(case%directory)
             progress%label = trim(case%method)
             call run_method(case, result, error, progress)
             code = report_run(case, result, error, quiet, uo, ue)

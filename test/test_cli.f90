@@ -9,7 +9,9 @@ module test_cli
     use stickslip_case, only: case_t, read_case
     use stickslip_cli, only: string_t, run_cli, report_run
     use stickslip_files, only: make_directory, open_temporary, close_and_rename, lock_name, &
-        process_id, process_alive, directory_lock_t, acquire_lock, release_lock
+        process_id, process_alive, directory_lock_t, acquire_lock, release_lock, &
+        process_start_time, remove_file
+    use stickslip_signals, only: register_output_directory, remove_own_files
     use stickslip_diagnostics, only: level_note, level_warning, level_untrusted
     use stickslip_driver, only: run_result_t, run_method
     use stickslip_progress, only: progress_t
@@ -114,6 +116,7 @@ contains
         character(len=*), parameter :: dir = scratch//"/out_lock"
         character(len=:), allocatable :: out, err
         character(len=24) :: pid
+        character(len=48) :: lock_line
         integer :: code
         type(directory_lock_t) :: lock, other
         type(error_type), allocatable :: error
@@ -122,10 +125,11 @@ contains
                    .not. process_alive(-1), "lock: no process 999999999, 0 or -1")
         call make_directory(dir, error)
         write (pid, '(i0)') process_id()
+        write (lock_line, '(i0,1x,i0)') process_id(), process_start_time(process_id())
         call write_lines(scratch//"/lock.nml", [character(len=120) :: good_system, &
             good_forcing, good_friction, "&hbm harmonics = 10, samples = 128 /", &
             "&output directory = '"//dir//"' /"])
-        call write_lines(dir//"/"//lock_name, [pid])
+        call write_lines(dir//"/"//lock_name, [lock_line])
         call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
         call check(t, code == 3 .and. index(err, "directory "//dir//" is being written by "// &
                    "another stickslip run (pid "//trim(pid)//")") > 0, &
@@ -145,6 +149,16 @@ contains
         call write_lines(dir//"/"//lock_name, [character(len=24) :: "garbage"])
         call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
         call check(t, code == 0, "lock: a damaged lock is taken over", err)
+        ! a lock that is not a run's: a live process that did not write it (pid 1, a pid
+        ! reused by another process: its start time differs) or a lock without the start
+        ! time of its writer; none refuses the next run forever
+        call write_lines(dir//"/"//lock_name, [character(len=24) :: "1"])
+        call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
+        call check(t, code == 0, "lock: a lock naming a live unrelated pid is taken over", err)
+        write (lock_line, '(i0,1x,i0)') process_id(), process_start_time(process_id()) + 7
+        call write_lines(dir//"/"//lock_name, [lock_line])
+        call cli([character(len=200) :: scratch//"/lock.nml"], code, out, err)
+        call check(t, code == 0, "lock: a live pid with another start time is taken over", err)
         ! a failed run removes its lock too
         call write_lines(scratch//"/lock_starved.nml", [character(len=120) :: good_system, &
             good_forcing, good_friction, "&hbm harmonics = 30, samples = 256, maxfev = 3, "// &
@@ -163,6 +177,22 @@ contains
         call check(t, exists(dir//"/"//lock_name), "lock: releasing a lock not held does nothing")
         call release_lock(lock)
         call check(t, .not. exists(dir//"/"//lock_name), "lock: released")
+        ! what the SIGINT/SIGTERM/SIGHUP handler of the program removes: this process's lock
+        ! and temporaries in a registered directory, never another run's lock
+        call register_output_directory(dir)
+        call acquire_lock(lock, dir, error)
+        write (pid, '(i0)') process_id()
+        call write_lines(dir//"/hbm.csv."//trim(pid)//".2.tmp", [character(len=8) :: "t,x1"])
+        call write_lines(dir//"/frc.checkpoint."//trim(pid)//".1.tmp", [character(len=8) :: "x"])
+        call remove_own_files()
+        call check(t, .not. exists(dir//"/"//lock_name) .and. &
+                   .not. exists(dir//"/hbm.csv."//trim(pid)//".2.tmp") .and. &
+                   .not. exists(dir//"/frc.checkpoint."//trim(pid)//".1.tmp"), &
+                   "lock: a signal removes this run's lock and temporaries")
+        call write_lines(dir//"/"//lock_name, [character(len=24) :: "1 24"])
+        call remove_own_files()
+        call check(t, exists(dir//"/"//lock_name), "lock: a signal keeps another run's lock")
+        call remove_file(dir//"/"//lock_name)
     end subroutine test_lock
 
     !> Temporaries have unique names (two open at once for one file; a leftover of the

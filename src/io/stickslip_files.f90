@@ -14,7 +14,7 @@ module stickslip_files
     public :: make_directory, open_temporary, close_and_rename, remove_file
     public :: result_file_names, remove_stale_results
     public :: directory_lock_t, acquire_lock, release_lock, lock_name, process_id, &
-              process_alive
+              process_alive, process_start_time
 
     !> File name of the directory lock.
     character(len=*), parameter :: lock_name = ".stickslip.lock"
@@ -281,6 +281,7 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         integer :: u, stat, attempt, owner
+        integer(int64) :: started
         character(len=512) :: msg
         character(len=4096) :: temporary
         lock%path = dir//'/'//lock_name
@@ -288,7 +289,9 @@ contains
         owner = -1
         call open_temporary(dir, lock_name, u, error)
         if (allocated(error)) return
-        write (u, '(i0)', iostat=stat, iomsg=msg) process_id()
+        ! the process id and its start time: a pid is reused, the pair is not
+        write (u, '(i0,1x,i0)', iostat=stat, iomsg=msg) process_id(), &
+            process_start_time(process_id())
         inquire (unit=u, name=temporary)
         close (u, iostat=stat)
         do attempt = 1, 3
@@ -296,12 +299,16 @@ contains
                 lock%held = .true.
                 exit
             end if
-            owner = lock_owner(lock%path)
+            owner = lock_owner(lock%path, started)
             if (owner == -2) cycle
-            if (process_alive(owner)) exit
+            ! held: its process lives and is the one that wrote the lock (same start time;
+            ! a lock without one, or whose pid now names another process, is stale)
+            if (process_alive(owner) .and. started >= 0) then
+                if (process_start_time(owner) == started) exit
+            end if
             ! a stale lock (its process is gone, or the file is damaged): take it over, with
             ! the temporaries the killed run left
-            if (owner > 0) call remove_temporaries(dir, owner)
+            if (owner > 0 .and. owner /= process_id()) call remove_temporaries(dir, owner)
             call remove_file(lock%path)
         end do
         stat = c_unlink(trim(temporary)//c_null_char)
@@ -333,21 +340,72 @@ contains
     end subroutine remove_temporaries
 
     !> Process id held by the lock file: -2 when the file does not exist, -1 when it cannot
-    !> be read as a process id.
-    integer function lock_owner(path) result(pid)
+    !> be read as a process id; `started` the start time it records (-1 when none).
+    integer function lock_owner(path, started) result(pid)
         character(len=*), intent(in) :: path
+        integer(int64), intent(out), optional :: started
         integer :: u, stat
+        integer(int64) :: t0
         logical :: exists
+        character(len=64) :: line
         pid = -2
+        if (present(started)) started = -1
         inquire (file=path, exist=exists)
         if (.not. exists) return
         pid = -1
         open (newunit=u, file=path, status='old', action='read', iostat=stat)
         if (stat /= 0) return
-        read (u, *, iostat=stat) pid
-        if (stat /= 0) pid = -1
+        read (u, '(a)', iostat=stat) line
         close (u)
+        if (stat /= 0) return
+        read (line, *, iostat=stat) pid
+        if (stat /= 0) then
+            pid = -1
+            return
+        end if
+        t0 = -1
+        read (line, *, iostat=stat) pid, t0
+        if (stat /= 0) t0 = -1
+        if (present(started)) started = t0
     end function lock_owner
+
+    !> Start time of process `pid` in clock ticks after boot (field 22 of /proc/<pid>/stat):
+    !> with the pid, it names one process (a pid is reused, the pair is not). 0 where /proc
+    !> does not tell (another system), -2 when the process does not exist.
+    function process_start_time(pid) result(started)
+        !> A process id.
+        integer, intent(in) :: pid
+        integer(int64) :: started
+        integer :: u, stat, k, field
+        character(len=1024) :: line
+        started = 0
+        open (newunit=u, file="/proc/"//itoa(pid)//"/stat", status='old', action='read', &
+              iostat=stat)
+        if (stat /= 0) then
+            if (.not. process_alive(pid)) started = -2
+            return
+        end if
+        read (u, '(a)', iostat=stat) line
+        close (u)
+        if (stat /= 0) return
+        ! fields after the command name, which is in parentheses and may hold blanks
+        k = index(line, ')', back=.true.)
+        if (k == 0) return
+        field = 2
+        do while (field < 22)
+            k = k + 1
+            if (k > len_trim(line)) return
+            if (line(k:k) == ' ') then
+                field = field + 1
+                do while (k < len(line))
+                    if (line(k + 1:k + 1) /= ' ') exit
+                    k = k + 1
+                end do
+            end if
+        end do
+        read (line(k + 1:), *, iostat=stat) started
+        if (stat /= 0) started = 0
+    end function process_start_time
 
     !> Give the lock back: remove the lock file when this run holds it. Safe to call when
     !> the lock is not held.

@@ -50,7 +50,28 @@ contains
         type(test_counter_t), intent(inout) :: t
         call enter_project_root()
         call test_size_limit(t)
+        call test_long_directory(t)
     end subroutine run_file_faults_tests
+
+    !> An output directory whose path is too long to create (ENAMETOOLONG deep down): an
+    !> io error, and none of the nested directories made on the way is left behind.
+    subroutine test_long_directory(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: path
+        type(error_type), allocatable :: error
+        logical :: exists
+        integer :: k
+        path = scratch//"/long_top"
+        do k = 1, 40
+            path = path//"/"//repeat("d", 200)
+        end do
+        call make_directory(path, error)
+        call check(t, allocated(error), "file_faults: a path too long to create fails")
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%io, &
+                                         "file_faults: too long a path is an io error")
+        inquire (file=scratch//"/long_top/.", exist=exists)
+        call check(t, .not. exists, "file_faults: no nested directories left behind")
+    end subroutine test_long_directory
 
     !> A file size limit below the file's size: io error, no temporary, the old file kept.
     subroutine test_size_limit(t)

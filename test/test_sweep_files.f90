@@ -318,7 +318,7 @@ contains
     !> Bad &sweep input: a message naming the file, &sweep and the variable; exit code 1.
     subroutine test_bad_sweep_input(t)
         type(test_counter_t), intent(inout) :: t
-        character(len=120) :: bad(5, 2)
+        character(len=120) :: bad(7, 2)
         character(len=:), allocatable :: out, err
         character(len=*), parameter :: path = scratch//"/sweep_bad.nml"
         integer :: code, k
@@ -330,6 +330,11 @@ contains
                      "&sweep step"]
         bad(5, :) = [character(len=120) :: "&sweep start = 1, stop = 2, max_points = 1 /", &
                      "&sweep max_points"]
+        ! a step the range cannot be walked with (issue 17: 2000 points at the start before)
+        bad(6, :) = [character(len=120) :: "&sweep start = 1, stop = 2, step = 1e-300 /", &
+                     "&sweep step = 1.000E-300: must be 0 (automatic) or >="]
+        bad(7, :) = [character(len=120) :: "&sweep start = 1, stop = 2, min_step = 1e-20 /", &
+                     "&sweep min_step"]
         do k = 1, size(bad, 1)
             call write_lines(path, [sweep_case(1:5), bad(k, 1), &
                                     "&output directory = '"//scratch//"/sweep_bad' /"])

@@ -49,6 +49,7 @@ contains
         !> Most points of one sweep.
         integer, parameter :: max_points = 100000
         character(len=200) :: buf
+        real(dp) :: smallest
         buf = ""
         select case (opts%parameter)
         case ('omega')
@@ -73,6 +74,20 @@ contains
         if (len_trim(buf) == 0) then
             if (opts%step < 0.0_dp .or. opts%min_step < 0.0_dp .or. opts%max_step < 0.0_dp) &
                 buf = "opts%step, opts%min_step, opts%max_step: must be >= 0 (0: automatic)"
+        end if
+        ! a step the range cannot be walked with: below 1e-9 of it (at most max_points
+        ! points, the step grows by halvings' inverse), or one that leaves the parameter
+        ! unchanged in floating point
+        if (len_trim(buf) == 0 .and. opts%stop /= opts%start) then
+            smallest = max(1.0e-9_dp*abs(opts%stop - opts%start), &
+                           4.0_dp*epsilon(1.0_dp)*max(abs(opts%start), abs(opts%stop)))
+            if (opts%step > 0.0_dp .and. opts%step < smallest) then
+                write (buf, '(a,es10.3e3,a,es10.3e3,a)') "opts%step = ", opts%step, &
+                    ": must be 0 (automatic) or >= ", smallest, " (1e-9 of the range)"
+            else if (opts%min_step > 0.0_dp .and. opts%min_step < smallest) then
+                write (buf, '(a,es10.3e3,a,es10.3e3,a)') "opts%min_step = ", opts%min_step, &
+                    ": must be 0 (automatic) or >= ", smallest, " (1e-9 of the range)"
+            end if
         end if
         if (len_trim(buf) == 0 .and. opts%max_points > max_points) &
             write (buf, '(a,i0,a,i0)') "opts%max_points = ", opts%max_points, &

@@ -55,6 +55,12 @@ module stickslip_files
             integer(c_int) :: stat
         end function c_link
 
+        function c_rmdir(path) bind(c, name='rmdir') result(stat)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int) :: stat
+        end function c_rmdir
+
         function c_unlink(path) bind(c, name='unlink') result(stat)
             import :: c_char, c_int
             character(kind=c_char), intent(in) :: path(*)
@@ -92,20 +98,37 @@ contains
         character(len=*), intent(in) :: path
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer :: k, stat
+        integer :: k, stat, ncreated
+        integer, allocatable :: created(:)
         logical :: exists
+        ! the ends of the components this call creates, to take them back on failure
+        allocate (created(count([(path(k:k) == '/', k=1, len(path))]) + 1))
+        ncreated = 0
         do k = 1, len(path)
             if (k < len(path) .and. path(k:k) /= '/') cycle
             if (k == 1 .and. path(1:1) == '/') cycle
             if (path(k:k) == '/') then
                 if (is_directory(path(1:k - 1))) cycle
                 stat = c_mkdir(path(1:k - 1)//c_null_char, int(o'755', c_int))
+                if (stat == 0) then
+                    ncreated = ncreated + 1
+                    created(ncreated) = k - 1
+                end if
             else
                 if (is_directory(path)) cycle
                 stat = c_mkdir(path//c_null_char, int(o'755', c_int))
+                if (stat == 0) then
+                    ncreated = ncreated + 1
+                    created(ncreated) = k
+                end if
             end if
         end do
         if (is_directory(path)) return
+        ! failed (a component in the way, a name too long, no permission): remove the empty
+        ! directories this call made, deepest first, so that nothing is left behind
+        do k = ncreated, 1, -1
+            stat = c_rmdir(path(1:created(k))//c_null_char)
+        end do
         ! say which component is in the way
         do k = 1, len(path)
             if (k < len(path) .and. path(k:k) /= '/') cycle

@@ -7,8 +7,9 @@
 !> close_and_rename: exit 3, one message, the temporary removed, the old file kept).
 !>
 !> SIGINT, SIGTERM, SIGHUP (Ctrl-C, a batch system's kill, a closed terminal): the program
-!> removes the directory locks it holds and its temporaries in the output directories it
-!> registered, then dies of the signal as it would have (exit status 128 + n). The handler
+!> removes the directory locks it holds, its temporaries and its staging directory (the
+!> result files not yet moved into place) in the output directories it registered, then
+!> dies of the signal as it would have (exit status 128 + n). The handler
 !> only calls async-signal-safe C functions (open, read, close, unlink, signal, raise) on
 !> paths prepared beforehand, when the directory was registered. This is the one place with
 !> module state in the program: a signal handler has no other way to know the paths.
@@ -28,7 +29,8 @@ module stickslip_signals
 
     !> NUL-terminated lock paths of the registered directories, and the temporary names
     !> this process may create there (NAME.<pid>.<n>.tmp, n = 1..3).
-    character(kind=c_char, len=path_length), allocatable, save :: locks(:), temporaries(:)
+    character(kind=c_char, len=path_length), allocatable, save :: locks(:), stages(:), &
+        temporaries(:)
     integer, save :: nlocks = 0, ntemporaries = 0
     !> This process id, as digits.
     character(len=24), save :: own_pid = ''
@@ -50,6 +52,11 @@ module stickslip_signals
             character(kind=c_char), intent(in) :: path(*)
             integer(c_int) :: stat
         end function c_unlink
+        function c_rmdir(path) bind(c, name='rmdir') result(stat)
+            import :: c_int, c_char
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int) :: stat
+        end function c_rmdir
         function c_open(path, flags) bind(c, name='open') result(fd)
             import :: c_int, c_char
             character(kind=c_char), intent(in) :: path(*)
@@ -97,38 +104,62 @@ contains
         !> The output directory.
         character(len=*), intent(in) :: dir
         character(kind=c_char, len=path_length) :: lock
-        character(len=:), allocatable :: stem
-        integer :: k, n, m
+        character(len=:), allocatable :: stage
         !$omp critical (stickslip_signal_registry)
         if (.not. allocated(locks)) then
-            allocate (locks(max_directories), temporaries(max_directories* &
-                                                          (size(result_file_names) + 2)*3))
+            allocate (locks(max_directories), stages(max_directories), temporaries(0))
             write (own_pid, '(i0)') process_id()
         end if
-        if (len(dir) + len(lock_name) + 40 < path_length .and. nlocks < max_directories) then
+        stage = dir//'/.stickslip.staging.'//trim(own_pid)
+        if (len(stage) + 64 < path_length .and. nlocks < max_directories) then
             lock = dir//'/'//lock_name//c_null_char
             if (.not. any(locks(1:nlocks) == lock)) then
                 nlocks = nlocks + 1
                 locks(nlocks) = lock
-                m = ntemporaries
-                do n = 1, 3
-                    do k = 1, size(result_file_names) + 2
-                        if (k <= size(result_file_names)) then
-                            stem = trim(result_file_names(k))
-                        else if (k == size(result_file_names) + 1) then
-                            stem = "frc.checkpoint"
-                        else
-                            stem = lock_name
-                        end if
-                        m = m + 1
-                        temporaries(m) = dir//'/'//stem//'.'//trim(own_pid)//'.'// &
-                                         achar(48 + n)//'.tmp'//c_null_char
-                    end do
-                end do
-                ntemporaries = m
+                stages(nlocks) = stage//c_null_char
+                ! the temporaries of this run in the directory and in its staging directory,
+                ! and the result files staged there
+                call add_names(dir, .true.)
+                call add_names(stage, .true.)
+                call add_names(stage, .false.)
             end if
         end if
         !$omp end critical (stickslip_signal_registry)
+    contains
+        !> Append the result files of `where` (with `temporary`: their temporaries
+        !> NAME.<pid>.<n>.tmp, n = 1..3, and those of the checkpoint and the lock).
+        subroutine add_names(where, temporary)
+            character(len=*), intent(in) :: where
+            logical, intent(in) :: temporary
+            character(kind=c_char, len=path_length), allocatable :: grown(:)
+            character(len=:), allocatable :: stem
+            integer :: k, n, m, nnames
+            nnames = size(result_file_names)
+            if (temporary) nnames = 3*(nnames + 2)
+            allocate (grown(ntemporaries + nnames))
+            grown(1:ntemporaries) = temporaries(1:ntemporaries)
+            m = ntemporaries
+            do n = 1, merge(3, 1, temporary)
+                do k = 1, size(result_file_names) + merge(2, 0, temporary)
+                    if (k <= size(result_file_names)) then
+                        stem = trim(result_file_names(k))
+                    else if (k == size(result_file_names) + 1) then
+                        stem = "frc.checkpoint"
+                    else
+                        stem = lock_name
+                    end if
+                    m = m + 1
+                    if (temporary) then
+                        grown(m) = where//'/'//stem//'.'//trim(own_pid)//'.'//achar(48 + n)// &
+                                   '.tmp'//c_null_char
+                    else
+                        grown(m) = where//'/'//stem//c_null_char
+                    end if
+                end do
+            end do
+            call move_alloc(grown, temporaries)
+            ntemporaries = m
+        end subroutine add_names
     end subroutine register_output_directory
 
     !> The handler: unlink this process's temporaries and the locks that hold its pid, then
@@ -152,6 +183,7 @@ contains
             r = c_unlink(temporaries(k))
         end do
         do k = 1, nlocks
+            r = c_rmdir(stages(k))
             if (holds_own_pid(locks(k))) r = c_unlink(locks(k))
         end do
     end subroutine remove_own_files

@@ -184,7 +184,12 @@ contains
         write (pid, '(i0)') process_id()
         call write_lines(dir//"/hbm.csv."//trim(pid)//".2.tmp", [character(len=8) :: "t,x1"])
         call write_lines(dir//"/frc.checkpoint."//trim(pid)//".1.tmp", [character(len=8) :: "x"])
+        call make_directory(dir//"/.stickslip.staging."//trim(pid), error)
+        call write_lines(dir//"/.stickslip.staging."//trim(pid)//"/hbm.csv", &
+                         [character(len=8) :: "t,x1"])
         call remove_own_files()
+        call check(t, .not. exists(dir//"/.stickslip.staging."//trim(pid)//"/."), &
+                   "lock: a signal removes this run's staging directory")
         call check(t, .not. exists(dir//"/"//lock_name) .and. &
                    .not. exists(dir//"/hbm.csv."//trim(pid)//".2.tmp") .and. &
                    .not. exists(dir//"/frc.checkpoint."//trim(pid)//".1.tmp"), &

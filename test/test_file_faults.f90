@@ -10,11 +10,16 @@ module test_file_faults
     use stickslip_error, only: error_type, stickslip_stat
     use stickslip_files, only: make_directory
     use stickslip_csv, only: write_samples_csv
-    use fixtures, only: enter_project_root, scratch, first_line
+    use fixtures, only: enter_project_root, scratch, first_line, write_lines, good_system, &
+        good_forcing, good_friction
+    use test_cli, only: cli
     use testing, only: test_counter_t, check
     implicit none
     private
     public :: run_file_faults_tests
+
+    !> An error holder for calls whose failure the checks see otherwise.
+    type(error_type), allocatable :: error_holder
 
     !> struct rlimit of Linux (rlim_t is unsigned long).
     type, bind(c) :: rlimit_t
@@ -51,7 +56,86 @@ contains
         call enter_project_root()
         call test_size_limit(t)
         call test_long_directory(t)
+        call test_result_set(t)
     end subroutine run_file_faults_tests
+
+    !> The result files are replaced as a set: a run that cannot write its files (a file
+    !> size limit, as a full disk) leaves the old set whole, summary included, and exits 3;
+    !> a run killed before its files were moved into place (its staging directory left, its
+    !> process gone) leaves the old set whole too, and the next run clears its staging.
+    subroutine test_result_set(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/file_faults_set"
+        character(len=*), parameter :: nml = scratch//"/file_faults_set.nml"
+        character(len=:), allocatable :: out, err, old_summary, old_hbm
+        type(rlimit_t) :: saved, small
+        type(c_funptr) :: old_handler, ignore
+        integer :: code, stat
+        logical :: exists
+        ! the three methods side by side: hbm.csv (~20 kB), coefficients.csv, euler.csv
+        ! (~1.5 MB), reference.csv, events.csv, summary.nml, written in that order
+        call write_lines(nml, [character(len=120) :: good_system, good_forcing, good_friction, &
+            "&hbm harmonics = 10, samples = 128 /", "&euler steps_per_period = 10000 /", &
+            "&run method = 'all' /", "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: nml], code, out, err)
+        call check(t, code == 0, "file_faults: the old set written", err)
+        old_summary = file_text(dir//"/summary.nml")
+        old_hbm = file_text(dir//"/hbm.csv")
+        ! another H: a new hbm.csv; under a 100 kB limit euler.csv cannot be written, after
+        ! hbm.csv and coefficients.csv were
+        call write_lines(nml, [character(len=120) :: good_system, good_forcing, good_friction, &
+            "&hbm harmonics = 12, samples = 128 /", "&euler steps_per_period = 10000 /", &
+            "&run method = 'all' /", "&output directory = '"//dir//"' /"])
+        stat = c_getrlimit(rlimit_fsize, saved)
+        small = saved
+        small%cur = 100000
+        ignore = transfer(1_c_intptr_t, ignore)
+        old_handler = c_signal(sigxfsz, ignore)
+        stat = c_setrlimit(rlimit_fsize, small)
+        call cli([character(len=200) :: nml], code, out, err)
+        stat = c_setrlimit(rlimit_fsize, saved)
+        old_handler = c_signal(sigxfsz, old_handler)
+        call check(t, code == 3 .and. index(err, dir//"/euler.csv: write failed") > 0 .and. &
+                   index(err, "staging") == 0, &
+                   "file_faults: a run that cannot write its files exits 3 naming the file", err)
+        call check(t, file_text(dir//"/summary.nml") == old_summary .and. &
+                   file_text(dir//"/hbm.csv") == old_hbm, &
+                   "file_faults: the old set is kept whole, hbm.csv and summary included "// &
+                   "(not a new hbm.csv beside the old summary)")
+        ! a run killed while writing: its staging directory and lock are left, its process
+        ! is gone (pid 999999999)
+        call make_directory(dir//"/.stickslip.staging.999999999", error_holder)
+        call write_lines(dir//"/.stickslip.staging.999999999/hbm.csv", &
+                         [character(len=8) :: "t,x1"])
+        call write_lines(dir//"/.stickslip.lock", [character(len=24) :: "999999999 5"])
+        call check(t, file_text(dir//"/summary.nml") == old_summary .and. &
+                   file_text(dir//"/hbm.csv") == old_hbm, &
+                   "file_faults: a run killed before its commit leaves the old set")
+        call cli([character(len=200) :: nml], code, out, err)
+        inquire (file=dir//"/.stickslip.staging.999999999/.", exist=exists)
+        call check(t, code == 0 .and. .not. exists .and. file_text(dir//"/hbm.csv") /= old_hbm, &
+                   "file_faults: the next run clears the killed run's staging and commits", err)
+    end subroutine test_result_set
+
+    !> The whole text of a file ('' when absent).
+    function file_text(path) result(text)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: text
+        integer :: u, stat
+        integer(8) :: n
+        logical :: there
+        inquire (file=path, exist=there, size=n)
+        if (.not. there .or. n <= 0) then
+            text = ''
+            return
+        end if
+        allocate (character(len=n) :: text)
+        open (newunit=u, file=path, access='stream', form='unformatted', action='read', &
+              iostat=stat)
+        if (stat /= 0) return
+        read (u, iostat=stat) text
+        close (u)
+    end function file_text
 
     !> An output directory whose path is too long to create (ENAMETOOLONG deep down): an
     !> io error, and none of the nested directories made on the way is left behind.

@@ -11,12 +11,12 @@ module stickslip_run_output
     use stickslip_case_messages, only: case_message
     use stickslip_solution, only: hbm_solution_t
     use stickslip_reference, only: reference_result_t
-    use stickslip_files, only: make_directory, directory_lock_t, acquire_lock, &
-        remove_stale_results
+    use stickslip_files, only: make_directory, directory_lock_t, acquire_lock, release_lock, &
+        begin_staging, commit_staging, staging_name
     use stickslip_csv, only: write_samples_csv, write_events_csv
     implicit none
     private
-    public :: open_output, after_method, name_case_file
+    public :: open_output, close_output, after_method, name_case_file
     public :: write_reference_files
     public :: sparse_columns, recovers, output_columns, boundary_columns, output_values, &
               output_solution
@@ -24,22 +24,26 @@ module stickslip_run_output
 contains
 
     !> reference.csv and events.csv of a converged reference.
-    subroutine write_reference_files(case, res, error)
-        !> The case (its output directory and DOF selection).
+    subroutine write_reference_files(case, dir, res, error)
+        !> The case (its DOF selection).
         type(case_t), intent(in) :: case
+        !> The directory written (the run's staging directory).
+        character(len=*), intent(in) :: dir
         !> The converged reference.
         type(reference_result_t), intent(in) :: res
         !> Set on failure (stat io).
         type(error_type), allocatable, intent(out) :: error
-        call write_samples_csv(case%directory, "reference.csv", res%t, &
+        call write_samples_csv(dir, "reference.csv", res%t, &
                                output_values(case, res%x), output_values(case, res%v), res%r, &
                                error, output_columns(case), selected_dofs(case))
         if (allocated(error)) return
-        call write_events_csv(case%directory, res, error)
+        call write_events_csv(dir, res, error)
     end subroutine write_reference_files
 
-    !> Before a method runs: create the output directory and take its lock.
-    subroutine open_output(case, lock, error)
+    !> Before a method runs: create the output directory, take its lock and make the
+    !> staging directory where the run writes its set of result files (close_output moves
+    !> them into place together).
+    subroutine open_output(case, lock, error, stage)
         !> The case (its &output directory).
         type(case_t), intent(in) :: case
         !> The directory's lock, held on return without an error.
@@ -47,6 +51,8 @@ contains
         !> Set on failure: stat input (no directory set), stat io (not created, or locked by
         !> another run).
         type(error_type), allocatable, intent(out) :: error
+        !> The staging directory: the run writes its result files there.
+        character(len=:), allocatable, intent(out) :: stage
         if (.not. allocated(case%directory)) then
             call fatal_error(error, "&output directory: not set", stickslip_stat%input)
             call name_case_file(case, error)
@@ -61,23 +67,57 @@ contains
             return
         end if
         call acquire_lock(lock, case%directory, error)
+        if (allocated(error)) return
+        call begin_staging(case%directory, error)
+        if (allocated(error)) then
+            call release_lock(lock)
+            return
+        end if
+        stage = staging_name(case%directory)
     end subroutine open_output
 
-    !> After a method ran: whether its files are to be written (no error). An input error
-    !> leaves the directory as it was; any other error (the method failed without a result
-    !> to write) removes the results of an earlier run, which would otherwise pass for this
-    !> run's.
-    subroutine after_method(case, error, wanted)
-        !> The case (its output directory).
+    !> After a method ran in the staging directory: replace the directory's set of result
+    !> files by the staged one (commit_staging: with a summary, all together and the summary
+    !> last; after a numerical failure without one, the old set removed; after an input or
+    !> io failure, the old set kept), name the real directory in `error`, give the lock back.
+    subroutine close_output(case, lock, error)
+        !> The case (its &output directory).
         type(case_t), intent(in) :: case
+        !> The directory's lock, released on return.
+        type(directory_lock_t), intent(inout) :: lock
+        !> The run's error; set when the files cannot be moved into place (stat io).
+        type(error_type), allocatable, intent(inout) :: error
+        type(error_type), allocatable :: commit_error
+        character(len=:), allocatable :: stage
+        integer :: stat, k
+        stat = 0
+        if (allocated(error)) stat = error%stat
+        call commit_staging(case%directory, stat, commit_error)
+        if (allocated(commit_error) .and. .not. allocated(error)) &
+            call move_alloc(commit_error, error)
+        if (allocated(error)) then
+            ! the files were written to the staging directory: name the real one
+            stage = staging_name(case%directory)
+            do
+                k = index(error%message, stage)
+                if (k == 0) exit
+                error%message = error%message(1:k - 1)//case%directory// &
+                                error%message(k + len(stage):)
+            end do
+        end if
+        call release_lock(lock)
+    end subroutine close_output
+
+    !> After a method ran: whether its files are to be written (no error). What happens to
+    !> the results of an earlier run is close_output's: an input error leaves the directory
+    !> as it was; a numerical one without a result to write removes them, as they would
+    !> otherwise pass for this run's.
+    subroutine after_method(error, wanted)
         !> The method's error, if any.
         type(error_type), allocatable, intent(in) :: error
         !> Whether the method's files are to be written.
         logical, intent(out) :: wanted
         wanted = .not. allocated(error)
-        if (wanted) return
-        if (error%stat /= stickslip_stat%input) &
-            call remove_stale_results(case%directory, [character(len=24) ::])
     end subroutine after_method
 
     !> Put an error of the library in the words of the case: the arguments of the method

@@ -19,12 +19,12 @@ module stickslip_run_solvers
     use stickslip_reference, only: reference_result_t
     use stickslip_reference_start, only: solve_reference_from_starts
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
-    use stickslip_files, only: directory_lock_t, release_lock, remove_stale_results
+    use stickslip_files, only: directory_lock_t
     use stickslip_csv, only: write_hbm_csv, write_coefficients_csv, write_samples_csv
     use stickslip_summary, only: write_summary, write_euler_summary, write_reference_summary, &
         write_side_by_side_summary
     use stickslip_run_findings, only: hbm_findings, side_by_side_findings
-    use stickslip_run_output, only: open_output, after_method, name_case_file, &
+    use stickslip_run_output, only: open_output, close_output, after_method, name_case_file, &
         write_reference_files, sparse_columns, recovers, output_columns, output_values, &
         output_solution
     implicit none
@@ -53,17 +53,20 @@ contains
         type(hbm_checks_t), intent(out), optional :: checks
         type(hbm_checks_t) :: ch
         type(directory_lock_t) :: lock
-        call open_output(case, lock, error)
+        character(len=:), allocatable :: stage
+        call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call hbm_run(case, sol, ch, error)
-        call release_lock(lock)
+        call hbm_run(case, stage, sol, ch, error)
+        call close_output(case, lock, error)
         if (present(checks)) checks = ch
         call name_case_file(case, error, ['opts ', 'copts', 'ref  ', 'basis'], &
                             ['hbm      ', 'hbm      ', 'reference', 'hbm      '])
     end subroutine run_case
 
-    subroutine hbm_run(case, sol, ch, error)
+    subroutine hbm_run(case, dir, sol, ch, error)
         type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
         type(hbm_solution_t), intent(out) :: sol
         type(hbm_checks_t), intent(out) :: ch
         type(error_type), allocatable, intent(out) :: error
@@ -89,22 +92,19 @@ contains
             call solve_and_check(case%model, case%hbm, case%checks, &
                                  case%reference%reference_options_t, sol, ch, error)
         end if
-        call after_method(case, error, wanted)
+        call after_method(error, wanted)
         if (.not. wanted) return
         if (sol%converged) then
-            call remove_stale_results(case%directory, [character(len=24) :: "hbm.csv", &
-                                      "coefficients.csv", &
-                                      merge("full_field.mtx", "hbm.csv       ", case%full_field)])
             if (allocated(sol%dofs)) then
                 ! the solution's columns are its kept DOFs: those of the selection
                 cols = sparse_columns(sol%dofs, selected_dofs(case))
             else
                 cols = output_columns(case)
             end if
-            call write_hbm_csv(case%directory, output_solution(case, sol), error, &
+            call write_hbm_csv(dir, output_solution(case, sol), error, &
                                cols, selected_dofs(case))
             if (allocated(error)) return
-            call write_coefficients_csv(case%directory, output_solution(case, sol), error, &
+            call write_coefficients_csv(dir, output_solution(case, sol), error, &
                                         cols, selected_dofs(case))
             if (allocated(error)) return
             if (case%full_field) then
@@ -118,14 +118,13 @@ contains
                         call recover_full_field(case%reduction, sol%xcoef, coef, error)
                         if (allocated(error)) return
                     end if
-                    call write_full_field(case%directory, coef, sol, error)
+                    call write_full_field(dir, coef, sol, error)
                     if (allocated(error)) return
                 end block
             end if
         else
-            call remove_stale_results(case%directory, [character(len=24) ::])
         end if
-        call write_summary(case%directory, case, sol, io_error, ch, hbm_findings(sol, ch))
+        call write_summary(dir, case, sol, io_error, ch, hbm_findings(sol, ch))
         if (allocated(io_error)) then
             call move_alloc(io_error, error)
             return
@@ -149,15 +148,18 @@ contains
         !> Progress of the periods (optional).
         type(progress_t), intent(inout), optional :: progress
         type(directory_lock_t) :: lock
-        call open_output(case, lock, error)
+        character(len=:), allocatable :: stage
+        call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call euler_run(case, res, error, progress)
-        call release_lock(lock)
+        call euler_run(case, stage, res, error, progress)
+        call close_output(case, lock, error)
         call name_case_file(case, error, ['opts'], ['euler'])
     end subroutine run_euler_case
 
-    subroutine euler_run(case, res, error, progress)
+    subroutine euler_run(case, dir, res, error, progress)
         type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
         type(euler_result_t), intent(out) :: res
         type(error_type), allocatable, intent(out) :: error
         type(progress_t), intent(inout), optional :: progress
@@ -169,18 +171,16 @@ contains
         else
             call integrate_euler(case%model, case%euler, res, error)
         end if
-        call after_method(case, error, wanted)
+        call after_method(error, wanted)
         if (.not. wanted) return
         if (res%periodic) then
-            call remove_stale_results(case%directory, [character(len=24) :: "euler.csv"])
-            call write_samples_csv(case%directory, "euler.csv", res%t, &
+            call write_samples_csv(dir, "euler.csv", res%t, &
                                    output_values(case, res%x), output_values(case, res%v), &
                                    res%r, error, output_columns(case), selected_dofs(case))
             if (allocated(error)) return
         else
-            call remove_stale_results(case%directory, [character(len=24) ::])
         end if
-        call write_euler_summary(case%directory, case, res, io_error)
+        call write_euler_summary(dir, case, res, io_error)
         if (allocated(io_error)) then
             call move_alloc(io_error, error)
             return
@@ -200,33 +200,33 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(directory_lock_t) :: lock
-        call open_output(case, lock, error)
+        character(len=:), allocatable :: stage
+        call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call reference_run(case, res, error)
-        call release_lock(lock)
+        call reference_run(case, stage, res, error)
+        call close_output(case, lock, error)
         call name_case_file(case, error, ['opts      ', 'hbm_opts  ', 'euler_opts', 'basis     '], &
                             ['reference', 'hbm      ', 'euler    ', 'hbm      '])
     end subroutine run_reference_case
 
-    subroutine reference_run(case, res, error)
+    subroutine reference_run(case, dir, res, error)
         type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
         type(reference_result_t), intent(out) :: res
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
         logical :: wanted
         call solve_reference_from_starts(case%model, case%reference, res, error, hbm_opts=case%hbm, &
                              euler_opts=case%euler)
-        call after_method(case, error, wanted)
+        call after_method(error, wanted)
         if (.not. wanted) return
         if (res%converged) then
-            call remove_stale_results(case%directory, [character(len=24) :: "reference.csv", &
-                                      "events.csv"])
-            call write_reference_files(case, res, error)
+            call write_reference_files(case, dir, res, error)
             if (allocated(error)) return
         else
-            call remove_stale_results(case%directory, [character(len=24) ::])
         end if
-        call write_reference_summary(case%directory, case, res, io_error)
+        call write_reference_summary(dir, case, res, io_error)
         if (allocated(io_error)) then
             call move_alloc(io_error, error)
             return
@@ -248,16 +248,19 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(directory_lock_t) :: lock
-        call open_output(case, lock, error)
+        character(len=:), allocatable :: stage
+        call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call side_by_side_run(case, res, error)
-        call release_lock(lock)
+        call side_by_side_run(case, stage, res, error)
+        call close_output(case, lock, error)
         call name_case_file(case, error, ['hbm  ', 'euler', 'ref  ', 'basis'], &
                             ['hbm      ', 'euler    ', 'reference', 'hbm      '])
     end subroutine run_side_by_side_case
 
-    subroutine side_by_side_run(case, res, error)
+    subroutine side_by_side_run(case, dir, res, error)
         type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
         type(side_by_side_t), intent(out) :: res
         type(error_type), allocatable, intent(out) :: error
         type(error_type), allocatable :: io_error
@@ -270,34 +273,33 @@ contains
             call solve_side_by_side(case%model, case%hbm, case%euler, case%reference, res, &
                                     error)
         end if
-        call after_method(case, error, wanted)
+        call after_method(error, wanted)
         if (.not. wanted) return
         files = [character(len=24) ::]
         if (res%hbm%converged) files = [character(len=24) :: files, "hbm.csv", "coefficients.csv"]
         if (res%euler%periodic) files = [character(len=24) :: files, "euler.csv"]
         if (res%reference%converged) files = [character(len=24) :: files, "reference.csv", &
                                               "events.csv"]
-        call remove_stale_results(case%directory, files)
         if (res%hbm%converged) then
-            call write_hbm_csv(case%directory, output_solution(case, res%hbm), error, &
+            call write_hbm_csv(dir, output_solution(case, res%hbm), error, &
                                output_columns(case), selected_dofs(case))
             if (allocated(error)) return
-            call write_coefficients_csv(case%directory, output_solution(case, res%hbm), &
+            call write_coefficients_csv(dir, output_solution(case, res%hbm), &
                                         error, output_columns(case), selected_dofs(case))
             if (allocated(error)) return
         end if
         if (res%euler%periodic) then
-            call write_samples_csv(case%directory, "euler.csv", res%euler%t, &
+            call write_samples_csv(dir, "euler.csv", res%euler%t, &
                                    output_values(case, res%euler%x), &
                                    output_values(case, res%euler%v), res%euler%r, error, &
                                    output_columns(case), selected_dofs(case))
             if (allocated(error)) return
         end if
         if (res%reference%converged) then
-            call write_reference_files(case, res%reference, error)
+            call write_reference_files(case, dir, res%reference, error)
             if (allocated(error)) return
         end if
-        call write_side_by_side_summary(case%directory, case, res, io_error, &
+        call write_side_by_side_summary(dir, case, res, io_error, &
                                         side_by_side_findings(res))
         if (allocated(io_error)) then
             call move_alloc(io_error, error)

@@ -15,13 +15,13 @@ module stickslip_run_studies
         default_robustness_options
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, read_checkpoint, &
         remove_checkpoint
-    use stickslip_files, only: directory_lock_t, release_lock, remove_stale_results
+    use stickslip_files, only: directory_lock_t
     use stickslip_csv, only: write_study_csv, write_frc_csv, write_robustness_csv
     use stickslip_summary, only: write_study_summary, write_sweep_summary, &
         write_robustness_summary
     use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script
     use stickslip_run_findings, only: study_findings
-    use stickslip_run_output, only: open_output, after_method, name_case_file, &
+    use stickslip_run_output, only: open_output, close_output, after_method, name_case_file, &
         write_reference_files, sparse_columns, recovers, output_columns, boundary_columns
     implicit none
     private
@@ -43,17 +43,20 @@ contains
         !> Progress hook, told after every run of the study.
         type(progress_t), intent(inout), optional :: progress
         type(directory_lock_t) :: lock
-        call open_output(case, lock, error)
+        character(len=:), allocatable :: stage
+        call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call study_run(case, res, error, progress)
-        call release_lock(lock)
+        call study_run(case, stage, res, error, progress)
+        call close_output(case, lock, error)
         call name_case_file(case, error, &
                             ['hbm     ', 'euler   ', 'ref_opts', 'opts    ', 'basis   '], &
                             ['hbm      ', 'euler    ', 'reference', 'study    ', 'hbm      '])
     end subroutine run_study_case
 
-    subroutine study_run(case, res, error, progress)
+    subroutine study_run(case, dir, res, error, progress)
         type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
         type(study_result_t), intent(out) :: res
         type(error_type), allocatable, intent(out) :: error
         type(progress_t), intent(inout), optional :: progress
@@ -67,23 +70,19 @@ contains
             if (error%stat == stickslip_stat%input) return
             if (error%stat /= stickslip_stat%numerical .or. &
                 .not. allocated(res%reference%diagnosis)) then
-                call remove_stale_results(case%directory, [character(len=24) ::])
                 return
             end if
             ! the reference failed: its report is still worth a summary
-            call remove_stale_results(case%directory, [character(len=24) ::])
-            call write_study_summary(case%directory, case, res, io_error, study_findings(res))
+            call write_study_summary(dir, case, res, io_error, study_findings(res))
             if (allocated(io_error)) call move_alloc(io_error, error)
             return
         end if
-        call remove_stale_results(case%directory, [character(len=24) :: "study.csv", &
-                                  "reference.csv", "events.csv"])
-        call write_study_csv(case%directory, res, case%model%ndof, case%model%ncontact(), error, &
+        call write_study_csv(dir, res, case%model%ndof, case%model%ncontact(), error, &
                              boundary_columns(case), selected_dofs(case))
         if (allocated(error)) return
-        call write_reference_files(case, res%reference, error)
+        call write_reference_files(case, dir, res%reference, error)
         if (allocated(error)) return
-        call write_study_summary(case%directory, case, res, error, study_findings(res))
+        call write_study_summary(dir, case, res, error, study_findings(res))
     end subroutine study_run
 
     !> Continue the periodic solution of `case` over the &sweep range and write frc.csv,
@@ -104,17 +103,32 @@ contains
         !> Progress hook, told after every point of the curve.
         type(progress_t), intent(inout), optional :: progress
         type(directory_lock_t) :: lock
-        call open_output(case, lock, error)
+        character(len=:), allocatable :: stage
+        logical :: summary_written
+        call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call sweep_run(case, res, error, progress)
-        call release_lock(lock)
+        call sweep_run(case, stage, res, summary_written, error, progress)
+        call close_output(case, lock, error)
+        ! the curve's files are in place: its checkpoint has served (a sweep stopped short
+        ! has written what it computed, with exit code 2)
+        if (summary_written) then
+            if (.not. allocated(error)) then
+                call remove_checkpoint(case%directory)
+            else if (error%stat == stickslip_stat%numerical) then
+                call remove_checkpoint(case%directory)
+            end if
+        end if
         call name_case_file(case, error, ['hbm  ', 'ref  ', 'opts ', 'basis'], &
                             ['hbm      ', 'reference', 'sweep    ', 'hbm      '])
     end subroutine run_sweep_case
 
-    subroutine sweep_run(case, res, error, progress)
+    subroutine sweep_run(case, dir, res, summary_written, error, progress)
         type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
         type(sweep_result_t), intent(out) :: res
+        !> summary.nml was written.
+        logical, intent(out) :: summary_written
         type(error_type), allocatable, intent(out) :: error
         type(progress_t), intent(inout), optional :: progress
         type(checkpoint_writer_t) :: writer
@@ -134,6 +148,7 @@ contains
             opts%observe = case%reduction%output_rows
             namp = size(opts%observe, 1)
         end if
+        summary_written = .false.
         writer%directory = case%directory
         writer%fingerprint = case_fingerprint(case)
         found = .false.
@@ -171,17 +186,16 @@ contains
             call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
                            opts, res, error, observer=writer, progress=progress)
         end if
-        call after_method(case, error, wanted)
+        call after_method(error, wanted)
         if (.not. wanted) return
-        call remove_stale_results(case%directory, [character(len=24) :: "frc.csv", "frc.gp"])
-        call write_frc_csv(case%directory, res, error, cols, selected_dofs(case))
+        call write_frc_csv(dir, res, error, cols, selected_dofs(case))
         if (allocated(error)) return
-        call write_frc_plot_script(case%directory, trim(case%sweep%parameter), &
+        call write_frc_plot_script(dir, trim(case%sweep%parameter), &
                                    ncols, error, cols, selected_dofs(case))
         if (allocated(error)) return
-        call write_sweep_summary(case%directory, case, res, error)
+        call write_sweep_summary(dir, case, res, error)
         if (allocated(error)) return
-        call remove_checkpoint(case%directory)
+        summary_written = .true.
         if (.not. res%complete) call fatal_error(error, "sweep: "//res%diagnosis// &
                                                  " (frc.csv holds the points computed)", &
                                                  stickslip_stat%numerical)
@@ -202,17 +216,20 @@ contains
         !> Progress hook, told after every run of the grid.
         type(progress_t), intent(inout), optional :: progress
         type(directory_lock_t) :: lock
-        call open_output(case, lock, error)
+        character(len=:), allocatable :: stage
+        call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call robustness_run(case, rows, error, progress)
-        call release_lock(lock)
+        call robustness_run(case, stage, rows, error, progress)
+        call close_output(case, lock, error)
         call name_case_file(case, error, &
                             ['hbm_opts  ', 'euler_opts', 'ref_opts  ', 'opts      ', 'basis     '], &
                             ['hbm       ', 'euler     ', 'reference ', 'robustness', 'hbm       '])
     end subroutine run_robustness_case
 
-    subroutine robustness_run(case, rows, error, progress)
+    subroutine robustness_run(case, dir, rows, error, progress)
         type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
         type(robustness_row_t), allocatable, intent(out) :: rows(:)
         type(error_type), allocatable, intent(out) :: error
         type(progress_t), intent(inout), optional :: progress
@@ -222,14 +239,12 @@ contains
         if (.not. allocated(opts%omegas)) opts = default_robustness_options()
         call run_robustness(case%model, case%hbm, case%euler, case%reference, opts, rows, &
                             error, progress)
-        call after_method(case, error, wanted)
+        call after_method(error, wanted)
         if (.not. wanted) return
-        call remove_stale_results(case%directory, [character(len=24) :: "robustness.csv", &
-                                  "robustness.gp"])
-        call write_robustness_csv(case%directory, rows, error)
+        call write_robustness_csv(dir, rows, error)
         if (allocated(error)) return
-        call write_robustness_plot_script(case%directory, opts, error)
+        call write_robustness_plot_script(dir, opts, error)
         if (allocated(error)) return
-        call write_robustness_summary(case%directory, case, rows, error)
+        call write_robustness_summary(dir, case, rows, error)
     end subroutine robustness_run
 end module stickslip_run_studies

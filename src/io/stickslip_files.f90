@@ -13,6 +13,7 @@ module stickslip_files
     private
     public :: make_directory, open_temporary, close_and_rename, remove_file
     public :: result_file_names, remove_stale_results
+    public :: staging_name, begin_staging, commit_staging
     public :: directory_lock_t, acquire_lock, release_lock, lock_name, process_id, &
               process_alive, process_start_time
 
@@ -290,6 +291,105 @@ contains
         call remove_file(dir//'/robustness_warm.png.tmp')
     end subroutine remove_stale_results
 
+    !> The staging directory of this process in output directory `dir`:
+    !> `dir/.stickslip.staging.<pid>`. A run writes its whole set of result files there and
+    !> commit_staging moves them into `dir` together.
+    function staging_name(dir) result(path)
+        !> Output directory.
+        character(len=*), intent(in) :: dir
+        character(len=:), allocatable :: path
+        path = dir//'/.stickslip.staging.'//itoa(process_id())
+    end function staging_name
+
+    !> Create the (empty) staging directory of this process in `dir` (which must exist and
+    !> be locked by this run). Error: stat io.
+    subroutine begin_staging(dir, error)
+        !> Output directory.
+        character(len=*), intent(in) :: dir
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        call clear_staging(staging_name(dir))
+        call make_directory(staging_name(dir), error)
+    end subroutine begin_staging
+
+    !> Replace the set of result files of `dir` by the set a run wrote into its staging
+    !> directory, then remove the staging directory. With a summary.nml staged (the run has
+    !> results): the old summary.nml is removed first, every staged file is renamed into
+    !> `dir`, the result files of the old set that are not in the new one are removed, and
+    !> the new summary.nml is renamed last, so that a summary always stands beside its own
+    !> files (a run killed before this step leaves the old set whole; during it, a few
+    !> renames, leaves no summary). Without a staged summary: a run that failed with stat
+    !> `failed_stat` numerical (no result) removes the old set, as its results would
+    !> otherwise pass for this run's; an input or io failure (a full disk) keeps it.
+    !> Error: stat io when a rename fails.
+    subroutine commit_staging(dir, failed_stat, error)
+        !> Output directory.
+        character(len=*), intent(in) :: dir
+        !> The run's error status (0: none).
+        integer, intent(in) :: failed_stat
+        !> Set when a staged file cannot be moved.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: stage
+        logical :: staged(size(result_file_names)), has_summary
+        integer :: k, isummary
+        stage = staging_name(dir)
+        isummary = findloc(result_file_names, "summary.nml", 1)
+        do k = 1, size(result_file_names)
+            inquire (file=stage//'/'//trim(result_file_names(k)), exist=staged(k))
+        end do
+        has_summary = staged(isummary)
+        if (has_summary) then
+            call remove_file(dir//'/summary.nml')
+            do k = 1, size(result_file_names)
+                if (k == isummary .or. .not. staged(k)) cycle
+                call move(trim(result_file_names(k)))
+                if (allocated(error)) exit
+            end do
+            if (.not. allocated(error)) then
+                call remove_stale_results(dir, pack(result_file_names, staged))
+                call move("summary.nml")
+            end if
+        else if (failed_stat == stickslip_stat%numerical) then
+            call remove_stale_results(dir, [character(len=24) ::])
+        end if
+        call clear_staging(stage)
+    contains
+        subroutine move(name)
+            character(len=*), intent(in) :: name
+            if (c_rename(stage//'/'//name//c_null_char, dir//'/'//name//c_null_char) /= 0) &
+                call fatal_error(error, dir//'/'//name//": cannot move the new result file "// &
+                                 "into place", stickslip_stat%io)
+        end subroutine move
+    end subroutine commit_staging
+
+    !> Remove a staging directory: the result files and this process's (or a killed
+    !> run's) temporaries in it, then the directory (nothing happens when it is absent).
+    subroutine clear_staging(stage)
+        character(len=*), intent(in) :: stage
+        integer :: k, stat, pid, n
+        logical :: exists
+        inquire (file=stage//'/.', exist=exists)
+        if (.not. exists) return
+        do k = 1, size(result_file_names)
+            call remove_file(stage//'/'//trim(result_file_names(k)))
+        end do
+        call remove_file(stage//'/frc.png.tmp')
+        call remove_file(stage//'/robustness_cold.png.tmp')
+        call remove_file(stage//'/robustness_warm.png.tmp')
+        ! the temporaries of the run that made it (its pid ends the directory's name)
+        k = index(stage, '.', back=.true.)
+        read (stage(k + 1:), *, iostat=stat) pid
+        if (stat == 0) then
+            do n = 1, 3
+                do k = 1, size(result_file_names)
+                    call remove_file(stage//'/'//trim(result_file_names(k))//'.'//itoa(pid)// &
+                                     '.'//itoa(n)//'.tmp')
+                end do
+            end do
+        end if
+        stat = c_rmdir(stage//c_null_char)
+    end subroutine clear_staging
+
     !> Take the lock of output directory `dir` (which must exist): create `dir/.stickslip.lock`
     !> holding this process id, atomically (written under a unique name, then hard-linked to
     !> the lock name, which fails when the lock exists). A lock whose process is gone (a
@@ -331,7 +431,10 @@ contains
             end if
             ! a stale lock (its process is gone, or the file is damaged): take it over, with
             ! the temporaries the killed run left
-            if (owner > 0 .and. owner /= process_id()) call remove_temporaries(dir, owner)
+            if (owner > 0 .and. owner /= process_id()) then
+                call remove_temporaries(dir, owner)
+                call clear_staging(dir//'/.stickslip.staging.'//itoa(owner))
+            end if
             call remove_file(lock%path)
         end do
         stat = c_unlink(trim(temporary)//c_null_char)

@@ -15,7 +15,7 @@ module fixtures
     public :: seed_model, damped_seed, chain_model, one_dof_model
     public :: scratch_dir, project_path, project_root, enter_project_root
     public :: scratch, write_lines, first_line, good_system, good_forcing, good_friction, sweep_case
-    public :: msg, rt
+    public :: msg, rt, file_text
 
     !> Scratch directory of the suites that write files, relative to the project root that
     !> they enter first (enter_project_root). A constant: gfortran 12 corrupts memory on
@@ -323,4 +323,23 @@ contains
         write (buf, '(es10.3)') x
         s = trim(adjustl(buf))
     end function rt
+    !> The whole text of a file ('' when absent).
+    function file_text(path) result(text)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: text
+        integer :: u, stat
+        integer(8) :: n
+        logical :: there
+        inquire (file=path, exist=there, size=n)
+        if (.not. there .or. n <= 0) then
+            text = ''
+            return
+        end if
+        allocate (character(len=n) :: text)
+        open (newunit=u, file=path, access='stream', form='unformatted', action='read', &
+              iostat=stat)
+        if (stat /= 0) return
+        read (u, iostat=stat) text
+        close (u)
+    end function file_text
 end module fixtures

@@ -18,7 +18,7 @@ module test_cli
     use stickslip_summary, only: write_summary
     use stickslip_version_info, only: stickslip_version
     use testing, only: test_counter_t, check, check_close, check_error
-    use fixtures, only: enter_project_root, first_line, project_path, scratch, write_lines, &
+    use fixtures, only: enter_project_root, first_line, project_path, scratch, write_lines, file_text, &
         good_system, good_forcing, good_friction, sweep_case
     implicit none
     private
@@ -43,7 +43,25 @@ contains
         call test_findings(t)
         call test_progress(t)
         call test_odd_directory(t)
+        call test_no_contact(t)
     end subroutine run_cli_tests
+
+    !> A case without contacts solves the linear problem, and says so: a warning on
+    !> standard error and in the summary (key no_contact), exit code 0.
+    subroutine test_no_contact(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/out_no_contact"
+        character(len=:), allocatable :: out, err
+        integer :: code
+        call write_lines(scratch//"/no_contact.nml", [character(len=120) :: good_system, &
+            good_forcing, "&hbm harmonics = 3, samples = 16 /", &
+            "&output directory = '"//dir//"' /"])
+        call cli([character(len=200) :: scratch//"/no_contact.nml"], code, out, err)
+        call check(t, code == 0 .and. index(err, "stickslip: warning: the case has no "// &
+                   "friction contact") > 0, "cli: a case without contacts warns", err)
+        call check(t, index(file_text(dir//"/summary.nml"), "warnings = 'no_contact'") > 0, &
+                   "cli: no_contact in the summary's warnings")
+    end subroutine test_no_contact
 
     !> `--version`: exit 0, `stickslip <version>`, then the BLAS/LAPACK line (nothing on
     !> stderr).

@@ -11,7 +11,7 @@ module test_file_faults
     use stickslip_files, only: make_directory
     use stickslip_csv, only: write_samples_csv
     use fixtures, only: enter_project_root, scratch, first_line, write_lines, good_system, &
-        good_forcing, good_friction
+        good_forcing, good_friction, file_text
     use test_cli, only: cli
     use testing, only: test_counter_t, check
     implicit none
@@ -117,25 +117,6 @@ contains
                    "file_faults: the next run clears the killed run's staging and commits", err)
     end subroutine test_result_set
 
-    !> The whole text of a file ('' when absent).
-    function file_text(path) result(text)
-        character(len=*), intent(in) :: path
-        character(len=:), allocatable :: text
-        integer :: u, stat
-        integer(8) :: n
-        logical :: there
-        inquire (file=path, exist=there, size=n)
-        if (.not. there .or. n <= 0) then
-            text = ''
-            return
-        end if
-        allocate (character(len=n) :: text)
-        open (newunit=u, file=path, access='stream', form='unformatted', action='read', &
-              iostat=stat)
-        if (stat /= 0) return
-        read (u, iostat=stat) text
-        close (u)
-    end function file_text
 
     !> An output directory whose path is too long to create (ENAMETOOLONG deep down): an
     !> io error, and none of the nested directories made on the way is left behind.

@@ -128,6 +128,7 @@ contains
         call write_lines(scratch//"/fuzz_dir_file.nml", [character(len=120) :: &
             "&system ndof = 2, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", &
             "&forcing omega = 4.5, force_dof = 1, force_amplitude = 10.0 /", &
+            "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0 /", &
             "&output directory = '"//file//"/sub' /"])
         call cli([character(len=200) :: scratch//"/fuzz_dir_file.nml", "--quiet"], code, out, err)
         call check(t, code == 3 .and. index(err, "stickslip: error: "//scratch// &

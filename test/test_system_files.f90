@@ -348,6 +348,23 @@ contains
         call bad(t, "10**8 entries announced, 2 given", "&system mass_file = 'm_e8.mtx', "// &
                  "stiffness_file = 'm_e8.mtx' /", [character(len=80) :: "m_e8.mtx:4:", &
                  "end of file after 2 of the 100000000 entries"])
+        block
+            type(error_type), allocatable :: ignored
+            call make_directory(dir//"/a_directory", ignored)
+        end block
+        call bad(t, "a directory given as mass_file", "&system mass_file = 'a_directory', "// &
+                 "stiffness_file = 'k8.mtx' /", [character(len=80) :: &
+                 "&system mass_file: "//dir//"/a_directory: a directory, not a Matrix Market "// &
+                 "file"])
+        ! a direction of length 1e-300 underflows every mobility: named, not "rho = 0"
+        call write_lines(dir//"/w_tiny.mtx", [character(len=60) :: &
+            "%%MatrixMarket matrix array real general", "8 1", "1e-300", "0", "0", "0", "0", &
+            "0", "0", "0"])
+        call bad(t, "a direction out of scale", "&system mass_file = 'm8.mtx', "// &
+                 "stiffness_file = 'k8.mtx' / &friction direction_file = 'w_tiny.mtx', "// &
+                 "mu = 0.3, normal_load = 1 /", [character(len=80) :: &
+                 "&friction direction_file '"//dir//"/w_tiny.mtx' column 1: largest entry", &
+                 "out of scale"])
         call bad(t, "reduction modes bounded", "&system mass_file = 'm8.mtx', "// &
                  "stiffness_file = 'k8.mtx' / &reduction method = 'craig-bampton', "// &
                  "modes = 2147483647 /", [character(len=80) :: &

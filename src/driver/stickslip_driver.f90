@@ -146,6 +146,7 @@ contains
             call name_case_file(case, error)
             return
         end select
+        call add_new(result%diagnostics, case%diagnostics)
         call add_new(result%diagnostics, case%reduction%diagnostics)
         if (allocated(error)) then
             if (error%stat == stickslip_stat%input) result%summary_written = .false.

@@ -28,6 +28,7 @@ module stickslip_case
         read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
     use stickslip_case_friction, only: read_friction_group, friction_form_t
+    use stickslip_diagnostics, only: diagnostics_t, level_warning
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t
     implicit none
@@ -56,6 +57,9 @@ module stickslip_case
         !> How &friction gave the contact-law directions (DOF lists in full-model numbers,
         !> inline, or file names), for the echo and messages.
         type(friction_form_t) :: friction_form
+        !> What read_case found about the case itself (warning 'no_contact': no friction
+        !> contact, the response is linear); every method's summary and the CLI report it.
+        type(diagnostics_t) :: diagnostics
         !> &system mass_file, stiffness_file, damping_file, rayleigh_alpha, rayleigh_beta as
         !> read (the matrices themselves are in model; C includes the Rayleigh terms).
         type(system_files_t) :: system_files
@@ -199,6 +203,9 @@ contains
                                    case%output_dofs_given, case%full_field, error)
             if (allocated(error)) return
         end if
+        if (case%model%ncontact() == 0) call case%diagnostics%add(level_warning, "no_contact", &
+            "the case has no friction contact (no &friction group, or no contact_dof or "// &
+            "direction_file in it): stickslip solves the linear response")
         if (allocated(error)) return
         call read_run_group(nml, method, method_given, error)
         if (allocated(error)) return
@@ -309,9 +316,18 @@ contains
         character(len=*), intent(in) :: component, variable
         character(len=:), allocatable, intent(in) :: path
         integer :: k
+        integer :: e
         if (.not. allocated(path)) return
         k = index(error%message, component)
         if (k == 0) return
+        ! "<component>(:, j)" is column j of the file
+        if (index(error%message(k + len(component):), "(:, ") == 1) then
+            e = index(error%message(k + len(component):), ")")
+            error%message = error%message(1:k - 1)//variable//" '"//path//"' column "// &
+                            error%message(k + len(component) + 4:k + len(component) + e - 2)// &
+                            error%message(k + len(component) + e:)
+            return
+        end if
         error%message = error%message(1:k - 1)//variable//" '"//path//"'"// &
                         error%message(k + len(component):)
     end subroutine name_column_file

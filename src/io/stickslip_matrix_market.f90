@@ -97,6 +97,12 @@ contains
         real(dp) :: v
 
         if (present(symmetric)) symmetric = .false.
+        inquire (file=path//'/.', exist=is_open)
+        if (is_open) then
+            call fatal_error(error, path//": a directory, not a Matrix Market file", &
+                             stickslip_stat%input)
+            return
+        end if
         open (newunit=u, file=path, status='old', action='read', form='formatted', &
               iostat=stat, iomsg=msg)
         if (stat /= 0) then

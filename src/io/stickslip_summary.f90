@@ -499,16 +499,11 @@ contains
         integer :: k
         stat = 0
         msg = ""
-        ! the method's findings, then those of the model's reduction (read_case)
+        ! the method's findings, then those of the case itself and of the model's reduction
+        ! (read_case)
         found = found_in
-        if (allocated(case%reduction%diagnostics%items)) then
-            do k = 1, size(case%reduction%diagnostics%items)
-                associate (item => case%reduction%diagnostics%items(k))
-                    if (.not. found%has(item%key)) call found%add(item%level, item%key, &
-                                                                  item%message)
-                end associate
-            end do
-        end if
+        call add_absent(case%diagnostics)
+        call add_absent(case%reduction%diagnostics)
         call open_temporary(dir, "summary.nml", u, error)
         if (allocated(error)) return
         call put(u, "! stickslip summary: the group &summary (and for several methods "// &
@@ -539,6 +534,19 @@ contains
                 end associate
             end do
         end if
+
+    contains
+
+        subroutine add_absent(more)
+            type(diagnostics_t), intent(in) :: more
+            if (.not. allocated(more%items)) return
+            do k = 1, size(more%items)
+                associate (item => more%items(k))
+                    if (.not. found%has(item%key)) call found%add(item%level, item%key, &
+                                                                  item%message)
+                end associate
+            end do
+        end subroutine add_absent
     end subroutine begin_summary
 
     !> The reduction keys of &summary (only when the model was reduced): reduction_method,

@@ -652,6 +652,22 @@ contains
                                      stickslip_stat%input)
                     return
                 end if
+                ! a direction is dimensionless, of length about 1: a length like 1e-300
+                ! underflows every velocity and mobility built from it
+                if (nonzero_columns .or. name == "normal_direction" .or. &
+                    name == "tangent2_direction") then
+                    if (any(a(:, q) /= 0.0_dp) .and. &
+                        .not. (maxval(abs(a(:, q))) >= 1.0e-100_dp .and. &
+                               maxval(abs(a(:, q))) <= 1.0e100_dp)) then
+                        call fatal_error(error, "model%"//name//"(:, "//itoa(q)//"): largest "// &
+                                         "entry "//real_text(maxval(abs(a(:, q))), &
+                                                             '(es10.3e3)')//" out of scale "// &
+                                         "(a direction is dimensionless, of length about 1; "// &
+                                         "1e-100 .. 1e100 accepted)", &
+                                         stickslip_stat%input)
+                        return
+                    end if
+                end if
             end do
         end subroutine check_shape
 

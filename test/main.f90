@@ -1,5 +1,7 @@
 !> The one test driver: runs every suite (or the suites named on the command line,
-!> `fpm test -- basis hbm`) and ends with the line "N passed, N failed".
+!> `fpm test -- basis hbm`) and ends with the line "N passed, N failed". Each suite is one
+!> entry of the `suites` list (its name and its run procedure; mctc-lib's collect pattern);
+!> an unknown name on the command line is an error that lists the known ones.
 program tester
     use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
     use testing, only: test_counter_t
@@ -48,80 +50,95 @@ program tester
     use test_csv_format, only: run_csv_format_tests
     use stickslip_blas_threads, only: limit_blas_threads
     implicit none
+
+    abstract interface
+        !> A suite: runs its tests, counting them in t.
+        subroutine run_suite(t)
+            import :: test_counter_t
+            type(test_counter_t), intent(inout) :: t
+        end subroutine run_suite
+    end interface
+
+    !> A suite of the driver: its name (the command-line argument) and its procedure.
+    type :: suite_t
+        character(len=24) :: name = ''
+        procedure(run_suite), pointer, nopass :: run => null()
+    end type suite_t
+
+    type(suite_t), allocatable :: suites(:)
     type(test_counter_t) :: t
-    integer :: n, i, ran
+    integer :: n, i, k
     character(len=64), allocatable :: wanted(:)
+    character(len=:), allocatable :: known
+
+    suites = [ &
+        suite_t("basis", run_basis_tests),&
+        suite_t("hbm", run_hbm_tests),&
+        suite_t("case", run_case_tests),&
+        suite_t("euler", run_euler_tests),&
+        suite_t("exact_reference", run_exact_reference_tests),&
+        suite_t("stability", run_stability_tests),&
+        suite_t("stiff_flow", run_stiff_flow_tests),&
+        suite_t("robustness", run_robustness_tests),&
+        suite_t("continuation", run_continuation_tests),&
+        suite_t("factorizations", run_factorizations_tests),&
+        suite_t("sweep_files", run_sweep_file_tests),&
+        suite_t("truncation", run_truncation_tests),&
+        suite_t("namelist", run_namelist_tests),&
+        suite_t("openmp", run_openmp_tests),&
+        suite_t("version_info", run_version_info_tests),&
+        suite_t("friction", run_friction_tests),&
+        suite_t("contact_law", run_contact_law_tests),&
+        suite_t("contact_case", run_contact_case_tests),&
+        suite_t("file_faults", run_file_faults_tests),&
+        suite_t("fft", run_fft_tests),&
+        suite_t("expm", run_expm_tests),&
+        suite_t("lapack", run_lapack_tests),&
+        suite_t("compare", run_compare_tests),&
+        suite_t("diagnostics", run_diagnostics_tests),&
+        suite_t("error", run_error_tests),&
+        suite_t("minpack", run_minpack_tests),&
+        suite_t("cli", run_cli_tests),&
+        suite_t("api", run_api_tests),&
+        suite_t("case_messages", run_case_messages_tests),&
+        suite_t("trust", run_trust_tests),&
+        suite_t("fuzz", run_fuzz_tests),&
+        suite_t("umfpack", run_umfpack_tests),&
+        suite_t("reduction", run_reduction_tests),&
+        suite_t("arpack", run_arpack_tests),&
+        suite_t("sparse", run_sparse_tests),&
+        suite_t("matrix_market", run_matrix_market_tests),&
+        suite_t("system_files", run_system_files_tests),&
+        suite_t("output_selection", run_output_selection_tests),&
+        suite_t("directions", run_directions_tests),&
+        suite_t("sparse_none", run_sparse_none_tests),&
+        suite_t("calculix", run_calculix_tests),&
+        suite_t("solver", run_solver_tests),&
+        suite_t("csv_format", run_csv_format_tests)]
     ! deterministic random points for the finite-difference and basis checks
     call random_seed(size=n)
     call random_seed(put=[(20261122 + 7919*i, i=1, n)])
     allocate (wanted(command_argument_count()))
     do i = 1, size(wanted)
         call get_command_argument(i, wanted(i))
+        if (.not. any(suites%name == wanted(i))) then
+            known = ""
+            do k = 1, size(suites)
+                known = known//" "//trim(suites(k)%name)
+            end do
+            write (error_unit, '(a)') "tester: unknown suite '"//trim(wanted(i))// &
+                "' (known:"//known//")"
+            t%failed = t%failed + 1
+        end if
     end do
     ! as the stickslip program does: one BLAS thread (OpenBLAS's pthreads build)
     call limit_blas_threads()
-    ran = 0
-    if (selected("basis")) call run_basis_tests(t)
-    if (selected("hbm")) call run_hbm_tests(t)
-    if (selected("case")) call run_case_tests(t)
-    if (selected("euler")) call run_euler_tests(t)
-    if (selected("exact_reference")) call run_exact_reference_tests(t)
-    if (selected("stability")) call run_stability_tests(t)
-    if (selected("stiff_flow")) call run_stiff_flow_tests(t)
-    if (selected("robustness")) call run_robustness_tests(t)
-    if (selected("continuation")) call run_continuation_tests(t)
-    if (selected("factorizations")) call run_factorizations_tests(t)
-    if (selected("sweep_files")) call run_sweep_file_tests(t)
-    if (selected("truncation")) call run_truncation_tests(t)
-    if (selected("namelist")) call run_namelist_tests(t)
-    if (selected("openmp")) call run_openmp_tests(t)
-    if (selected("version_info")) call run_version_info_tests(t)
-    if (selected("friction")) call run_friction_tests(t)
-    if (selected("contact_law")) call run_contact_law_tests(t)
-    if (selected("contact_case")) call run_contact_case_tests(t)
-    if (selected("file_faults")) call run_file_faults_tests(t)
-    if (selected("fft")) call run_fft_tests(t)
-    if (selected("expm")) call run_expm_tests(t)
-    if (selected("lapack")) call run_lapack_tests(t)
-    if (selected("compare")) call run_compare_tests(t)
-    if (selected("diagnostics")) call run_diagnostics_tests(t)
-    if (selected("error")) call run_error_tests(t)
-    if (selected("minpack")) call run_minpack_tests(t)
-    if (selected("cli")) call run_cli_tests(t)
-    if (selected("api")) call run_api_tests(t)
-    if (selected("case_messages")) call run_case_messages_tests(t)
-    if (selected("trust")) call run_trust_tests(t)
-    if (selected("fuzz")) call run_fuzz_tests(t)
-    if (selected("umfpack")) call run_umfpack_tests(t)
-    if (selected("reduction")) call run_reduction_tests(t)
-    if (selected("arpack")) call run_arpack_tests(t)
-    if (selected("sparse")) call run_sparse_tests(t)
-    if (selected("matrix_market")) call run_matrix_market_tests(t)
-    if (selected("system_files")) call run_system_files_tests(t)
-    if (selected("output_selection")) call run_output_selection_tests(t)
-    if (selected("directions")) call run_directions_tests(t)
-    if (selected("sparse_none")) call run_sparse_none_tests(t)
-    if (selected("calculix")) call run_calculix_tests(t)
-    if (selected("solver")) call run_solver_tests(t)
-    if (selected("csv_format")) call run_csv_format_tests(t)
-    if (ran < size(wanted) .or. ran == 0) then
-        write (error_unit, '(a)') "tester: unknown suite name among the arguments"
-        t%failed = t%failed + 1
-    end if
+    do k = 1, size(suites)
+        if (size(wanted) > 0) then
+            if (.not. any(wanted == suites(k)%name)) cycle
+        end if
+        call suites(k)%run(t)
+    end do
     write (output_unit, '(i0," passed, ",i0," failed")') t%passed, t%failed
     if (t%failed > 0) error stop 1
-
-contains
-
-    !> Whether the suite `name` runs: all run when no names are given.
-    logical function selected(name)
-        character(len=*), intent(in) :: name
-        if (size(wanted) == 0) then
-            selected = .true.
-            ran = ran + 1
-        else
-            selected = any(wanted == name)
-            if (selected) ran = ran + 1
-        end if
-    end function selected
 end program tester

@@ -9,7 +9,9 @@ per row), or, with --grid, by each combination of the values given (the last nam
 fastest); {case} is replaced by the case's name (case_001, case_002, ...). The template must
 use {case} (in &output directory, so that the cases write distinct directories) and every
 other placeholder must get a value. Writes DIR/case_001.nml ... (DIR default: cases) and
-prints the number of cases (the SLURM array is 1-<that number>). Exit 1 on a usage error.
+prints the number of cases (the SLURM array is 1-<that number>). A DIR that already holds
+case files (an earlier campaign: job.sh would run them too) is refused unless --clean, which
+removes its *.nml files first. Exit 1 on a usage error.
 """
 import argparse
 import csv
@@ -48,6 +50,8 @@ def main(argv=None):
     p.add_argument("--grid", nargs="+", metavar="NAME=V1,V2")
     p.add_argument("--out", default="cases")
     p.add_argument("--prefix", default="case")
+    p.add_argument("--clean", action="store_true",
+                   help="remove the case files of an earlier campaign from --out first")
     args = p.parse_args(argv)
     try:
         with open(args.template) as f:
@@ -57,6 +61,13 @@ def main(argv=None):
                              "directory so that every case writes its own directory)")
         sets = parameter_sets(args)
         os.makedirs(args.out, exist_ok=True)
+        old = sorted(f for f in os.listdir(args.out) if f.endswith(".nml"))
+        if old and not args.clean:
+            raise ValueError(f"{args.out}/ already holds {len(old)} case files of an earlier "
+                             "campaign (job.sh runs every case file there): remove them, "
+                             "or give --clean")
+        for f in old:
+            os.remove(os.path.join(args.out, f))
         width = max(3, len(str(len(sets))))
         for i, values in enumerate(sets, start=1):
             name = f"{args.prefix}_{i:0{width}d}"

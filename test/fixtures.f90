@@ -13,6 +13,7 @@ module fixtures
     implicit none
     private
     public :: seed_model, damped_seed, chain_model, one_dof_model
+    public :: unilateral_seed, liftoff_model, planar_model
     public :: scratch_dir, project_path, project_root, enter_project_root
     public :: scratch, write_lines, first_line, good_system, good_forcing, good_friction, sweep_case
     public :: msg, rt, file_text
@@ -83,6 +84,80 @@ contains
         m%mu = [0.45_dp]
         m%normal_load = [1.0_dp]
     end function seed_model
+
+    !> The seed structure with its contact made unilateral (doc/contacts.md): a third DOF,
+    !> decoupled from the others (mass 1, grounded by a spring 5), is the contact's normal
+    !> (n = e_3, gap 0), pressed by the preload 1 (normal_stiffness `kn`, 0: rigid). Its
+    !> contact never opens and carries lambda = 1: the seed case's answer.
+    function unilateral_seed(kn) result(m)
+        real(dp), intent(in) :: kn
+        type(model_t) :: m
+        m = seed_model()
+        m%ndof = 3
+        m%mass = reshape([1, 0, 0, 0, 1, 0, 0, 0, 1]*1.0_dp, [3, 3])
+        m%stiffness = reshape([2, -1, 0, -1, 1, 0, 0, 0, 5]*1.0_dp, [3, 3])
+        m%damping = 0.0_dp*m%mass
+        m%normal_load = [0.0_dp]
+        allocate (m%normal_direction(3, 1))
+        m%normal_direction = 0.0_dp
+        m%normal_direction(3, 1) = 1.0_dp
+        m%preload = [1.0_dp]
+        m%normal_stiffness = [kn]
+    end function unilateral_seed
+
+    !> A damper-like contact that opens part of the period: a platform with a tangential
+    !> DOF 1 and a normal DOF 2 (masses 1, grounded springs 1 and 1.5 coupled by 0.3, damping
+    !> 0.02 M + 0.002 K), pressed by the preload 1 on a ground contact (n = e_2, gap 0,
+    !> normal stiffness `kn`, tangential stiffness `kt`, mu 0.5), forced on both DOFs at
+    !> omega = 1.5 (1 on DOF 1, 2 on DOF 2 with phase 0.4): the normal force it carries when
+    !> closed, about kn 0.23, exceeds the preload's share, so the contact lifts off.
+    function liftoff_model(kn, kt) result(m)
+        real(dp), intent(in) :: kn, kt
+        type(model_t) :: m
+        m%ndof = 2
+        m%mass = reshape([1, 0, 0, 1]*1.0_dp, [2, 2])
+        m%stiffness = reshape([1.3_dp, -0.3_dp, -0.3_dp, 1.8_dp], [2, 2])
+        m%damping = 0.02_dp*m%mass + 0.002_dp*m%stiffness
+        m%omega = 1.5_dp
+        m%force_dof = [1, 2]
+        m%force_harmonic = [1, 1]
+        m%force_amplitude = [1.0_dp, 2.0_dp]
+        m%force_phase = [0.0_dp, 0.4_dp]
+        m%contact_dof = [1]
+        m%contact_dof2 = [0]
+        m%mu = [0.5_dp]
+        m%normal_load = [0.0_dp]
+        allocate (m%normal_direction(2, 1))
+        m%normal_direction = reshape([0.0_dp, 1.0_dp], [2, 1])
+        m%preload = [1.0_dp]
+        m%normal_stiffness = [kn]
+        m%tangential_stiffness = [kt]
+    end function liftoff_model
+
+    !> 2D friction: a point mass 1 on two orthogonal springs k = 1 (x = DOF 1, y = DOF 2),
+    !> damping c = 0.1, forced by (fx cos(omega t), fy sin(omega t)) at omega = 1.7, a ground
+    !> contact in the plane (w = e_1, t = e_2, mu = 0.3, N = 1, tangential stiffness `kt`):
+    !> fx = fy gives a circular path, fx /= fy an elliptical one.
+    function planar_model(fx, fy, kt) result(m)
+        real(dp), intent(in) :: fx, fy, kt
+        type(model_t) :: m
+        m%ndof = 2
+        m%mass = reshape([1, 0, 0, 1]*1.0_dp, [2, 2])
+        m%stiffness = m%mass
+        m%damping = 0.1_dp*m%mass
+        m%omega = 1.7_dp
+        m%force_dof = [1, 2]
+        m%force_harmonic = [1, 1]
+        m%force_amplitude = [fx, fy]
+        m%force_phase = [0.0_dp, -2.0_dp*atan(1.0_dp)]
+        m%contact_dof = [1]
+        m%contact_dof2 = [0]
+        m%mu = [0.3_dp]
+        m%normal_load = [1.0_dp]
+        allocate (m%tangent2_direction(2, 1))
+        m%tangent2_direction = reshape([0.0_dp, 1.0_dp], [2, 1])
+        m%tangential_stiffness = [kt]
+    end function planar_model
 
     !> The seed system with light Rayleigh damping C = 0.02 M + 0.02 K.
     function damped_seed() result(m)

@@ -38,6 +38,8 @@ module stickslip_truncation
     use stickslip_friction, only: psi, psi_stick
     use stickslip_hbm, only: solve_periodic
     use stickslip_dynamics, only: dynamics_t
+    use stickslip_contact_set, only: channel_directions, channel_normal
+    use stickslip_contact_law, only: contact_psi, contact_state, state_stick, state_open
     implicit none
     private
     public :: truncation_t, estimate_truncation, solve_to_tolerance, coarse_harmonics
@@ -432,7 +434,13 @@ contains
         ! the weight the solution was solved with (opts%rho = 0 asks for the automatic one)
         rho = sol%rho
         if (.not. (rho > 0.0_dp)) rho = opts%rho
-        do j = 1, model%ncontact()
+        if (.not. sol%contacts%plain .and. model%ncontact() > 0) then
+            call laws_defect(model, sol, fb, grid, rho, vfloor, est)
+            j = model%ncontact() + 1
+        else
+            j = 1
+        end if
+        do j = j, model%ncontact()
             limit = model%mu(j)*model%normal_load(j)
             vc = matmul(sol%vcoef, contact_velocity_direction(model, j))
             call grid%synthesize(fb, sol%rcoef(:, j), rt)
@@ -457,6 +465,76 @@ contains
             est%note = "the solution did not converge: no truncation estimate"
         end if
     end subroutine diagnose
+
+    !> The Coulomb defect with contact laws (doc/contacts.md): Psi of every contact
+    !> (stickslip_contact_law) on the fine grid, each channel's kinematic quantity rebuilt
+    !> from the solution (slider velocity d^T v + r' / k_t, omega (gap + d^T x + lambda /
+    !> k_n)); a sample in stick (closed) divided by the channel's peak kinematic quantity,
+    !> one in slip (open) by rho times the contact's largest limit (largest normal force);
+    !> psi_rms and psi_max of `est` set.
+    subroutine laws_defect(model, sol, fb, grid, rho, vfloor, est)
+        type(model_t), intent(in) :: model
+        type(hbm_solution_t), intent(in) :: sol
+        type(basis_t), intent(in) :: fb
+        type(fine_grid_t), intent(inout) :: grid
+        real(dp), intent(in) :: rho, vfloor
+        type(truncation_t), intent(inout) :: est
+        real(dp), allocatable :: d(:, :), r(:, :), u(:, :), p(:, :), coef(:), dr(:), &
+                                 uscale(:), gmax(:)
+        integer :: j, c, k, m, c0, nf, state
+        real(dp) :: q
+        associate (cs => sol%contacts)
+            nf = est%fine_samples
+            d = channel_directions(model, cs)
+            allocate (r(nf, cs%nchannel), u(nf, cs%nchannel), p(nf, 3), coef(sol%nb), &
+                      dr(sol%nb), uscale(cs%nchannel), gmax(cs%ncontact))
+            do c = 1, cs%nchannel
+                j = cs%contact_of(c)
+                if (cs%kind(c) == channel_normal) then
+                    coef = model%omega*matmul(sol%xcoef, d(:, c))
+                    if (fb%has_zero) coef(fb%i0) = coef(fb%i0) + model%omega*cs%gap(j)
+                    if (cs%kn(j) > 0.0_dp) coef = coef + model%omega*sol%rcoef(:, c)/cs%kn(j)
+                else
+                    coef = matmul(sol%vcoef, d(:, c))
+                    if (cs%kt(j) > 0.0_dp) then
+                        call fb%derivative(sol%rcoef(:, c), model%omega, dr)
+                        coef = coef + dr/cs%kt(j)
+                    end if
+                end if
+                call grid%synthesize(fb, coef, u(:, c))
+                call grid%synthesize(fb, sol%rcoef(:, c), r(:, c))
+                uscale(c) = max(maxval(abs(u(:, c))), vfloor, tiny(1.0_dp))
+            end do
+            do j = 1, cs%ncontact
+                c0 = cs%first(j)
+                m = cs%width(j)
+                if (cs%normal(j) > 0) then
+                    gmax(j) = max(maxval(r(:, cs%normal(j))), tiny(1.0_dp))
+                else
+                    gmax(j) = max(cs%mu(j)*cs%normal_load(j), tiny(1.0_dp))
+                end if
+                do k = 1, nf
+                    call contact_psi(cs%law(j), rho, r(k, c0:c0 + m - 1), u(k, c0:c0 + m - 1), &
+                                     p(k, 1:m))
+                    state = contact_state(cs%law(j), rho, r(k, c0:c0 + m - 1), &
+                                          u(k, c0:c0 + m - 1))
+                    do c = 1, m
+                        if (state == state_stick .or. (cs%kind(c0 + c - 1) == channel_normal &
+                                                       .and. state /= state_open)) then
+                            p(k, c) = p(k, c)/uscale(c0 + c - 1)
+                        else
+                            p(k, c) = p(k, c)/max(rho*gmax(j), vfloor, tiny(1.0_dp))
+                        end if
+                    end do
+                end do
+                do c = 1, m
+                    q = sqrt(sum(p(:, c)**2)/nf)
+                    est%psi_rms = max(est%psi_rms, q)
+                    est%psi_max = max(est%psi_max, maxval(abs(p(:, c))))
+                end do
+            end do
+        end associate
+    end subroutine laws_defect
 
     !> Add to est (already diagnosed for `fine`) the changes from the solution `coarse` on
     !> a prefix basis of fine's, and fold them into the estimate.

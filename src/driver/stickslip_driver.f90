@@ -103,7 +103,7 @@ contains
             return
         end if
         ! contact laws (doc/contacts.md) run only in the methods that handle them so far
-        if (has_contact_laws(case%model)) then
+        if (has_contact_laws(case%model) .and. result%method /= 'hbm') then
             call fatal_error(error, "&friction: contact laws (a normal direction, a second "// &
                              "tangential direction or a tangential_stiffness) are not yet "// &
                              "handled by &run method = '"//result%method//"'", &

@@ -6,6 +6,7 @@
 module stickslip_condensed_structure
     use stickslip_kinds, only: dp
     use stickslip_rho, only: rho_fraction
+    use stickslip_contact_set, only: contact_set_t
     implicit none
     private
     public :: condensed_structure_t, rho_ratio, rho_out_of_band
@@ -18,8 +19,11 @@ module stickslip_condensed_structure
         real(dp) :: omega = 0.0_dp
         !> Number of contacts.
         integer :: ncontact = 0
-        !> Friction limits mu_j N_j [N].
+        !> Friction limits mu_j N_j [N] of the constant-load contacts (0 for a unilateral
+        !> one).
         real(dp), allocatable :: limit(:)
+        !> The contacts and their force channels (contact laws when not plain).
+        type(contact_set_t) :: contacts
         !> The automatic rho of the structure (stickslip_rho) [m/(N s)].
         real(dp) :: rho_auto = 1.0_dp
         !> Load shape of each forcing term on the displacement columns (all N DOFs, or the

@@ -10,13 +10,15 @@
 module stickslip_hb_residual
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t, new_dynamics, restrict_dynamics, restrict_to_basis, &
         check_harmonics_in_basis
     use stickslip_friction, only: psi, psi_stick
     use stickslip_nonlinear, only: nonlinear_system_t
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
+    use stickslip_hb_laws, only: hb_laws_t, new_hb_laws
     implicit none
     private
     public :: hb_problem_t, new_hb_problem, new_condensed_problem
@@ -34,14 +36,22 @@ module stickslip_hb_residual
         integer :: n = 0
         !> Weight rho of Psi.
         real(dp) :: rho = 0.0_dp
-        !> Friction limits mu_j N_j [N].
+        !> Friction limits mu_j N_j [N] (plain contacts; 0 for a unilateral contact).
         real(dp), allocatable :: limit(:)
+        !> Every contact is plain (rigid 1D Coulomb friction under a constant normal load):
+        !> the unknowns are the friction forces, one column per contact (the path of
+        !> before). Otherwise `laws` holds the contact laws and the unknowns are the force
+        !> channels (stickslip_hb_laws); nc is then the number of channels.
+        logical :: plain = .true.
+        !> The contact laws (when not plain).
+        type(hb_laws_t) :: laws
         real(dp), allocatable, private :: rs(:), vs(:), ps(:), rc(:, :), vc(:, :), a(:, :)
         complex(dp), allocatable, private :: cw(:)
     contains
         procedure :: residual => hb_residual
         procedure :: jacobian => hb_jacobian
         procedure :: contact_samples
+        procedure :: law_samples
         procedure :: destroy => hb_destroy
     end type hb_problem_t
 
@@ -83,7 +93,7 @@ contains
         call new_basis(self%basis, harmonics, odd_only, samples, error)
         if (allocated(error)) return
         if (present(dyn)) then
-            if (dyn%ndof /= model%ndof .or. dyn%ncontact /= model%ncontact() .or. &
+            if (dyn%ndof /= model%ndof .or. dyn%ncontact /= channel_count(model) .or. &
                 .not. allocated(dyn%v0) .or. .not. (dyn%omega == model%omega)) then
                 call fatal_error(error, "new_hb_problem: dyn was not built for this model "// &
                                  "(sizes or omega differ)", stickslip_stat%input)
@@ -108,7 +118,41 @@ contains
         self%limit = model%mu*model%normal_load
         allocate (self%rs(nt), self%vs(nt), self%ps(nt), self%cw(nt/2 + 1))
         allocate (self%rc(nb, nc), self%vc(nb, nc), self%a(nb, nb))
+        block
+            type(contact_set_t) :: cs
+            call new_contact_set(cs, model)
+            if (.not. cs%plain) call set_laws(self, cs, model%omega, error)
+        end block
     end subroutine new_hb_problem
+
+    !> Take the contact laws of `cs` (not plain) at omega [rad/s]: the unknowns become the
+    !> force channels. Error (stat input): a unilateral contact on a basis without the
+    !> constant term (its gap, preload and mean normal force need it).
+    subroutine set_laws(self, cs, omega, error)
+        type(hb_problem_t), intent(inout) :: self
+        type(contact_set_t), intent(in) :: cs
+        real(dp), intent(in) :: omega
+        type(error_type), allocatable, intent(out) :: error
+        integer :: j, nb, nt
+        if (.not. self%basis%has_zero .and. any(cs%normal > 0)) then
+            j = findloc(cs%normal > 0, .true., 1)
+            call fatal_error(error, "opts%odd_only = .true.: contact "//itoa(j)//" is "// &
+                             "unilateral, and its gap, preload and mean normal force need "// &
+                             "the constant term of the basis; set odd_only = .false.", &
+                             stickslip_stat%input)
+            call self%basis%destroy()
+            return
+        end if
+        nb = self%basis%nb
+        nt = self%basis%nt
+        self%plain = .false.
+        self%nc = cs%nchannel
+        self%n = nb*cs%nchannel
+        self%limit = cs%constant_limit([(j, j=1, cs%ncontact)])
+        call new_hb_laws(self%laws, cs, omega, nb, nt)
+        if (allocated(self%rc)) deallocate (self%rc, self%vc)
+        allocate (self%rc(nb, cs%nchannel), self%vc(nb, cs%nchannel))
+    end subroutine set_laws
 
     !> The problem on condensed dynamics already built, without a model (the exact sparse
     !> condensation, the rungs of a harmonic ladder): `dyn` on this basis or on a larger one
@@ -117,7 +161,7 @@ contains
     !> model's). Errors: stat input (rho, sizes, a harmonic missing from `dyn` or from the
     !> basis).
     subroutine new_condensed_problem(self, dyn, limit, harmonics, odd_only, samples, rho, &
-                                     error, force_harmonic)
+                                     error, force_harmonic, contacts)
         !> The problem.
         type(hb_problem_t), intent(out) :: self
         !> Condensed dynamics on this basis or a larger one.
@@ -136,8 +180,14 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Harmonics of the forcing terms.
         integer, intent(in), optional :: force_harmonic(:)
+        !> The contacts, when they have contact laws (then `dyn` is condensed on their
+        !> channels and `limit` holds one value per contact).
+        type(contact_set_t), intent(in), optional :: contacts
         integer :: nb, nc, nt
+        logical :: laws
         character(len=100) :: buf
+        laws = .false.
+        if (present(contacts)) laws = .not. contacts%plain
         if (.not. (rho > 0.0_dp) .or. rho > huge(rho)) then
             write (buf, '(a,g0.6,a)') "rho = ", rho, ": must be finite and > 0"
             call fatal_error(error, trim(buf), stickslip_stat%input)
@@ -149,7 +199,7 @@ contains
             call check_harmonics_in_basis(force_harmonic, self%basis, error)
         end if
         if (.not. allocated(error)) then
-            if (size(limit) /= dyn%ncontact .or. .not. allocated(dyn%v0)) then
+            if ((.not. laws .and. size(limit) /= dyn%ncontact) .or. .not. allocated(dyn%v0)) then
                 call fatal_error(error, "new_condensed_problem: limit and dyn disagree on "// &
                                  "the contacts, or dyn was not built", stickslip_stat%input)
             else if (same_harmonics(dyn, self%basis)) then
@@ -171,7 +221,16 @@ contains
         self%limit = limit
         allocate (self%rs(nt), self%vs(nt), self%ps(nt), self%cw(nt/2 + 1))
         allocate (self%rc(nb, nc), self%vc(nb, nc), self%a(nb, nb))
+        if (laws) call set_laws(self, contacts, dyn%omega, error)
     end subroutine new_condensed_problem
+
+    !> Number of force channels of a model (its contacts when plain).
+    integer function channel_count(model)
+        type(model_t), intent(in) :: model
+        type(contact_set_t) :: cs
+        call new_contact_set(cs, model)
+        channel_count = cs%nchannel
+    end function channel_count
 
     !> Whether `dyn` holds exactly the harmonics (and constant) of `basis`.
     pure logical function same_harmonics(dyn, basis)
@@ -196,6 +255,11 @@ contains
         !> Callback status.
         integer, intent(inout) :: stat
         integer :: j, nb
+        if (.not. self%plain) then
+            call self%laws%residual(self%basis, self%dyn, self%rho, x, f)
+            if (.not. all(ieee_is_finite(f))) stat = 1
+            return
+        end if
         nb = self%basis%nb
         self%rc = reshape(x, [nb, self%nc])
         call self%dyn%contact_velocity(self%basis, self%rc, self%vc)
@@ -220,6 +284,11 @@ contains
         integer, intent(inout) :: stat
         integer :: j, l, nb, ih, k, rj, cl, i
         real(dp) :: gr, gi
+        if (.not. self%plain) then
+            call self%laws%jacobian(self%basis, self%dyn, self%rho, x, jac)
+            if (.not. all(ieee_is_finite(jac))) stat = 1
+            return
+        end if
         nb = self%basis%nb
         self%rc = reshape(x, [nb, self%nc])
         call self%dyn%contact_velocity(self%basis, self%rc, self%vc)
@@ -273,6 +342,29 @@ contains
             s(:, j) = psi_stick(r(:, j), v(:, j), self%limit(j), self%rho)
         end do
     end subroutine contact_samples
+
+    !> Samples of every force channel's force r and kinematic quantity u (nt x n_ch; the
+    !> friction force and slip velocity of a plain contact) and of every contact's state
+    !> (nt x n_c: state_open, state_stick, state_slip of stickslip_contact_law).
+    subroutine law_samples(self, x, r, u, state)
+        !> The problem.
+        class(hb_problem_t), intent(inout) :: self
+        !> Force coefficients of the channels [N].
+        real(dp), intent(in) :: x(:)
+        !> Channel forces [N] and kinematic quantities [m/s], nt x n_ch.
+        real(dp), intent(out) :: r(:, :), u(:, :)
+        !> Contact states, nt x n_c.
+        integer, intent(out) :: state(:, :)
+        real(dp), allocatable :: s(:, :)
+        if (.not. self%plain) then
+            call self%laws%samples(self%basis, self%dyn, self%rho, x, r, u, state)
+            return
+        end if
+        allocate (s(size(r, 1), self%nc))
+        call self%contact_samples(x, r, u, s)
+        ! a plain contact is never open: stick or slip
+        state = merge(1, 2, s > 0.5_dp)
+    end subroutine law_samples
 
     !> Release the FFT plans of the problem's basis.
     subroutine hb_destroy(self)

@@ -18,6 +18,7 @@ module stickslip_hbm
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_dynamics, only: dynamics_t
     use stickslip_rho, only: automatic_rho, rho_fraction
+    use stickslip_contact_set, only: new_contact_set
     use stickslip_condensed_structure, only: condensed_structure_t, rho_ratio, &
         rho_out_of_band, rho_ratio_min, rho_ratio_max
     use stickslip_hbm_strategy, only: newton_min_unknowns, ladder_first, use_newton, &
@@ -147,6 +148,7 @@ contains
         s%omega = model%omega
         s%ncontact = model%ncontact()
         s%limit = model%mu*model%normal_load
+        call new_contact_set(s%contacts, model)
         s%rho_auto = automatic_rho(model)
         allocate (s%force_rows(model%ndof, model%nforce()))
         do i = 1, model%nforce()
@@ -305,7 +307,7 @@ contains
         !> A validated model.
         type(model_t), intent(in) :: model
         !> Its projected friction equations.
-        type(hb_problem_t), intent(in) :: prob
+        type(hb_problem_t), intent(inout) :: prob
         real(dp) :: fscale
         fscale = 0.0_dp
         if (prob%nc == 0) return
@@ -313,21 +315,32 @@ contains
     end function convergence_scale
 
     !> convergence_scale with the automatic rho of the structure given (`rho_auto`).
+    !> With contact laws, V0 holds the free kinematic quantities of every channel (the
+    !> slider velocities, omega times the free gaps with the preload) and the force scale is
+    !> the largest of the constant limits mu N, the preloads and mu times the preloads.
     function condensed_convergence_scale(prob, rho_auto) result(fscale)
         !> The projected friction equations.
-        type(hb_problem_t), intent(in) :: prob
+        type(hb_problem_t), intent(inout) :: prob
         !> The automatic rho of the structure [m/(N s)].
         real(dp), intent(in) :: rho_auto
         real(dp) :: fscale
         real(dp) :: rzero(prob%basis%nb, prob%nc), vfree(prob%basis%nb, prob%nc)
-        real(dp) :: vnorm, rstop, rs
+        real(dp) :: vnorm, rstop, rs, fmax
         fscale = 0.0_dp
         if (prob%nc == 0) return
         rzero = 0.0_dp
-        call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
+        if (prob%plain) then
+            call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
+            fmax = maxval(prob%limit)
+        else
+            call prob%laws%kinematics(prob%basis, prob%dyn, rzero, vfree)
+            associate (cs => prob%laws%cs)
+                fmax = max(maxval(prob%limit), maxval(cs%preload), maxval(cs%mu*cs%preload))
+            end associate
+        end if
         vnorm = norm2(vfree)
         rstop = vnorm*rho_fraction/rho_auto
-        rs = max(min(maxval(prob%limit), rstop), 1.0e-6_dp*rstop)
+        rs = max(min(fmax, rstop), 1.0e-6_dp*rstop)
         fscale = min(vnorm, prob%rho*rs)
     end function condensed_convergence_scale
 end module stickslip_hbm

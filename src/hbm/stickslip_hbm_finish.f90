@@ -12,6 +12,10 @@ module stickslip_hbm_finish
     use stickslip_dynamics, only: near_singular_threshold
     use stickslip_condensed_structure, only: condensed_structure_t, rho_ratio, &
         rho_out_of_band, rho_ratio_min, rho_ratio_max
+    use stickslip_contact_set, only: channel_directions
+    use stickslip_contact_law, only: state_stick
+    use stickslip_hbm_finish_laws, only: laws_samples_settled, laws_fractions, laws_coulomb, &
+        laws_normal
     implicit none
     private
     public :: finish_solution, check_solution
@@ -27,6 +31,12 @@ module stickslip_hbm_finish
     !> events is 2.6-5% on the seed case (stickslip_rho), up to 9% of a jump of 2 mu N
     !> (18%) at a reversal; 20% is reached on the damped 4-DOF chain at omega = 0.27.
     real(dp), parameter, public :: force_excess_warning = 0.5_dp, force_excess_untrusted = 1.0_dp
+    !> The normal law of unilateral contacts (sol%signorini_check): a pulling normal force
+    !> or a penetration beyond the Gibbs ripple of the truncated series.
+    real(dp), parameter, public :: signorini_warning = 0.2_dp, signorini_untrusted = 0.5_dp
+    !> A rigid unilateral contact closing with this share of its normal velocity amplitude
+    !> (sol%impact_check) is an impact.
+    real(dp), parameter, public :: impact_warning = 0.05_dp
 
 contains
 
@@ -46,8 +56,10 @@ contains
         !> The dense model (dense path only: W^T v and its C for the energies).
         type(model_t), intent(in), optional :: model
         real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:)
+        real(dp), allocatable :: dirs(:, :), ucoef(:, :)
+        integer, allocatable :: state(:, :)
         complex(dp), allocatable :: cw(:)
-        integer :: nb, nc, nt, n, j, i, k, p, q, i0
+        integer :: nb, nc, nt, n, j, i, k, p, q, i0, ncontact
         real(dp) :: period, lo, hi, shift, coulomb_slip, max_force_ratio
 
         max_force_ratio = 0.0_dp
@@ -57,13 +69,24 @@ contains
         n = size(prob%dyn%x0, 1)
         i0 = prob%basis%i0
         period = two_pi/s%omega
-        allocate (rs(nt, nc), vs(nt, nc), ss(nt, nc), sol%offset_undetermined(nc))
+        ! contacts (nc counts the force channels of contact laws)
+        ncontact = s%ncontact
+        sol%contacts = s%contacts
+        allocate (rs(nt, nc), vs(nt, nc), ss(nt, ncontact), sol%offset_undetermined(ncontact), &
+                  state(nt, ncontact))
         sol%offset_undetermined = .false.
-        if (nc > 0) call prob%contact_samples(y, rs, vs, ss)
+        if (.not. prob%plain) then
+            ! the force channels, their kinematic quantities and the contact states
+            call laws_samples_settled(prob, y, rs, vs, state, sol%offset_undetermined)
+            ss = merge(1.0_dp, 0.0_dp, state == state_stick)
+        else if (nc > 0) then
+            call prob%contact_samples(y, rs, vs, ss)
+            state = merge(1, 2, ss > 0.5_dp)
+        end if
 
         ! A contact stuck over the whole period holds any mean force in an interval:
         ! choose the admissible value closest to zero (minimum norm), never an arbitrary one.
-        if (prob%basis%has_zero) then
+        if (prob%basis%has_zero .and. prob%plain) then
             do j = 1, nc
                 if (all(ss(:, j) > 0.5_dp)) then
                     sol%offset_undetermined(j) = .true.
@@ -84,12 +107,20 @@ contains
             call prob%basis%derivative(sol%xcoef(:, p), s%omega, sol%vcoef(:, p))
         end do
 
-        allocate (sol%stick_fraction(nc), sol%stick_phases(nc))
-        do j = 1, nc
+        allocate (sol%stick_fraction(ncontact), sol%stick_phases(ncontact), &
+                  sol%open_fraction(ncontact), sol%slip_fraction(ncontact))
+        do j = 1, ncontact
             sol%stick_fraction(j) = sum(ss(:, j))/real(nt, dp)
             sol%stick_phases(j) = count_phases(ss(:, j) > 0.5_dp, &
                                                max(1, nt/max(1, opts%harmonics)))
         end do
+        if (prob%plain) then
+            sol%open_fraction = 0.0_dp
+            sol%slip_fraction = 1.0_dp - sol%stick_fraction
+        else
+            call laws_fractions(state, sol%open_fraction, sol%stick_fraction, &
+                                sol%slip_fraction)
+        end if
 
         ! energy balance over one period, exact for the truncated series (Parseval)
         allocate (fcoef(nb, n), vc(nb, nc))
@@ -106,7 +137,11 @@ contains
                                   s%force_rows(:, i)
             end if
         end do
-        if (present(model)) then
+        if (present(model) .and. .not. prob%plain) then
+            ! the velocities along the channel directions (the normal channels' too)
+            dirs = channel_directions(model, s%contacts)
+            vc = matmul(sol%vcoef, dirs)
+        else if (present(model)) then
             do j = 1, nc
                 vc(:, j) = matmul(sol%vcoef, contact_velocity_direction(model, j))
             end do
@@ -137,7 +172,16 @@ contains
         sol%diss_friction = 0.0_dp
         sol%diss_coulomb = 0.0_dp
         coulomb_slip = 0.0_dp
-        do j = 1, nc
+        if (.not. prob%plain) then
+            ! every channel's work (the normal forces' is zero over a period for an exact
+            ! solution); Coulomb's with the varying limit and the slider velocities
+            do j = 1, nc
+                sol%diss_friction = sol%diss_friction - inner(sol%rcoef(:, j), vc(:, j))
+            end do
+            call laws_coulomb(s%contacts, rs, vs, state, period, sol%diss_coulomb, &
+                              coulomb_slip, max_force_ratio)
+        end if
+        do j = 1, merge(nc, 0, prob%plain)
             sol%diss_friction = sol%diss_friction - inner(sol%rcoef(:, j), vc(:, j))
             sol%diss_coulomb = sol%diss_coulomb + prob%limit(j)*period*sum(abs(vs(:, j)))/nt
             ! what Coulomb's law dissipates: mu N |v| where the contact slips, |r v| (<= mu
@@ -174,6 +218,20 @@ contains
             end do
             sol%r = rs
             sol%stick = ss
+            sol%state = state
+        end if
+        ! normal forces, gaps and the checks of the normal law
+        allocate (sol%normal(nt, ncontact), sol%gap(nt, ncontact))
+        if (prob%plain) then
+            do j = 1, ncontact
+                sol%normal(:, j) = s%contacts%normal_load(j)
+            end do
+            sol%gap = 0.0_dp
+        else
+            allocate (ucoef(nb, nc))
+            call prob%laws%kinematics(prob%basis, prob%dyn, sol%rcoef, ucoef)
+            call laws_normal(prob, rs, vs, state, ucoef, sol%normal, sol%gap, &
+                             sol%signorini_check, sol%impact_check)
         end if
 
     contains
@@ -256,6 +314,19 @@ contains
         call graded("coulomb_law", sol%max_force_ratio - 1.0_dp, force_excess_warning, &
                     force_excess_untrusted, "friction force exceeds mu N (max |r| / mu N "// &
                     "- 1, beyond the Gibbs overshoot of a truncated series)")
+        if (prob%plain) return
+        call graded("signorini", sol%signorini_check, signorini_warning, signorini_untrusted, &
+                    "the normal contact law is broken beyond the ripple of a truncated "// &
+                    "series (a pulling normal force relative to the largest one, or a "// &
+                    "penetration relative to the normal displacement amplitude)")
+        if (sol%impact_check > impact_warning) then
+            write (buf, '(a,es10.2e3,a)') "weighted residual: a rigid unilateral contact "// &
+                "closes with a normal velocity (", sol%impact_check, " of its normal "// &
+                "velocity amplitude): an impact, whose velocity jump a truncated Fourier "// &
+                "series cannot carry; give the contact a normal_stiffness (the measured "// &
+                "contact stiffness), or check the answer against &run method = 'euler'"
+            call sol%diagnostics%add(level_warning, "impact", trim(buf))
+        end if
 
     contains
 

@@ -14,7 +14,8 @@ module stickslip_hbm_sparse
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
     use stickslip_hbm, only: condensed_structure_t, solve_condensed, validate_options
-    use stickslip_rho, only: rho_from_mobility
+    use stickslip_rho, only: rho_from_mobility, rho_from_channels, dominant_harmonic
+    use stickslip_contact_set, only: new_contact_set
     implicit none
     private
     public :: solve_periodic_sparse, kept_dofs
@@ -70,9 +71,15 @@ contains
             s%omega = m%omega
             s%ncontact = m%ncontact()
             s%limit = m%mu*m%normal_load
+            call new_contact_set(s%contacts, m)
             call sparse_contact_mobility(smodel, mob, error)
             if (allocated(error)) return
-            s%rho_auto = rho_from_mobility(mob, m%mu, m%normal_load)
+            if (s%contacts%plain) then
+                s%rho_auto = rho_from_mobility(mob, m%mu, m%normal_load)
+            else
+                s%rho_auto = rho_from_channels(mob, s%contacts, m%omega, &
+                                               dominant_harmonic(m)*m%omega)
+            end if
             allocate (s%force_rows(size(kept), m%nforce()))
             do i = 1, m%nforce()
                 s%force_rows(:, i) = force_rows_of(i)
@@ -103,7 +110,7 @@ contains
             end if
             call system_clock(c3)
             call new_condensed_problem(prob, dyn, s%limit, o%harmonics, o%odd_only, o%samples, &
-                                       o%rho, error, s%force_harmonic)
+                                       o%rho, error, s%force_harmonic, s%contacts)
         else
             call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
             if (allocated(error)) return
@@ -112,7 +119,7 @@ contains
             call basis%destroy()
             if (allocated(error)) return
             call new_condensed_problem(prob, built, s%limit, o%harmonics, o%odd_only, &
-                                       o%samples, o%rho, error, s%force_harmonic)
+                                       o%samples, o%rho, error, s%force_harmonic, s%contacts)
         end if
         if (allocated(error)) return
         call solve_condensed(s, prob, opts, o, sol, error, r_start, dyn_out)
@@ -169,6 +176,13 @@ contains
             pack([(i, i=1, smodel%model%ndof)], any(smodel%model%contact_direction /= 0.0_dp, &
                                                     dim=2))]
         if (allocated(smodel%model%force_dof)) extra = [extra, smodel%model%force_dof]
+        ! the DOFs of the normal and second tangential directions of the contact laws
+        if (allocated(smodel%model%normal_direction)) extra = [extra, &
+            pack([(i, i=1, smodel%model%ndof)], any(smodel%model%normal_direction /= 0.0_dp, &
+                                                    dim=2))]
+        if (allocated(smodel%model%tangent2_direction)) extra = [extra, &
+            pack([(i, i=1, smodel%model%ndof)], any(smodel%model%tangent2_direction /= 0.0_dp, &
+                                                    dim=2))]
         do i = 1, size(extra)
             if (.not. any(kept == extra(i))) kept = [kept, extra(i)]
         end do

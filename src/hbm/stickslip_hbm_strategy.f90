@@ -223,7 +223,7 @@ contains
             if (present(warm)) nt = level_samples(opts%samples, opts%harmonics, rungs(i))
             ! the lower basis is a subset of prob's: its dynamics without a factorization
             call new_condensed_problem(low, prob%dyn, prob%limit, rungs(i), opts%odd_only, &
-                                       nt, opts%rho, error, s%force_harmonic)
+                                       nt, opts%rho, error, s%force_harmonic, s%contacts)
             if (allocated(error)) return
             nbl = low%basis%nb
             ylow = reshape(rfull(1:nbl, :), [nbl*nc])

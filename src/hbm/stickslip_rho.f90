@@ -47,11 +47,14 @@
 module stickslip_rho
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_model, only: model_t, contact_velocity_direction, force_direction
+    use stickslip_model, only: model_t, force_direction
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions, &
+        channel_normal
     use stickslip_lapack, only: dgetrf, dgetrs
     implicit none
     private
-    public :: automatic_rho, contact_mobility, rho_fraction, rho_from_mobility
+    public :: automatic_rho, contact_mobility, rho_fraction, rho_from_mobility, &
+        rho_from_channels, dominant_harmonic
 
     !> The automatic rho as a fraction of the contact mobility (see the module header).
     real(dp), parameter :: rho_fraction = 0.5_dp
@@ -68,12 +71,74 @@ contains
         type(model_t), intent(in) :: model
         !> The weight rho > 0 [m/(N s)].
         real(dp) :: rho
-        real(dp) :: mob(model%ncontact())
+        real(dp), allocatable :: mob(:)
+        type(contact_set_t) :: cs
         rho = 1.0_dp
         if (model%ncontact() == 0) return
         mob = contact_mobility(model)
-        rho = rho_from_mobility(mob, model%mu, model%normal_load)
+        call new_contact_set(cs, model)
+        if (cs%plain) then
+            rho = rho_from_mobility(mob, model%mu, model%normal_load)
+        else
+            rho = rho_from_channels(mob, cs, model%omega, dominant_harmonic(model)*model%omega)
+        end if
     end function automatic_rho
+
+    !> The automatic rho of a model with contact laws from the resonance-free mobilities
+    !> `mob` of its force channels (contact_mobility: Omega d^T (K + Omega^2 M)^-1 d): for
+    !> a normal channel, whose kinematic quantity is omega times the gap, times omega /
+    !> Omega, plus omega / k_n; for a tangential channel with a contact stiffness, plus
+    !> Omega / k_t; rho_fraction times their geometric mean over the channels that can
+    !> hold a force (every normal channel; a tangential one with mu > 0 and a normal load or
+    !> a normal channel; all when none can) [m/(N s)].
+    pure function rho_from_channels(mob, cs, omega, big_omega) result(rho)
+        !> Mobility of each force channel [m/(N s)].
+        real(dp), intent(in) :: mob(:)
+        !> The contacts.
+        type(contact_set_t), intent(in) :: cs
+        !> Fundamental and dominant forcing angular frequencies [rad/s].
+        real(dp), intent(in) :: omega, big_omega
+        real(dp) :: rho
+        real(dp) :: m(size(mob))
+        logical :: holds(size(mob))
+        integer :: c, j
+        rho = 1.0_dp
+        if (size(mob) == 0) return
+        do c = 1, size(mob)
+            j = cs%contact_of(c)
+            if (cs%kind(c) == channel_normal) then
+                m(c) = mob(c)*omega/big_omega
+                if (cs%kn(j) > 0.0_dp) m(c) = m(c) + omega/cs%kn(j)
+                holds(c) = .true.
+            else
+                m(c) = mob(c)
+                if (cs%kt(j) > 0.0_dp) m(c) = m(c) + big_omega/cs%kt(j)
+                holds(c) = cs%mu(j) > 0.0_dp .and. (cs%normal_load(j) > 0.0_dp .or. &
+                                                    cs%normal(j) > 0)
+            end if
+        end do
+        if (.not. any(holds)) holds = .true.
+        rho = rho_fraction*exp(sum(log(m), mask=holds)/real(count(holds), dp))
+    end function rho_from_channels
+
+    !> The harmonic of the forcing term of largest |amplitude| x max |load shape| (h > 0; 1
+    !> when the forcing is static): Omega = h omega is where the contact mobility is taken.
+    pure integer function dominant_harmonic(model) result(hf)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        real(dp) :: big, fsize
+        integer :: i
+        hf = 1
+        big = 0.0_dp
+        do i = 1, model%nforce()
+            ! the size of term i: |amplitude| x the largest entry of its load shape
+            fsize = abs(model%force_amplitude(i))*maxval(abs(force_direction(model, i)))
+            if (model%force_harmonic(i) > 0 .and. fsize > big) then
+                big = fsize
+                hf = model%force_harmonic(i)
+            end if
+        end do
+    end function dominant_harmonic
 
     !> The automatic rho from the contact mobilities `mob` (contact_mobility, or its sparse
     !> twin): rho_fraction times their geometric mean over the contacts with mu N > 0 (all
@@ -92,7 +157,8 @@ contains
         rho = rho_fraction*exp(sum(log(mob), mask=holds)/real(count(holds), dp))
     end function rho_from_mobility
 
-    !> Resonance-free mobility of every contact, Omega w_j^T (K + Omega^2 M)^{-1} w_j
+    !> Resonance-free mobility of every contact (of every force channel, direction d, for a
+    !> model with contact laws), Omega w_j^T (K + Omega^2 M)^{-1} w_j
     !> [m/(N s)], at Omega = h_f omega, h_f the harmonic of the forcing term of largest
     !> |amplitude| x max |load shape| (h > 0; 1 when the forcing is static). Falls back on
     !> the mass line w_j^T M^{-1} w_j / Omega when K + Omega^2 M is singular or the value
@@ -100,27 +166,20 @@ contains
     function contact_mobility(model) result(mob)
         !> A validated model.
         type(model_t), intent(in) :: model
-        !> Mobility of each contact [m/(N s)].
-        real(dp) :: mob(model%ncontact())
-        real(dp) :: s(model%ndof, model%ndof), w(model%ndof, model%ncontact())
-        real(dp) :: y(model%ndof, model%ncontact()), big, fsize
-        integer :: ipiv(model%ndof), n, nc, j, i, info, hf
+        !> Mobility of each contact (of each force channel with contact laws) [m/(N s)].
+        real(dp), allocatable :: mob(:)
+        real(dp), allocatable :: s(:, :), w(:, :), y(:, :)
+        integer, allocatable :: ipiv(:)
+        integer :: n, nc, j, info, hf
+        type(contact_set_t) :: cs
         n = model%ndof
-        nc = model%ncontact()
+        call new_contact_set(cs, model)
+        nc = cs%nchannel
+        allocate (mob(nc))
         if (nc == 0) return
-        hf = 1
-        big = 0.0_dp
-        do i = 1, model%nforce()
-            ! the size of term i: |amplitude| x the largest entry of its load shape
-            fsize = abs(model%force_amplitude(i))*maxval(abs(force_direction(model, i)))
-            if (model%force_harmonic(i) > 0 .and. fsize > big) then
-                big = fsize
-                hf = model%force_harmonic(i)
-            end if
-        end do
-        do j = 1, nc
-            w(:, j) = contact_velocity_direction(model, j)
-        end do
+        hf = dominant_harmonic(model)
+        w = channel_directions(model, cs)
+        allocate (s(n, n), y(n, nc), ipiv(n))
         associate (big_omega => hf*model%omega)
             s = model%stiffness + big_omega**2*model%mass
             y = w

@@ -4,6 +4,7 @@
 module stickslip_solution
     use stickslip_kinds, only: dp
     use stickslip_diagnostics, only: diagnostics_t
+    use stickslip_contact_set, only: contact_set_t
     implicit none
     private
     public :: hbm_options_t, hbm_solution_t
@@ -100,9 +101,18 @@ module stickslip_solution
         !> Velocity coefficients, nb x N [m/s].
         real(dp), allocatable :: vcoef(:, :)
         !> Friction force coefficients, nb x n_c [N] (the unknowns of the nonlinear solve).
+        !> With contact laws, the coefficients of every force channel, nb x n_ch (contact
+        !> after contact: first tangential force, second tangential force of a planar
+        !> contact, normal force of a unilateral one; `contacts` tells which).
         real(dp), allocatable :: rcoef(:, :)
+        !> The contacts and their force channels (stickslip_contact_set; plain: one channel
+        !> per contact).
+        type(contact_set_t) :: contacts
         !> Fraction of the samples in the stick region, per contact.
         real(dp), allocatable :: stick_fraction(:)
+        !> Fractions of the samples where the contact is open (unilateral contacts; 0
+        !> otherwise) and where it slips, per contact: open + stick + slip = 1.
+        real(dp), allocatable :: open_fraction(:), slip_fraction(:)
         !> Number of stick phases per period, per contact.
         integer, allocatable :: stick_phases(:)
         !> True for a contact that sticks over the whole period while the basis holds the
@@ -129,16 +139,35 @@ module stickslip_solution
         real(dp) :: max_force_ratio = 0.0_dp
         !> Energy dissipated by viscous damping over one period, integral v^T C v dt [J].
         real(dp) :: diss_damping = 0.0_dp
+        !> Largest violation of the normal contact law over the unilateral contacts
+        !> (dimensionless): a pulling normal force relative to the largest normal force, a
+        !> penetration (of the gap + lambda / k_n) relative to the normal displacement
+        !> amplitude; ~the Gibbs ripple of the truncated series for a sound solution.
+        real(dp) :: signorini_check = 0.0_dp
+        !> Largest normal velocity of a rigid unilateral contact at the instant it closes,
+        !> relative to its normal velocity amplitude (dimensionless; an impact: the
+        !> truncated series cannot carry its velocity jump).
+        real(dp) :: impact_check = 0.0_dp
         !> Sample instants t_k = k T / nt [s] (when samples were asked for).
         real(dp), allocatable :: t(:)
         !> Displacements at the samples, nt x N [m].
         real(dp), allocatable :: x(:, :)
         !> Velocities at the samples, nt x N [m/s].
         real(dp), allocatable :: v(:, :)
-        !> Friction forces at the samples, nt x n_c [N].
+        !> Friction forces at the samples, nt x n_c [N] (with contact laws: every force
+        !> channel, nt x n_ch, in the order of rcoef).
         real(dp), allocatable :: r(:, :)
-        !> Stick indicator (1 stick, 0 slip) at the samples, nt x n_c.
+        !> Stick indicator (1 stick, 0 slip or open) at the samples, nt x n_c.
         real(dp), allocatable :: stick(:, :)
+        !> Contact state at the samples, nt x n_c: state_open (0), state_stick (1),
+        !> state_slip (2) of stickslip_contact_law.
+        integer, allocatable :: state(:, :)
+        !> Normal force at the samples, nt x n_c [N]: the constant normal load of a plain
+        !> contact, the normal force lambda(t) of a unilateral one.
+        real(dp), allocatable :: normal(:, :)
+        !> Gap at the samples, nt x n_c [m]: gap + n^T x of a unilateral contact (negative:
+        !> the compression of an elastic contact), 0 for the others.
+        real(dp), allocatable :: gap(:, :)
         !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
         type(diagnostics_t) :: diagnostics
     end type hbm_solution_t

@@ -65,7 +65,8 @@ contains
         !> Column numbers of the selected DOFs (size of the selection; default: the DOF
         !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
         integer, intent(in), optional :: labels(:)
-        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error, dofs, labels)
+        call write_samples_csv(dir, "hbm.csv", sol%t, sol%x, sol%v, sol%r, error, dofs, labels, &
+                               sol%contacts, sol%gap)
     end subroutine write_hbm_csv
 
     !> Write `dir`/`name`: header t,x1..xN,v1..vN,r1..rC (with `dofs`: t,x<d>..,v<d>..,r1..rC
@@ -182,7 +183,7 @@ contains
         sel = selection(size(sol%xcoef, 2), dofs)
         numbers = column_numbers(sel, labels)
         n = size(sel)
-        call contact_columns(size(sol%rcoef, 2), rnames, channel, gap_of)
+        call contact_columns(size(sol%rcoef, 2), rnames, channel, gap_of, sol%contacts)
         ! the gap is not a force channel: no coefficients column
         rnames = pack(rnames, channel > 0)
         channel = pack(channel, channel > 0)
@@ -617,7 +618,7 @@ contains
             integer, intent(in) :: c, g
             character(len=16) :: word
             word = name
-            names = [names, word]
+            names = [character(len=16) :: names, word]
             channel = [channel, c]
             gap_of = [gap_of, g]
         end subroutine add

@@ -190,6 +190,13 @@ contains
             call put(u, "  stick_phases = "//ilist(sol%stick_phases), stat, msg)
             call put(u, "  offset_undetermined = "//llist(sol%offset_undetermined), stat, msg)
         end if
+        if (nc > 0 .and. .not. sol%contacts%plain) then
+            ! contact laws: the open and slip shares, the normal law's checks
+            call put(u, "  open_fraction = "//rlist(sol%open_fraction), stat, msg)
+            call put(u, "  slip_fraction = "//rlist(sol%slip_fraction), stat, msg)
+            call put(u, "  signorini_check = "//rtoa(sol%signorini_check), stat, msg)
+            call put(u, "  impact_check = "//rtoa(sol%impact_check), stat, msg)
+        end if
         call put(u, "  work_forcing = "//rtoa(sol%work_forcing), stat, msg)
         call put(u, "  work_gross = "//rtoa(sol%work_gross), stat, msg)
         call put(u, "  diss_friction = "//rtoa(sol%diss_friction), stat, msg)

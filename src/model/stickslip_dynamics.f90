@@ -7,10 +7,16 @@
 !> For h = 0: X_0 = K^{-1} (F_0 + W R_0) and the contact velocity is zero.
 !> The factorizations are done once (LAPACK zgetrf); afterwards only O(n_c^2) work per
 !> harmonic is left for the nonlinear solve. Only the data: no FFT, no friction law.
+!> With contact laws (doc/contacts.md) the "contacts" of the condensation are the force
+!> channels of stickslip_contact_set (W is the channel direction matrix D, ncontact the number
+!> of channels), the static load includes the preload, and the static channel receptance
+!> D^T K^-1 D and D^T K^-1 F_0 are kept for the normal channels. A plain model builds exactly
+!> what it built before.
 module stickslip_dynamics
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
-    use stickslip_model, only: model_t, contact_velocity_direction, force_direction
+    use stickslip_model, only: model_t, force_direction, preload_force
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_basis, only: basis_t
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     implicit none
@@ -38,6 +44,10 @@ module stickslip_dynamics
         real(dp), allocatable :: x0_static(:)
         !> Static flexibility K^{-1} W, N x n_c (when the basis has the constant) [m/N].
         real(dp), allocatable :: y_static(:, :)
+        !> Static channel receptance D^T K^-1 D, n_c x n_c [m/N], and static channel
+        !> displacements D^T K^-1 F_0, n_c [m] (F_0 with the preload), when the basis has
+        !> the constant (the normal channels of unilateral contacts read them).
+        real(dp), allocatable :: g_static(:, :), u_static(:)
         !> d V0_h / d omega, n_c x nharm (only when built with_omega_derivative) [m].
         complex(dp), allocatable :: dv0(:, :)
         !> d G_h / d omega, n_c x n_c x nharm (only when built with_omega_derivative)
@@ -120,14 +130,18 @@ contains
         integer :: n, nc, ih, h, j, i, info
         complex(dp), allocatable :: z(:, :), rhs(:, :), work(:), drhs(:, :)
         logical :: deriv
-        real(dp), allocatable :: rwork(:)
+        real(dp), allocatable :: rwork(:), d(:, :)
         integer, allocatable :: ipiv(:)
         real(dp) :: anorm, rcond, w(model%ndof), knorm, mnorm, zscale, rel, smin_k, smin_m
         complex(dp) :: ihw
         character(len=512) :: buf
+        type(contact_set_t) :: cs
 
         n = model%ndof
-        nc = model%ncontact()
+        ! the force channels (the contacts of a plain model) and their directions
+        call new_contact_set(cs, model)
+        nc = cs%nchannel
+        d = channel_directions(model, cs)
         self%ndof = n
         self%ncontact = nc
         self%omega = model%omega
@@ -215,20 +229,24 @@ contains
                                 exp(cmplx(0.0_dp, model%force_phase(i), dp))*force_direction(model, i)
                 end if
             end do
+            ! the static preload of unilateral contacts (none for a plain model)
+            if (h == 0 .and. .not. cs%plain) rhs(:, 1) = rhs(:, 1) + preload_force(model)
             do j = 1, nc
-                rhs(:, j + 1) = contact_velocity_direction(model, j)
+                rhs(:, j + 1) = d(:, j)
             end do
             call zgetrs('N', n, nc + 1, z, n, ipiv, rhs, n, info)
             if (h == 0) then
                 self%x0_static = real(rhs(:, 1), dp)
                 self%y_static = real(rhs(:, 2:), dp)
+                self%g_static = matmul(transpose(d), self%y_static)
+                self%u_static = matmul(self%x0_static, d)
                 cycle
             end if
             self%x0(:, ih) = rhs(:, 1)
             self%y(:, :, ih) = rhs(:, 2:)
             ihw = cmplx(0.0_dp, h*model%omega, dp)
             do j = 1, nc
-                w = contact_velocity_direction(model, j)
+                w = d(:, j)
                 self%v0(j, ih) = ihw*sum(w*rhs(:, 1))
                 do i = 1, nc
                     self%g(j, i, ih) = ihw*sum(w*rhs(:, i + 1))
@@ -240,7 +258,7 @@ contains
                               rhs)
                 call zgetrs('N', n, nc + 1, z, n, ipiv, drhs, n, info)
                 do j = 1, nc
-                    w = contact_velocity_direction(model, j)
+                    w = d(:, j)
                     self%dv0(j, ih) = cmplx(0.0_dp, real(h, dp), dp)*sum(w*rhs(:, 1)) &
                                       - ihw*sum(w*drhs(:, 1))
                     do i = 1, nc
@@ -321,6 +339,8 @@ contains
         if (basis%has_zero) then
             sub%x0_static = self%x0_static
             sub%y_static = self%y_static
+            if (allocated(self%g_static)) sub%g_static = self%g_static
+            if (allocated(self%u_static)) sub%u_static = self%u_static
         end if
         ! as new_dynamics: the first harmonic where the smallest value is reached
         sub%relative_conditioning = 1.0_dp

@@ -86,7 +86,9 @@ contains
         character(len=512) :: buf
 
         n = smodel%model%ndof
-        nc = smodel%model%ncontact()
+        ! the force channels (the contacts of a plain model)
+        w = sparse_directions(smodel)
+        nc = size(w, 2)
         nk = size(kept)
         if (smodel%model%nforce() > 0) then
             call check_harmonics_in_basis(smodel%model%force_harmonic, basis, error)
@@ -113,7 +115,6 @@ contains
 
         call build_pattern(smodel, pat, error)
         if (allocated(error)) return
-        w = sparse_directions(smodel)
 
         ! the smallest singular values of K and M (0 when singular)
         k_factorized = .false.
@@ -159,6 +160,8 @@ contains
             if (allocated(error)) return
             self%x0_static = rsol(kept, 1)
             self%y_static = rsol(kept, 2:)
+            self%g_static = matmul(transpose(w), rsol(:, 2:))
+            self%u_static = matmul(rsol(:, 1), w)
             deallocate (rrhs, rsol)
         end if
         call klu%release()
@@ -250,7 +253,7 @@ contains
     subroutine sparse_contact_mobility(smodel, mob, error)
         !> A validated sparse model.
         type(sparse_model_t), intent(in) :: smodel
-        !> Mobility of each contact [m/(N s)].
+        !> Mobility of each contact (of each force channel with contact laws) [m/(N s)].
         real(dp), allocatable, intent(out) :: mob(:)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
@@ -259,7 +262,9 @@ contains
         real(dp), allocatable :: w(:, :), y(:, :)
         real(dp) :: big, big_omega
         integer :: i, j, hf, nc
-        nc = smodel%model%ncontact()
+        ! the force channels (the contacts of a plain model)
+        w = sparse_directions(smodel)
+        nc = size(w, 2)
         allocate (mob(nc))
         if (nc == 0) return
         hf = 1
@@ -275,7 +280,6 @@ contains
         end associate
         call build_pattern(smodel, pat, error)
         if (allocated(error)) return
-        w = sparse_directions(smodel)
         allocate (y(size(w, 1), nc))
         mob = -1.0_dp
         call lu%factorize(pat%n, pat%colptr, pat%rowind, pat%k + big_omega**2*pat%m, error)

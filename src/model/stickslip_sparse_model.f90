@@ -9,8 +9,9 @@ module stickslip_sparse_model
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
-        force_direction
+    use stickslip_model, only: model_t, validate_model, force_direction, has_contact_laws, &
+        preload_force
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_sparse, only: sparse_matrix_t, sparse_symmetry_defect
     implicit none
     private
@@ -101,11 +102,9 @@ contains
         !> A validated sparse model.
         type(sparse_model_t), intent(in) :: smodel
         real(dp), allocatable :: w(:, :)
-        integer :: j
-        allocate (w(smodel%model%ndof, smodel%model%ncontact()))
-        do j = 1, smodel%model%ncontact()
-            w(:, j) = contact_velocity_direction(smodel%model, j)
-        end do
+        type(contact_set_t) :: cs
+        call new_contact_set(cs, smodel%model)
+        w = channel_directions(smodel%model, cs)
     end function sparse_directions
 
     !> The complex load amplitude F_h (size N) of harmonic h: the forcing terms of that
@@ -126,6 +125,8 @@ contains
                 if (m%force_harmonic(i) == h) f = f + m%force_amplitude(i)* &
                     exp(cmplx(0.0_dp, m%force_phase(i), dp))*force_direction(m, i)
             end do
+            ! the static preload of the unilateral contacts (zero for a plain model)
+            if (h == 0 .and. has_contact_laws(m)) f = f + preload_force(m)
         end associate
     end function sparse_load
 end module stickslip_sparse_model

@@ -103,7 +103,8 @@ contains
             return
         end if
         ! contact laws (doc/contacts.md) run only in the methods that handle them so far
-        if (has_contact_laws(case%model) .and. result%method /= 'hbm') then
+        if (has_contact_laws(case%model) .and. result%method /= 'hbm' .and. &
+            result%method /= 'euler') then
             call fatal_error(error, "&friction: contact laws (a normal direction, a second "// &
                              "tangential direction or a tangential_stiffness) are not yet "// &
                              "handled by &run method = '"//result%method//"'", &

@@ -176,7 +176,8 @@ contains
         if (res%periodic) then
             call write_samples_csv(dir, "euler.csv", res%t, &
                                    output_values(case, res%x), output_values(case, res%v), &
-                                   res%r, error, output_columns(case), selected_dofs(case))
+                                   res%r, error, output_columns(case), selected_dofs(case), &
+                                   res%contacts, res%gap)
             if (allocated(error)) return
         else
         end if
@@ -292,7 +293,8 @@ contains
             call write_samples_csv(dir, "euler.csv", res%euler%t, &
                                    output_values(case, res%euler%x), &
                                    output_values(case, res%euler%v), res%euler%r, error, &
-                                   output_columns(case), selected_dofs(case))
+                                   output_columns(case), selected_dofs(case), &
+                                   res%euler%contacts, res%euler%gap)
             if (allocated(error)) return
         end if
         if (res%reference%converged) then

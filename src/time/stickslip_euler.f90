@@ -27,7 +27,10 @@ module stickslip_euler
     use stickslip_diagnostics, only: diagnostics_t, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
-        force_direction
+        force_direction, has_contact_laws, preload_force
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
+    use stickslip_contact_law, only: state_stick, state_slip
+    use stickslip_euler_laws, only: euler_laws_t, new_euler_laws, step_block_laws
     use stickslip_lapack, only: dgetrf, dgetrs
     use stickslip_contact_solve, only: contact_forces
     implicit none
@@ -84,8 +87,17 @@ module stickslip_euler
         real(dp), allocatable :: x(:, :)
         !> Velocities over the last period, steps x N [m/s].
         real(dp), allocatable :: v(:, :)
-        !> Friction forces over the last period, steps x n_c [N].
+        !> Friction forces over the last period, steps x n_c [N] (with contact laws: the
+        !> forces of every force channel, steps x n_ch, stickslip_contact_set's order).
         real(dp), allocatable :: r(:, :)
+        !> The contacts and their force channels.
+        type(contact_set_t) :: contacts
+        !> Contact state over the last period, steps x n_c: state_open, state_stick,
+        !> state_slip of stickslip_contact_law (after the step before each instant).
+        integer, allocatable :: state(:, :)
+        !> Normal force [N] (the constant normal load of a plain contact) and gap [m] (0 for
+        !> a plain contact) over the last period, steps x n_c.
+        real(dp), allocatable :: normal(:, :), gap(:, :)
         !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
         type(diagnostics_t) :: diagnostics
     end type euler_result_t
@@ -141,8 +153,12 @@ contains
         real(dp), intent(in), optional :: v0(:)
         !> Progress of the periods (a line at most once a second when its unit is set).
         type(progress_t), intent(inout), optional :: progress
-        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, first, last, nblock
-        logical :: inverse, ftz, gradual
+        integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, first, last, nblock, nch
+        logical :: inverse, ftz, gradual, laws
+        type(euler_laws_t) :: el
+        integer, allocatable :: sts(:, :)
+        real(dp), allocatable :: nrm(:, :), gps(:, :), rstart(:)
+        real(dp) :: dr
         character(len=40) :: defect_text
         real(dp) :: h, period_t, t, ampx, ampv, dx, dv, acc
         real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), a(:, :), y(:), &
@@ -184,6 +200,13 @@ contains
         end if
         nc = model%ncontact()
         nf = model%nforce()
+        ! contact laws: the force channels (nch of them), the preload a constant load term
+        laws = has_contact_laws(model)
+        call new_contact_set(res%contacts, model)
+        nch = res%contacts%nchannel
+        if (laws) then
+            if (any(res%contacts%preload > 0.0_dp)) nf = nf + 1
+        end if
         ny = 2*n + nf
         ns = opts%steps_per_period
         period_t = two_pi/model%omega
@@ -194,8 +217,8 @@ contains
         ! c_i = h famp_i cos(k_i omega t + phase_i) of the step. The right-hand side
         ! M v - h K x + h f(t) is A y with A = [M, -h K, F] (F: the load shapes); the free
         ! velocity S^{-1} A y is one product when A holds S^{-1} [M, -h K, F].
-        allocate (s(n, n), sw(n, nc), d(nc, nc), w(n, nc), a(n, ny), y(ny), ystart(ny), &
-                  vf(n), r(nc), ufree(nc), limit(nc), ipiv(n))
+        allocate (s(n, n), sw(n, nch), d(nch, nch), w(n, nch), a(n, ny), y(ny), ystart(ny), &
+                  vf(n), r(nch), ufree(nch), limit(nc), ipiv(n))
         s = model%mass + h*model%damping + h*h*model%stiffness
         call dgetrf(n, n, s, n, ipiv, info)
         if (info /= 0) then
@@ -203,18 +226,24 @@ contains
                              "singular", stickslip_stat%numerical)
             return
         end if
-        do j = 1, nc
-            w(:, j) = contact_velocity_direction(model, j)
-        end do
+        if (laws) then
+            w = channel_directions(model, res%contacts)
+        else
+            do j = 1, nc
+                w(:, j) = contact_velocity_direction(model, j)
+            end do
+        end if
         sw = w
-        if (nc > 0) call dgetrs('N', n, nc, s, n, ipiv, sw, n, info)
+        if (nch > 0) call dgetrs('N', n, nch, s, n, ipiv, sw, n, info)
         d = h*matmul(transpose(w), sw)
         limit = model%mu*model%normal_load
         a(:, 1:n) = model%mass
         a(:, n + 1:2*n) = -h*model%stiffness
-        do i = 1, nf
+        do i = 1, model%nforce()
             a(:, 2*n + i) = force_direction(model, i)
         end do
+        if (nf > model%nforce()) a(:, 2*n + nf) = preload_force(model)
+        if (laws) call new_euler_laws(el, res%contacts, d, h)
         if (inverse) then
             call dgetrs('N', n, ny, s, n, ipiv, a, n, info)
             ! S^{-1} of a chain or a beam decays away from the diagonal into subnormal
@@ -240,9 +269,16 @@ contains
         fh = real(model%force_harmonic, dp)*model%omega
         famp = h*model%force_amplitude
         fph = model%force_phase
+        if (nf > model%nforce()) then
+            ! the preload: a constant term of unit amplitude
+            fh = [fh, 0.0_dp]
+            famp = [famp, h]
+            fph = [fph, 0.0_dp]
+        end if
 
         nblock = min(ns, block_steps)
-        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nc), fc(nf, nblock))
+        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nch), fc(nf, nblock))
+        allocate (sts(ns, nc), nrm(ns, nc), gps(ns, nc))
         do k = 1, ns
             res%t(k) = period_t*real(k - 1, dp)/real(ns, dp)
         end do
@@ -265,6 +301,7 @@ contains
         end if
         do period = 1, opts%max_periods
             ystart = y
+            rstart = r
             do first = 1, ns, nblock
                 last = min(ns, first + nblock - 1)
                 ! the forcing coefficients of a block of steps first, apart from the steps: the
@@ -275,7 +312,12 @@ contains
                         fc(i, step - first + 1) = famp(i)*cos(fh(i)*t + fph(i))
                     end do
                 end do
-                if (n == 2 .and. nc == 1 .and. nf >= 1 .and. inverse) then
+                if (laws) then
+                    call step_block_laws(el, n, nch, nf, ns, first, last, h, inverse, a, s, &
+                                         ipiv, w, sw, opts%contact_tol, &
+                                         opts%contact_max_sweeps, fc, y, vf, r, res%x, &
+                                         res%v, res%r, sts, nrm, gps, res%max_sweeps)
+                else if (n == 2 .and. nc == 1 .and. nf >= 1 .and. inverse) then
                     call step_block_2(nf, ns, first, last, h, a, wa, sw, d(1, 1), limit(1), fc, y, &
                                       r(1), res%x, res%v, res%r)
                 else
@@ -307,6 +349,14 @@ contains
                 dv = 0.0_dp
             end if
             res%defect = max(dx, dv)
+            if (laws) then
+                ! a tangential contact stiffness keeps the slider's force as state
+                if (any(res%contacts%kt > 0.0_dp)) then
+                    dr = maxval(abs(r - rstart))/max(maxval(abs(res%r)), tiny(1.0_dp))
+                    if (maxval(abs(res%r)) == 0.0_dp) dr = 0.0_dp
+                    res%defect = max(res%defect, dr)
+                end if
+            end if
             if (res%defect <= opts%tol) then
                 res%periodic = .true.
                 exit
@@ -330,6 +380,20 @@ contains
         end if
         if (.not. res%periodic) call res%diagnostics%add(level_untrusted, "not_periodic", &
                                                          res%diagnosis)
+        ! the contacts' states, normal forces and gaps over the last period
+        if (laws) then
+            res%state = sts
+            res%normal = nrm
+            res%gap = gps
+        else
+            allocate (res%state(ns, nc), res%normal(ns, nc), res%gap(ns, nc))
+            res%gap = 0.0_dp
+            do j = 1, nc
+                res%normal(:, j) = model%normal_load(j)
+                res%state(:, j) = merge(state_slip, state_stick, &
+                                        abs(res%r(:, j)) >= limit(j)*(1.0_dp - 1.0e-12_dp))
+            end do
+        end if
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler

@@ -21,7 +21,9 @@ module stickslip_cli
     use stickslip_side_by_side, only: side_by_side_t
     use stickslip_study, only: study_result_t
     use stickslip_compare, only: comparison_t
-    use stickslip_flow, only: event_name
+    use stickslip_flow, only: law_event_name
+    use stickslip_contact_set, only: contact_set_t
+    use stickslip_contact_law, only: state_open, state_slip
     use stickslip_summary, only: energy_balance_error, reference_balance_error
     use stickslip_gnuplot, only: run_gnuplot, rename_pictures
     use stickslip_files, only: remove_file
@@ -474,10 +476,11 @@ contains
             call emit(u)
         end if
         do j = 1, size(sol%stick_fraction)
-            write (u, '(a,i0,a,f0.1,a,i0,a,g0.4,a,g0.4,a)', advance='no') "  contact ", j, &
+            write (u, '(a,i0,a,f0.1,a,i0,a,g0.4,a)', advance='no') "  contact ", j, &
                 ": sticks ", 100*sol%stick_fraction(j), "% of the period in ", &
-                sol%stick_phases(j), " phase(s); max |r| ", maxval(abs(sol%r(:, j))), &
-                " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+                sol%stick_phases(j), " phase(s); max |r| ", &
+                maxval(abs(sol%r(:, sol%contacts%first(j)))), &
+                limit_text(case, sol%contacts, j, sol%normal(:, j), sol%state(:, j))
             if (sol%offset_undetermined(j)) write (u, '(a)', advance='no') &
                 "; stuck all period: mean force set to the admissible value closest to 0"
             write (u, '(a)') ""
@@ -515,6 +518,29 @@ contains
         write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, summary.nml}"
     end subroutine print_summary
 
+    !> The end of a contact's line: its limit, " (mu N 0.45)" for a constant normal load;
+    !> for a unilateral contact its open and slip shares and normal force range
+    !> " (open 69.1%, slip 18.9%; normal force 0 .. 5.79 N, mu 0.5)".
+    function limit_text(case, cs, j, normal, state) result(text)
+        type(case_t), intent(in) :: case
+        type(contact_set_t), intent(in) :: cs
+        integer, intent(in) :: j
+        real(dp), intent(in) :: normal(:)
+        integer, intent(in) :: state(:)
+        character(len=:), allocatable :: text
+        character(len=160) :: buf
+        if (cs%normal(j) == 0) then
+            write (buf, '(a,g0.4,a)') " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+        else
+            write (buf, '(a,f0.1,a,f0.1,a,g0.4,a,g0.4,a,g0.4,a)') " (open ", &
+                100.0_dp*count(state == state_open)/max(size(state), 1), "%, slip ", &
+                100.0_dp*count(state == state_slip)/max(size(state), 1), &
+                "%; normal force ", minval(normal), " .. ", maxval(normal), " N, mu ", &
+                case%model%mu(j), ")"
+        end if
+        text = trim(buf)
+    end function limit_text
+
     subroutine print_euler_summary(u, case, res)
         integer, intent(in) :: u
         type(case_t), intent(in) :: case
@@ -525,9 +551,10 @@ contains
             res%periods, " periods of ", case%euler%steps_per_period, " steps (defect ", &
             res%defect, ") in ", 1.0e3_dp*res%seconds, " ms"
         call emit(u)
-        do j = 1, size(res%r, 2)
-            write (u, '(a,i0,a,g0.4,a,g0.4,a)') "  contact ", j, ": max |r| ", &
-                maxval(abs(res%r(:, j))), " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+        do j = 1, res%contacts%ncontact
+            write (u, '(a,i0,a,g0.4,a)') "  contact ", j, ": max |r| ", &
+                maxval(abs(res%r(:, res%contacts%first(j)))), &
+                limit_text(case, res%contacts, j, res%normal(:, j), res%state(:, j))
         end do
         write (u, '(a)') "  wrote "//case%directory//"/{euler.csv, summary.nml}"
     end subroutine print_euler_summary
@@ -557,15 +584,20 @@ contains
                 " phase(s); events"
             do k = 1, ref%nevent
                 if (ref%event_contact(k) == j) write (u, '(a,a,a,f0.5)', advance='no') " ", &
-                    trim(event_name(ref%event_kind(k))), " t=", ref%event_t(k)
+                    trim(law_event_name(ref%event_kind(k))), " t=", ref%event_t(k)
             end do
-            write (u, '(a,g0.4,a)') " (mu N ", case%model%mu(j)*case%model%normal_load(j), ")"
+            write (u, '(a)') limit_text(case, ref%contacts, j, ref%normal(:, j), ref%state(:, j))
         end do
         write (buffer, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') &
             "  energy per period [J]: forcing ", &
             ref%work_forcing, ", friction ", ref%diss_friction, ", damping ", ref%diss_damping, &
             " (balance error ", reference_balance_error(ref), ")"
         call emit(u)
+        if (ref%impact_loss > 0.0_dp) then
+            write (buffer, '(a,es11.4,a)') "  impacts of the rigid unilateral contacts: ", &
+                ref%impact_loss, " J lost per period (in the balance)"
+            call emit(u)
+        end if
     end subroutine print_reference_lines
 
     subroutine print_side_by_side_summary(u, case, sbs)

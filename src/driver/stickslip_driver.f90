@@ -24,6 +24,7 @@ module stickslip_driver
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t
     use stickslip_model, only: has_contact_laws
+    use stickslip_reference, only: reference_handles
     use stickslip_solution, only: hbm_solution_t
     use stickslip_checks, only: hbm_checks_t
     use stickslip_euler, only: euler_result_t
@@ -91,6 +92,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Progress hook of the long methods (sweep, study, robustness).
         type(progress_t), intent(inout), optional :: progress
+        character(len=:), allocatable :: why
         result%method = trim(case%method)
         if (len(result%method) == 0) result%method = 'hbm'
         if (allocated(case%sparse_model) .and. result%method /= 'hbm' .and. &
@@ -103,8 +105,15 @@ contains
             return
         end if
         ! contact laws (doc/contacts.md) run only in the methods that handle them so far
+        if (result%method == 'reference' .and. .not. reference_handles(case%model, why)) then
+            call fatal_error(error, "&run method = 'reference': "//why//" (&run method = "// &
+                             "'euler'; method 'all' compares with it)", stickslip_stat%input)
+            call name_case_file(case, error)
+            return
+        end if
         if (has_contact_laws(case%model) .and. result%method /= 'hbm' .and. &
-            result%method /= 'euler') then
+            result%method /= 'euler' .and. result%method /= 'reference' .and. &
+            result%method /= 'all') then
             call fatal_error(error, "&friction: contact laws (a normal direction, a second "// &
                              "tangential direction or a tangential_stiffness) are not yet "// &
                              "handled by &run method = '"//result%method//"'", &

@@ -35,7 +35,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         call write_samples_csv(dir, "reference.csv", res%t, &
                                output_values(case, res%x), output_values(case, res%v), res%r, &
-                               error, output_columns(case), selected_dofs(case))
+                               error, output_columns(case), selected_dofs(case), &
+                               res%contacts, res%gap)
         if (allocated(error)) return
         call write_events_csv(dir, res, error)
     end subroutine write_reference_files

@@ -19,13 +19,16 @@ module stickslip_flow
     use stickslip_model, only: model_t
     use stickslip_expm, only: expm
     use stickslip_flow_modes, only: ngauss, mode_t, flow_modes_t, new_flow_modes, mode_index, &
-        zero_velocity_modes, propagate, gauss_exponentials, project_stuck
+        zero_velocity_modes, propagate, gauss_exponentials, project_stuck, identity_matrix
     use stickslip_flow_events, only: event_stick, event_slip, event_reversal, event_graze, &
         event_kind, event_name, find_event
+    use stickslip_flow_orbit, only: orbit_t
+    use stickslip_flow_law_map, only: law_period_map, law_event_name
     implicit none
     private
     public :: flow_t, new_flow, orbit_t
-    public :: event_stick, event_slip, event_reversal, event_graze, event_name
+    public :: event_stick, event_slip, event_reversal, event_graze, event_name, &
+        law_event_name
 
     !> The exact flow of one model: the piecewise-linear dynamics and the cache of the modes
     !> met so far (the components of flow_modes_t, inherited), with the period map and the
@@ -36,28 +39,6 @@ module stickslip_flow
         procedure :: sample
     end type flow_t
 
-    !> One period of the flow, recorded: its phases, its events and its energy balance.
-    type :: orbit_t
-        !> Start of the period [s].
-        real(dp) :: t0 = 0.0_dp
-        !> Number of phases; phase p starts at phase_t(p) in state phase_y(:, p) and mode
-        !> phase_mode(p); the last one ends at t0 + T.
-        integer :: nphase = 0
-        real(dp), allocatable :: phase_t(:)
-        real(dp), allocatable :: phase_y(:, :)
-        integer, allocatable :: phase_mode(:)
-        !> Events: time [s] (in [t0, t0 + T)), contact, kind (event_*), slip direction after
-        !> the event (0: stuck), friction force at the event [N], slip velocity [m/s].
-        integer :: nevent = 0
-        real(dp), allocatable :: event_t(:), event_force(:), event_velocity(:)
-        integer, allocatable :: event_contact(:), event_kind(:), event_direction(:)
-        !> Work of the forcing, friction and viscous dissipation over the period [J].
-        real(dp) :: work_forcing = 0.0_dp, diss_friction = 0.0_dp, diss_damping = 0.0_dp
-        !> Gross work of the forcing, integral |f . v| dt [J].
-        real(dp) :: work_gross = 0.0_dp
-        !> Time spent stuck, per contact [s].
-        real(dp), allocatable :: stick_time(:)
-    end type orbit_t
 
 contains
 
@@ -111,6 +92,11 @@ contains
         logical :: found, want_mono, want_orbit, full_step, want_energy
         character(len=200) :: buf
 
+        if (self%laws) then
+            ! contact laws: unilateral contacts, impacts (stickslip_flow_law_map)
+            call law_period_map(self%flow_modes_t, t0, z0, z1, error, mono, orbit, energies)
+            return
+        end if
         n = self%n
         nz = 2*n
         na = self%na
@@ -126,7 +112,7 @@ contains
         y(nz + 1:) = self%exo(t0)
         if (want_mono) then
             allocate (jac(nz, nz), phi(nz, nz), sal(nz, nz))
-            jac = identity(nz)
+            jac = identity_matrix(nz)
         end if
         ! the modes at the start
         code = 0
@@ -217,7 +203,7 @@ contains
                 fp = matmul(self%modes(imnew)%b, yeb)
                 h = dot_product(c, fm)
                 if (abs(h) > 1.0e-300_dp) then
-                    sal = identity(nz)
+                    sal = identity_matrix(nz)
                     do k = 1, nz
                         sal(:, k) = sal(:, k) + (fp(1:nz) - fm(1:nz))*c(k)/h
                     end do
@@ -363,9 +349,11 @@ contains
     end subroutine period_map
 
     !> Samples of the recorded orbit at t_k = k T / ng, k = 0..ng-1 (t = 0 is the phase of
-    !> the forcing): displacements x(ng, N), velocities v(ng, N), friction forces r(ng, n_c).
+    !> the forcing): displacements x(ng, N), velocities v(ng, N), friction forces r(ng, n_c)
+    !> (with contact laws: the forces of every force channel, r(ng, n_ch)), and on request
+    !> the contact codes of the mode at each sample (0 stuck, +1 / -1 slipping, 2 open).
     !> Errors (stat numerical): the matrix exponential failed.
-    subroutine sample(self, orbit, ng, x, v, r, error)
+    subroutine sample(self, orbit, ng, x, v, r, error, code)
         !> The flow whose orbit was recorded.
         class(flow_t), intent(in) :: self
         !> One recorded period.
@@ -376,6 +364,8 @@ contains
         real(dp), intent(out) :: x(:, :), v(:, :), r(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> Contact codes at the samples, ng x n_c.
+        integer, intent(out), optional :: code(:, :)
         real(dp) :: y(self%na), yb(self%na), tk, dt
         real(dp), allocatable :: step(:, :, :)
         logical, allocatable :: have_step(:)
@@ -422,18 +412,10 @@ contains
                 x(k + 1, :) = y(1:n)
                 v(k + 1, :) = y(n + 1:2*n)
                 r(k + 1, :) = matmul(md%force, y)
+                if (present(code)) code(k + 1, :) = md%code
             end associate
         end do
     end subroutine sample
 
-    pure function identity(n) result(e)
-        integer, intent(in) :: n
-        real(dp) :: e(n, n)
-        integer :: i
-        e = 0.0_dp
-        do i = 1, n
-            e(i, i) = 1.0_dp
-        end do
-    end function identity
 
 end module stickslip_flow

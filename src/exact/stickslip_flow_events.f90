@@ -18,7 +18,7 @@ module stickslip_flow_events
     implicit none
     private
     public :: event_stick, event_slip, event_reversal, event_graze, event_kind, event_name
-    public :: find_event
+    public :: find_event, first_crossing, value_at
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
     !> reverses without sticking; a slipping contact's velocity touches zero and it goes on.

@@ -24,7 +24,9 @@ module stickslip_flow_modes
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp, pi, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_model, only: model_t, contact_velocity_direction, force_direction
+    use stickslip_model, only: model_t, contact_velocity_direction, force_direction, &
+        has_contact_laws, preload_force, contact_normal_direction
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_lapack, only: dpotrf, dpotrs, dsygv
     use stickslip_expm, only: expm
     use stickslip_contact_solve, only: contact_forces
@@ -32,6 +34,7 @@ module stickslip_flow_modes
     private
     public :: ngauss, mode_t, flow_modes_t, new_flow_modes
     public :: mode_index, zero_velocity_modes, propagate, gauss_exponentials, project_stuck
+    public :: build_ladder, identity_matrix
 
     !> Gauss-Legendre points per step for the energy integrals.
     integer, parameter :: ngauss = 8
@@ -99,6 +102,17 @@ module stickslip_flow_modes
         real(dp), allocatable :: lam(:), s(:), ct(:, :), wt(:, :), ft(:, :)
         type(mode_t), allocatable :: modes(:)
         integer :: nmodes = 0
+        !> Contact laws (doc/contacts.md, section 5): unilateral contacts with 1D friction,
+        !> rigid or elastic normal. A mode's code is then 0 (stuck), +1 / -1 (slipping) or 2
+        !> (open: no force at all); its forces are those of every force channel
+        !> (stickslip_contact_set), its event rows three per contact (stickslip_flow_laws).
+        logical :: laws = .false.
+        !> The contacts and their channels (with laws).
+        type(contact_set_t) :: cs
+        !> Normal directions N x n_c (zero columns: constant load), and Phi^T of them.
+        real(dp), allocatable :: dn(:, :), nt(:, :)
+        !> Scales of the gaps [m] and normal forces [N] of the contacts, for event tests.
+        real(dp), allocatable :: gref(:), fref(:)
     contains
         procedure :: exo
     end type flow_modes_t
@@ -138,6 +152,32 @@ contains
         self%n = n
         self%nc = nc
         self%omega = model%omega
+        if (has_contact_laws(model)) then
+            call new_contact_set(self%cs, model)
+            do j = 1, nc
+                if (self%cs%ntangent(j) == 2) then
+                    call fatal_error(error, "model%tangent2_direction(:, "//itoa(j)// &
+                                     "): the exact reference handles 1D friction only (contact "// &
+                                     itoa(j)//" slips in a plane); the yardstick for 2D "// &
+                                     "friction is implicit Euler at small steps (&run method "// &
+                                     "= 'euler')", stickslip_stat%input)
+                    return
+                end if
+                if (self%cs%kt(j) > 0.0_dp) then
+                    call fatal_error(error, "model%tangential_stiffness("//itoa(j)//"): the "// &
+                                     "exact reference does not handle a tangential contact "// &
+                                     "stiffness (Jenkins element); the yardstick for it is "// &
+                                     "implicit Euler at small steps (&run method = 'euler')", &
+                                     stickslip_stat%input)
+                    return
+                end if
+            end do
+            self%laws = .true.
+            allocate (self%dn(n, nc))
+            do j = 1, nc
+                self%dn(:, j) = contact_normal_direction(model, j)
+            end do
+        end if
         self%period = two_pi/model%omega
         self%steps = steps
         self%delta = self%period/steps
@@ -186,8 +226,14 @@ contains
         do j = 1, nc
             self%w(:, j) = contact_velocity_direction(model, j)
         end do
+        ! the preload of unilateral contacts: a constant load
+        if (self%laws) self%hf(:, 2*n + 1) = self%hf(:, 2*n + 1) + preload_force(model)
         self%limit = model%mu*model%normal_load
         self%vref = max(vref, tiny(1.0_dp))
+        if (self%laws) then
+            self%gref = self%vref/self%omega
+            self%fref = max(self%cs%preload, model%normal_load, tiny(1.0_dp))
+        end if
         call gauss_legendre(self%gx, self%gw)
         call balance(self, model, error)
         if (allocated(error)) return
@@ -236,6 +282,7 @@ contains
         self%s = s
         self%ct = matmul(transpose(phi), matmul(model%damping, phi))
         self%wt = matmul(transpose(phi), self%w)
+        if (self%laws) self%nt = matmul(transpose(phi), self%dn)
         self%ft = matmul(transpose(phi), self%hf(:, 2*n + 1:))
         allocate (self%tb(na, na), self%tbi(na, na))
         self%tb = 0.0_dp
@@ -309,6 +356,17 @@ contains
         im = self%nmodes
         n = self%n
         na = self%na
+        if (self%laws) then
+            ! the mode is built by stickslip_flow_laws (the caller's hook)
+            self%modes(im)%code = code
+            if (allocated(self%modes(im)%b)) deallocate (self%modes(im)%b)
+            if (allocated(self%modes(im)%ladder)) deallocate (self%modes(im)%ladder)
+            if (allocated(self%modes(im)%gauss)) deallocate (self%modes(im)%gauss)
+            if (allocated(self%modes(im)%force)) deallocate (self%modes(im)%force)
+            if (allocated(self%modes(im)%rows)) deallocate (self%modes(im)%rows)
+            if (allocated(self%modes(im)%drows)) deallocate (self%modes(im)%drows)
+            return
+        end if
         build: associate (md => self%modes(im))
             md%code = code
             if (allocated(md%a)) deallocate (md%a, md%force)
@@ -403,22 +461,50 @@ contains
                 end if
             end do
             md%drows = matmul(transpose(md%b), md%rows)
-            bnorm = maxval(sum(abs(md%b), 2))*self%delta
-            md%nl = 0
-            if (bnorm > 1.0_dp/16.0_dp) md%nl = exponent(bnorm) + 4
-            allocate (md%ladder(na, na, 0:md%nl))
-            call expm(md%b*(self%delta*0.5_dp**md%nl), md%ladder(:, :, md%nl), stat)
-            do k = md%nl, 1, -1
-                md%ladder(:, :, k - 1) = matmul(md%ladder(:, :, k), md%ladder(:, :, k))
-            end do
-            if (stat /= 0 .or. .not. all(ieee_is_finite(md%ladder(:, :, 0)))) then
-                call fatal_error(error, "reference: the matrix exponential of a contact mode "// &
-                                 "is not finite", stickslip_stat%numerical)
-            end if
+            call build_ladder(self, md, error)
         end associate build
         ! never leave a broken mode in the cache
         if (allocated(error)) self%nmodes = self%nmodes - 1
     end function mode_index
+
+    !> The dyadic ladder of exponentials of mode md: exp(b delta 2^-k), k = 0..nl, with
+    !> ||b delta 2^-nl|| <= 1/16 (balanced coordinates). Error (stat numerical): not finite.
+    subroutine build_ladder(self, md, error)
+        !> The dynamics md belongs to (its step delta).
+        class(flow_modes_t), intent(in) :: self
+        !> The mode, with its b; ladder and nl set.
+        type(mode_t), intent(inout) :: md
+        !> Set when the exponential is not finite.
+        type(error_type), allocatable, intent(inout) :: error
+        real(dp) :: bnorm
+        integer :: k, stat, na
+        na = size(md%b, 1)
+        bnorm = maxval(sum(abs(md%b), 2))*self%delta
+        md%nl = 0
+        if (bnorm > 1.0_dp/16.0_dp) md%nl = exponent(bnorm) + 4
+        if (allocated(md%ladder)) deallocate (md%ladder)
+        allocate (md%ladder(na, na, 0:md%nl))
+        call expm(md%b*(self%delta*0.5_dp**md%nl), md%ladder(:, :, md%nl), stat)
+        do k = md%nl, 1, -1
+            md%ladder(:, :, k - 1) = matmul(md%ladder(:, :, k), md%ladder(:, :, k))
+        end do
+        if (stat /= 0 .or. .not. all(ieee_is_finite(md%ladder(:, :, 0)))) then
+            call fatal_error(error, "reference: the matrix exponential of a contact mode "// &
+                             "is not finite", stickslip_stat%numerical)
+        end if
+    end subroutine build_ladder
+
+    !> The n x n identity matrix.
+    pure function identity_matrix(n) result(e)
+        !> Order.
+        integer, intent(in) :: n
+        real(dp) :: e(n, n)
+        integer :: i
+        e = 0.0_dp
+        do i = 1, n
+            e(i, i) = 1.0_dp
+        end do
+    end function identity_matrix
 
     !> New codes for the contacts at zero velocity `zset` in the balanced state yb, from
     !> Coulomb's law at acceleration level (a box-constrained strictly convex QP; unique

@@ -15,7 +15,10 @@ module stickslip_reference
     use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
-    use stickslip_model, only: model_t, validate_model, contact_velocity_direction
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
+        has_contact_laws, contact_normal_direction, is_planar, tangential_stiffness_of
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
+    use stickslip_contact_law, only: state_open, state_stick, state_slip
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_flow, only: flow_t, new_flow, orbit_t
@@ -24,7 +27,7 @@ module stickslip_reference
     private
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference
     public :: validate_reference_options, reference_energy_error
-    public :: energy_warning, energy_untrusted, coulomb_margin
+    public :: energy_warning, energy_untrusted, coulomb_margin, reference_handles
 
     !> Energy balance error of a converged orbit above which a warning is given: the flow
     !> is exact up to root finding and roundoff (~1e-12 measured on the examples).
@@ -80,8 +83,22 @@ module stickslip_reference
         integer :: nevent = 0
         real(dp), allocatable :: event_t(:), event_force(:), event_velocity(:)
         integer, allocatable :: event_contact(:), event_kind(:), event_direction(:)
-        !> Samples at t_k = k T / samples: instants [s], x [m], v [m/s], r [N].
+        !> Samples at t_k = k T / samples: instants [s], x [m], v [m/s], r [N] (with
+        !> contact laws the forces of every force channel, samples x n_ch,
+        !> stickslip_contact_set's order).
         real(dp), allocatable :: t(:), x(:, :), v(:, :), r(:, :)
+        !> The contacts and their force channels.
+        type(contact_set_t) :: contacts
+        !> Contact state at the samples, samples x n_c (state_open, state_stick, state_slip
+        !> of stickslip_contact_law); normal force [N] (the constant load of a plain
+        !> contact) and gap [m] (0 for a plain contact), samples x n_c.
+        integer, allocatable :: state(:, :)
+        real(dp), allocatable :: normal(:, :), gap(:, :)
+        !> Share of the period each contact is open (contact laws; 0 otherwise).
+        real(dp), allocatable :: open_fraction(:)
+        !> Kinetic energy lost in the plastic impacts of rigid unilateral contacts over one
+        !> period [J] (part of the energy balance).
+        real(dp) :: impact_loss = 0.0_dp
         !> The flow and the recorded orbit, to sample the solution on other grids.
         type(flow_t) :: flow
         type(orbit_t) :: orbit
@@ -109,6 +126,38 @@ module stickslip_reference
     end type shooting_t
 
 contains
+
+    !> Whether the exact reference handles the contacts of `model`: 1D friction with a
+    !> constant normal load or a unilateral normal law (rigid or elastic). Not: 2D friction
+    !> (a contact slipping in a plane) or a tangential contact stiffness (Jenkins element);
+    !> `why` then says which contact and what the yardstick is (implicit Euler at small
+    !> steps).
+    logical function reference_handles(model, why) result(ok)
+        !> The model.
+        type(model_t), intent(in) :: model
+        !> Empty when handled; otherwise the reason.
+        character(len=:), allocatable, intent(out) :: why
+        integer :: j
+        character(len=20) :: num
+        ok = .true.
+        why = ""
+        do j = 1, model%ncontact()
+            write (num, '(i0)') j
+            if (is_planar(model, j)) then
+                why = "the exact reference handles 1D friction only (contact "//trim(num)// &
+                      " slips in a plane): the yardstick for 2D friction is implicit Euler "// &
+                      "at small steps"
+            else if (tangential_stiffness_of(model, j) > 0.0_dp) then
+                why = "the exact reference does not handle a tangential contact stiffness "// &
+                      "(contact "//trim(num)//", a Jenkins element): the yardstick for it is "// &
+                      "implicit Euler at small steps"
+            end if
+            if (len(why) > 0) then
+                ok = .false.
+                return
+            end if
+        end do
+    end function reference_handles
 
     !> Check reference options. Errors (stat input) name the
     !> component ("opts%samples = 0: must be >= 1").
@@ -230,6 +279,10 @@ contains
             call res%diagnostics%add(level_warning, "energy_balance", trim(buf))
         end if
         if (.not. allocated(res%r)) return
+        if (.not. res%contacts%plain) then
+            call check_reference_laws(res)
+            return
+        end if
         do j = 1, size(res%r, 2)
             limit = model%mu(j)*model%normal_load(j)
             excess = maxval(abs(res%r(:, j))) - limit
@@ -243,13 +296,59 @@ contains
         end do
     end subroutine check_reference
 
+    !> Coulomb's law with the varying limit and the normal law at the samples of a reference
+    !> with contact laws: |r_j| <= mu lambda_j, lambda_j >= 0, and for a rigid contact
+    !> g_j >= 0 and lambda_j g_j = 0 (margins coulomb_margin of the contact's force and gap
+    !> scales); a breach is a 'coulomb_law' or 'signorini' item, untrusted.
+    subroutine check_reference_laws(res)
+        type(reference_result_t), intent(inout) :: res
+        real(dp) :: fscale, gscale, excess, un
+        integer :: j, c, k
+        character(len=300) :: buf
+        associate (cs => res%contacts)
+            do j = 1, cs%ncontact
+                c = cs%first(j)
+                fscale = max(maxval(abs(res%normal(:, j))), maxval(abs(res%r(:, c))), &
+                             tiny(1.0_dp))
+                gscale = max(maxval(abs(res%gap(:, j))), maxval(abs(res%x)), tiny(1.0_dp))
+                do k = 1, size(res%t)
+                    excess = abs(res%r(k, c)) - cs%mu(j)*max(res%normal(k, j), 0.0_dp)
+                    if (excess > coulomb_margin*fscale) then
+                        write (buf, '(a,i0,a,es12.4e3,a,es12.4e3,a,es12.4e3,a)') &
+                            "reference: contact ", j, " breaks Coulomb's law at t = ", &
+                            res%t(k), " s: |r| = ", abs(res%r(k, c)), " > mu lambda = ", &
+                            cs%mu(j)*max(res%normal(k, j), 0.0_dp), " [N]"
+                        call res%diagnostics%add(level_untrusted, "coulomb_law", trim(buf))
+                        return
+                    end if
+                    if (cs%normal(j) == 0) cycle
+                    ! the normal law's complementarity: u = g + lambda / k_n (g when rigid)
+                    un = res%gap(k, j)
+                    if (cs%kn(j) > 0.0_dp) un = un + res%normal(k, j)/cs%kn(j)
+                    if (res%normal(k, j) < -coulomb_margin*fscale .or. &
+                        un < -coulomb_margin*gscale .or. &
+                        min(abs(un)/gscale, max(res%normal(k, j), 0.0_dp)/fscale) > &
+                        coulomb_margin) then
+                        write (buf, '(a,i0,a,es12.4e3,a,es12.4e3,a,es12.4e3,a)') &
+                            "reference: contact ", j, " breaks the normal law at t = ", &
+                            res%t(k), " s: normal force ", res%normal(k, j), " N, gap ", &
+                            res%gap(k, j), " m"
+                        call res%diagnostics%add(level_untrusted, "signorini", trim(buf))
+                        return
+                    end if
+                end do
+            end do
+        end associate
+    end subroutine check_reference_laws
+
     !> Relative energy balance error of a reference orbit over one period:
-    !> |work_forcing - diss_friction - diss_damping| / max(|work_forcing|, 1e-6 work_gross,
-    !> tiny) (dimensionless; the gross work is the scale when the net work is ~0).
+    !> |work_forcing - diss_friction - diss_damping - impact_loss| / max(|work_forcing|,
+    !> 1e-6 work_gross, tiny) (dimensionless; the gross work is the scale when the net
+    !> work is ~0).
     pure real(dp) function reference_energy_error(res) result(e)
         !> A reference solution.
         type(reference_result_t), intent(in) :: res
-        e = abs(res%work_forcing - res%diss_friction - res%diss_damping)/ &
+        e = abs(res%work_forcing - res%diss_friction - res%diss_damping - res%impact_loss)/ &
             max(abs(res%work_forcing), 1.0e-6_dp*res%work_gross, tiny(1.0_dp))
     end function reference_energy_error
 
@@ -266,9 +365,11 @@ contains
         type(shooting_t) :: shooting
         type(hybrj_options_t) :: hopts
         type(hybrj_report_t) :: report
-        real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:)
-        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv
+        real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:)
+        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, gamp
         integer :: n, nc, ns, j, k, ksec, nsamp
+        integer, allocatable :: code(:, :)
+        logical :: laws
         character(len=400) :: buf
 
         c0 = thread_cpu_seconds()
@@ -284,10 +385,22 @@ contains
         if (.not. (vscale > 0.0_dp)) vscale = 1.0_dp
         allocate (vref(nc), speed(ns))
         speed = huge(1.0_dp)
+        laws = has_contact_laws(model)
+        if (laws) call new_contact_set(res%contacts, model)
         do j = 1, nc
             w = contact_velocity_direction(model, j)
             vref(j) = maxval(abs(matmul(vs, w)))
             if (.not. (vref(j) > 0.0_dp)) vref(j) = vscale
+            if (laws) then
+                if (res%contacts%normal(j) > 0) then
+                    ! a unilateral contact is away from its switching surfaces where it is
+                    ! clearly open or slips fast
+                    gs = res%contacts%gap(j) + matmul(xs, contact_normal_direction(model, j))
+                    gamp = max(maxval(abs(gs)), tiny(1.0_dp))
+                    speed = min(speed, max(abs(matmul(vs, w))/vref(j), gs/gamp))
+                    cycle
+                end if
+            end if
             if (model%mu(j)*model%normal_load(j) > 0.0_dp) &
                 speed = min(speed, abs(matmul(vs, w))/vref(j))
         end do
@@ -331,15 +444,18 @@ contains
             deallocate (error, res%monodromy)
             return
         end if
-        call project_stuck_start(shooting%flow, &
-                                 shooting%flow%modes(res%orbit%phase_mode(1))%code, &
-                                 res%monodromy)
+        ! (with contact laws the period map projects its start itself)
+        if (.not. laws) call project_stuck_start(shooting%flow, shooting%flow%modes( &
+                                                 res%orbit%phase_mode(1))%code, res%monodromy)
         nsamp = opts%samples
         if (light) nsamp = ns
-        allocate (res%t(nsamp), res%x(nsamp, n), res%v(nsamp, n), res%r(nsamp, nc))
+        if (.not. laws) call new_contact_set(res%contacts, model)
+        allocate (res%t(nsamp), res%x(nsamp, n), res%v(nsamp, n), &
+                  res%r(nsamp, res%contacts%nchannel), code(nsamp, nc))
         res%t = [(period*real(k, dp)/real(nsamp, dp), k=0, nsamp - 1)]
-        call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error)
+        call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error, code)
         if (allocated(error)) return
+        call contact_samples(model, res, code)
         ampx = max(maxval(abs(res%x)), maxval(abs(z0(1:n))))
         ampv = max(maxval(abs(res%v)), maxval(abs(z0(n + 1:))))
         res%defect = max(maxval(abs(z1(1:n) - z0(1:n)))/max(ampx, tiny(1.0_dp)), &
@@ -353,6 +469,13 @@ contains
         res%diss_friction = res%orbit%diss_friction
         res%diss_damping = res%orbit%diss_damping
         res%stick_fraction = res%orbit%stick_time/period
+        res%impact_loss = res%orbit%impact_loss
+        if (allocated(res%orbit%open_time)) then
+            res%open_fraction = res%orbit%open_time/period
+        else
+            allocate (res%open_fraction(nc))
+            res%open_fraction = 0.0_dp
+        end if
         res%stick_phases = count_stick_phases(res, nc)
         if (res%converged) then
             res%diagnosis = ""
@@ -368,6 +491,35 @@ contains
         c1 = thread_cpu_seconds()
         res%seconds = res%seconds + (c1 - c0)
     end subroutine shoot_from
+
+    !> The contacts' states, normal forces and gaps at the samples of res, from the codes of
+    !> the modes (code: 0 stuck, +1 / -1 slipping, 2 open).
+    subroutine contact_samples(model, res, code)
+        type(model_t), intent(in) :: model
+        type(reference_result_t), intent(inout) :: res
+        integer, intent(in) :: code(:, :)
+        integer :: j, ns
+        ns = size(res%t)
+        allocate (res%state(ns, res%contacts%ncontact), res%normal(ns, res%contacts%ncontact), &
+                  res%gap(ns, res%contacts%ncontact))
+        do j = 1, res%contacts%ncontact
+            where (code(:, j) == 0)
+                res%state(:, j) = state_stick
+            elsewhere (code(:, j) == 2)
+                res%state(:, j) = state_open
+            elsewhere
+                res%state(:, j) = state_slip
+            end where
+            if (res%contacts%normal(j) > 0) then
+                res%normal(:, j) = res%r(:, res%contacts%normal(j))
+                res%gap(:, j) = res%contacts%gap(j) + &
+                                matmul(res%x, contact_normal_direction(model, j))
+            else
+                res%normal(:, j) = model%normal_load(j)
+                res%gap(:, j) = 0.0_dp
+            end if
+        end do
+    end subroutine contact_samples
 
     !> mono <- mono P0, P0 the projection of a start perturbation [dx; dv] onto zero slip
     !> velocity of the contacts stuck at the start (code 0): dv <- dv - M^-1 W_S G^-1 W_S^T dv,
@@ -467,7 +619,8 @@ contains
     end function count_stick_phases
 
     !> The reference solution sampled at t_k = k T / ng, k = 0..ng-1 (any grid size, e.g.
-    !> the steps of an implicit Euler run): x(ng, N) [m], v(ng, N) [m/s], r(ng, n_c) [N].
+    !> the steps of an implicit Euler run): x(ng, N) [m], v(ng, N) [m/s], r(ng, n_c) [N]
+    !> (with contact laws r(ng, n_ch), every force channel).
     !> Errors: stat input (no orbit: the solve did not get that far), stat numerical.
     subroutine sample_reference(res, ng, x, v, r, error)
         !> A reference solution.
@@ -483,7 +636,7 @@ contains
                              stickslip_stat%input)
             return
         end if
-        allocate (x(ng, res%flow%n), v(ng, res%flow%n), r(ng, res%flow%nc))
+        allocate (x(ng, res%flow%n), v(ng, res%flow%n), r(ng, res%contacts%nchannel))
         call res%flow%sample(res%orbit, ng, x, v, r, error)
     end subroutine sample_reference
 

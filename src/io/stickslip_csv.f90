@@ -13,7 +13,7 @@ module stickslip_csv
     use stickslip_error, only: error_type, itoa
     use stickslip_solution, only: hbm_solution_t
     use stickslip_reference, only: reference_result_t
-    use stickslip_flow, only: event_name
+    use stickslip_flow, only: event_name, law_event_name
     use stickslip_compare, only: quantity_names
     use stickslip_study, only: study_result_t
     use stickslip_sweep, only: sweep_result_t
@@ -216,7 +216,9 @@ contains
 
     !> Write `dir`/events.csv: header t,contact,kind,direction,force,velocity and one row per
     !> event of the reference in one period, sorted by time in [0, T): kind is stick, slip,
-    !> reversal or graze, direction the slip direction after the event (0 stuck, +1, -1),
+    !> reversal or graze, and with contact laws open, close or impact (a rigid contact that
+    !> closes with a normal velocity), direction the slip direction after the event (0 stuck
+    !> or open, +1, -1),
     !> force [N] and slip velocity [m/s] at the event. Error: stat io.
     subroutine write_events_csv(dir, ref, error)
         !> Output directory (must exist).
@@ -235,7 +237,7 @@ contains
         do k = 1, ref%nevent
             if (stat /= 0) exit
             write (u, fmt, iostat=stat, iomsg=msg) ref%event_t(k), ref%event_contact(k), &
-                event_name(ref%event_kind(k)), ref%event_direction(k), ref%event_force(k), &
+                law_event_name(ref%event_kind(k)), ref%event_direction(k), ref%event_force(k), &
                 ref%event_velocity(k)
         end do
         call close_and_rename(dir, "events.csv", u, stat, msg, error)

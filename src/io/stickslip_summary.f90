@@ -10,7 +10,7 @@ module stickslip_summary
     use stickslip_solution, only: hbm_solution_t
     use stickslip_euler, only: euler_result_t
     use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist
-    use stickslip_reference, only: reference_result_t
+    use stickslip_reference, only: reference_result_t, reference_energy_error
     use stickslip_compare, only: comparison_t, quantity_names
     use stickslip_side_by_side, only: side_by_side_t
     use stickslip_study, only: study_result_t
@@ -38,13 +38,12 @@ contains
             max(abs(sol%work_forcing), 1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
     end function energy_balance_error
 
-    !> Relative energy balance error of the reference over one period:
-    !> |work_forcing - diss_friction - diss_damping| / max(|work_forcing|, tiny).
+    !> Relative energy balance error of a reference over one period (the impact losses of
+    !> rigid unilateral contacts included): stickslip_reference's reference_energy_error.
     pure real(dp) function reference_balance_error(ref) result(e)
         !> A reference solution.
         type(reference_result_t), intent(in) :: ref
-        e = abs(ref%work_forcing - ref%diss_friction - ref%diss_damping)/ &
-            max(abs(ref%work_forcing), 1.0e-6_dp*ref%work_gross, tiny(1.0_dp))
+        e = reference_energy_error(ref)
     end function reference_balance_error
 
     !> Write `dir`/summary.nml: a namelist group &summary (one `key = value` per line) with
@@ -248,6 +247,12 @@ contains
         call put(u, "  work_forcing = "//rtoa(ref%work_forcing), stat, msg)
         call put(u, "  diss_friction = "//rtoa(ref%diss_friction), stat, msg)
         call put(u, "  diss_damping = "//rtoa(ref%diss_damping), stat, msg)
+        if (.not. ref%contacts%plain .and. allocated(ref%open_fraction)) then
+            call put(u, "  impact_loss = "//rtoa(ref%impact_loss), stat, msg)
+            call put(u, "  open_fraction = "//rlist(ref%open_fraction), stat, msg)
+            call put(u, "  slip_fraction = "//rlist(1.0_dp - ref%open_fraction - &
+                                                    ref%stick_fraction), stat, msg)
+        end if
         call put(u, "  energy_balance_error = "//rtoa(reference_balance_error(ref)), stat, msg)
         call put(u, "  diagnosis = '"//quote(ref%diagnosis)//"'", stat, msg)
     end subroutine put_reference_keys

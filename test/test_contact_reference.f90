@@ -1,0 +1,247 @@
+!> The exact event-driven reference with contact laws (doc/contacts.md, section 5) against
+!> independent truth: a unilateral contact that never opens gives the constant-load
+!> reference (rigid: the seed's; elastic: the load of the static spring share); a contact
+!> that lifts off keeps the energy balance over a period (with the impact losses of a rigid
+!> contact), the normal law and Coulomb's law with the varying limit at every sample; its
+!> monodromy matrix is the central difference of the period map; the weighted residual
+!> converges to it as harmonics are added (elastic contact) and implicit Euler at first
+!> order (rigid contact, impacts). 2D friction and a tangential stiffness are refused with a
+!> message that names the yardstick.
+module test_contact_reference
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_model, only: model_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
+    use stickslip_reference, only: reference_result_t, sample_reference, reference_handles, &
+        reference_energy_error
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
+    use stickslip_flow, only: flow_t
+    use stickslip_contact_law, only: state_open
+    use stickslip_diagnostics, only: level_warning
+    use fixtures, only: seed_model, unilateral_seed, liftoff_model, planar_model
+    use testing, only: test_counter_t, check, check_error
+    implicit none
+    private
+    public :: run_contact_reference_tests
+
+contains
+
+    subroutine run_contact_reference_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t) :: elastic, rigid
+        call test_never_opens(t)
+        call solved(t, liftoff_model(10.0_dp, 0.0_dp), elastic, "elastic lift-off", 'hbm')
+        if (elastic%converged) then
+            call test_monodromy(t, elastic, "elastic lift-off")
+            call test_hbm_converges(t, elastic)
+        end if
+        call solved(t, liftoff_model(0.0_dp, 0.0_dp), rigid, "rigid lift-off", 'euler')
+        if (rigid%converged) then
+            call check(t, rigid%impact_loss > 0.01_dp*rigid%work_forcing .and. &
+                       any(rigid%event_kind(1:rigid%nevent) == 12), &
+                       "contact_reference: rigid lift-off: an impact, its loss in the balance")
+            call test_monodromy(t, rigid, "rigid lift-off")
+            call test_euler_first_order(t, rigid)
+        end if
+        call test_refused(t)
+    end subroutine run_contact_reference_tests
+
+    !> Solve the reference of `m`: converged, the energy balance (impact losses included),
+    !> no finding above a warning (the normal law, Coulomb's law with the varying limit),
+    !> the contact open part of the period.
+    subroutine solved(t, m, res, name, start)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t), intent(in) :: m
+        type(reference_result_t), intent(out) :: res
+        character(len=*), intent(in) :: name, start
+        type(reference_start_options_t) :: o
+        type(error_type), allocatable :: error
+        o%samples = 512
+        o%start = start
+        call solve_reference_from_starts(m, o, res, error)
+        call check_error(t, error, "contact_reference: "//name//": no error", .false.)
+        if (allocated(error)) return
+        call check(t, res%converged .and. res%defect <= o%tol, "contact_reference: "// &
+                   name//": converged", res%diagnosis)
+        if (.not. res%converged) return
+        call check(t, res%work_forcing > 0.0_dp .and. &
+                   reference_energy_error(res) < 1.0e-9_dp, &
+                   "contact_reference: "//name//": energy balance over a period")
+        call check(t, res%diagnostics%worst() < level_warning, "contact_reference: "// &
+                   name//": normal law and Coulomb's law hold at the samples")
+        call check(t, res%open_fraction(1) > 0.3_dp .and. res%open_fraction(1) < 0.9_dp .and. &
+                   any(res%state(:, 1) == state_open) .and. &
+                   abs(real(count(res%state(:, 1) == state_open), dp)/size(res%t) - &
+                       res%open_fraction(1)) < 0.01_dp, &
+                   "contact_reference: "//name//": open part of the period")
+    end subroutine solved
+
+    !> A unilateral contact pressed by a preload 1 on a normal DOF of its own (spring 5)
+    !> never opens: rigid, it carries lambda = 1 and the reference is the seed's; elastic
+    !> (k_n = 20) it carries the spring share 20 / 25 of the preload and the reference is
+    !> the seed's with that normal load.
+    subroutine test_never_opens(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: plain
+        real(dp) :: kn
+        integer :: k
+        do k = 1, 2
+            kn = merge(0.0_dp, 20.0_dp, k == 1)
+            plain = seed_model()
+            if (kn > 0.0_dp) plain%normal_load = [kn/(5.0_dp + kn)]
+            call compare(plain, unilateral_seed(kn), merge("rigid  ", "elastic", k == 1))
+        end do
+
+    contains
+
+        subroutine compare(plain, uni, name)
+            type(model_t), intent(in) :: plain, uni
+            character(len=*), intent(in) :: name
+            type(reference_start_options_t) :: o
+            type(reference_result_t) :: rp, ru
+            type(error_type), allocatable :: error
+            o%samples = 256
+            call solve_reference_from_starts(plain, o, rp, error)
+            if (allocated(error)) return
+            call solve_reference_from_starts(uni, o, ru, error)
+            call check_error(t, error, "contact_reference: never opens ("//trim(name)// &
+                             "): solved", .false.)
+            if (allocated(error)) return
+            call check(t, rp%converged .and. ru%converged .and. &
+                       maxval(abs(ru%x(:, 1:2) - rp%x)) <= 1.0e-8_dp*maxval(abs(rp%x)) .and. &
+                       maxval(abs(ru%r(:, 1) - rp%r(:, 1))) <= 1.0e-8_dp* &
+                       maxval(abs(rp%r(:, 1))), "contact_reference: a contact that never "// &
+                       "opens ("//trim(name)//") is the constant-load reference", ru%diagnosis)
+            call check(t, maxval(abs(ru%normal(:, 1) - plain%normal_load(1))) <= 1.0e-8_dp &
+                       .and. ru%open_fraction(1) == 0.0_dp .and. ru%impact_loss == 0.0_dp, &
+                       "contact_reference: never opens ("//trim(name)//"): the normal force "// &
+                       "of the static share, closed all period")
+        end subroutine compare
+    end subroutine test_never_opens
+
+    !> The monodromy matrix of the shooting's recording pass against central differences
+    !> of the period map from the section state (saltation matrices at open, close and slip
+    !> events; the jump Jacobian at an impact).
+    subroutine test_monodromy(t, res, name)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t), intent(in) :: res
+        character(len=*), intent(in) :: name
+        type(flow_t) :: flow
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: z0(:), zp(:), z1(:), fd(:, :)
+        real(dp) :: h
+        integer :: k, nz
+        flow = res%flow
+        nz = 2*flow%n
+        z0 = res%orbit%phase_y(1:nz, 1)
+        allocate (z1(nz), fd(nz, nz))
+        do k = 1, nz
+            h = 1.0e-6_dp*max(abs(z0(k)), 1.0e-2_dp)
+            zp = z0
+            zp(k) = zp(k) + h
+            call flow%period_map(res%t_section, zp, z1, error)
+            if (allocated(error)) exit
+            fd(:, k) = z1
+            zp(k) = z0(k) - h
+            call flow%period_map(res%t_section, zp, z1, error)
+            if (allocated(error)) exit
+            fd(:, k) = (fd(:, k) - z1)/(2.0_dp*h)
+        end do
+        call check_error(t, error, "contact_reference: "//name//": perturbed period maps", &
+                         .false.)
+        if (allocated(error)) return
+        call check(t, maxval(abs(fd - res%monodromy)) <= 1.0e-5_dp*maxval(abs(res%monodromy)), &
+                   "contact_reference: "//name//": monodromy = central differences of the "// &
+                   "period map")
+    end subroutine test_monodromy
+
+    !> The weighted residual on the elastic lift-off converges to the reference: the
+    !> displacement error falls as H goes 10, 20, 40 and is below 2% at H = 40.
+    subroutine test_hbm_converges(t, res)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t), intent(in) :: res
+        type(hbm_options_t) :: o
+        type(hbm_solution_t) :: sol
+        type(error_type), allocatable :: error
+        real(dp) :: e(3)
+        real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
+        integer :: k
+        call sample_reference(res, 512, xr, vr, rr, error)
+        if (allocated(error)) return
+        do k = 1, 3
+            o%harmonics = 10*2**(k - 1)
+            o%samples = 512
+            o%want_samples = .true.
+            call solve_periodic(liftoff_model(10.0_dp, 0.0_dp), o, sol, error)
+            if (allocated(error) .or. .not. sol%converged) then
+                call check(t, .false., "contact_reference: weighted residual H = 10, 20, 40 "// &
+                           "converged")
+                return
+            end if
+            e(k) = maxval(abs(sol%x - xr))/maxval(abs(xr))
+        end do
+        call check(t, e(2) < e(1) .and. e(3) < e(2) .and. e(3) < 0.02_dp, &
+                   "contact_reference: the weighted residual converges to the reference "// &
+                   "as harmonics are added (elastic lift-off)")
+    end subroutine test_hbm_converges
+
+    !> Implicit Euler on the rigid lift-off (plastic impacts) converges to the reference at
+    !> first order: its max displacement error falls by at least 2.5 when the step is
+    !> divided by 4.
+    subroutine test_euler_first_order(t, res)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t), intent(in) :: res
+        type(euler_options_t) :: o
+        type(euler_result_t) :: e
+        type(error_type), allocatable :: error
+        real(dp) :: err(2)
+        real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
+        integer :: k
+        character(len=80) :: buf
+        do k = 1, 2
+            o%steps_per_period = 1000*4**(k - 1)
+            call integrate_euler(liftoff_model(0.0_dp, 0.0_dp), o, e, error)
+            if (allocated(error) .or. .not. e%periodic) then
+                call check(t, .false., "contact_reference: rigid lift-off: Euler periodic")
+                return
+            end if
+            call sample_reference(res, o%steps_per_period, xr, vr, rr, error)
+            if (allocated(error)) return
+            err(k) = maxval(abs(e%x - xr))/maxval(abs(xr))
+        end do
+        write (buf, '(2es10.2)') err
+        call check(t, err(2) < err(1)/2.5_dp .and. err(2) < 5.0e-3_dp, &
+                   "contact_reference: implicit Euler converges to the rigid lift-off "// &
+                   "reference at first order", buf)
+    end subroutine test_euler_first_order
+
+    !> 2D friction and a tangential contact stiffness: not handled, said so (the yardstick
+    !> is implicit Euler), an input error from the solve.
+    subroutine test_refused(t)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_start_options_t) :: o
+        type(reference_result_t) :: res
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: why
+        logical :: ok
+        ok = reference_handles(planar_model(1.0_dp, 0.5_dp, 0.0_dp), why)
+        call check(t, .not. ok .and. index(why, "2D friction") > 0 .and. &
+                   index(why, "implicit Euler") > 0, "contact_reference: 2D friction is "// &
+                   "not handled, Euler named as the yardstick", why)
+        ok = reference_handles(liftoff_model(10.0_dp, 5.0_dp), why)
+        call check(t, .not. ok .and. index(why, "tangential contact stiffness") > 0, &
+                   "contact_reference: a tangential stiffness is not handled", why)
+        call check(t, reference_handles(liftoff_model(10.0_dp, 0.0_dp), why) .and. &
+                   len(why) == 0, "contact_reference: 1D unilateral contacts are handled")
+        o%start = 'hbm'
+        call solve_reference_from_starts(planar_model(1.0_dp, 0.5_dp, 0.0_dp), o, res, error)
+        call check(t, allocated(error), "contact_reference: 2D friction: an error")
+        if (.not. allocated(error)) return
+        call check(t, error%stat == stickslip_stat%input .and. &
+                   index(error%message, "tangent2_direction") > 0, &
+                   "contact_reference: 2D friction: an input error naming the direction", &
+                   error%message)
+    end subroutine test_refused
+end module test_contact_reference

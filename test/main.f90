@@ -26,6 +26,7 @@ program tester
     use test_contact_hbm, only: run_contact_hbm_tests
     use test_contact_euler, only: run_contact_euler_tests
     use test_contact_reference, only: run_contact_reference_tests
+    use test_contact_sweep, only: run_contact_sweep_tests
     use test_file_faults, only: run_file_faults_tests
     use test_fft, only: run_fft_tests
     use test_expm, only: run_expm_tests
@@ -96,6 +97,7 @@ program tester
         suite_t("contact_hbm", run_contact_hbm_tests),&
         suite_t("contact_euler", run_contact_euler_tests),&
         suite_t("contact_reference", run_contact_reference_tests),&
+        suite_t("contact_sweep", run_contact_sweep_tests),&
         suite_t("file_faults", run_file_faults_tests),&
         suite_t("fft", run_fft_tests),&
         suite_t("expm", run_expm_tests),&

@@ -24,6 +24,8 @@ module stickslip_friction_family
     use stickslip_sparse_dynamics, only: new_sparse_dynamics
     use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_friction, only: psi_limit_derivative
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
+    use stickslip_hb_laws, only: new_hb_laws
     use stickslip_continuation, only: parametric_system_t
     use stickslip_sweep_options, only: set_sweep_parameter
     implicit none
@@ -39,7 +41,7 @@ module stickslip_friction_family
         type(model_t) :: model
         !> Weighted-residual options of the points (rho fixed along the family).
         type(hbm_options_t) :: opts
-        !> 'omega', 'force_amplitude', 'mu' or 'normal_load'.
+        !> 'omega', 'force_amplitude', 'mu', 'normal_load' or 'preload'.
         character(len=16) :: parameter = ''
         !> The condensed friction equations (basis, dynamics, limits, work arrays).
         type(hb_problem_t) :: prob
@@ -133,14 +135,25 @@ contains
             block
                 type(basis_t) :: basis
                 type(dynamics_t) :: dyn
+                type(contact_set_t) :: cs
+                integer :: j
                 call new_basis(basis, hbm%harmonics, hbm%odd_only, hbm%samples, error)
                 if (allocated(error)) return
                 call new_sparse_dynamics(dyn, fam%sparse, basis, fam%kept, error)
                 call basis%destroy()
                 if (allocated(error)) return
-                call new_condensed_problem(fam%prob, dyn, fam%model%mu*fam%model%normal_load, &
-                                           hbm%harmonics, hbm%odd_only, hbm%samples, rho, &
-                                           error, fam%model%force_harmonic)
+                call new_contact_set(cs, fam%model)
+                if (cs%plain) then
+                    call new_condensed_problem(fam%prob, dyn, fam%model%mu* &
+                                               fam%model%normal_load, hbm%harmonics, &
+                                               hbm%odd_only, hbm%samples, rho, error, &
+                                               fam%model%force_harmonic)
+                else
+                    call new_condensed_problem(fam%prob, dyn, cs%constant_limit([(j, j=1, &
+                                               cs%ncontact)]), hbm%harmonics, hbm%odd_only, &
+                                               hbm%samples, rho, error, &
+                                               fam%model%force_harmonic, contacts=cs)
+                end if
             end block
         else
             call new_hb_problem(fam%prob, fam%model, hbm%harmonics, hbm%odd_only, &
@@ -189,6 +202,10 @@ contains
             stat = 1
             return
         end if
+        if (.not. self%prob%plain) then
+            call set_laws_parameter(self, p, stat)
+            return
+        end if
         select case (self%parameter)
         case ('omega')
             if (.not. (p > 0.0_dp)) then
@@ -222,6 +239,37 @@ contains
         self%current = p
         self%have_current = .true.
     end subroutine family_set
+
+    !> Move a family with contact laws to parameter p: omega, the forcing amplitude and the
+    !> preload change the dynamics (the preload is in the static load; built once per
+    !> value, cached as in omega), every parameter the laws (mu, the normal loads, the
+    !> preloads, omega). stat = 1 when the family has no point at p.
+    subroutine set_laws_parameter(self, p, stat)
+        !> The family.
+        class(friction_family_t), intent(inout) :: self
+        !> The parameter value.
+        real(dp), intent(in) :: p
+        !> Set to 1 when the family has no point there.
+        integer, intent(inout) :: stat
+        type(contact_set_t) :: cs
+        integer :: j
+        if (p < 0.0_dp .or. (self%parameter == 'omega' .and. .not. (p > 0.0_dp))) then
+            stat = 1
+            return
+        end if
+        call set_sweep_parameter(self%model, self%parameter, p, self%amplitude0)
+        select case (self%parameter)
+        case ('omega', 'force_amplitude', 'preload')
+            call set_omega_dynamics(self, p, stat)
+            if (stat /= 0) return
+        end select
+        call new_contact_set(cs, self%model)
+        call new_hb_laws(self%prob%laws, cs, self%model%omega, self%prob%basis%nb, &
+                         self%prob%basis%nt)
+        self%prob%limit = cs%constant_limit([(j, j=1, cs%ncontact)])
+        self%current = p
+        self%have_current = .true.
+    end subroutine set_laws_parameter
 
     !> The dynamics of a family in omega at omega = p (self%model%omega already p): from
     !> the cache when p was met before (exactly), else factorized and cached. stat = 1 when
@@ -337,6 +385,10 @@ contains
             return
         end if
         call self%prob%jacobian(y, jy, stat)
+        if (.not. self%prob%plain) then
+            call laws_parameter_derivative(self, y, lambda, jl, stat)
+            return
+        end if
         nb = self%prob%basis%nb
         nc = self%prob%nc
         call self%prob%contact_samples(y, self%rs, self%vs, self%ss)
@@ -367,6 +419,42 @@ contains
         if (.not. all(ieee_is_finite(jl))) stat = 1
     end subroutine family_jacobian
 
+    !> dF/dlambda of a family with contact laws by central differences of the residual at
+    !> fixed y, step 1e-6 max(|lambda|, 1e-3) (one-sided at a parameter's lower bound 0):
+    !> the laws' dependence on omega (the gap term omega g), on the preload (the static
+    !> load) and on the forcing runs through the condensed dynamics and the laws together.
+    !> The family is left at lambda.
+    subroutine laws_parameter_derivative(self, y, lambda, jl, stat)
+        !> The family.
+        class(friction_family_t), intent(inout) :: self
+        !> Channel-force coefficients [N], and the parameter value.
+        real(dp), intent(in) :: y(:), lambda
+        !> dF/dlambda.
+        real(dp), intent(out) :: jl(:)
+        !> Nonzero on failure.
+        integer, intent(inout) :: stat
+        real(dp) :: h, fp(size(jl)), fm(size(jl))
+        logical :: central
+        h = 1.0e-6_dp*max(abs(lambda), 1.0e-3_dp)
+        central = lambda - h > 0.0_dp
+        call self%set(lambda + h, stat)
+        if (stat == 0) call self%prob%residual(y, fp, stat)
+        if (central) then
+            if (stat == 0) call self%set(lambda - h, stat)
+            if (stat == 0) call self%prob%residual(y, fm, stat)
+        else
+            if (stat == 0) call self%set(lambda, stat)
+            if (stat == 0) call self%prob%residual(y, fm, stat)
+        end if
+        if (stat == 0) call self%set(lambda, stat)
+        if (stat /= 0) then
+            jl = 0.0_dp
+            return
+        end if
+        jl = (fp - fm)/merge(2.0_dp*h, h, central)
+        if (.not. all(ieee_is_finite(jl))) stat = 1
+    end subroutine laws_parameter_derivative
+
     !> Recovery at a fixed parameter: the harmonic ladder (warm starts from fewer harmonics,
     !> the lowest stage starting from the truncated y).
     subroutine family_recover(self, y, lambda, ok, error)
@@ -386,8 +474,8 @@ contains
         ok = .false.
         if (.not. ieee_is_finite(lambda)) return
         if (self%parameter == 'omega' .and. .not. (lambda > 0.0_dp)) return
-        if ((self%parameter == 'mu' .or. self%parameter == 'normal_load') .and. lambda < 0.0_dp) &
-            return
+        if ((self%parameter == 'mu' .or. self%parameter == 'normal_load' .or. &
+             self%parameter == 'preload') .and. lambda < 0.0_dp) return
         m = self%model
         call set_sweep_parameter(m, self%parameter, lambda, self%amplitude0)
         o = self%opts

@@ -18,6 +18,7 @@ module stickslip_sweep
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
     use stickslip_sparse_model, only: sparse_model_t, validate_sparse_model
@@ -160,7 +161,7 @@ contains
         if (allocated(error)) return
         nb = fam%prob%basis%nb
         co%tol = hbm%tol
-        co%fscale = max(fam%prob%rho*maxval(fam%prob%limit), tiny(1.0_dp))
+        co%fscale = max(fam%prob%rho*force_scale(fam%model), tiny(1.0_dp))
         ! the arclength measures the friction force by the RMS of its coefficients relative to
         ! the friction limit, weighted so that the smallest change the quadrature can make
         ! (one sample switching between slip directions through stick: a force change of
@@ -168,15 +169,16 @@ contains
         ! the sampled equations is a staircase of such switches near a resonance, and
         ! the parameter must dominate the step there; the force still takes over at folds
         weight = max(1.0_dp, 28.0_dp*abs(co%stop - co%start)/(real(hbm%samples, dp)*co%max_step))
-        co%yscale = [max(maxval(fam%prob%limit), tiny(1.0_dp))*sqrt(real(nb, dp))*weight]
-        if (opts%parameter == 'mu' .or. opts%parameter == 'normal_load') then
+        co%yscale = [max(force_scale(fam%model), tiny(1.0_dp))*sqrt(real(nb, dp))*weight]
+        if (opts%parameter == 'mu' .or. opts%parameter == 'normal_load' .or. &
+            opts%parameter == 'preload') then
             ! the limits change along the curve: scale by the largest on the range
             block
                 type(model_t) :: m2
                 m2 = fam%model
                 call set_sweep_parameter(m2, opts%parameter, max(abs(opts%start), &
                                          abs(opts%stop)), fam%amplitude0)
-                co%yscale = [max(maxval(m2%mu*m2%normal_load), tiny(1.0_dp))]
+                co%yscale = [max(force_scale(m2), tiny(1.0_dp))]
                 co%fscale = max(fam%prob%rho*co%yscale(1), tiny(1.0_dp))
                 co%yscale = co%yscale*sqrt(real(nb, dp))*weight
             end block
@@ -353,4 +355,18 @@ contains
             if (t(1:1) == '.') t = '0'//t
         end function fmt
     end function undamped_resonance_notes
+    !> The force scale of a model's contacts [N]: the largest friction limit mu N; with
+    !> contact laws also the largest preload and mu times it (the normal force and the
+    !> friction a unilateral contact carries at rest).
+    function force_scale(model) result(f)
+        !> The model.
+        type(model_t), intent(in) :: model
+        real(dp) :: f
+        type(contact_set_t) :: cs
+        integer :: j
+        call new_contact_set(cs, model)
+        f = maxval([0.0_dp, cs%constant_limit([(j, j=1, cs%ncontact)])])
+        if (.not. cs%plain) f = max(f, maxval([0.0_dp, cs%preload]), &
+                                    maxval([0.0_dp, cs%mu*cs%preload]))
+    end function force_scale
 end module stickslip_sweep

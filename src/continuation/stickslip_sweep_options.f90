@@ -5,8 +5,9 @@ module stickslip_sweep_options
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
-    use stickslip_model, only: model_t
+    use stickslip_model, only: model_t, is_unilateral, contact_preload
     use stickslip_continuation, only: continuation_options_t, validate_continuation_options
+    use stickslip_reference, only: reference_handles
     implicit none
     private
     public :: sweep_options_t, validate_sweep_options, continuation_options_of
@@ -15,8 +16,9 @@ module stickslip_sweep_options
     !> Options of a sweep (&sweep).
     type :: sweep_options_t
         !> The parameter: 'omega' [rad/s], 'force_amplitude' [N] (every forcing term scaled
-        !> so that term 1 has this amplitude), 'mu' (every contact) or 'normal_load' [N]
-        !> (every contact).
+        !> so that term 1 has this amplitude), 'mu' (every contact), 'normal_load' [N]
+        !> (every contact with a constant normal load) or 'preload' [N] (every unilateral
+        !> contact).
         character(len=16) :: parameter = 'omega'
         !> Range of the parameter, from start to stop.
         real(dp) :: start = 0.0_dp, stop = 0.0_dp
@@ -48,18 +50,29 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Most points of one sweep.
         integer, parameter :: max_points = 100000
-        character(len=200) :: buf
+        character(len=400) :: buf
         real(dp) :: smallest
+        integer :: j
+        character(len=:), allocatable :: why
         buf = ""
         select case (opts%parameter)
         case ('omega')
             if (.not. (min(opts%start, opts%stop) > 0.0_dp)) &
                 buf = "opts%start, opts%stop: omega must stay > 0"
-        case ('mu', 'normal_load')
+        case ('mu', 'normal_load', 'preload')
             if (.not. (min(opts%start, opts%stop) >= 0.0_dp)) &
                 buf = "opts%start, opts%stop: "//trim(opts%parameter)//" must stay >= 0"
-            if (model%ncontact() == 0) buf = "opts%parameter = '"//trim(opts%parameter)// &
-                                             "': the model has no contact"
+            if (model%ncontact() == 0) then
+                buf = "opts%parameter = '"//trim(opts%parameter)//"': the model has no contact"
+            else if (opts%parameter == 'preload' .and. &
+                     .not. any([(is_unilateral(model, j), j=1, model%ncontact())])) then
+                buf = "opts%parameter = 'preload': the model has no unilateral contact "// &
+                      "(normal_dof, normal_direction or normal_file)"
+            else if (opts%parameter == 'normal_load' .and. &
+                     all([(is_unilateral(model, j), j=1, model%ncontact())])) then
+                buf = "opts%parameter = 'normal_load': every contact is unilateral (its "// &
+                      "normal force comes from the normal law); sweep 'preload' instead"
+            end if
         case ('force_amplitude')
             if (model%nforce() == 0) then
                 buf = "opts%parameter = 'force_amplitude': the model has no forcing term"
@@ -69,8 +82,12 @@ contains
             end if
         case default
             buf = "opts%parameter = '"//trim(opts%parameter)// &
-                  "': must be 'omega', 'force_amplitude', 'mu' or 'normal_load'"
+                  "': must be 'omega', 'force_amplitude', 'mu', 'normal_load' or 'preload'"
         end select
+        if (len_trim(buf) == 0 .and. opts%stability) then
+            ! the multipliers come from the exact reference's monodromy
+            if (.not. reference_handles(model, why)) buf = "opts%stability = .true.: "//why
+        end if
         if (len_trim(buf) == 0) then
             if (opts%step < 0.0_dp .or. opts%min_step < 0.0_dp .or. opts%max_step < 0.0_dp) &
                 buf = "opts%step, opts%min_step, opts%max_step: must be >= 0 (0: automatic)"
@@ -134,8 +151,9 @@ contains
     pure real(dp) function sweep_parameter_value(model, parameter) result(p)
         !> The model.
         type(model_t), intent(in) :: model
-        !> 'omega', 'force_amplitude', 'mu' or 'normal_load'.
+        !> 'omega', 'force_amplitude', 'mu', 'normal_load' or 'preload'.
         character(len=*), intent(in) :: parameter
+        integer :: j
         select case (parameter)
         case ('omega')
             p = model%omega
@@ -143,6 +161,14 @@ contains
             p = model%force_amplitude(1)
         case ('mu')
             p = model%mu(1)
+        case ('preload')
+            p = 0.0_dp
+            do j = 1, model%ncontact()
+                if (is_unilateral(model, j)) then
+                    p = contact_preload(model, j)
+                    return
+                end if
+            end do
         case default
             p = model%normal_load(1)
         end select
@@ -153,12 +179,13 @@ contains
     pure subroutine set_sweep_parameter(model, parameter, p, amplitude0)
         !> The model, changed.
         type(model_t), intent(inout) :: model
-        !> 'omega', 'force_amplitude', 'mu' or 'normal_load'.
+        !> 'omega', 'force_amplitude', 'mu', 'normal_load' or 'preload'.
         character(len=*), intent(in) :: parameter
         !> The value.
         real(dp), intent(in) :: p
         !> The forcing amplitudes of the case.
         real(dp), intent(in) :: amplitude0(:)
+        integer :: j
         select case (parameter)
         case ('omega')
             model%omega = p
@@ -166,8 +193,20 @@ contains
             model%force_amplitude = amplitude0*(p/amplitude0(1))
         case ('mu')
             model%mu = p
+        case ('preload')
+            ! every unilateral contact's preload
+            if (.not. allocated(model%preload)) then
+                allocate (model%preload(model%ncontact()))
+                model%preload = 0.0_dp
+            end if
+            do j = 1, model%ncontact()
+                if (is_unilateral(model, j)) model%preload(j) = p
+            end do
         case default
-            model%normal_load = p
+            ! the constant loads of the contacts that carry one (not the unilateral ones)
+            do j = 1, model%ncontact()
+                if (.not. is_unilateral(model, j)) model%normal_load(j) = p
+            end do
         end select
     end subroutine set_sweep_parameter
 end module stickslip_sweep_options

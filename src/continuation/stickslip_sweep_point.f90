@@ -80,7 +80,7 @@ contains
         integer :: k, nb, nc
         logical :: at_point
         nb = fam%prob%basis%nb
-        nc = fam%model%ncontact()
+        nc = fam%prob%nc
         m = fam%model
         call set_sweep_parameter(m, opts%parameter, state%lambda, fam%amplitude0)
         po = fam%opts
@@ -117,7 +117,21 @@ contains
         pt%diss_friction = ps%diss_friction
         pt%diss_damping = ps%diss_damping
         pt%dissipation = ps%diss_friction + ps%diss_damping
-        pt%rmax = [(maxval(abs(ps%r(:, k))), k=1, nc)]
+        if (fam%prob%plain) then
+            pt%rmax = [(maxval(abs(ps%r(:, k))), k=1, nc)]
+        else
+            ! the friction force of each contact (its modulus in 2D), its open share and
+            ! largest normal force
+            associate (cs => ps%contacts)
+                allocate (pt%rmax(cs%ncontact))
+                do k = 1, cs%ncontact
+                    pt%rmax(k) = maxval(norm2(ps%r(:, cs%first(k):cs%first(k) + &
+                                                  cs%ntangent(k) - 1), dim=2))
+                end do
+            end associate
+            pt%open = ps%open_fraction
+            pt%normal_max = maxval(ps%normal, dim=1)
+        end if
         pt%stick = ps%stick_fraction
         pt%harmonics = ps%harmonics
         pt%residual = ps%fnorm/max(ps%fscale, tiny(1.0_dp))

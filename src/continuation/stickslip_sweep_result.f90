@@ -22,8 +22,12 @@ module stickslip_sweep_result
         real(dp), allocatable :: amplitude(:)
         !> Energy dissipated per period: friction + viscous, and each [J].
         real(dp) :: dissipation = 0.0_dp, diss_friction = 0.0_dp, diss_damping = 0.0_dp
-        !> max_t |r_j(t)| [N] and stick fraction per contact.
+        !> max_t |r_j(t)| [N] (the friction force: with 2D friction its modulus) and stick
+        !> fraction per contact.
         real(dp), allocatable :: rmax(:), stick(:)
+        !> With contact laws, per contact: the open fraction and max_t lambda_j(t) [N]
+        !> (unallocated for a model without contact laws).
+        real(dp), allocatable :: open(:), normal_max(:)
         !> Harmonic count H of the point.
         integer :: harmonics = 0
         !> ||F|| / fscale of the point.

@@ -113,7 +113,7 @@ contains
         end if
         if (has_contact_laws(case%model) .and. result%method /= 'hbm' .and. &
             result%method /= 'euler' .and. result%method /= 'reference' .and. &
-            result%method /= 'all') then
+            result%method /= 'all' .and. result%method /= 'sweep') then
             call fatal_error(error, "&friction: contact laws (a normal direction, a second "// &
                              "tangential direction or a tangential_stiffness) are not yet "// &
                              "handled by &run method = '"//result%method//"'", &

@@ -8,6 +8,7 @@ module stickslip_run_studies
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t, selected_dofs
+    use stickslip_model, only: has_contact_laws
     use stickslip_hbm_sparse, only: kept_dofs
     use stickslip_study, only: study_options_t, study_result_t, run_study, default_study_options
     use stickslip_sweep, only: sweep_result_t, run_sweep, sweep_options_t
@@ -164,7 +165,8 @@ contains
         end if
         if (case%sweep%resume) then
             call read_checkpoint(case%directory, writer%fingerprint, ncols, &
-                                 case%model%ncontact(), saved, found, error)
+                                 case%model%ncontact(), saved, found, error, &
+                                 laws=has_contact_laws(case%model))
             if (allocated(error)) return
         end if
         if (allocated(case%sparse_model)) then

@@ -100,10 +100,10 @@ contains
         if (allocated(error)) return
         parameter = lower(trim(parameter))
         select case (parameter)
-        case ('omega', 'force_amplitude', 'mu', 'normal_load')
+        case ('omega', 'force_amplitude', 'mu', 'normal_load', 'preload')
         case default
             call group_error(nml, error, "&sweep parameter = '"//parameter//"': must be "// &
-                             "'omega', 'force_amplitude', 'mu' or 'normal_load'")
+                             "'omega', 'force_amplitude', 'mu', 'normal_load' or 'preload'")
             return
         end select
         opts%parameter = parameter

@@ -160,6 +160,9 @@ contains
                 if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) p%parameter, p%arclength, &
                     p%dissipation, p%diss_friction, p%diss_damping, p%residual, p%floquet_max, &
                     p%truncation, p%amplitude, p%rmax, p%stick
+                ! contact laws: a line of open shares and largest normal forces
+                if (stat == 0 .and. allocated(p%open)) write (u, rf, iostat=stat, iomsg=msg) &
+                    p%open, p%normal_max
             end associate
         end do
         call close_and_rename(self%directory, checkpoint_name, u, stat, msg, error)
@@ -171,7 +174,8 @@ contains
     !> size of the file (each value takes at least two characters). Errors: stat input when
     !> it belongs to another case (fingerprint), is not a checkpoint or is damaged (a count
     !> out of bounds, an unreadable value: "delete it"), stat io when it cannot be opened.
-    subroutine read_checkpoint(directory, fingerprint, ndof, ncontact, res, found, error)
+    subroutine read_checkpoint(directory, fingerprint, ndof, ncontact, res, found, error, &
+                               laws)
         !> Output directory.
         character(len=*), intent(in) :: directory
         !> Fingerprint of the case being run.
@@ -186,14 +190,20 @@ contains
         logical, intent(out) :: found
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The case has contact laws: each point has its line of open shares and largest
+        !> normal forces (default .false.).
+        logical, intent(in), optional :: laws
         character(len=:), allocatable :: path, problem
         character(len=128) :: line
+        logical :: with_laws
         character(len=512) :: msg
         character(len=12) :: status
         integer :: u, stat, n, nd, nc, k, npoints
         integer(int64) :: bytes
         type(frc_point_t) :: p
         path = directory//'/'//checkpoint_name
+        with_laws = .false.
+        if (present(laws)) with_laws = laws
         inquire (file=path, exist=found, size=bytes)
         if (.not. found) return
         ! a checkpoint is a non-empty regular file: an empty file, a device (a link to
@@ -274,6 +284,10 @@ contains
             if (stat == 0) read (u, *, iostat=stat, iomsg=msg) p%parameter, p%arclength, &
                 p%dissipation, p%diss_friction, p%diss_damping, p%residual, p%floquet_max, &
                 p%truncation, p%amplitude, p%rmax, p%stick
+            if (stat == 0 .and. with_laws) then
+                if (.not. allocated(p%open)) allocate (p%open(nc), p%normal_max(nc))
+                read (u, *, iostat=stat, iomsg=msg) p%open, p%normal_max
+            end if
             p%status = status
             res%points(k) = p
         end do

@@ -318,7 +318,9 @@ contains
     !> harmonics, residual (||F|| / fscale), status, floquet_max (largest Floquet
     !> multiplier modulus, NaN when not computed), stable (1 stable, 0 unstable, -1 unknown),
     !> truncation (relative harmonic truncation error estimate, NaN when not computed), then
-    !> arclength, diss_friction, diss_damping [J], nfev. Error: stat io.
+    !> arclength, diss_friction, diss_damping [J], nfev; with contact laws then open_1..
+    !> open_C, slip_1..slip_C (shares of the period) and normal_max_1..normal_max_C (max_t
+    !> lambda_j [N]). Error: stat io.
     subroutine write_frc_csv(dir, res, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
@@ -334,7 +336,8 @@ contains
         integer :: u, k, i, stat, n, nc
         character(len=512) :: msg
         character(len=:), allocatable :: header
-        character(len=160) :: fmt
+        character(len=200) :: fmt
+        logical :: laws
         integer, allocatable :: sel(:), numbers(:)
         stat = 0
         msg = ''
@@ -365,19 +368,45 @@ contains
         end do
         header = header//",harmonics,residual,status,floquet_max,stable,truncation,"// &
                  "arclength,diss_friction,diss_damping,nfev"
+        ! contact laws: each contact's open and slip shares and largest normal force
+        laws = .false.
+        if (res%npoints > 0) laws = allocated(res%points(1)%open)
+        if (laws) then
+            do i = 1, nc
+                header = header//",open_"//itoa(i)
+            end do
+            do i = 1, nc
+                header = header//",slip_"//itoa(i)
+            end do
+            do i = 1, nc
+                header = header//",normal_max_"//itoa(i)
+            end do
+        end if
         write (fmt, '(a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // ',","),i0,",",' // &
             real_fmt // ',",",a,",",' // real_fmt // ',",",i0,",",4(' // real_fmt // &
             ',","),i0)'
+        if (laws) write (fmt, '(a,i0,a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // &
+            ',","),i0,",",' // real_fmt // ',",",a,",",' // real_fmt // ',",",i0,",",4(' // &
+            real_fmt // ',","),i0,', 3*nc, '(",",' // real_fmt // '))'
         call open_temporary(dir, "frc.csv", u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
         do k = 1, res%npoints
             if (stat /= 0) exit
             associate (p => res%points(k))
-                write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude(sel), &
-                    p%dissipation, &
-                    p%rmax, p%stick, p%harmonics, p%residual, trim(p%status), p%floquet_max, &
-                    p%stable, p%truncation, p%arclength, p%diss_friction, p%diss_damping, p%nfev
+                if (laws) then
+                    write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude(sel), &
+                        p%dissipation, p%rmax, p%stick, p%harmonics, p%residual, &
+                        trim(p%status), p%floquet_max, p%stable, p%truncation, p%arclength, &
+                        p%diss_friction, p%diss_damping, p%nfev, p%open, &
+                        1.0_dp - p%open - p%stick, p%normal_max
+                else
+                    write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude(sel), &
+                        p%dissipation, &
+                        p%rmax, p%stick, p%harmonics, p%residual, trim(p%status), &
+                        p%floquet_max, p%stable, p%truncation, p%arclength, p%diss_friction, &
+                        p%diss_damping, p%nfev
+                end if
             end associate
         end do
         call close_and_rename(dir, "frc.csv", u, stat, msg, error)

@@ -1,0 +1,217 @@
+!> The sweep with contact laws against independent truth: a unilateral contact that never
+!> opens sweeps the curve of the constant-load case (its points against separate solves
+!> of that case); the points of a sweep in omega and in the preload over a contact that
+!> lifts off are the separate solves at their parameters, each warm-started from the
+!> previous (amplitudes, open shares, largest normal forces); the family's parameter derivative
+!> (central differences with the laws) against a difference quotient of wider step; a
+!> stability verdict of the exact reference at points; a planar contact asks for
+!> stability = .false. with the yardstick named.
+module test_contact_sweep
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, stickslip_stat, real_text, itoa
+    use stickslip_model, only: model_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_reference, only: reference_options_t
+    use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
+    use stickslip_sweep_options, only: set_sweep_parameter
+    use stickslip_friction_family, only: friction_family_t, new_friction_family
+    use fixtures, only: damped_seed, unilateral_seed, liftoff_model, planar_model
+    use testing, only: test_counter_t, check, check_error
+    implicit none
+    private
+    public :: run_contact_sweep_tests
+
+contains
+
+    subroutine run_contact_sweep_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call test_never_opens(t)
+        call test_points_are_solves(t, 'omega', 1.5_dp, 1.3_dp)
+        call test_points_are_solves(t, 'preload', 0.5_dp, 2.0_dp)
+        call test_parameter_derivative(t)
+        call test_planar_stability_refused(t)
+    end subroutine run_contact_sweep_tests
+
+    !> The damped seed with its contact made unilateral (rigid, never opening, preload 1 on
+    !> its own normal DOF) sweeps in omega the curve of the constant-load seed: the same
+    !> number of points, the amplitudes of DOFs 1, 2 to the solver tolerance.
+    subroutine test_never_opens(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: plain, uni, mk
+        type(hbm_options_t) :: ho
+        type(reference_options_t) :: ro
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: ru
+        type(hbm_solution_t) :: sol
+        type(error_type), allocatable :: error
+        real(dp) :: worst
+        integer :: k, i
+        plain = damped_seed()
+        uni = unilateral_seed(0.0_dp)
+        uni%damping(1:2, 1:2) = plain%damping
+        ho%harmonics = 10
+        ho%samples = 128
+        ho%rho = 0.2_dp
+        so%parameter = 'omega'
+        so%start = 2.0_dp
+        so%stop = 3.0_dp
+        so%step = 0.05_dp
+        so%max_step = 0.1_dp
+        so%stability = .false.
+        call run_sweep(uni, ho, ro, so, ru, error)
+        call check_error(t, error, "contact_sweep: never opens: swept", .false.)
+        if (allocated(error)) return
+        call check(t, ru%complete .and. ru%npoints > 5, "contact_sweep: never opens: "// &
+                   "complete", ru%diagnosis)
+        ! each point against the constant-load seed solved at its omega
+        worst = 0.0_dp
+        ho%want_samples = .true.
+        do k = 1, ru%npoints
+            mk = plain
+            mk%omega = ru%points(k)%parameter
+            call solve_periodic(mk, ho, sol, error)
+            if (allocated(error)) return
+            worst = max(worst, maxval(abs(ru%points(k)%amplitude(1:2) - &
+                                          [(maxval(abs(sol%x(:, i))), i=1, 2)])/ &
+                                      ru%points(k)%amplitude(1:2)))
+        end do
+        call check(t, worst <= 1.0e-7_dp .and. all([(ru%points(k)%open(1) == 0.0_dp, &
+                   k=1, ru%npoints)]), "contact_sweep: a contact that never opens sweeps "// &
+                   "the constant-load curve", "worst difference "//real_text(worst))
+    end subroutine test_never_opens
+
+    !> A sweep of the elastic lift-off in `parameter` from p0 to p1: complete, and every
+    !> third point is the separate solve at its parameter (amplitudes, open share, largest
+    !> normal force), the forcing work = the dissipation.
+    subroutine test_points_are_solves(t, parameter, p0, p1)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), intent(in) :: parameter
+        real(dp), intent(in) :: p0, p1
+        type(model_t) :: m, mk
+        type(hbm_options_t) :: ho
+        type(reference_options_t) :: ro
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(hbm_solution_t) :: sol, last
+        type(error_type), allocatable :: error
+        real(dp) :: worst, balance
+        integer :: k, i, missed
+        m = liftoff_model(10.0_dp, 0.0_dp)
+        ho%harmonics = 15
+        ho%samples = 256
+        so%parameter = parameter
+        so%start = p0
+        so%stop = p1
+        so%stability = .false.
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "contact_sweep: "//parameter//": swept", .false.)
+        if (allocated(error)) return
+        call check(t, res%complete .and. res%npoints > 5, "contact_sweep: "//parameter// &
+                   ": complete", res%diagnosis)
+        ! separate solves, each started from the previous one's forces (several periodic
+        ! solutions coexist at some parameters), with the sweep's rho (the automatic one
+        ! at its start: the projected equations depend on rho at finite H); a warm start
+        ! that does not converge (the single solve is less robust than the continuation
+        ! near contact transitions) is counted, the next one starts from the last that did
+        worst = 0.0_dp
+        balance = 0.0_dp
+        missed = 0
+        ho%want_samples = .true.
+        do k = 1, res%npoints
+            mk = m
+            call set_sweep_parameter(mk, parameter, res%points(k)%parameter, m%force_amplitude)
+            if (k == 1) then
+                call solve_periodic(mk, ho, sol, error)
+                ho%rho = sol%rho
+            else
+                call solve_periodic(mk, ho, sol, error, r_start=last%rcoef)
+            end if
+            if (allocated(error)) exit
+            if (.not. sol%converged) then
+                missed = missed + 1
+                cycle
+            end if
+            last = sol
+            worst = max(worst, maxval(abs([(maxval(abs(sol%x(:, i))), i=1, 2)] - &
+                                          res%points(k)%amplitude)/res%points(k)%amplitude), &
+                        abs(sol%open_fraction(1) - res%points(k)%open(1)), &
+                        abs(maxval(sol%normal(:, 1)) - res%points(k)%normal_max(1))/ &
+                        res%points(k)%normal_max(1))
+            balance = max(balance, abs(sol%work_forcing - res%points(k)%dissipation)/ &
+                          sol%work_forcing)
+        end do
+        call check_error(t, error, "contact_sweep: "//parameter//": point solves", .false.)
+        call check(t, worst <= 1.0e-5_dp .and. balance <= 1.0e-6_dp .and. &
+                   missed <= res%npoints/5, "contact_sweep: "// &
+                   parameter//": the points are the separate solves (amplitudes, open "// &
+                   "share, normal force, energy)", "worst "//real_text(worst)//", balance "// &
+                   real_text(balance)//", warm starts not converged "//itoa(missed))
+    end subroutine test_points_are_solves
+
+    !> dF/dlambda of the family (central differences with step 1e-6) against the quotient
+    !> of step 1e-4 around a lift-off solution, in omega and in the preload: the two agree to
+    !> the quotients' truncation.
+    subroutine test_parameter_derivative(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=8), parameter :: names(2) = [character(len=8) :: 'omega', 'preload']
+        real(dp), parameter :: values(2) = [1.5_dp, 1.0_dp]
+        type(friction_family_t) :: fam
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: y(:), jy(:, :), jl(:), fp(:), fm(:)
+        real(dp) :: h
+        integer :: k, stat
+        ho%harmonics = 10
+        ho%samples = 128
+        call solve_periodic(liftoff_model(10.0_dp, 0.0_dp), ho, sol, error)
+        if (allocated(error)) return
+        y = reshape(sol%rcoef, [size(sol%rcoef)])
+        do k = 1, 2
+            call new_friction_family(fam, liftoff_model(10.0_dp, 0.0_dp), ho, trim(names(k)), &
+                                     values(k), sol%rho, error)
+            call check_error(t, error, "contact_sweep: family in "//trim(names(k)), .false.)
+            if (allocated(error)) return
+            allocate (jy(size(y), size(y)), jl(size(y)), fp(size(y)), fm(size(y)))
+            stat = 0
+            call fam%jacobian(y, values(k), jy, jl, stat)
+            h = 1.0e-4_dp*values(k)
+            call fam%residual(y, values(k) + h, fp, stat)
+            call fam%residual(y, values(k) - h, fm, stat)
+            call check(t, stat == 0 .and. norm2(jl - (fp - fm)/(2.0_dp*h)) <= &
+                       1.0e-4_dp*norm2(jl) .and. norm2(jl) > 0.0_dp, "contact_sweep: "// &
+                       "dF/d"//trim(names(k))//" with the laws = the difference quotient")
+            call fam%destroy()
+            deallocate (jy, jl, fp, fm)
+        end do
+    end subroutine test_parameter_derivative
+
+    !> A sweep over a planar contact with stability = .true.: an input error that names the
+    !> option and the yardstick (stability = .false. sweeps it).
+    subroutine test_planar_stability_refused(t)
+        type(test_counter_t), intent(inout) :: t
+        type(hbm_options_t) :: ho
+        type(reference_options_t) :: ro
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(error_type), allocatable :: error
+        ho%harmonics = 5
+        ho%samples = 64
+        so%parameter = 'omega'
+        so%start = 1.7_dp
+        so%stop = 1.9_dp
+        so%stability = .true.
+        call run_sweep(planar_model(1.0_dp, 0.5_dp, 0.0_dp), ho, ro, so, res, error)
+        call check(t, allocated(error), "contact_sweep: planar contact, stability: refused")
+        if (.not. allocated(error)) return
+        call check(t, error%stat == stickslip_stat%input .and. &
+                   index(error%message, "opts%stability") > 0 .and. &
+                   index(error%message, "implicit Euler") > 0, "contact_sweep: planar "// &
+                   "contact, stability: names the option and the yardstick", error%message)
+        so%stability = .false.
+        call run_sweep(planar_model(1.0_dp, 0.5_dp, 0.0_dp), ho, ro, so, res, error)
+        call check(t, .not. allocated(error) .and. res%complete, "contact_sweep: a planar "// &
+                   "contact sweeps without stability")
+    end subroutine test_planar_stability_refused
+end module test_contact_sweep

@@ -605,6 +605,7 @@ contains
         type(case_t), intent(in) :: case
         type(side_by_side_t), intent(in) :: sbs
         integer :: k
+        character(len=:), allocatable :: files
         write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
         write (buffer, '(a,i0,a,i0,a,es9.2,a,f0.3,a)') "  weighted residual: H = ", &
             sbs%hbm%harmonics, ", ", sbs%hbm%nfev, " evaluations, residual ", sbs%hbm%fnorm, &
@@ -614,7 +615,21 @@ contains
             case%euler%steps_per_period, " steps/period, periodic after ", sbs%euler%periods, &
             " periods (defect ", sbs%euler%defect, "), ", 1.0e3_dp*sbs%euler_seconds, " ms CPU"
         call emit(u)
-        call print_reference_lines(u, case, sbs%reference)
+        if (sbs%reference%converged) then
+            call print_reference_lines(u, case, sbs%reference)
+        else
+            ! not run (contacts it does not handle) or not converged: the diagnosis, and
+            ! the contacts as implicit Euler saw them
+            write (u, '(a)') "  exact reference: "//sbs%reference%diagnosis
+            if (sbs%euler%periodic) then
+                do k = 1, sbs%euler%contacts%ncontact
+                    write (u, '(a,i0,a,g0.4,a)') "  contact ", k, " (implicit Euler): max |r| ", &
+                        maxval(abs(sbs%euler%r(:, sbs%euler%contacts%first(k)))), &
+                        limit_text(case, sbs%euler%contacts, k, sbs%euler%normal(:, k), &
+                                   sbs%euler%state(:, k))
+                end do
+            end if
+        end if
         write (u, '(a,i0,a)') "  differences on the common grid (", sbs%grid, &
             " points per period), relative to each quantity's amplitude, worst DOF/contact:"
         write (u, '(a)') "                            max x     max v     max r     rms x"// &
@@ -622,8 +637,11 @@ contains
         do k = 1, size(sbs%comparisons)
             call print_comparison(u, sbs%comparisons(k))
         end do
-        write (u, '(a)') "  wrote "//case%directory//"/{hbm.csv, coefficients.csv, euler.csv, "// &
-            "reference.csv, events.csv, summary.nml}"
+        files = ""
+        if (sbs%hbm%converged) files = files//"hbm.csv, coefficients.csv, "
+        if (sbs%euler%periodic) files = files//"euler.csv, "
+        if (sbs%reference%converged) files = files//"reference.csv, events.csv, "
+        write (u, '(a)') "  wrote "//case%directory//"/{"//files//"summary.nml}"
     end subroutine print_side_by_side_summary
 
     subroutine print_comparison(u, cmp)

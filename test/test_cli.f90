@@ -44,7 +44,64 @@ contains
         call test_progress(t)
         call test_odd_directory(t)
         call test_no_contact(t)
+        call test_contact_examples(t)
     end subroutine run_cli_tests
+
+    !> The contact-law examples from the command line: the damper that lifts off (weighted
+    !> residual: the normal force and gap columns, the open share on stdout and in the
+    !> summary; the exact reference: open and close events), and the 2D elliptical slip
+    !> (method 'all' without the reference, noted; method 'reference' refused, naming the
+    !> yardstick, exit 1).
+    subroutine test_contact_examples(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=:), allocatable :: out, err, dir, text
+        character(len=200) :: path
+        integer :: code
+        path = scratch_copy("damper_liftoff")
+        dir = scratch//"/out_damper_liftoff"
+        call cli([path], code, out, err)
+        call check(t, code == 0 .and. index(out, "(open ") > 0, "cli damper_liftoff: exit 0, "// &
+                   "the open share printed", err)
+        text = file_text(dir//"/hbm.csv")
+        call check(t, index(text, "t,x1,x2,v1,v2,r1,normal1,gap1"//new_line('a')) == 1, &
+                   "cli damper_liftoff: hbm.csv has the normal force and gap columns")
+        call check(t, len(summary_value(dir//"/summary.nml", "open_fraction")) > 0, &
+                   "cli damper_liftoff: the summary has the open fraction")
+        call replace_in_file(trim(path), "method = 'hbm'", "method = 'reference'")
+        call cli([path], code, out, err)
+        text = file_text(dir//"/events.csv")
+        call check(t, code == 0 .and. index(text, ",open,") > 0 .and. index(text, ",close,") > 0, &
+                   "cli damper_liftoff, reference: exit 0, open and close events", err)
+        path = scratch_copy("planar_ellipse")
+        dir = scratch//"/out_planar_ellipse"
+        call replace_in_file(trim(path), "steps_per_period = 20000", "steps_per_period = 2000")
+        call cli([path], code, out, err)
+        call check(t, code == 0 .and. index(out, "hbm vs euler") > 0 .and. &
+                   index(out, "yardstick for 2D friction is implicit Euler") > 0, &
+                   "cli planar_ellipse: exit 0, the weighted residual against Euler, noted", err)
+        call check(t, index(file_text(dir//"/hbm.csv"), "t,x1,x2,v1,v2,r1,r1_2") == 1, &
+                   "cli planar_ellipse: hbm.csv has both tangential force columns")
+        call replace_in_file(trim(path), "method = 'all'", "method = 'reference'")
+        call cli([path], code, out, err)
+        call check(t, code == 1 .and. index(err, "&run method = 'reference'") > 0 .and. &
+                   index(err, "implicit Euler") > 0 .and. count_lines(err) == 1, &
+                   "cli planar_ellipse, reference: exit 1, one line naming the yardstick", err)
+    end subroutine test_contact_examples
+
+    !> Replace the first occurrence of `old` by `new` in the text file `path`.
+    subroutine replace_in_file(path, old, new)
+        character(len=*), intent(in) :: path, old, new
+        character(len=:), allocatable :: text
+        integer :: k, u
+        text = file_text(path)
+        k = index(text, old)
+        if (k == 0) return
+        text = text(1:k - 1)//new//text(k + len(old):)
+        open (newunit=u, file=path, status='replace', action='write', access='stream', &
+              form='unformatted')
+        write (u) text
+        close (u)
+    end subroutine replace_in_file
 
     !> A case without contacts solves the linear problem, and says so: a warning on
     !> standard error and in the summary (key no_contact), exit code 0.

@@ -105,15 +105,19 @@ contains
             return
         end if
         ! contact laws (doc/contacts.md) run only in the methods that handle them so far
-        if (result%method == 'reference' .and. .not. reference_handles(case%model, why)) then
-            call fatal_error(error, "&run method = 'reference': "//why//" (&run method = "// &
-                             "'euler'; method 'all' compares with it)", stickslip_stat%input)
+        if ((result%method == 'reference' .or. result%method == 'study' .or. &
+             result%method == 'robustness') .and. .not. reference_handles(case%model, why)) then
+            ! these methods measure against the exact reference
+            call fatal_error(error, "&run method = '"//result%method//"': "//why// &
+                             " (&run method = 'euler'; method 'all' compares the weighted "// &
+                             "residual with it)", stickslip_stat%input)
             call name_case_file(case, error)
             return
         end if
         if (has_contact_laws(case%model) .and. result%method /= 'hbm' .and. &
             result%method /= 'euler' .and. result%method /= 'reference' .and. &
-            result%method /= 'all' .and. result%method /= 'sweep') then
+            result%method /= 'all' .and. result%method /= 'sweep' .and. &
+            result%method /= 'study' .and. result%method /= 'robustness') then
             call fatal_error(error, "&friction: contact laws (a normal direction, a second "// &
                              "tangential direction or a tangential_stiffness) are not yet "// &
                              "handled by &run method = '"//result%method//"'", &

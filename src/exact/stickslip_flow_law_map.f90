@@ -218,8 +218,8 @@ contains
                 do j = 1, self%nc
                     if (code(j) == oldcode(j) .and. j /= jev) cycle
                     call add_event(te, j, law_kind(oldcode(j), code(j), j == jev .and. impact), &
-                                   merge(0, code(j), code(j) == 2), dot_product(self%modes(imnew)%force( &
-                                   self%cs%first(j), :), ye), &
+                                   merge(0, code(j), code(j) == 2), &
+                                   dot_product(self%modes(imnew)%force(self%cs%first(j), :), ye), &
                                    dot_product(self%w(:, j), ye(n + 1:nz)))
                 end do
                 call add_phase(te, ye, imnew)

@@ -189,7 +189,8 @@ contains
 
     !> Implicit Euler on the rigid lift-off (plastic impacts) converges to the reference at
     !> first order: its max displacement error falls by at least 2.5 when the step is
-    !> divided by 4.
+    !> divided by 4 (measured: 1.4e-2 and 3.4e-3 at 1000 and 4000 steps; the bound 5e-3 on
+    !> the second only catches a wrong limit).
     subroutine test_euler_first_order(t, res)
         type(test_counter_t), intent(inout) :: t
         type(reference_result_t), intent(in) :: res

@@ -127,13 +127,8 @@ contains
         im = mode_index(self, code, error)
         if (allocated(error)) return
         if (want_orbit) then
-            orbit%t0 = t0
-            allocate (orbit%phase_t(16), orbit%phase_y(na, 16), orbit%phase_mode(16))
-            allocate (orbit%event_t(16), orbit%event_force(16), orbit%event_velocity(16), &
-                      orbit%event_contact(16), orbit%event_kind(16), orbit%event_direction(16))
-            allocate (orbit%stick_time(self%nc))
-            orbit%stick_time = 0.0_dp
-            call add_phase(t0, y, im)
+            call orbit%start(t0, na, self%nc)
+            call orbit%add_phase(t0, y, im)
         end if
 
         ! the state is stepped in balanced coordinates (yb: y; ybb: the end of the step;
@@ -213,11 +208,11 @@ contains
             if (want_orbit) then
                 do j = 1, self%nc
                     if (code(j) == oldcode(j) .and. j /= jev) cycle
-                    call add_event(te, j, event_kind(oldcode(j), code(j)), code(j), &
+                    call orbit%add_event(te, j, event_kind(oldcode(j), code(j)), code(j), &
                                    dot_product(self%modes(imnew)%force(j, :), ye), &
                                    dot_product(self%w(:, j), ye(n + 1:nz)))
                 end do
-                call add_phase(te, ye, imnew)
+                call orbit%add_phase(te, ye, imnew)
             end if
             nevents = nevents + 1
             if (te - tp <= 1.0e-12_dp*self%period) then
@@ -259,50 +254,6 @@ contains
             character(len=*), intent(in) :: message
             call fatal_error(error, "reference: "//message, stickslip_stat%numerical)
         end subroutine fail
-
-        subroutine add_phase(ts, ys, imode)
-            real(dp), intent(in) :: ts, ys(:)
-            integer, intent(in) :: imode
-            real(dp), allocatable :: rt(:), ry(:, :)
-            integer, allocatable :: im2(:)
-            integer :: m
-            m = orbit%nphase
-            if (m == size(orbit%phase_t)) then
-                allocate (rt(2*m), ry(na, 2*m), im2(2*m))
-                rt(1:m) = orbit%phase_t
-                ry(:, 1:m) = orbit%phase_y
-                im2(1:m) = orbit%phase_mode
-                call move_alloc(rt, orbit%phase_t)
-                call move_alloc(ry, orbit%phase_y)
-                call move_alloc(im2, orbit%phase_mode)
-            end if
-            orbit%nphase = m + 1
-            orbit%phase_t(m + 1) = ts
-            orbit%phase_y(:, m + 1) = ys
-            orbit%phase_mode(m + 1) = imode
-        end subroutine add_phase
-
-        subroutine add_event(ts, contact, kind, direction, force, velocity)
-            real(dp), intent(in) :: ts, force, velocity
-            integer, intent(in) :: contact, kind, direction
-            integer :: m
-            m = orbit%nevent
-            if (m == size(orbit%event_t)) then
-                orbit%event_t = [orbit%event_t, orbit%event_t]
-                orbit%event_force = [orbit%event_force, orbit%event_force]
-                orbit%event_velocity = [orbit%event_velocity, orbit%event_velocity]
-                orbit%event_contact = [orbit%event_contact, orbit%event_contact]
-                orbit%event_kind = [orbit%event_kind, orbit%event_kind]
-                orbit%event_direction = [orbit%event_direction, orbit%event_direction]
-            end if
-            orbit%nevent = m + 1
-            orbit%event_t(m + 1) = ts
-            orbit%event_contact(m + 1) = contact
-            orbit%event_kind(m + 1) = kind
-            orbit%event_direction(m + 1) = direction
-            orbit%event_force(m + 1) = force
-            orbit%event_velocity(m + 1) = velocity
-        end subroutine add_event
 
         !> Friction dissipation of the phase (exact: mu N |change of w^T x| in slip) and
         !> time in stick.

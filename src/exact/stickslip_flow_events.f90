@@ -18,7 +18,7 @@ module stickslip_flow_events
     implicit none
     private
     public :: event_stick, event_slip, event_reversal, event_graze, event_kind, event_name
-    public :: find_event, first_crossing, value_at
+    public :: find_event, row_crossing
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
     !> reverses without sticking; a slipping contact's velocity touches zero and it goes on.
@@ -106,34 +106,52 @@ contains
 
         subroutine test(col, kind)
             integer, intent(in) :: col, kind
-            real(dp) :: ga, gb, da, db, thr, tmin, h
-            associate (r => md%rows(:, col))
-                h = tb - ta
-                ga = dot_product(r, ya)
-                gb = dot_product(r, yb)
-                da = dot_product(md%drows(:, col), ya)
-                db = dot_product(md%drows(:, col), yb)
-                thr = 1.0e-9_dp*gscale*self%omega
-                if (gb <= 0.0_dp) then
-                    tau = first_crossing(md, self%delta, ya, r, 0, h)
-                else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
-                    ! a dip between two positive values: does its minimum go below zero?
-                    tmin = first_crossing(md, self%delta, ya, -r, 1, h)
-                    if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
-                    tau = first_crossing(md, self%delta, ya, r, 0, tmin)
-                else
-                    return
-                end if
-                if (tau < best) then
-                    best = tau
-                    found = .true.
-                    jev = j
-                    kev = kind
-                    c = r
-                end if
-            end associate
+            tau = row_crossing(self, md, col, gscale, ta, ya, tb, yb)
+            if (tau < best) then
+                best = tau
+                found = .true.
+                jev = j
+                kev = kind
+                c = md%rows(:, col)
+            end if
         end subroutine test
     end subroutine find_event
+
+    !> The first time tau in (0, tb - ta] where event row `col` of mode md crosses zero from
+    !> the balanced state ya at ta (yb the state at tb), or huge when it does not: a row
+    !> that ends non-positive, or dips below zero between two positive values (a minimum
+    !> found when its slope changes sign by more than 1e-9 of gscale * omega). gscale is
+    !> the scale of the row's values.
+    real(dp) function row_crossing(self, md, col, gscale, ta, ya, tb, yb) result(tau)
+        !> The dynamics md belongs to.
+        class(flow_modes_t), intent(in) :: self
+        !> The contact mode of the step.
+        type(mode_t), intent(in) :: md
+        !> The event row.
+        integer, intent(in) :: col
+        !> Scale of the row's values.
+        real(dp), intent(in) :: gscale
+        !> Start time [s] and state, end time [s] and state of the step.
+        real(dp), intent(in) :: ta, ya(:), tb, yb(:)
+        real(dp) :: ga, gb, da, db, thr, tmin, h
+        tau = huge(1.0_dp)
+        associate (r => md%rows(:, col))
+            h = tb - ta
+            ga = dot_product(r, ya)
+            gb = dot_product(r, yb)
+            da = dot_product(md%drows(:, col), ya)
+            db = dot_product(md%drows(:, col), yb)
+            thr = 1.0e-9_dp*gscale*self%omega
+            if (gb <= 0.0_dp) then
+                tau = first_crossing(md, self%delta, ya, r, 0, h)
+            else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
+                ! a dip between two positive values: does its minimum go below zero?
+                tmin = first_crossing(md, self%delta, ya, -r, 1, h)
+                if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
+                tau = first_crossing(md, self%delta, ya, r, 0, tmin)
+            end if
+        end associate
+    end function row_crossing
 
     !> g(tau) = r . exp(b tau) y0.
     real(dp) function value_at(md, delta, y0, r, tau) result(g)

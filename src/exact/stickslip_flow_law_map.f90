@@ -13,9 +13,10 @@ module stickslip_flow_law_map
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_expm, only: expm
+    use stickslip_lapack, only: dgesv
     use stickslip_flow_modes, only: ngauss, mode_t, flow_modes_t, propagate, &
         gauss_exponentials, identity_matrix
-    use stickslip_flow_events, only: event_kind, event_name, first_crossing, value_at
+    use stickslip_flow_events, only: event_kind, event_name, row_crossing
     use stickslip_flow_laws, only: law_mode_index, law_modes_at, impact_jump, law_start_codes, &
         event_open, event_close
     use stickslip_flow_orbit, only: orbit_t
@@ -107,15 +108,8 @@ contains
         y = matmul(self%tbi, yb)
         y(nz + 1:) = self%exo(t0)
         if (want_orbit) then
-            orbit%t0 = t0
-            allocate (orbit%phase_t(16), orbit%phase_y(na, 16), orbit%phase_mode(16))
-            allocate (orbit%event_t(16), orbit%event_force(16), orbit%event_velocity(16), &
-                      orbit%event_contact(16), orbit%event_kind(16), orbit%event_direction(16))
-            allocate (orbit%stick_time(self%nc), orbit%open_time(self%nc))
-            orbit%stick_time = 0.0_dp
-            orbit%open_time = 0.0_dp
-            orbit%impact_loss = 0.0_dp
-            call add_phase(t0, y, im)
+            call orbit%start(t0, na, self%nc)
+            call orbit%add_phase(t0, y, im)
         end if
 
         t = t0
@@ -217,12 +211,12 @@ contains
             if (want_orbit) then
                 do j = 1, self%nc
                     if (code(j) == oldcode(j) .and. j /= jev) cycle
-                    call add_event(te, j, law_kind(oldcode(j), code(j), j == jev .and. impact), &
+                    call orbit%add_event(te, j, law_kind(oldcode(j), code(j), j == jev .and. impact), &
                                    merge(0, code(j), code(j) == 2), &
                                    dot_product(self%modes(imnew)%force(self%cs%first(j), :), ye), &
                                    dot_product(self%w(:, j), ye(n + 1:nz)))
                 end do
-                call add_phase(te, ye, imnew)
+                call orbit%add_phase(te, ye, imnew)
             end if
             nevents = nevents + 1
             if (te - tp <= 1.0e-12_dp*self%period) then
@@ -277,50 +271,6 @@ contains
                 law_kind = event_kind(old, new)
             end if
         end function law_kind
-
-        subroutine add_phase(ts, ys, imode)
-            real(dp), intent(in) :: ts, ys(:)
-            integer, intent(in) :: imode
-            real(dp), allocatable :: rt(:), ry(:, :)
-            integer, allocatable :: im2(:)
-            integer :: m
-            m = orbit%nphase
-            if (m == size(orbit%phase_t)) then
-                allocate (rt(2*m), ry(na, 2*m), im2(2*m))
-                rt(1:m) = orbit%phase_t
-                ry(:, 1:m) = orbit%phase_y
-                im2(1:m) = orbit%phase_mode
-                call move_alloc(rt, orbit%phase_t)
-                call move_alloc(ry, orbit%phase_y)
-                call move_alloc(im2, orbit%phase_mode)
-            end if
-            orbit%nphase = m + 1
-            orbit%phase_t(m + 1) = ts
-            orbit%phase_y(:, m + 1) = ys
-            orbit%phase_mode(m + 1) = imode
-        end subroutine add_phase
-
-        subroutine add_event(ts, contact, kind, direction, force, velocity)
-            real(dp), intent(in) :: ts, force, velocity
-            integer, intent(in) :: contact, kind, direction
-            integer :: m
-            m = orbit%nevent
-            if (m == size(orbit%event_t)) then
-                orbit%event_t = [orbit%event_t, orbit%event_t]
-                orbit%event_force = [orbit%event_force, orbit%event_force]
-                orbit%event_velocity = [orbit%event_velocity, orbit%event_velocity]
-                orbit%event_contact = [orbit%event_contact, orbit%event_contact]
-                orbit%event_kind = [orbit%event_kind, orbit%event_kind]
-                orbit%event_direction = [orbit%event_direction, orbit%event_direction]
-            end if
-            orbit%nevent = m + 1
-            orbit%event_t(m + 1) = ts
-            orbit%event_contact(m + 1) = contact
-            orbit%event_kind(m + 1) = kind
-            orbit%event_direction(m + 1) = direction
-            orbit%event_force(m + 1) = force
-            orbit%event_velocity(m + 1) = velocity
-        end subroutine add_event
 
         !> Time stuck and open over the phase just ended.
         subroutine close_phase(md, duration)
@@ -429,33 +379,17 @@ contains
 
         subroutine test(col, kind)
             integer, intent(in) :: col, kind
-            real(dp) :: ga, gb, da, db, thr, tmin, hh
-            associate (r => md%rows(:, col))
-                hh = tb - ta
-                ga = dot_product(r, ya)
-                gb = dot_product(r, yb2)
-                da = dot_product(md%drows(:, col), ya)
-                db = dot_product(md%drows(:, col), yb2)
-                thr = 1.0e-9_dp*gscale*self%omega
-                if (gb <= 0.0_dp) then
-                    tau = first_crossing(md, self%delta, ya, r, 0, hh)
-                else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
-                    tmin = first_crossing(md, self%delta, ya, -r, 1, hh)
-                    if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
-                    tau = first_crossing(md, self%delta, ya, r, 0, tmin)
-                else
-                    return
-                end if
-                if (tau < best) then
-                    best = tau
-                    found = .true.
-                    jev = jj
-                    kev = kind
-                    c = r
-                end if
-            end associate
+            tau = row_crossing(self, md, col, gscale, ta, ya, tb, yb2)
+            if (tau < best) then
+                best = tau
+                found = .true.
+                jev = jj
+                kev = kind
+                c = md%rows(:, col)
+            end if
         end subroutine test
     end subroutine find_law_event
+
     !> Put every rigid unilateral contact whose gap is zero or negative (below 1e-9 of its
     !> scale) at zero gap: the M-orthogonal projection of the displacement, in balanced
     !> coordinates p = S q (x = Phi q): q <- q - Nt G^-1 (Nt^T q + gap), G = Nt^T Nt.
@@ -467,8 +401,9 @@ contains
         real(dp), intent(inout) :: yb(:)
         !> The Jacobian of the correction.
         real(dp), intent(out) :: pj(:, :)
-        real(dp), allocatable :: nt(:, :), g(:, :), rhs(:, :), q(:), gi(:, :)
-        integer :: j, n, m, k, info
+        real(dp), allocatable :: nt(:, :), rhs(:, :), q(:), x(:, :)
+        integer :: j, n, m, k
+        logical :: ok
         n = self%n
         pj = identity_matrix(2*n)
         allocate (nt(n, 0))
@@ -483,17 +418,14 @@ contains
         end do
         m = size(nt, 2)
         if (m == 0) return
-        g = matmul(transpose(nt), nt)
-        call dgesv_small(m, g, rhs, info)
-        if (info /= 0) return
-        q = q - matmul(nt, rhs(:, 1))
+        ! X = G^-1 [Nt^T q + gap, Nt^T]
+        call gram_solve(nt, reshape([rhs(:, 1), transpose(nt)], [m, n + 1]), x, ok)
+        if (.not. ok) return
+        q = q - matmul(nt, x(:, 1))
         yb(1:n) = q*self%s
         ! d p_new / d p = S (I - Nt G^-1 Nt^T) S^-1
-        gi = transpose(nt)
         do k = 1, n
-            rhs(:, 1) = gi(:, k)
-            call dgesv_small(m, g, rhs, info)
-            pj(1:n, k) = pj(1:n, k) - self%s*matmul(nt, rhs(:, 1))/self%s(k)
+            pj(1:n, k) = pj(1:n, k) - self%s*matmul(nt, x(:, k + 1))/self%s(k)
         end do
     end subroutine close_rigid_gaps
 
@@ -510,8 +442,9 @@ contains
         real(dp), intent(inout) :: yb(:)
         !> Jacobian of the start corrections, composed with this one's.
         real(dp), intent(inout), optional :: pj(:, :)
-        real(dp), allocatable :: ctm(:, :), g(:, :), u(:, :), pu(:, :)
-        integer :: jj, info, m, n, k
+        real(dp), allocatable :: ctm(:, :), x(:, :)
+        integer :: jj, m, n
+        logical :: ok
         n = self%n
         allocate (ctm(n, 0))
         do jj = 1, self%nc
@@ -524,59 +457,33 @@ contains
         end do
         m = size(ctm, 2)
         if (m == 0) return
-        g = matmul(transpose(ctm), ctm)
-        allocate (u(m, 1))
-        u(:, 1) = matmul(yb(n + 1:2*n), ctm)
-        call dgesv_small(m, g, u, info)
-        if (info /= 0) return
-        yb(n + 1:2*n) = yb(n + 1:2*n) - matmul(ctm, u(:, 1))
-        if (.not. present(pj)) return
+        ! X = G^-1 [Ct^T u, Ct^T]
+        call gram_solve(ctm, reshape([matmul(yb(n + 1:2*n), ctm), transpose(ctm)], &
+                                     [m, n + 1]), x, ok)
+        if (.not. ok) return
+        yb(n + 1:2*n) = yb(n + 1:2*n) - matmul(ctm, x(:, 1))
         ! P = I - Ct G^-1 Ct^T on the velocities
-        allocate (pu(n, n))
-        pu = identity_matrix(n)
-        do k = 1, n
-            u(:, 1) = ctm(k, :)
-            call dgesv_small(m, g, u, info)
-            pu(:, k) = pu(:, k) - matmul(ctm, u(:, 1))
-        end do
-        pj(n + 1:2*n, :) = matmul(pu, pj(n + 1:2*n, :))
+        if (present(pj)) pj(n + 1:2*n, :) = matmul(identity_matrix(n) - &
+                                                   matmul(ctm, x(:, 2:)), pj(n + 1:2*n, :))
     end subroutine project_velocities
 
-    !> Solve g x = b (m x m, one right-hand side) by Gaussian elimination with partial
-    !> pivoting; info = 1 when a pivot vanishes.
-    pure subroutine dgesv_small(m, g, b, info)
-        integer, intent(in) :: m
-        real(dp), intent(in) :: g(:, :)
-        real(dp), intent(inout) :: b(:, :)
-        integer, intent(out) :: info
-        real(dp) :: w(m, m), f, t
-        integer :: i, k, p, q
-        w = g
-        info = 0
-        do k = 1, m
-            p = k - 1 + maxloc(abs(w(k:m, k)), 1)
-            if (.not. (abs(w(p, k)) > 1.0e-300_dp)) then
-                info = 1
-                return
-            end if
-            if (p /= k) then
-                do q = 1, m
-                    t = w(k, q)
-                    w(k, q) = w(p, q)
-                    w(p, q) = t
-                end do
-                t = b(k, 1)
-                b(k, 1) = b(p, 1)
-                b(p, 1) = t
-            end if
-            do i = k + 1, m
-                f = w(i, k)/w(k, k)
-                w(i, k:m) = w(i, k:m) - f*w(k, k:m)
-                b(i, 1) = b(i, 1) - f*b(k, 1)
-            end do
-        end do
-        do i = m, 1, -1
-            b(i, 1) = (b(i, 1) - dot_product(w(i, i + 1:m), b(i + 1:m, 1)))/w(i, i)
-        end do
-    end subroutine dgesv_small
+    !> x = (C^T C)^-1 b for the m columns of c (n x m) and b (m x k) (LAPACK dgesv); ok =
+    !> .false. when C^T C is singular (dependent constraint directions).
+    subroutine gram_solve(c, b, x, ok)
+        !> The directions, n x m.
+        real(dp), intent(in) :: c(:, :)
+        !> Right-hand sides, m x k.
+        real(dp), intent(in) :: b(:, :)
+        !> The solutions, m x k.
+        real(dp), allocatable, intent(out) :: x(:, :)
+        !> The system was solved.
+        logical, intent(out) :: ok
+        real(dp) :: g(size(c, 2), size(c, 2))
+        integer :: ipiv(size(c, 2)), info, m
+        m = size(c, 2)
+        g = matmul(transpose(c), c)
+        x = b
+        call dgesv(m, size(b, 2), g, m, ipiv, x, m, info)
+        ok = info == 0 .and. all(ieee_is_finite(x))
+    end subroutine gram_solve
 end module stickslip_flow_law_map

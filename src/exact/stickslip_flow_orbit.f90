@@ -1,5 +1,5 @@
 !> One period of the exact flow, recorded (stickslip_flow, stickslip_flow_law_map): its
-!> phases, its events and its energy balance. Plain data.
+!> phases, its events and its energy balance, with the procedures that record them.
 module stickslip_flow_orbit
     use stickslip_kinds, only: dp
     implicit none
@@ -32,5 +32,87 @@ module stickslip_flow_orbit
         !> then work_forcing = diss_friction + diss_damping + impact_loss).
         real(dp), allocatable :: open_time(:)
         real(dp) :: impact_loss = 0.0_dp
+    contains
+        procedure :: start => orbit_start
+        procedure :: add_phase => orbit_add_phase
+        procedure :: add_event => orbit_add_event
     end type orbit_t
+
+contains
+
+    !> Start recording a period at t0 [s]: room for 16 phases of augmented states of size na
+    !> and 16 events (both grow), stick and open times of nc contacts set to zero.
+    subroutine orbit_start(self, t0, na, nc)
+        !> The orbit (reset).
+        class(orbit_t), intent(inout) :: self
+        !> Start time [s].
+        real(dp), intent(in) :: t0
+        !> Augmented state size and number of contacts.
+        integer, intent(in) :: na, nc
+        self%t0 = t0
+        self%nphase = 0
+        self%nevent = 0
+        allocate (self%phase_t(16), self%phase_y(na, 16), self%phase_mode(16))
+        allocate (self%event_t(16), self%event_force(16), self%event_velocity(16), &
+                  self%event_contact(16), self%event_kind(16), self%event_direction(16))
+        allocate (self%stick_time(nc), self%open_time(nc))
+        self%stick_time = 0.0_dp
+        self%open_time = 0.0_dp
+        self%impact_loss = 0.0_dp
+    end subroutine orbit_start
+
+    !> A phase starting at ts [s] in state ys (augmented, model coordinates) and mode imode.
+    subroutine orbit_add_phase(self, ts, ys, imode)
+        !> The orbit.
+        class(orbit_t), intent(inout) :: self
+        !> Start time [s] and state of the phase.
+        real(dp), intent(in) :: ts, ys(:)
+        !> Its mode (index in the flow's cache).
+        integer, intent(in) :: imode
+        real(dp), allocatable :: rt(:), ry(:, :)
+        integer, allocatable :: im2(:)
+        integer :: m
+        m = self%nphase
+        if (m == size(self%phase_t)) then
+            allocate (rt(2*m), ry(size(ys), 2*m), im2(2*m))
+            rt(1:m) = self%phase_t
+            ry(:, 1:m) = self%phase_y
+            im2(1:m) = self%phase_mode
+            call move_alloc(rt, self%phase_t)
+            call move_alloc(ry, self%phase_y)
+            call move_alloc(im2, self%phase_mode)
+        end if
+        self%nphase = m + 1
+        self%phase_t(m + 1) = ts
+        self%phase_y(:, m + 1) = ys
+        self%phase_mode(m + 1) = imode
+    end subroutine orbit_add_phase
+
+    !> An event at ts [s] of `contact`: its kind, the slip direction after it, the friction
+    !> force [N] and slip velocity [m/s] there.
+    subroutine orbit_add_event(self, ts, contact, kind, direction, force, velocity)
+        !> The orbit.
+        class(orbit_t), intent(inout) :: self
+        !> Time [s], friction force [N], slip velocity [m/s].
+        real(dp), intent(in) :: ts, force, velocity
+        !> Contact, kind and slip direction after the event.
+        integer, intent(in) :: contact, kind, direction
+        integer :: m
+        m = self%nevent
+        if (m == size(self%event_t)) then
+            self%event_t = [self%event_t, self%event_t]
+            self%event_force = [self%event_force, self%event_force]
+            self%event_velocity = [self%event_velocity, self%event_velocity]
+            self%event_contact = [self%event_contact, self%event_contact]
+            self%event_kind = [self%event_kind, self%event_kind]
+            self%event_direction = [self%event_direction, self%event_direction]
+        end if
+        self%nevent = m + 1
+        self%event_t(m + 1) = ts
+        self%event_contact(m + 1) = contact
+        self%event_kind(m + 1) = kind
+        self%event_direction(m + 1) = direction
+        self%event_force(m + 1) = force
+        self%event_velocity(m + 1) = velocity
+    end subroutine orbit_add_event
 end module stickslip_flow_orbit

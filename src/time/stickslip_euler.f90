@@ -30,7 +30,7 @@ module stickslip_euler
         force_direction, has_contact_laws, preload_force
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_law, only: state_stick, state_slip
-    use stickslip_euler_laws, only: euler_laws_t, new_euler_laws, step_block_laws
+    use stickslip_euler_laws, only: euler_laws_t, new_euler_laws, step_block_laws, free_velocity
     use stickslip_lapack, only: dgetrf, dgetrs
     use stickslip_contact_solve, only: contact_forces
     implicit none
@@ -456,15 +456,7 @@ contains
                 y(2*n + i) = fc(i, step - first + 1)
             end do
             ! free velocity: A y, solved with S unless A holds S^{-1} [M, -h K, F]
-            do k = 1, n
-                vf(k) = a(k, 1)*y(1)
-            end do
-            do j = 2, ny
-                do k = 1, n
-                    vf(k) = vf(k) + a(k, j)*y(j)
-                end do
-            end do
-            if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
+            call free_velocity(n, ny, a, y, inverse, s, ipiv, vf)
             ! friction forces, then v = v_free + h S^{-1} W r
             if (nc == 1) then
                 acc = 0.0_dp

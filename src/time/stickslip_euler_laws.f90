@@ -16,7 +16,7 @@ module stickslip_euler_laws
     use stickslip_lapack, only: dgetrs
     implicit none
     private
-    public :: euler_laws_t, new_euler_laws, step_block_laws
+    public :: euler_laws_t, new_euler_laws, step_block_laws, free_velocity
 
     !> The contact laws of an implicit Euler run and the state they carry between steps.
     type :: euler_laws_t
@@ -150,15 +150,7 @@ contains
             do i = 1, nf
                 y(2*n + i) = fc(i, step - first + 1)
             end do
-            do k = 1, n
-                vf(k) = amat(k, 1)*y(1)
-            end do
-            do j = 2, ny
-                do k = 1, n
-                    vf(k) = vf(k) + amat(k, j)*y(j)
-                end do
-            end do
-            if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
+            call free_velocity(n, ny, amat, y, inverse, s, ipiv, vf)
             ! free kinematic quantities: slider velocities (with the slider's last force),
             ! gaps / h at the end of the step
             do j = 1, nch
@@ -211,4 +203,32 @@ contains
             end do
         end do
     end subroutine step_block_laws
+    !> The free velocity of a step, vf = S^-1 A y: the written-out product A y (no array
+    !> temporary), then solved with the LU factors of S unless A already holds S^-1 [M,
+    !> -h K, F] (`inverse`). Shared by the plain and the contact-law step kernels.
+    subroutine free_velocity(n, ny, a, y, inverse, s, ipiv, vf)
+        !> DOFs and the size of y.
+        integer, intent(in) :: n, ny
+        !> [M, -h K, F] or S^-1 times it, n x ny.
+        real(dp), intent(in) :: a(n, ny)
+        !> [v; x; forcing terms].
+        real(dp), intent(in) :: y(ny)
+        !> a holds S^-1 [M, -h K, F].
+        logical, intent(in) :: inverse
+        !> LU factors of S and their pivots (used when not inverse).
+        real(dp), intent(in) :: s(n, n)
+        integer, intent(in) :: ipiv(n)
+        !> The free velocity [m/s].
+        real(dp), intent(out) :: vf(n)
+        integer :: j, k, info
+        do k = 1, n
+            vf(k) = a(k, 1)*y(1)
+        end do
+        do j = 2, ny
+            do k = 1, n
+                vf(k) = vf(k) + a(k, j)*y(j)
+            end do
+        end do
+        if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
+    end subroutine free_velocity
 end module stickslip_euler_laws

@@ -68,7 +68,8 @@ module stickslip_cli
         "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all',"// &
         new_line('a')//"  'study', 'sweep' or 'robustness'). Results go to &output directory:"// &
         new_line('a')//"  hbm.csv, coefficients.csv, euler.csv, reference.csv, events.csv,"// &
-        new_line('a')//"  study.csv, frc.csv (+ frc.gp, frc.png), robustness.csv (+ maps),"// &
+        new_line('a')//"  study.csv, frc.csv (+ frc_harmonics.csv, frc.gp, frc.png,"// &
+        new_line('a')//"  frc_dissipation.png), robustness.csv (+ maps),"// &
         new_line('a')//"  summary.nml. Warnings, errors and progress go to standard error;"// &
         new_line('a')//"  --quiet: no summary and no progress. Several case files run in"// &
         new_line('a')//"  parallel (OMP_NUM_THREADS), their output printed case by case;"// &
@@ -422,7 +423,8 @@ contains
             if (allocated(error)) then
                 if (error%stat /= stickslip_stat%numerical) return
             end if
-            call draw(case%directory, "frc.gp", [character(len=20) :: "frc.png"], err_unit)
+            call draw(case%directory, "frc.gp", &
+                      [character(len=20) :: "frc.png", "frc_dissipation.png"], err_unit)
         case ('robustness')
             if (allocated(error)) return
             call draw(case%directory, "robustness.gp", &
@@ -708,7 +710,9 @@ contains
         if (allocated(res%notes)) then
             if (len(res%notes) > 0) write (u, '(a)') "  note: "//res%notes
         end if
-        write (u, '(a)') "  wrote "//case%directory//"/{frc.csv, frc.gp, summary.nml}"
+        write (u, '(a)') "  wrote "//case%directory//"/{frc.csv, frc_harmonics.csv, frc.gp, "// &
+            pictures(case%directory, [character(len=20) :: "frc.png", "frc_dissipation.png"])// &
+            "summary.nml}"
     end subroutine print_sweep_summary
 
     subroutine print_robustness_summary(u, case, rows)
@@ -728,8 +732,24 @@ contains
                 " succeeded (", 100.0_dp*count(rows%method == methods(k) .and. rows%success)/n, &
                 "%)"
         end do
-        write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, summary.nml}"
+        write (u, '(a)') "  wrote "//case%directory//"/{robustness.csv, robustness.gp, "// &
+            pictures(case%directory, [character(len=20) :: "robustness_cold.png", &
+                                      "robustness_warm.png"])//"summary.nml}"
     end subroutine print_robustness_summary
+
+    !> The pictures of `pngs` that stand in `directory` (drawn by this run: the old ones
+    !> were removed with the old result set), each followed by ", ".
+    function pictures(directory, pngs) result(list)
+        character(len=*), intent(in) :: directory, pngs(:)
+        character(len=:), allocatable :: list
+        integer :: k
+        logical :: exists
+        list = ""
+        do k = 1, size(pngs)
+            inquire (file=directory//'/'//trim(pngs(k)), exist=exists)
+            if (exists) list = list//trim(pngs(k))//", "
+        end do
+    end function pictures
 
     !> `text` made fit for one line of standard error: every byte outside printable ASCII
     !> (control characters, a line feed in a file name, bytes of a binary or non-ASCII file

@@ -105,31 +105,40 @@ contains
                    "calculix H = 45 sweep: ends at 620 rad/s (past the kink)", trim(last))
     end subroutine test_retrace
 
-    !> frc.gp of the example's sweep (full-model labels 2409, 2244) titles its curves
-    !> amp_2409 and amp_2244 as plain text: gnuplot's enhanced mode would make "_2" a
-    !> subscript ("amp" with a subscript 2, then "409").
+    !> frc.gp of the example's sweep (full-model labels 2409, 2244) names its curves
+    !> "full-model DOF 2409" and "... 2244" and labels its axes with units, all as plain
+    !> text: the terminal is noenhanced (gnuplot's enhanced mode would make "_2" of a label
+    !> a subscript).
     subroutine test_plot_titles(t)
         type(test_counter_t), intent(inout) :: t
         type(error_type), allocatable :: error
         character(len=:), allocatable :: dir
         character(len=256) :: line
         integer :: u, stat, found
+        logical :: noenhanced, units
         dir = scratch_dir()//"/calculix_plot"
         call make_directory(dir, error)
-        if (.not. allocated(error)) call write_frc_plot_script(dir, "omega", 10, error, [1, 2], &
-                                                                [2409, 2244])
+        if (.not. allocated(error)) call write_frc_plot_script(dir, "normal_load", 10, error, &
+                                                                [1, 2], [2409, 2244])
         call check(t, .not. allocated(error), "calculix: frc.gp written")
         if (allocated(error)) return
         found = 0
+        noenhanced = .false.
+        units = .false.
         open (newunit=u, file=dir//"/frc.gp", status='old', action='read', iostat=stat)
         do while (stat == 0)
             read (u, '(a)', iostat=stat) line
             if (stat /= 0) exit
-            if (index(line, "title 'amp_2409' noenhanced") > 0) found = found + 1
-            if (index(line, "title 'amp_2244' noenhanced") > 0) found = found + 1
+            if (index(line, "title 'full-model DOF 2409'") > 0) found = found + 1
+            if (index(line, "title 'full-model DOF 2244'") > 0) found = found + 1
+            if (index(line, "set terminal pngcairo") == 1) noenhanced = index(line, " noenhanced") > 0
+            if (index(line, "set xlabel 'normal load N [N]'") == 1) units = .true.
         end do
         close (u)
-        call check(t, found == 2, "calculix: frc.gp titles amp_2409, amp_2244 as plain text")
+        call check(t, found == 4, "calculix: frc.gp names its curves full-model DOF 2409, "// &
+                   "2244 in both pictures")
+        call check(t, noenhanced, "calculix: frc.gp draws its text plain (noenhanced)")
+        call check(t, units, "calculix: frc.gp labels a normal_load sweep 'normal load N [N]'")
     end subroutine test_plot_titles
 
     !> stiffness.mtx and mass.mtx: declared symmetric, N x N, exactly symmetric after the

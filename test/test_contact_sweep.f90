@@ -95,8 +95,11 @@ contains
         type(sweep_result_t) :: res
         type(hbm_solution_t) :: sol, last
         type(error_type), allocatable :: error
-        real(dp) :: worst, balance
-        integer :: k, i, missed
+        real(dp), parameter :: pi = acos(-1.0_dp)
+        real(dp) :: worst, balance, coefs, work, worst_work
+        integer :: k, i, c, missed
+        coefs = 0.0_dp
+        worst_work = 0.0_dp
         m = liftoff_model(10.0_dp, 0.0_dp)
         ho%harmonics = 15
         ho%samples = 256
@@ -140,7 +143,28 @@ contains
                         res%points(k)%normal_max(1))
             balance = max(balance, abs(sol%work_forcing - res%points(k)%dissipation)/ &
                           sol%work_forcing)
+            ! the point's Fourier coefficients (frc_harmonics.csv): the solve's, the
+            ! displacements along the channels (tangent DOF 1, normal DOF 2), and the work
+            ! of the contact forces integrated exactly from them is the point's
+            ! diss_friction (every channel: the normal force's work is the truncation's)
+            associate (p => res%points(k))
+                coefs = max(coefs, maxval(abs(p%xcoef - sol%xcoef))/maxval(abs(sol%xcoef)), &
+                            maxval(abs(p%ucoef(:, 1) - p%xcoef(:, 1))), &
+                            maxval(abs(p%ucoef(:, 2) - p%xcoef(:, 2))))
+                work = 0.0_dp
+                do c = 1, size(p%rcoef, 2)
+                    do i = 2, size(p%harmonic), 2
+                        work = work - pi*p%harmonic(i)*(p%rcoef(i, c)*p%ucoef(i + 1, c) - &
+                                                        p%rcoef(i + 1, c)*p%ucoef(i, c))
+                    end do
+                end do
+                worst_work = max(worst_work, abs(work - p%diss_friction)/p%dissipation)
+            end associate
         end do
+        call check(t, coefs <= 1.0e-5_dp .and. worst_work <= 1.0e-9_dp, "contact_sweep: "// &
+                   parameter//": the points' coefficients are the solves', the friction "// &
+                   "work from them is diss_friction", "coefficients "//real_text(coefs)// &
+                   ", work "//real_text(worst_work))
         call check_error(t, error, "contact_sweep: "//parameter//": point solves", .false.)
         call check(t, worst <= 1.0e-5_dp .and. balance <= 1.0e-6_dp .and. &
                    missed <= res%npoints/5, "contact_sweep: "// &

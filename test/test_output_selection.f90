@@ -549,10 +549,11 @@ contains
         call check_error(t, error, "frc unit: frc.gp written", .false.)
         if (allocated(error)) return
         script = slurp_file(frc_dir//"/frc.gp")
-        call check(t, index(script, "title 'amp_4'") > 0 .and. index(script, "title 'amp_2'") > 0 &
-                   .and. index(script, "amp_1") == 0 .and. index(script, "amp_3") == 0 .and. &
-                   index(script, "amp_5") == 0 .and. index(script, "do for [k=2:3]") > 0 .and. &
-                   index(script, "using 1:4 ") == 0, "frc unit: frc.gp draws amp_4, amp_2 only")
+        call check(t, index(script, "title 'DOF 4'") > 0 .and. index(script, "title 'DOF 2'") > 0 &
+                   .and. index(script, "DOF 1") == 0 .and. index(script, "DOF 3") == 0 .and. &
+                   index(script, "DOF 5") == 0 .and. index(script, "do for [k=2:3]") > 0 .and. &
+                   index(script, "using 1:4 ") == 0 .and. index(script, "using 4:") == 0, &
+                   "frc unit: frc.gp draws amp_4, amp_2 only")
         ! labels (a reduced model: reduced DOFs 4, 2 are full DOFs 70, 40)
         call write_frc_csv(frc_dir, res, error, [4, 2], [70, 40])
         call check_error(t, error, "frc unit, labels: written", .false.)
@@ -566,9 +567,10 @@ contains
         call check_error(t, error, "frc unit, labels: frc.gp written", .false.)
         if (allocated(error)) return
         script = slurp_file(frc_dir//"/frc.gp")
-        call check(t, index(script, "title 'amp_70'") > 0 .and. &
-                   index(script, "title 'amp_40'") > 0 .and. index(script, "amp_4'") == 0, &
-                   "frc unit, labels: frc.gp titles amp_70, amp_40")
+        call check(t, index(script, "title 'full-model DOF 70'") > 0 .and. &
+                   index(script, "title 'full-model DOF 40'") > 0 .and. &
+                   index(script, "DOF 4'") == 0, &
+                   "frc unit, labels: frc.gp titles full-model DOF 70, 40")
 
         call write_lines(dir//"/seed_sweep.nml", [character(len=120) :: sweep_case, &
             "&output directory = '"//sweep_dir//"', dofs = 2 /"])
@@ -579,7 +581,7 @@ contains
                    "arclength,diss_friction,diss_damping,nfev", "seed sweep dofs = 2: frc.csv "// &
                    "header", first_line(sweep_dir//"/frc.csv"))
         script = slurp_file(sweep_dir//"/frc.gp")
-        call check(t, index(script, "title 'amp_2'") > 0 .and. index(script, "amp_1") == 0, &
+        call check(t, index(script, "title 'DOF 2'") > 0 .and. index(script, "DOF 1") == 0, &
                    "seed sweep dofs = 2: frc.gp draws amp_2 only")
     end subroutine test_frc
 

@@ -11,7 +11,8 @@ module test_sweep_files
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, checkpoint_name
     use stickslip_files, only: make_directory, remove_file
     use test_cli, only: cli
-    use fixtures, only: enter_project_root, scratch, write_lines, sweep_case
+    use fixtures, only: enter_project_root, scratch, write_lines, sweep_case, first_line, rt, &
+        file_text
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -51,7 +52,7 @@ contains
     subroutine test_cli_robustness(t)
         type(test_counter_t), intent(inout) :: t
         character(len=*), parameter :: dir = scratch//"/robustness_cli"
-        character(len=:), allocatable :: out, err
+        character(len=:), allocatable :: out, err, script
         character(len=2000) :: line
         integer :: code, u, stat, rows
         logical :: exists
@@ -76,6 +77,11 @@ contains
         call check(t, rows == 10, "robustness cli: one row per run")
         inquire (file=dir//"/robustness.gp", exist=exists)
         call check(t, exists, "robustness cli: robustness.gp written")
+        script = file_text(dir//"/robustness.gp")
+        call check(t, index(script, "title 'converged to the right solution'") > 0 .and. &
+                   index(script, "title 'converged to a wrong solution'") > 0 .and. &
+                   index(script, "title 'not converged'") > 0, &
+                   "robustness cli: the maps have a colour legend")
         call write_lines(dir//".nml", [sweep_case(1:4), &
             "&run method = 'robustness' /" // repeat(' ', 0), &
             "&robustness omegas = 2.0, -1.0 /", "&output directory = '"//dir//"' /"])
@@ -138,7 +144,120 @@ contains
         end do
         close (u)
         call check(t, exists, "sweep cli: summary says complete")
+        call check(t, index(out, "frc_harmonics.csv") > 0, "sweep cli: the wrote line names "// &
+                   "frc_harmonics.csv", out)
+        call check_harmonics(t, dir)
     end subroutine test_cli_sweep
+
+    !> frc_harmonics.csv of the seed sweep in `dir` (H = 10, 64 samples, contact on DOF 2)
+    !> against frc.csv: 2H + 1 rows a point, the point's parameter; the displacement rebuilt
+    !> from the coefficients at the solver's 64 sample times has frc.csv's amplitudes; the
+    !> contact displacement u1 is x2; and the energy the friction force dissipates over a
+    !> period, integrated exactly from the coefficients (-pi sum_h h (a_h^r b_h^u - b_h^r
+    !> a_h^u)), is frc.csv's diss_friction, which the solver summed over its samples.
+    subroutine check_harmonics(t, dir)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), intent(in) :: dir
+        real(dp), parameter :: pi = acos(-1.0_dp)
+        character(len=4000) :: line
+        character(len=40), allocatable :: f(:)
+        real(dp), allocatable :: frc(:, :), c(:, :)
+        real(dp) :: x(64, 2), tk, omega, work, worst_amp, worst_work, worst_u
+        integer, allocatable :: h(:)
+        integer :: u, stat, npt, k, m, i, d, rows
+        character(len=:), allocatable :: header
+        header = first_line(dir//"/frc_harmonics.csv")
+        call check(t, header == "point,parameter,omega,harmonic,kind,x1,x2,r1,u1", &
+                   "frc_harmonics.csv: header", header)
+        ! frc.csv: parameter, amp_1, amp_2, diss_friction (column 14)
+        allocate (frc(4, 0))
+        open (newunit=u, file=dir//"/frc.csv", status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat)
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            f = fields(line)
+            frc = reshape([frc, real_of(f(1)), real_of(f(2)), real_of(f(3)), real_of(f(14))], &
+                          [4, size(frc, 2) + 1])
+        end do
+        close (u)
+        npt = size(frc, 2)
+        open (newunit=u, file=dir//"/frc_harmonics.csv", status='old', action='read', iostat=stat)
+        call check(t, stat == 0, "frc_harmonics.csv written")
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat)
+        worst_amp = 0.0_dp
+        worst_work = 0.0_dp
+        worst_u = 0.0_dp
+        rows = 0
+        do k = 1, npt
+            ! the 21 rows of point k: harmonic, then x1, x2, r1, u1
+            allocate (c(21, 4), h(21))
+            do m = 1, 21
+                read (u, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                rows = rows + 1
+                f = fields(line)
+                if (int(real_of(f(1))) /= k .or. real_of(f(2)) /= frc(1, k)) stat = -99
+                omega = real_of(f(3))
+                h(m) = int(real_of(f(4)))
+                c(m, :) = [(real_of(f(5 + i)), i=1, 4)]
+            end do
+            if (stat /= 0) exit
+            ! x(t_j) at the solver's samples t_j = j T / 64
+            do i = 1, 64
+                tk = (i - 1)*2.0_dp*pi/omega/64.0_dp
+                do d = 1, 2
+                    x(i, d) = c(1, d)
+                    do m = 2, 21, 2
+                        x(i, d) = x(i, d) + c(m, d)*cos(h(m)*omega*tk) + &
+                                  c(m + 1, d)*sin(h(m)*omega*tk)
+                    end do
+                end do
+            end do
+            do d = 1, 2
+                worst_amp = max(worst_amp, abs(maxval(abs(x(:, d))) - frc(1 + d, k))/frc(1 + d, k))
+            end do
+            work = 0.0_dp
+            do m = 2, 21, 2
+                work = work - pi*h(m)*(c(m, 3)*c(m + 1, 4) - c(m + 1, 3)*c(m, 4))
+            end do
+            worst_work = max(worst_work, abs(work - frc(4, k))/max(frc(4, k), 1.0e-300_dp))
+            worst_u = max(worst_u, maxval(abs(c(:, 4) - c(:, 2))))
+            deallocate (c, h)
+        end do
+        close (u)
+        call check(t, stat == 0 .and. rows == 21*npt, "frc_harmonics.csv: 21 rows for each "// &
+                   "of the points of frc.csv, numbered, with their parameter")
+        call check(t, worst_amp <= 1.0e-12_dp, "frc_harmonics.csv: x rebuilt at the samples "// &
+                   "has frc.csv's amplitudes", rt(worst_amp))
+        call check(t, worst_u == 0.0_dp, "frc_harmonics.csv: u1 = x2 (contact on DOF 2)")
+        call check(t, worst_work <= 1.0e-9_dp, "frc_harmonics.csv: the friction work "// &
+                   "integrated from the coefficients is diss_friction", rt(worst_work))
+    contains
+        !> The comma-separated fields of `text`.
+        function fields(text) result(out)
+            character(len=*), intent(in) :: text
+            character(len=40), allocatable :: out(:)
+            integer :: a, b
+            allocate (out(0))
+            a = 1
+            do
+                b = index(text(a:), ',')
+                if (b == 0) then
+                    out = [character(len=40) :: out, adjustl(text(a:))]
+                    exit
+                end if
+                out = [character(len=40) :: out, adjustl(text(a:a + b - 2))]
+                a = a + b
+            end do
+        end function fields
+        real(dp) function real_of(text)
+            character(len=*), intent(in) :: text
+            read (text, *) real_of
+        end function real_of
+    end subroutine check_harmonics
 
     !> A run killed after 4 points leaves its checkpoint; running the case again resumes
     !> from it and ends with the same curve as an uninterrupted run. A checkpoint of another
@@ -184,6 +303,21 @@ contains
             end do
         end if
         call check(t, same, "resume: the same curve as an uninterrupted run")
+        ! the resumed points carry their Fourier coefficients through the checkpoint
+        same = resumed%npoints == whole%npoints
+        if (same) then
+            do k = 1, whole%npoints
+                same = same .and. allocated(resumed%points(k)%xcoef)
+                if (.not. same) exit
+                same = all(resumed%points(k)%harmonic == whole%points(k)%harmonic) .and. &
+                       all(abs(resumed%points(k)%xcoef - whole%points(k)%xcoef) <= &
+                           1.0e-10_dp*maxval(abs(whole%points(k)%xcoef))) .and. &
+                       all(abs(resumed%points(k)%ucoef - whole%points(k)%ucoef) <= &
+                           1.0e-10_dp*maxval(abs(whole%points(k)%xcoef))) .and. &
+                       resumed%points(k)%omega == whole%points(k)%omega
+            end do
+        end if
+        call check(t, same, "resume: the resumed points keep their Fourier coefficients")
         ! a checkpoint of another case
         killer%stop_after = 2
         killer%last = -1
@@ -217,10 +351,10 @@ contains
         character(len=4000) :: line
         character(len=24) :: fields(9)
         integer :: u, stat, n, k
-        character(len=*), parameter :: names(11) = [character(len=24) :: "huge unknowns", &
+        character(len=*), parameter :: names(13) = [character(len=24) :: "huge unknowns", &
             "huge points", "negative points", "other ndof", "negative count", "truncated", &
             "garbage counts", "fewer points", "a NaN value", "a link to /dev/zero", &
-            "an empty file"]
+            "an empty file", "huge coefficient count", "a NaN coefficient"]
         call write_lines(dir//".nml", [sweep_case, "&output directory = '"//dir//"' /"])
         call read_case(dir//".nml", c, error)
         if (allocated(error)) return
@@ -278,6 +412,18 @@ contains
             else if (k == 11) then
                 call remove_file(dir//"/"//checkpoint_name)
                 call write_lines(dir//"/"//checkpoint_name, [character(len=1) ::])
+            else if (k == 12) then
+                ! point 1's coefficient counts (line 9: nb, channels, omega)
+                line = saved(9)
+                line = "2147483647 "//line(index(adjustl(line), " ") + 1:)
+                call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:8), &
+                                 line, saved(10:n)])
+            else if (k == 13) then
+                ! point 1's first coefficient (line 11)
+                line = saved(11)
+                line = "NaN "//line(index(adjustl(line), " ") + 1:)
+                call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:10), &
+                                 line, saved(12:n)])
             else
                 call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:2), line, saved(4:n)])
             end if
@@ -289,6 +435,14 @@ contains
                                              "damaged checkpoint: input error (exit 1): "// &
                                              trim(names(k)))
         end do
+        ! a checkpoint of an earlier version (points without coefficients) is refused
+        call remove_file(dir//"/"//checkpoint_name)
+        call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: &
+                         "stickslip sweep checkpoint 1", saved(2:n)])
+        call run_sweep_case(c, resumed, error)
+        call check_error(t, error, "checkpoint of an earlier version refused", .true., &
+                         [character(len=40) :: "an earlier version of stickslip", &
+                          "delete it"])
         ! the intact file still resumes
         call remove_file(dir//"/"//checkpoint_name)
         call write_lines(dir//"/"//checkpoint_name, saved)

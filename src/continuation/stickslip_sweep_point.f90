@@ -20,6 +20,7 @@ module stickslip_sweep_point
     use stickslip_sweep_options, only: sweep_options_t, set_sweep_parameter
     use stickslip_sweep_result, only: frc_point_t
     use stickslip_friction_family, only: friction_family_t
+    use stickslip_contact_set, only: channel_directions
     implicit none
     private
     public :: point_tally_t, evaluate_point
@@ -133,6 +134,7 @@ contains
             pt%normal_max = maxval(ps%normal, dim=1)
         end if
         pt%stick = ps%stick_fraction
+        call keep_coefficients(m, ps, opts, pt)
         pt%harmonics = ps%harmonics
         pt%residual = ps%fnorm/max(ps%fscale, tiny(1.0_dp))
         pt%status = status
@@ -163,6 +165,34 @@ contains
             end if
         end if
     end subroutine evaluate_point
+
+    !> Keep the Fourier coefficients of point `pt` (frc_point_t: harmonic, xcoef, rcoef,
+    !> ucoef, omega) from its solution `ps` of `model`: the displacements observed as the
+    !> amplitudes are (opts%observe, or the solution's columns), every force channel, and
+    !> the displacement along each channel's direction.
+    subroutine keep_coefficients(model, ps, opts, pt)
+        !> The model at the point's parameter.
+        type(model_t), intent(in) :: model
+        !> The point's solution.
+        type(hbm_solution_t), intent(in) :: ps
+        !> Sweep options (the observation matrix).
+        type(sweep_options_t), intent(in) :: opts
+        !> The point.
+        type(frc_point_t), intent(inout) :: pt
+        real(dp), allocatable :: d(:, :)
+        pt%omega = ps%omega
+        pt%harmonic = ps%harmonic
+        if (allocated(opts%observe)) then
+            pt%xcoef = matmul(ps%xcoef, transpose(opts%observe))
+        else
+            pt%xcoef = ps%xcoef
+        end if
+        pt%rcoef = ps%rcoef
+        d = channel_directions(model, ps%contacts)
+        ! the exact sparse condensation keeps some DOFs only, the contact DOFs among them
+        if (allocated(ps%dofs)) d = d(ps%dofs, :)
+        pt%ucoef = matmul(ps%xcoef, d)
+    end subroutine keep_coefficients
 
     !> Count the failed checks of one point: its solution's diagnostics (warnings and
     !> distrust) and its truncation estimate (stickslip_checks thresholds; NaN: not

@@ -43,6 +43,18 @@ module stickslip_sweep_result
         integer :: stable = -1
         !> Relative harmonic truncation error estimate (NaN when not computed).
         real(dp) :: truncation = 0.0_dp
+        !> Fundamental angular frequency of the point [rad/s] (the parameter of a sweep in
+        !> omega, the model's omega otherwise).
+        real(dp) :: omega = 0.0_dp
+        !> The point's Fourier coefficients, one row per basis function (harmonic(k): 0 for
+        !> the constant, then cos and sin of each harmonic; u(t) = c0 + sum a_h cos(h omega
+        !> t) + b_h sin(h omega t)): of the observed displacements (the columns of
+        !> `amplitude`) [m], of every force channel (contact_set_t order: tangential, second
+        !> tangential, normal) [N] and of the displacement along each channel's direction
+        !> (w_j^T x, t2_j^T x, n_j^T x) [m]. Unallocated in a point read from an old
+        !> checkpoint.
+        integer, allocatable :: harmonic(:)
+        real(dp), allocatable :: xcoef(:, :), rcoef(:, :), ucoef(:, :)
     end type frc_point_t
 
     !> A forced-response curve.

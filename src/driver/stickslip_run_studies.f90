@@ -1,6 +1,7 @@
 !> The runs of a case that solve it many times: &run method 'study' (the work-precision
 !> study: study.csv, with its reference's reference.csv and events.csv), 'sweep' (the
-!> forced-response curve: frc.csv, frc.gp, resumable from frc.checkpoint) and
+!> forced-response curve: frc.csv, frc_harmonics.csv, frc.gp, resumable from
+!> frc.checkpoint) and
 !> 'robustness' (the grid of cold and warm starts: robustness.csv, robustness.gp). Each
 !> runs under the lock of the output directory, with an optional progress hook, and writes
 !> its table, plot script and summary.nml.
@@ -17,7 +18,9 @@ module stickslip_run_studies
     use stickslip_checkpoint, only: checkpoint_writer_t, case_fingerprint, read_checkpoint, &
         remove_checkpoint
     use stickslip_files, only: directory_lock_t
-    use stickslip_csv, only: write_study_csv, write_frc_csv, write_robustness_csv
+    use stickslip_csv, only: write_study_csv, write_frc_csv, write_frc_harmonics_csv, &
+        write_robustness_csv
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_summary, only: write_study_summary, write_sweep_summary, &
         write_robustness_summary
     use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script
@@ -87,7 +90,8 @@ contains
     end subroutine study_run
 
     !> Continue the periodic solution of `case` over the &sweep range and write frc.csv,
-    !> frc.gp (the gnuplot script of frc.png) and summary.nml into case%directory. The curve
+    !> frc_harmonics.csv (each point's Fourier coefficients), frc.gp (the gnuplot script of
+    !> frc.png and frc_dissipation.png) and summary.nml into case%directory. The curve
     !> is saved in frc.checkpoint after its first point, then at most once a second; with
     !> &sweep resume (the default) a run of the same case that finds a checkpoint goes on
     !> from it. The checkpoint is removed once the files are written. A curve that stopped
@@ -140,6 +144,7 @@ contains
         integer :: ncols
 
         type(sweep_options_t) :: opts
+        type(contact_set_t) :: contacts
         integer :: namp
 
         ! a reduced model's amplitudes are those of the selected full-model DOFs
@@ -191,6 +196,9 @@ contains
         call after_method(error, wanted)
         if (.not. wanted) return
         call write_frc_csv(dir, res, error, cols, selected_dofs(case))
+        if (allocated(error)) return
+        call new_contact_set(contacts, case%model)
+        call write_frc_harmonics_csv(dir, res, error, cols, selected_dofs(case), contacts)
         if (allocated(error)) return
         call write_frc_plot_script(dir, trim(case%sweep%parameter), &
                                    ncols, error, cols, selected_dofs(case))

@@ -22,7 +22,10 @@ module stickslip_checkpoint
 
     !> File name of the checkpoint in the output directory.
     character(len=*), parameter :: checkpoint_name = "frc.checkpoint"
-    character(len=*), parameter :: magic = "stickslip sweep checkpoint 1"
+    character(len=*), parameter :: magic = "stickslip sweep checkpoint 2"
+    !> The first line of a checkpoint of stickslip before the points held their Fourier
+    !> coefficients (refused with its own message).
+    character(len=*), parameter :: magic_1 = "stickslip sweep checkpoint 1"
 
     !> Writes the checkpoint after a point of a sweep: after the first, then whenever
     !> `interval` seconds of wall time have passed since the last write. The file holds every
@@ -163,6 +166,11 @@ contains
                 ! contact laws: a line of open shares and largest normal forces
                 if (stat == 0 .and. allocated(p%open)) write (u, rf, iostat=stat, iomsg=msg) &
                     p%open, p%normal_max
+                ! the Fourier coefficients: counts and omega, harmonics, values
+                if (stat == 0) write (u, '(i0,1x,i0,1x,' // real_fmt // ')', iostat=stat, &
+                                      iomsg=msg) size(p%harmonic), size(p%rcoef, 2), p%omega
+                if (stat == 0) write (u, '(*(i0,:,1x))', iostat=stat, iomsg=msg) p%harmonic
+                if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) p%xcoef, p%rcoef, p%ucoef
             end associate
         end do
         call close_and_rename(self%directory, checkpoint_name, u, stat, msg, error)
@@ -220,6 +228,13 @@ contains
             return
         end if
         read (u, '(a)', iostat=stat) line
+        if (stat == 0 .and. line == magic_1) then
+            close (u)
+            call fatal_error(error, path//": a checkpoint of an earlier version of stickslip "// &
+                             "(without Fourier coefficients): delete it, or set &sweep "// &
+                             "resume = .false.", stickslip_stat%input)
+            return
+        end if
         if (stat /= 0 .or. line /= magic) then
             close (u)
             call fatal_error(error, path//": not a stickslip sweep checkpoint (delete it)", &
@@ -288,10 +303,19 @@ contains
                 if (.not. allocated(p%open)) allocate (p%open(nc), p%normal_max(nc))
                 read (u, *, iostat=stat, iomsg=msg) p%open, p%normal_max
             end if
+            if (stat == 0) call read_coefficients(p)
+            if (len(problem) > 0) exit
             p%status = status
             res%points(k) = p
         end do
         close (u)
+        if (len(problem) > 0) then
+            res%npoints = 0
+            call fatal_error(error, path//": a damaged checkpoint ("//problem// &
+                             "): delete it, or set &sweep resume = .false.", &
+                             stickslip_stat%input)
+            return
+        end if
         if (stat /= 0) then
             res%npoints = 0
             call fatal_error(error, path//": a damaged checkpoint (unreadable: "// &
@@ -312,7 +336,8 @@ contains
                     if (.not. all(ieee_is_finite([q%parameter, q%arclength, q%dissipation, &
                                                   q%diss_friction, q%diss_damping, &
                                                   q%residual, q%amplitude, q%rmax, &
-                                                  q%stick]))) &
+                                                  q%stick, q%omega, q%xcoef, q%rcoef, &
+                                                  q%ucoef]))) &
                         problem = "point "//itoa(k)//" holds a value that is not a finite number"
                 end associate
             end do
@@ -327,6 +352,29 @@ contains
                              "): delete it, or set &sweep resume = .false.", &
                              stickslip_stat%input)
         end if
+
+    contains
+
+        !> The coefficient lines of point `q` (counts checked against the contacts and the
+        !> size of the file before anything is allocated; `problem` says what is wrong).
+        subroutine read_coefficients(q)
+            type(frc_point_t), intent(inout) :: q
+            integer :: nb, nch
+            read (u, *, iostat=stat, iomsg=msg) nb, nch, q%omega
+            if (stat /= 0) return
+            if (nb < 1 .or. nch < nc .or. nch > 3*nc .or. &
+                2_int64*nb*(nd + 2*nch) > bytes) then
+                problem = "a point's numbers of coefficients ("//itoa(nb)//", "//itoa(nch)// &
+                          ") are out of bounds"
+                return
+            end if
+            if (allocated(q%harmonic)) deallocate (q%harmonic, q%xcoef, q%rcoef, q%ucoef)
+            allocate (q%harmonic(nb), q%xcoef(nb, nd), q%rcoef(nb, nch), q%ucoef(nb, nch))
+            read (u, *, iostat=stat, iomsg=msg) q%harmonic
+            if (stat == 0) read (u, *, iostat=stat, iomsg=msg) q%xcoef, q%rcoef, q%ucoef
+            if (stat == 0 .and. (minval(q%harmonic) < 0 .or. q%harmonic(1) /= 0)) &
+                problem = "a point's harmonic numbers are out of bounds"
+        end subroutine read_coefficients
     end subroutine read_checkpoint
 
     !> Delete <directory>/frc.checkpoint if present (the curve is finished).

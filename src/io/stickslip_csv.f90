@@ -24,7 +24,8 @@ module stickslip_csv
     implicit none
     private
     public :: write_hbm_csv, write_samples_csv, write_coefficients_csv, write_events_csv
-    public :: write_study_csv, write_frc_csv, write_robustness_csv, real_fmt
+    public :: write_study_csv, write_frc_csv, write_frc_harmonics_csv, write_robustness_csv
+    public :: real_fmt
     public :: format_real, real_width, contact_columns
 
     !> Edit descriptor of every real in the result files: full double precision.
@@ -201,13 +202,7 @@ contains
         write (u, '(a)', iostat=stat, iomsg=msg) header
         do k = 1, sol%nb
             if (stat /= 0) exit
-            if (sol%harmonic(k) == 0) then
-                kind = "c0"
-            else if (k > 1 .and. sol%harmonic(max(k - 1, 1)) == sol%harmonic(k)) then
-                kind = "sin"
-            else
-                kind = "cos"
-            end if
+            kind = basis_kind(sol%harmonic, k)
             write (u, fmt, iostat=stat, iomsg=msg) sol%harmonic(k), kind, sol%xcoef(k, sel), &
                 sol%rcoef(k, channel)
         end do
@@ -412,6 +407,87 @@ contains
         call close_and_rename(dir, "frc.csv", u, stat, msg, error)
     end subroutine write_frc_csv
 
+    !> Write `dir`/frc_harmonics.csv, the Fourier coefficients of every point of the
+    !> forced-response curve (frc.csv's rows, numbered 1.. in the column point): header
+    !> point,parameter,omega,harmonic,kind, then x<d> for the DOFs of frc.csv's amp_<d>
+    !> columns [m], the force channels r<j> (r<j>_2, normal<j> with contact laws) [N] and
+    !> the displacements along them u<j> (u<j>_2, un<j>) [m]; one row per basis function
+    !> of the point, kind c0, cos or sin: q(t) = c0 + sum_h a_h cos(h omega t) + b_h
+    !> sin(h omega t). Points without coefficients (none in a curve of this version) are
+    !> skipped. Error: stat io.
+    subroutine write_frc_harmonics_csv(dir, res, error, dofs, labels, contacts)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The curve.
+        type(sweep_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The DOFs written (columns of the points' xcoef, as frc.csv's); absent: all.
+        integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (default: `dofs`).
+        integer, intent(in), optional :: labels(:)
+        !> The contacts' channel layout (absent: one tangential channel per contact).
+        type(contact_set_t), intent(in), optional :: contacts
+        integer :: u, k, i, m, stat, n, nch
+        character(len=512) :: msg
+        character(len=:), allocatable :: header, kind
+        character(len=80) :: fmt
+        integer, allocatable :: sel(:), numbers(:), channel(:), gap_of(:)
+        character(len=16), allocatable :: rnames(:)
+        stat = 0
+        msg = ''
+        n = 0
+        nch = 0
+        do k = 1, res%npoints
+            if (.not. allocated(res%points(k)%xcoef)) cycle
+            n = size(res%points(k)%xcoef, 2)
+            nch = size(res%points(k)%rcoef, 2)
+            exit
+        end do
+        if (present(dofs)) then
+            sel = dofs
+        else
+            sel = selection(n)
+        end if
+        numbers = column_numbers(sel, labels)
+        call contact_columns(nch, rnames, channel, gap_of, contacts)
+        rnames = pack(rnames, channel > 0)
+        channel = pack(channel, channel > 0)
+        header = "point,parameter,omega,harmonic,kind"
+        do i = 1, size(sel)
+            header = header//",x"//itoa(numbers(i))
+        end do
+        do i = 1, size(channel)
+            header = header//","//trim(rnames(i))
+        end do
+        do i = 1, size(channel)
+            if (rnames(i)(1:1) == 'n') then
+                header = header//",un"//trim(rnames(i)(7:))
+            else
+                header = header//",u"//trim(rnames(i)(2:))
+            end if
+        end do
+        write (fmt, '(a,i0,a)') '(i0,",",2(' // real_fmt // ',","),i0,",",a,",",', &
+            size(sel) + 2*size(channel), '(' // real_fmt // ',:,","))'
+        call open_temporary(dir, "frc_harmonics.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, res%npoints
+            associate (p => res%points(k))
+                if (.not. allocated(p%xcoef)) cycle
+                do m = 1, size(p%harmonic)
+                    if (stat /= 0) exit
+                    kind = basis_kind(p%harmonic, m)
+                    write (u, fmt, iostat=stat, iomsg=msg) k, p%parameter, p%omega, &
+                        p%harmonic(m), kind, p%xcoef(m, sel), p%rcoef(m, channel), &
+                        p%ucoef(m, channel)
+                end do
+            end associate
+            if (stat /= 0) exit
+        end do
+        call close_and_rename(dir, "frc_harmonics.csv", u, stat, msg, error)
+    end subroutine write_frc_harmonics_csv
+
     !> Write `dir`/robustness.csv: header
     !> method,omega,mu,harmonics,rho,rho_auto,samples,converged,success,iterations,
     !> cpu_seconds,err_amplitude,diagnosis and one row per run (logicals T/F; success:
@@ -556,6 +632,19 @@ contains
         two = 2*mod(ae, 100)
         s(24:25) = digit_pairs(two + 1:two + 2)
     end function format_real
+
+    !> The kind of basis function k of a basis whose harmonic numbers are `harmonic`:
+    !> 'c0' (the constant), 'cos' (the first of a harmonic) or 'sin' (the second).
+    pure function basis_kind(harmonic, k) result(kind)
+        integer, intent(in) :: harmonic(:), k
+        character(len=:), allocatable :: kind
+        kind = "cos"
+        if (harmonic(k) == 0) then
+            kind = "c0"
+        else if (k > 1) then
+            if (harmonic(k - 1) == harmonic(k)) kind = "sin"
+        end if
+    end function basis_kind
 
     !> The numbers naming the columns of the DOFs `sel`: `labels` when present, else `sel`.
     pure function column_numbers(sel, labels) result(numbers)

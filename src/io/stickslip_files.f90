@@ -23,10 +23,12 @@ module stickslip_files
     !> Every result file stickslip writes into an output directory (README, "Outputs"):
     !> the files that a run removes when it does not write them itself. Never the case
     !> file, the sweep checkpoint or anything else.
-    character(len=*), parameter :: result_file_names(15) = [character(len=24) :: &
+    character(len=*), parameter :: result_file_names(17) = [character(len=24) :: &
         "hbm.csv", "coefficients.csv", "full_field.mtx", "euler.csv", "reference.csv", "events.csv", &
-        "study.csv", "frc.csv", "frc.gp", "frc.png", "robustness.csv", "robustness.gp", &
-        "robustness_cold.png", "robustness_warm.png", "summary.nml"]
+        "study.csv", "frc.csv", "frc_harmonics.csv", "frc.gp", "frc.png", &
+        "frc_dissipation.png", &
+        "robustness.csv", "robustness.gp", "robustness_cold.png", "robustness_warm.png", &
+        "summary.nml"]
 
     !> The lock of an output directory, held from acquire_lock to release_lock.
     type :: directory_lock_t
@@ -286,10 +288,19 @@ contains
             if (any(keep == result_file_names(k))) cycle
             call remove_file(dir//'/'//trim(result_file_names(k)))
         end do
-        call remove_file(dir//'/frc.png.tmp')
-        call remove_file(dir//'/robustness_cold.png.tmp')
-        call remove_file(dir//'/robustness_warm.png.tmp')
+        call remove_picture_temporaries(dir)
     end subroutine remove_stale_results
+
+    !> Remove the temporaries of the pictures (<name>.png.tmp, drawn by gnuplot) from `dir`.
+    subroutine remove_picture_temporaries(dir)
+        !> The directory.
+        character(len=*), intent(in) :: dir
+        integer :: k
+        do k = 1, size(result_file_names)
+            if (index(result_file_names(k), '.png') > 0) &
+                call remove_file(dir//'/'//trim(result_file_names(k))//'.tmp')
+        end do
+    end subroutine remove_picture_temporaries
 
     !> The staging directory of this process in output directory `dir`:
     !> `dir/.stickslip.staging.<pid>`. A run writes its whole set of result files there and
@@ -373,9 +384,7 @@ contains
         do k = 1, size(result_file_names)
             call remove_file(stage//'/'//trim(result_file_names(k)))
         end do
-        call remove_file(stage//'/frc.png.tmp')
-        call remove_file(stage//'/robustness_cold.png.tmp')
-        call remove_file(stage//'/robustness_warm.png.tmp')
+        call remove_picture_temporaries(stage)
         ! the temporaries of the run that made it (its pid ends the directory's name)
         k = index(stage, '.', back=.true.)
         read (stage(k + 1:), *, iostat=stat) pid

@@ -1,4 +1,5 @@
-!> The gnuplot scripts of the pictures: frc.gp (frc.png, a forced-response curve) and
+!> The gnuplot scripts of the pictures: frc.gp (frc.png, a forced-response curve, and
+!> frc_dissipation.png, the dissipation per cycle against amplitude) and
 !> robustness.gp (robustness_cold.png, robustness_warm.png, the robustness maps). Each
 !> script reads its CSV file by a relative name, so it runs in the output directory
 !> (`cd DIR && gnuplot frc.gp`), and writes its PNGs with the name suffix held by the
@@ -16,14 +17,19 @@ module stickslip_plot_scripts
 
 contains
 
-    !> Write `dir`/frc.gp, the gnuplot script that draws `dir`/frc.png from frc.csv: the
-    !> amplitude of every DOF of frc.csv (all N, or the `dofs` selected, the columns amp_<d>
-    !> in their order) against the parameter (log scale), unstable points marked with red
-    !> crosses. `parameter` labels the axis. Error: stat io.
+    !> Write `dir`/frc.gp, the gnuplot script that draws two pictures from frc.csv:
+    !> frc.png, the amplitude [m] of every DOF of frc.csv (all N, or the `dofs` selected, the
+    !> columns amp_<d> in their order) against the swept parameter (amplitude on a log
+    !> scale), unstable points marked with red crosses; frc_dissipation.png, the energy the
+    !> friction contacts dissipate per cycle [J] against the amplitude of each of these DOFs
+    !> (log-log), with the total (friction + viscous) against the first. Curves are named
+    !> "DOF <d>" and the axes carry their units; no text is read as gnuplot markup.
+    !> Error: stat io.
     subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
-        !> Name of the swept parameter.
+        !> Name of the swept parameter ('omega', 'force_amplitude', 'mu', 'normal_load',
+        !> 'preload').
         character(len=*), intent(in) :: parameter
         !> Number of DOFs (columns amp_1..amp_N when `dofs` is absent).
         integer, intent(in) :: ndof
@@ -36,6 +42,7 @@ contains
         integer, intent(in), optional :: labels(:)
         integer :: u, stat, k, nsel
         character(len=512) :: msg
+        character(len=:), allocatable :: sep, dof_name
         integer, allocatable :: sel(:)
         if (present(dofs)) then
             sel = dofs
@@ -44,58 +51,105 @@ contains
         end if
         if (present(labels)) sel = labels
         nsel = size(sel)
+        dof_name = "DOF "
+        if (present(labels) .and. present(dofs)) then
+            if (any(labels /= dofs)) dof_name = "full-model DOF "
+        end if
         stat = 0
         msg = ''
         call open_temporary(dir, "frc.gp", u, error)
         if (allocated(error)) return
-        call put(u, "# Forced-response curve from frc.csv: gnuplot frc.gp (in this directory)", &
-                 stat, msg)
-        call put(u, "set terminal pngcairo size 1100,700 enhanced font ',11'", stat, msg)
+        call put(u, "# Forced-response curve and dissipation per cycle from frc.csv:", stat, msg)
+        call put(u, "#   gnuplot frc.gp   (in this directory; writes frc.png and "// &
+                 "frc_dissipation.png)", stat, msg)
+        call put(u, "set terminal pngcairo size 1100,700 noenhanced font ',11'", stat, msg)
         call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
-        call put(u, "set output 'frc.png'.suffix", stat, msg)
         call put(u, "set datafile separator ','", stat, msg)
-        call put(u, "set key autotitle columnhead top right", stat, msg)
+        call put(u, "set key autotitle columnhead top right box opaque", stat, msg)
         call put(u, "set grid lc rgb '#dddddd'", stat, msg)
-        call put(u, "set logscale y", stat, msg)
         call put(u, "f = 'frc.csv'", stat, msg)
-        call put(u, "# the y range: from the smallest amplitude, but at most four decades "// &
-                 "below the largest (a contact stuck all period drives its DOF to roundoff)", &
-                 stat, msg)
+        call put(u, "# the amplitude range: from the smallest amplitude, but at most four "// &
+                 "decades below the largest (a contact stuck all period drives its DOF to "// &
+                 "roundoff)", stat, msg)
         call put(u, "ymax = 0; ymin = 1e300", stat, msg)
         call put(u, "do for [k=2:"//itoa(1 + nsel)//"] { stats f using k nooutput; "// &
                  "if (STATS_max > ymax) { ymax = STATS_max }; "// &
                  "if (STATS_min > 0 && STATS_min < ymin) { ymin = STATS_min } }", stat, msg)
-        call put(u, "if (ymax > 0) set yrange [(ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4):"// &
-                 "ymax*1.5]", stat, msg)
-        call put(u, "set xlabel '"//parameter//"'", stat, msg)
-        call put(u, "set ylabel 'amplitude max |x_k(t)|'", stat, msg)
-        call put(u, "set title 'Forced-response curve (red crosses: unstable, Floquet)'", &
+        call put(u, "alo = (ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4); ahi = ymax*1.5", &
                  stat, msg)
+        call put(u, "", stat, msg)
+        call put(u, "# frc.png: amplitude against the parameter", stat, msg)
+        call put(u, "set output 'frc.png'.suffix", stat, msg)
+        call put(u, "set logscale y", stat, msg)
+        call put(u, "if (ymax > 0) set yrange [alo:ahi]", stat, msg)
+        call put(u, "set xlabel '"//parameter_label(parameter)//"'", stat, msg)
+        call put(u, "set ylabel 'amplitude max_t |x(t)| [m]'", stat, msg)
+        call put(u, "set title 'Forced-response curve (red crosses: unstable points, "// &
+                 "Floquet multipliers)'", stat, msg)
         call put(u, "# the column 'stable' (1, 0 unstable, -1 unknown)", stat, msg)
         call put(u, "unstable(k) = (column('stable') == 0 ? column(k) : 1/0)", stat, msg)
         do k = 1, nsel
-            if (k == 1) then
-                call put(u, "plot f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(sel(k))//"' noenhanced, \", stat, msg)
-            else
-                call put(u, "     f using 1:"//itoa(1 + k)//" with lines lw 1.5 title 'amp_"// &
-                         itoa(sel(k))//"' noenhanced, \", stat, msg)
-            end if
-            if (k < nsel) then
-                call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points pt 2 "// &
-                         "ps 0.8 lc rgb 'red' notitle, \", stat, msg)
-            else
-                call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points pt 2 "// &
-                         "ps 0.8 lc rgb 'red' title 'unstable'", stat, msg)
-            end if
+            sep = merge("plot ", "     ", k == 1)
+            call put(u, sep//"f using 1:"//itoa(1 + k)//" with lines lw 1.5 "// &
+                     "title '"//dof_name//itoa(sel(k))//"', \", stat, msg)
+            call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points "// &
+                     "pt 2 ps 0.8 lc rgb 'red' "//merge("title 'unstable'", "notitle         ", &
+                     k == nsel)//trim(merge("   ", ", \", k == nsel)), stat, msg)
         end do
+        call put(u, "", stat, msg)
+        call put(u, "# frc_dissipation.png: friction dissipation per cycle against amplitude", &
+                 stat, msg)
+        call put(u, "set output 'frc_dissipation.png'.suffix", stat, msg)
+        call put(u, "set logscale xy", stat, msg)
+        call put(u, "# the dissipation range: at most five decades below the largest (a stuck "// &
+                 "contact dissipates roundoff)", stat, msg)
+        call put(u, "unset yrange", stat, msg)
+        call put(u, "stats f using (column('dissipation')) nooutput", stat, msg)
+        call put(u, "if (STATS_max > 0) { set yrange [STATS_max*1e-5:STATS_max*2] } "// &
+                 "else { unset yrange }", stat, msg)
+        call put(u, "if (ymax > 0) set xrange [alo:ahi]", stat, msg)
+        call put(u, "set xlabel 'amplitude max_t |x(t)| [m]'", stat, msg)
+        call put(u, "set ylabel 'energy dissipated per cycle [J]'", stat, msg)
+        call put(u, "set title 'Dissipation per cycle (solid: friction contacts; dashed: "// &
+                 "friction + viscous)'", stat, msg)
+        call put(u, "set key top left", stat, msg)
+        call put(u, "positive(y) = (y > 0 ? y : 1/0)", stat, msg)
+        do k = 1, nsel
+            sep = merge("plot ", "     ", k == 1)
+            call put(u, sep//"f using "//itoa(1 + k)//":(positive(column('diss_friction')))"// &
+                     " with lines lw 1.5 title '"//dof_name//itoa(sel(k))//"', \", &
+                     stat, msg)
+        end do
+        call put(u, "     f using 2:(positive(column('dissipation'))) with lines "// &
+                 "dt 2 lc rgb 'black' title 'total, against "//dof_name//itoa(sel(1))//"'", &
+                 stat, msg)
         call close_and_rename(dir, "frc.gp", u, stat, msg, error)
     end subroutine write_frc_plot_script
+
+    !> The axis label of a swept parameter, with its unit.
+    pure function parameter_label(parameter) result(label)
+        character(len=*), intent(in) :: parameter
+        character(len=:), allocatable :: label
+        select case (parameter)
+        case ('omega')
+            label = "excitation frequency omega [rad/s]"
+        case ('force_amplitude')
+            label = "force amplitude (first forcing term) [N]"
+        case ('mu')
+            label = "friction coefficient mu [-]"
+        case ('normal_load')
+            label = "normal load N [N]"
+        case ('preload')
+            label = "preload of the unilateral contacts [N]"
+        case default
+            label = parameter
+        end select
+    end function parameter_label
 
     !> Write `dir`/robustness.gp, the gnuplot script that draws robustness_cold.png and
     !> robustness_warm.png from robustness.csv: one panel per (rho, H), omega across and mu
     !> up (log), each run a square: green success, orange converged to a wrong solution, red
-    !> not converged. Error: stat io.
+    !> not converged, the colours explained in a legend below the panels. Error: stat io.
     subroutine write_robustness_plot_script(dir, opts, error)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
@@ -107,7 +161,8 @@ contains
         character(len=512) :: msg
         character(len=8), parameter :: methods(2) = [character(len=8) :: 'hbm-cold', 'hbm-warm']
         character(len=4), parameter :: tags(2) = [character(len=4) :: 'cold', 'warm']
-        character(len=:), allocatable :: sel, label
+        character(len=:), allocatable :: sel, label, legend
+        integer :: width, height
         stat = 0
         msg = ''
         call open_temporary(dir, "robustness.gp", u, error)
@@ -127,14 +182,37 @@ contains
         call put(u, "f = 'robustness.csv'", stat, msg)
         do m = 1, 2
             if (m == 2 .and. .not. opts%warm) exit
-            call put(u, "set terminal pngcairo size "//itoa(260*size(opts%harmonics) + 80)// &
-                     ","//itoa(200*size(opts%rhos) + 60)//" font ',9'", stat, msg)
+            ! the canvas: 260 x 215 pixels a panel, a band on top for the title and one at
+            ! the bottom for the colour legend (margins and spacing in screen fractions)
+            width = 260*size(opts%harmonics) + 80
+            height = 215*size(opts%rhos) + 135
+            call put(u, "set terminal pngcairo size "//itoa(width)//","//itoa(height)// &
+                     " noenhanced font ',9'", stat, msg)
             call put(u, "set output 'robustness_"//trim(tags(m))//".png'.suffix", stat, msg)
             call put(u, "set multiplot layout "//itoa(size(opts%rhos))//","// &
                      itoa(size(opts%harmonics))//" title 'weighted residual, "// &
-                     trim(tags(m))//" starts: x omega [rad/s], y mu'", stat, msg)
+                     trim(tags(m))//" starts: omega [rad/s] across, friction coefficient "// &
+                     "mu [-] up' margins "//screen_fraction(60, width)//", "// &
+                     screen_fraction(width - 15, width)//", "// &
+                     screen_fraction(75, height)//", "// &
+                     screen_fraction(height - 60, height)//" spacing "// &
+                     screen_fraction(45, width)//", "//screen_fraction(60, height), stat, msg)
             do i = 1, size(opts%rhos)
                 do j = 1, size(opts%harmonics)
+                    ! the colour legend, drawn once below the panels
+                    if (i == 1 .and. j == 1) then
+                        call put(u, "set key at screen 0.5, screen "// &
+                                 screen_fraction(8, height)//" center bottom vertical "// &
+                                 "Left reverse samplen 1 font ',9'", stat, msg)
+                        legend = ", 1/0 with points pt 5 ps 1.2 lc rgb '#2ca02c' title "// &
+                                 "'converged to the right solution', 1/0 with points pt 5 "// &
+                                 "ps 1.2 lc rgb '#ff7f0e' title 'converged to a wrong "// &
+                                 "solution', 1/0 with points pt 5 ps 1.2 lc rgb '#d62728' "// &
+                                 "title 'not converged'"
+                    else
+                        call put(u, "set key off", stat, msg)
+                        legend = ""
+                    end if
                     if (opts%rhos(i) == 0.0_dp) then
                         sel = "strcol(6) eq 'T'"
                         label = "rho auto"
@@ -148,13 +226,23 @@ contains
                     call put(u, "plot f using 2:((strcol(1) eq '"//trim(methods(m))// &
                              "' && $4 == "//itoa(opts%harmonics(j))//" && "//sel// &
                              ") ? $3 : 1/0):(colour(strcol(8), strcol(9))) "// &
-                             "every ::1 with points pt 5 ps 1.2 lc rgb variable", stat, msg)
+                             "every ::1 with points pt 5 ps 1.2 lc rgb variable notitle"// &
+                             legend, stat, msg)
                 end do
             end do
             call put(u, "unset multiplot", stat, msg)
         end do
         call close_and_rename(dir, "robustness.gp", u, stat, msg, error)
     end subroutine write_robustness_plot_script
+
+    !> `pixels` / `total` as a screen fraction with three decimals: 0.125.
+    pure function screen_fraction(pixels, total) result(s)
+        integer, intent(in) :: pixels, total
+        character(len=:), allocatable :: s
+        character(len=8) :: buf
+        write (buf, '(f5.3)') real(pixels, dp)/real(total, dp)
+        s = trim(adjustl(buf))
+    end function screen_fraction
 
     !> A short real for labels: 0.02, 0.2, 1, 5, 1.5e-05.
     pure function gfmt(x) result(s)

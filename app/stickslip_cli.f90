@@ -214,8 +214,8 @@ contains
         write (buf, '(i0)') wanted
         write (err_unit, '(a)') "stickslip: note: running on 1 thread instead of "//trim(buf)// &
             ": the linked BLAS/LAPACK, "//blas_library()//", gives wrong answers when "// &
-            "called from several threads at once (install libopenblas0-pthread; README "// &
-            "'BLAS/LAPACK')"
+            "called from several threads at once (install libopenblas0-pthread; "// &
+            "doc/library.md, 'BLAS/LAPACK')"
     end subroutine note_serial_blas
 
     !> A multi-case run: every case of `paths` read and run as `stickslip <path>` would, the

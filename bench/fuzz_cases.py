@@ -292,7 +292,7 @@ def method_groups(rng, method):
     return g
 
 
-# Sizes at, just above and far above the documented limits (README "Limits").
+# Sizes at, just above and far above the documented limits (doc/case-file.md, "Limits").
 SIZES = [("hbm", "harmonics", ["4096", "4097", "100000", "2147483647", "0", "-3"]),
          ("hbm", "samples", ["1048577", "2147483647", "100000000", "-1", "0", "3"]),
          ("hbm", "max_harmonics", ["4097", "2147483647"]),
@@ -751,7 +751,7 @@ def classify(rc, out, err, elapsed, timed_out, folder, outdirs, before, planted)
                     if any(n.startswith("x") and not v <= 1.0 for n, v in zip(names, vals)):
                         cls.append("answer:exit0_methods_disagree")
         for p in after:
-            # study.csv, frc.csv and robustness.csv mark "not computed" with NaN (README)
+            # study.csv, frc.csv and robustness.csv mark "not computed" with NaN (doc/outputs.md)
             if os.path.basename(p) in ("hbm.csv", "euler.csv", "reference.csv",
                                        "coefficients.csv", "events.csv"):
                 fp = os.path.join(folder, p)
@@ -929,7 +929,7 @@ def run_one(binary, tmp, i, data, desc, outdir, timeout, state=None, checkpoint=
                 with open(fp, "rb") as f:
                     if f.read() == content:
                         cls = sorted(set(cls + ["files:stale_result_left"]))
-    # every 5th run that wrote a summary: the summary.nml read back as a case (README: "a
+    # every 5th run that wrote a summary: the summary.nml read back as a case (doc/outputs.md: "a
     # summary.nml reads back as its case") must run again, into another directory
     if i % 5 == 0 and os.path.exists(summary) and not timed_out and p.returncode in (0, 2) \
             and not state:
@@ -1030,7 +1030,7 @@ def main():
                                        ((re.search(r"&(robustness|study)\b", low) or
                                          re.search(r"method\s*=\s*['\"](robustness|study)",
                                                    low)) and not grid)):
-                # the method's default grid (README: ~20 s for the robustness example) was
+                # the method's default grid (README: ~17 s for the robustness example) was
                 # asked for: slow by request, not a hang
                 cls = []
                 counts["slow:default_grid"] = counts.get("slow:default_grid", 0) + 1

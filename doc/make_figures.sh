@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerate the README figures: Figure 3 of the paper (examples/seed.nml, the three methods
+# Regenerate the figures of doc/: Figure 3 of the paper (examples/seed.nml, the three methods
 # side by side), the work-precision diagrams of examples/seed_study.nml and
 # examples/chain4_study.nml, the forced-response curve of examples/seed_frc.nml and the
 # robustness maps of examples/seed_robustness.nml, release build. Writes doc/*.png; the runs'

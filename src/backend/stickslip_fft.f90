@@ -26,7 +26,7 @@
 !> valid without further locking; its size is bounded (fft_cache_capacity lengths; beyond
 !> that the plans belong to their fft_plan_t and are destroyed with it, as before the
 !> cache). In a build without OpenMP the critical section is a no-op and the library is
-!> serial-only (README, "Threads").
+!> serial-only (doc/library.md, "Threads").
 module stickslip_fft
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: iso_c_binding, only: c_ptr, c_int, c_double, c_double_complex, &

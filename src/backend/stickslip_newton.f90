@@ -1,6 +1,6 @@
 !> Semismooth Newton with a dense LU (LAPACK dgetrf/dgetrs on the linked BLAS) for a
 !> `nonlinear_system_t` with an element of its generalized Jacobian: the fast path of the
-!> weighted-residual solve at hundreds of unknowns (README, "Solvers").
+!> weighted-residual solve at hundreds of unknowns (doc/benchmarks.md, "The nonlinear solve at hundreds of unknowns").
 !>
 !> Newton steps x <- x - t J(x)^-1 F(x) with backtracking on ||F||: the full step t = 1
 !> first, halved (at most max_halvings times) until ||F||^2 drops by Armijo's factor

@@ -45,7 +45,7 @@ module stickslip_driver
     public :: run_study_case, run_sweep_case, run_robustness_case
     public :: hbm_findings, side_by_side_findings, study_findings
 
-    !> The values of &run method, in the order of the README.
+    !> The values of &run method, in the order of doc/case-file.md.
     character(len=*), parameter :: method_names(7) = [character(len=10) :: 'hbm', 'euler', &
         'reference', 'all', 'study', 'sweep', 'robustness']
 

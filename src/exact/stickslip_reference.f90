@@ -257,7 +257,7 @@ contains
         end if
     end subroutine solve_reference
 
-    !> Checks of a converged reference orbit, as diagnostics items (README, "Where each
+    !> Checks of a converged reference orbit, as diagnostics items (doc/where-methods-fail.md, "Where each
     !> method fails"): the energy balance over one period and Coulomb's law |r| <= mu N at
     !> the samples.
     subroutine check_reference(model, res)

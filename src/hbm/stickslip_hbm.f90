@@ -94,7 +94,7 @@ contains
     !> opts%rho = 0 selects the automatic weight (stickslip_rho); sol%rho is the one used.
     !> A non-converged solve is an outcome: sol%converged = .false. and sol%diagnosis says
     !> why. The checks of the answer go to sol%diagnostics (not_converged, rho_out_of_range,
-    !> near_resonance, energy_balance, coulomb_dissipation, coulomb_law; README, "Where each
+    !> near_resonance, energy_balance, coulomb_dissipation, coulomb_law; doc/where-methods-fail.md, "Where each
     !> method fails"). Errors: stat input (invalid model or options), stat numerical
     !> (singular dynamic stiffness: "undamped resonance at harmonic h ...", NaN in the
     !> residual).

@@ -20,7 +20,7 @@ module stickslip_hbm_finish
     private
     public :: finish_solution, check_solution
 
-    !> Thresholds of the checks of a solution (check_solution; README, "Where each method
+    !> Thresholds of the checks of a solution (check_solution; doc/where-methods-fail.md, "Where each method
     !> fails"). Energy balance error: exact for the truncated series up to roundoff.
     real(dp), parameter, public :: energy_warning = 1.0e-6_dp, energy_untrusted = 1.0e-2_dp
     !> |friction - Coulomb dissipation| / (the larger of Coulomb's and the whole dissipation
@@ -269,7 +269,7 @@ contains
         end function inner
     end subroutine finish_solution
 
-    !> The checks of a solution as diagnostics items (README, "Where each method fails"):
+    !> The checks of a solution as diagnostics items (doc/where-methods-fail.md):
     !> not_converged; rho_out_of_range (rho / contact mobility outside [rho_ratio_min,
     !> rho_ratio_max]: the friction equality loses its digits); near_resonance (Z_h nearly
     !> singular); and, once converged, energy_balance, coulomb_dissipation and coulomb_law.

@@ -23,7 +23,7 @@ module stickslip_hbm_strategy
 
     !> Number of unknowns (basis size x contacts) from which &hbm solver = 'auto' takes the
     !> semismooth Newton path (warm starts, LU) instead of hybrj: where it starts to win
-    !> (bench/bench_solver.f90, README "Solvers").
+    !> (bench/bench_solver.f90, doc/benchmarks.md).
     integer, parameter :: newton_min_unknowns = 48
 
     !> hybrj calls per stage: the first plus restarts from the last iterate.

@@ -50,7 +50,7 @@ module stickslip_solution
         logical :: converged = .false.
         !> hybrj's info of the last call: -1 stopped by stickslip because the residual met
         !> the tolerance (the usual outcome, also when Newton met it), 1 xtol met, 2 maxfev reached, 4 or 5 no
-        !> progress (README, "Convergence").
+        !> progress (doc/convergence.md).
         integer :: info = 0
         !> Residual evaluations, all stages and restarts included.
         integer :: nfev = 0
@@ -117,7 +117,7 @@ module stickslip_solution
         integer, allocatable :: stick_phases(:)
         !> True for a contact that sticks over the whole period while the basis holds the
         !> constant: its mean force is undetermined and the admissible value closest to zero
-        !> was chosen (README, "Undetermined offset").
+        !> was chosen (doc/convergence.md, "Undetermined offset").
         logical, allocatable :: offset_undetermined(:)
         !> Work of the forcing over one period [J].
         real(dp) :: work_forcing = 0.0_dp

@@ -3,7 +3,7 @@
 !> reference's events), study.csv (the work-precision study), frc.csv (a forced-response
 !> curve) and robustness.csv (the robustness study). Each file is written under a unique
 !> temporary name and renamed when complete (stickslip_files). Columns are contracts
-!> (README, "Outputs"). The per-DOF columns are those of the DOFs selected by the optional
+!> (doc/outputs.md). The per-DOF columns are those of the DOFs selected by the optional
 !> `dofs` (&output dofs), named by DOF number (x7, v7, amp_7); absent: every DOF, 1..N.
 !> Knows nothing of how the results are computed.
 module stickslip_csv

@@ -20,7 +20,7 @@ module stickslip_files
     !> File name of the directory lock.
     character(len=*), parameter :: lock_name = ".stickslip.lock"
 
-    !> Every result file stickslip writes into an output directory (README, "Outputs"):
+    !> Every result file stickslip writes into an output directory (doc/outputs.md):
     !> the files that a run removes when it does not write them itself. Never the case
     !> file, the sweep checkpoint or anything else.
     character(len=*), parameter :: result_file_names(17) = [character(len=24) :: &

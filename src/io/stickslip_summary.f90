@@ -2,7 +2,7 @@
 !> line: the method, whether the answer can be trusted, the keys of its warnings, the
 !> convergence report and the checks), for several methods groups &summary_<method>, then
 !> the effective case as namelist groups (read_case reads the file back as a case). Keys are
-!> contracts (README, "Outputs"). Written under a unique temporary name and renamed.
+!> contracts (doc/outputs.md). Written under a unique temporary name and renamed.
 module stickslip_summary
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, itoa
@@ -81,7 +81,7 @@ contains
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_summary
 
-    !> The keys of the checks of a solution (README, "summary.nml").
+    !> The keys of the checks of a solution (doc/outputs.md, "summary.nml").
     subroutine put_check_keys(u, checks, stat, msg)
         integer, intent(in) :: u
         type(hbm_checks_t), intent(in) :: checks
@@ -160,7 +160,7 @@ contains
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_euler_summary
 
-    !> The keys of a weighted-residual solution (README, "summary.nml").
+    !> The keys of a weighted-residual solution (doc/outputs.md, "summary.nml").
     subroutine put_hbm_keys(u, sol, stat, msg)
         integer, intent(in) :: u
         type(hbm_solution_t), intent(in) :: sol

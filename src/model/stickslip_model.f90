@@ -28,7 +28,7 @@ module stickslip_model
         has_contact_laws, preload_force
 
     !> A structure with friction contacts, forced at angular frequency `omega`.
-    !> Field names follow the case-file namelist variables (README).
+    !> Field names follow the case-file namelist variables (doc/case-file.md).
     type :: model_t
         !> Number of degrees of freedom N.
         integer :: ndof = 0

@@ -184,7 +184,7 @@ contains
         end subroutine add
     end subroutine solve_side_by_side
 
-    !> Diagnostics items for methods that disagree, from the comparisons (README, "Where
+    !> Diagnostics items for methods that disagree, from the comparisons (doc/where-methods-fail.md, "Where
     !> each method fails"): the largest displacement difference of a method against the
     !> reference, relative to each DOF's amplitude (floored at 1e-3 of the largest
     !> amplitude: a DOF nearly at rest does not count alone), above disagree_warning gives

@@ -20,6 +20,7 @@ module stickslip_cli
     use stickslip_reference, only: reference_result_t
     use stickslip_side_by_side, only: side_by_side_t
     use stickslip_study, only: study_result_t
+    use stickslip_modes, only: modes_result_t
     use stickslip_compare, only: comparison_t
     use stickslip_flow, only: law_event_name
     use stickslip_contact_set, only: contact_set_t
@@ -66,10 +67,12 @@ module stickslip_cli
         "  Periodic response of a structure with Coulomb friction contacts by the"//new_line('a')// &
         "  weighted-residual (harmonic balance) method, implicit Euler or the exact"//new_line('a')// &
         "  event-driven reference (&run method = 'hbm', 'euler', 'reference', 'all',"// &
-        new_line('a')//"  'study', 'sweep' or 'robustness'). Results go to &output directory:"// &
+        new_line('a')//"  'study', 'sweep', 'robustness' or 'modes': nonlinear modes)."// &
+        new_line('a')//"  Results go to &output directory:"// &
         new_line('a')//"  hbm.csv, coefficients.csv, euler.csv, reference.csv, events.csv,"// &
         new_line('a')//"  study.csv, frc.csv (+ frc_harmonics.csv, frc.gp, frc.png,"// &
-        new_line('a')//"  frc_dissipation.png), robustness.csv (+ maps),"// &
+        new_line('a')//"  frc_dissipation.png), robustness.csv (+ maps), modes.csv (+"// &
+        new_line('a')//"  modes_harmonics.csv, modes.gp, modes.png),"// &
         new_line('a')//"  summary.nml. Warnings, errors and progress go to standard error;"// &
         new_line('a')//"  --quiet: no summary and no progress. Several case files run in"// &
         new_line('a')//"  parallel (OMP_NUM_THREADS), their output printed case by case;"// &
@@ -356,6 +359,8 @@ contains
                 call print_sweep_summary(out_unit, case, result%sweep)
             case ('robustness')
                 call print_robustness_summary(out_unit, case, result%robustness)
+            case ('modes')
+                call print_modes_summary(out_unit, case, result%modes)
             case default
                 call print_summary(out_unit, case, result%hbm, result%checks)
             end select
@@ -425,6 +430,12 @@ contains
             end if
             call draw(case%directory, "frc.gp", &
                       [character(len=20) :: "frc.png", "frc_dissipation.png"], err_unit)
+        case ('modes')
+            if (.not. (case%modes%plot .and. result%modes%npoints > 1)) return
+            if (allocated(error)) then
+                if (error%stat /= stickslip_stat%numerical) return
+            end if
+            call draw(case%directory, "modes.gp", [character(len=20) :: "modes.png"], err_unit)
         case ('robustness')
             if (allocated(error)) return
             call draw(case%directory, "robustness.gp", &
@@ -714,6 +725,32 @@ contains
             pictures(case%directory, [character(len=20) :: "frc.png", "frc_dissipation.png"])// &
             "summary.nml}"
     end subroutine print_sweep_summary
+
+    subroutine print_modes_summary(u, case, res)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(modes_result_t), intent(in) :: res
+        integer :: n, k
+        n = res%npoints
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,i0,a,g0.6,a,g0.6,a)') "  nonlinear mode ", case%modes%mode, ": ", &
+            n, " points, modal amplitude ", res%points(1)%p%parameter, " to ", &
+            res%points(n)%p%parameter, merge(" (complete)  ", " (incomplete)", res%complete)
+        write (u, '(a,g0.7,a,g0.7,a,a,a)') "  linear limits: contacts stuck ", &
+            res%omega_stuck, " rad/s, slipping ", res%omega_slipping, " rad/s (started ", &
+            trim(res%start), ")"
+        k = maxloc(res%points(1:n)%damping_ratio, 1)
+        write (u, '(a,g0.7,a,g0.7,a,g0.5,a,g0.5)') "  frequency ", &
+            minval(res%points(1:n)%p%omega), " .. ", maxval(res%points(1:n)%p%omega), &
+            " rad/s; largest damping ratio ", res%points(k)%damping_ratio, &
+            " at amplitude ", res%points(k)%p%parameter
+        write (u, '(a,es9.2,a,f0.3,a,i0,a)') "  energy balance error at most ", &
+            maxval(res%points(1:n)%energy_error), "; CPU ", res%seconds, " s (", &
+            res%factorizations, " factorizations)"
+        write (u, '(a)') "  wrote "//case%directory//"/{modes.csv, modes_harmonics.csv, "// &
+            "modes.gp, "//pictures(case%directory, [character(len=20) :: "modes.png"])// &
+            "summary.nml}"
+    end subroutine print_modes_summary
 
     subroutine print_robustness_summary(u, case, rows)
         integer, intent(in) :: u

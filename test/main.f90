@@ -27,6 +27,7 @@ program tester
     use test_contact_euler, only: run_contact_euler_tests
     use test_contact_reference, only: run_contact_reference_tests
     use test_contact_sweep, only: run_contact_sweep_tests
+    use test_modes, only: run_modes_tests
     use test_file_faults, only: run_file_faults_tests
     use test_fft, only: run_fft_tests
     use test_expm, only: run_expm_tests
@@ -98,6 +99,7 @@ program tester
         suite_t("contact_euler", run_contact_euler_tests),&
         suite_t("contact_reference", run_contact_reference_tests),&
         suite_t("contact_sweep", run_contact_sweep_tests),&
+        suite_t("modes", run_modes_tests),&
         suite_t("file_faults", run_file_faults_tests),&
         suite_t("fft", run_fft_tests),&
         suite_t("expm", run_expm_tests),&

@@ -75,8 +75,9 @@ contains
         if (allocated(error)) return
         call check(t, res%method == c%method, "api: the result names the method run")
         call check(t, res%diagnostics%worst() < level_untrusted, "api: chain4 trusted")
-        call check(t, size(method_names) == 7 .and. any(method_names == 'robustness'), &
-                   "api: seven methods dispatched")
+        call check(t, size(method_names) == 8 .and. any(method_names == 'robustness') .and. &
+                   any(method_names == 'modes'), "api: eight methods dispatched")
+
     end subroutine test_io_api
 
     logical function openmp_build()

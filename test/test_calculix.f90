@@ -6,7 +6,8 @@
 !> digits), an independent truth: another program's eigensolver on its own assembly; the
 !> Craig-Bampton model that case.nml builds bounds the first one from above within its
 !> reduction error (1.6e-5), and with 30 fixed-interface modes equals it to the digits. The
-!> picture's key shows amp_2409, not gnuplot's subscript of "_2".
+!> picture's key shows amp_2409, not gnuplot's subscript of "_2". The nonlinear mode of the
+!> reduced strip with its damper slipping has CalculiX's first frequency.
 module test_calculix
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
@@ -57,7 +58,57 @@ contains
         call test_reduced_frequency(t, reference)
         call test_retrace(t)
         call test_more_modes(t, kmat, mmat, reference)
+        call test_nonlinear_mode(t, reference)
     end subroutine run_calculix_tests
+
+    !> modes.nml on the reduced strip (20 points over a = 1e-2 .. 1e-4 here): exit 0, the
+    !> amplitude columns of the full-model DOFs 2409 and 2244 recovered through the
+    !> reduction basis, and at large amplitude, where the damper slips all period, the
+    !> frequency of CalculiX's first mode with the tip free (within the reduction error),
+    !> the energy balance at every point.
+    subroutine test_nonlinear_mode(t, reference)
+        type(test_counter_t), intent(inout) :: t
+        real(dp), intent(in) :: reference(:)
+        character(len=:), allocatable :: dir, out, err, line
+        character(len=512) :: buf
+        integer :: code, u, stat
+        real(dp) :: values(11), worst
+        character(len=300) :: lines(6), args(1)
+        dir = scratch_dir()//"/calculix_modes"
+        ! (arrays assigned line by line: gfortran 12 corrupts memory on an array
+        ! constructor of concatenations with variables, see fixtures)
+        lines(1) = "&system mass_file = '"//project_path(folder//"mass.mtx")// &
+                   "', stiffness_file = '"//project_path(folder//"stiffness.mtx")// &
+                   "', rayleigh_alpha = 2.0 /"
+        lines(2) = "&forcing omega = 534.7, force_dof = 2244, force_amplitude = 0.2 /"
+        lines(3) = "&friction contact_dof = 2409, mu = 0.5, normal_load = 0.24 /"
+        lines(4) = "&hbm harmonics = 15, samples = 256 /"
+        lines(5) = "&modes amplitude_start = 1e-2, amplitude_stop = 1e-4, points = 20 /"
+        lines(6) = "&output directory = '"//dir//"', dofs = 2409, 2244 /"
+        call write_lines(dir//".nml", lines)
+        args(1) = dir//".nml"
+        call cli(args, code, out, err)
+        call check(t, code == 0, "calculix modes: exit 0", err)
+        if (code /= 0) return
+        open (newunit=u, file=dir//"/modes.csv", status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)') buf
+        line = trim(buf)
+        call check(t, index(line, "amplitude,omega,frequency,xi,damping_ratio,amp_2409,"// &
+                   "amp_2244,") == 1, "calculix modes: full-model DOF columns", line)
+        read (u, *, iostat=stat) values
+        call check(t, stat == 0 .and. abs(values(2) - reference(1)) <= &
+                   (rule_rtol + 1.0e-5_dp)*reference(1), "calculix modes: slipping damper: "// &
+                   "CalculiX's first frequency (tip free)")
+        worst = values(11)
+        do
+            read (u, *, iostat=stat) values
+            if (stat /= 0) exit
+            worst = max(worst, values(11))
+        end do
+        close (u)
+        call check(t, worst <= 1.0e-10_dp, "calculix modes: energy balance at every point")
+    end subroutine test_nonlinear_mode
 
     !> The example's sweep at H = 45 (1024 samples, checks off) reaches 620 rad/s. With
     !> OpenBLAS's AVX-512 kernels it turns back at a kink of the sampled friction equations

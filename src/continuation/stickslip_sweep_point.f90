@@ -23,7 +23,7 @@ module stickslip_sweep_point
     use stickslip_contact_set, only: channel_directions
     implicit none
     private
-    public :: point_tally_t, evaluate_point
+    public :: point_tally_t, evaluate_point, keep_coefficients
 
     !> Which checks the points of a curve failed: per diagnostics key, how many points, the
     !> worst level and the parameter of the first (sweep_result_t%diagnostics gets one

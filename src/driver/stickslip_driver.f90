@@ -37,17 +37,19 @@ module stickslip_driver
     use stickslip_run_output, only: name_case_file
     use stickslip_run_solvers, only: run_case, run_euler_case, run_reference_case, &
         run_side_by_side_case
-    use stickslip_run_studies, only: run_study_case, run_sweep_case, run_robustness_case
+    use stickslip_run_studies, only: run_study_case, run_sweep_case, run_robustness_case, &
+        run_modes_case
+    use stickslip_modes, only: modes_result_t
     implicit none
     private
     public :: run_result_t, run_method, method_names
     public :: run_case, run_euler_case, run_reference_case, run_side_by_side_case
-    public :: run_study_case, run_sweep_case, run_robustness_case
+    public :: run_study_case, run_sweep_case, run_robustness_case, run_modes_case
     public :: hbm_findings, side_by_side_findings, study_findings
 
     !> The values of &run method, in the order of doc/case-file.md.
-    character(len=*), parameter :: method_names(7) = [character(len=10) :: 'hbm', 'euler', &
-        'reference', 'all', 'study', 'sweep', 'robustness']
+    character(len=*), parameter :: method_names(8) = [character(len=10) :: 'hbm', 'euler', &
+        'reference', 'all', 'study', 'sweep', 'robustness', 'modes']
 
     !> The result of whichever method ran (only the component of that method is set).
     type :: run_result_t
@@ -69,6 +71,8 @@ module stickslip_driver
         type(sweep_result_t) :: sweep
         !> method 'robustness': one row per run.
         type(robustness_row_t), allocatable :: robustness(:)
+        !> method 'modes'.
+        type(modes_result_t) :: modes
         !> The findings of the run (its result's and its parts'), as in summary.nml.
         type(diagnostics_t) :: diagnostics
         !> Whether summary.nml was written.
@@ -141,9 +145,13 @@ contains
         case ('robustness')
             call run_robustness_case(case, result%robustness, error, progress)
             result%summary_written = allocated(result%robustness)
+        case ('modes')
+            call run_modes_case(case, result%modes, error, progress)
+            result%diagnostics = result%modes%diagnostics
+            result%summary_written = result%modes%npoints > 0
         case default
             call fatal_error(error, "&run method: unknown method '"//result%method// &
-                             "' (hbm, euler, reference, all, study, sweep or robustness)", &
+                             "' (hbm, euler, reference, all, study, sweep, robustness or modes)", &
                              stickslip_stat%input)
             call name_case_file(case, error)
             return

@@ -2,7 +2,8 @@
 !> study: study.csv, with its reference's reference.csv and events.csv), 'sweep' (the
 !> forced-response curve: frc.csv, frc_harmonics.csv, frc.gp, resumable from
 !> frc.checkpoint) and
-!> 'robustness' (the grid of cold and warm starts: robustness.csv, robustness.gp). Each
+!> 'robustness' (the grid of cold and warm starts: robustness.csv, robustness.gp) and
+!> 'modes' (the backbone of a nonlinear mode: modes.csv, modes_harmonics.csv, modes.gp). Each
 !> runs under the lock of the output directory, with an optional progress hook, and writes
 !> its table, plot script and summary.nml.
 module stickslip_run_studies
@@ -19,17 +20,19 @@ module stickslip_run_studies
         remove_checkpoint
     use stickslip_files, only: directory_lock_t
     use stickslip_csv, only: write_study_csv, write_frc_csv, write_frc_harmonics_csv, &
-        write_robustness_csv
+        write_robustness_csv, write_modes_csv, write_modes_harmonics_csv
+    use stickslip_modes, only: modes_options_t, modes_result_t, run_modes
     use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_summary, only: write_study_summary, write_sweep_summary, &
-        write_robustness_summary
-    use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script
+        write_robustness_summary, write_modes_summary
+    use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script, &
+        write_modes_plot_script
     use stickslip_run_findings, only: study_findings
     use stickslip_run_output, only: open_output, close_output, after_method, name_case_file, &
         write_reference_files, sparse_columns, recovers, output_columns, boundary_columns
     implicit none
     private
-    public :: run_study_case, run_sweep_case, run_robustness_case
+    public :: run_study_case, run_sweep_case, run_robustness_case, run_modes_case
 
 contains
 
@@ -210,6 +213,62 @@ contains
                                                  " (frc.csv holds the points computed)", &
                                                  stickslip_stat%numerical)
     end subroutine sweep_run
+
+    !> Compute the backbone of the nonlinear mode of `case` (&modes) and write modes.csv,
+    !> modes_harmonics.csv, modes.gp (the gnuplot script of modes.png) and summary.nml into
+    !> case%directory. A backbone that stopped before amplitude_stop is written too, and an
+    !> error with stat numerical is returned with the diagnosis. Errors: stat input (invalid
+    !> case, no such mode), stat numerical (no solution at the start), stat io.
+    subroutine run_modes_case(case, res, error, progress)
+        !> The case (with its &modes group).
+        type(case_t), intent(in) :: case
+        !> The backbone.
+        type(modes_result_t), intent(out) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress hook, told after every point.
+        type(progress_t), intent(inout), optional :: progress
+        type(directory_lock_t) :: lock
+        character(len=:), allocatable :: stage
+        call open_output(case, lock, error, stage)
+        if (allocated(error)) return
+        call modes_run(case, stage, res, error, progress)
+        call close_output(case, lock, error)
+        call name_case_file(case, error, ['hbm  ', 'opts ', 'basis'], &
+                            ['hbm      ', 'modes    ', 'hbm      '])
+    end subroutine run_modes_case
+
+    subroutine modes_run(case, dir, res, error, progress)
+        type(case_t), intent(in) :: case
+        !> The directory the results are written to (the run's staging directory).
+        character(len=*), intent(in) :: dir
+        type(modes_result_t), intent(out) :: res
+        type(error_type), allocatable, intent(out) :: error
+        type(progress_t), intent(inout), optional :: progress
+        type(modes_options_t) :: opts
+        type(contact_set_t) :: contacts
+        integer, allocatable :: cols(:)
+        logical :: wanted
+        opts = case%modes%modes_options_t
+        if (recovers(case)) opts%observe = case%reduction%output_rows
+        call run_modes(case%model, case%hbm, opts, res, error, progress)
+        call after_method(error, wanted)
+        if (.not. wanted) return
+        cols = output_columns(case)
+        call write_modes_csv(dir, res, error, cols, selected_dofs(case))
+        if (allocated(error)) return
+        call new_contact_set(contacts, case%model)
+        call write_modes_harmonics_csv(dir, res, error, cols, selected_dofs(case), contacts)
+        if (allocated(error)) return
+        call write_modes_plot_script(dir, case%modes%mode, res%omega_stuck, &
+                                     res%omega_slipping, error)
+        if (allocated(error)) return
+        call write_modes_summary(dir, case, res, error)
+        if (allocated(error)) return
+        if (.not. res%complete) call fatal_error(error, "modes: "//res%diagnosis// &
+                                                 " (modes.csv holds the points computed)", &
+                                                 stickslip_stat%numerical)
+    end subroutine modes_run
 
     !> Run the robustness study of `case` (&robustness: omega x mu x H x rho x samples, cold
     !> and warm starts, Euler) and write robustness.csv, robustness.gp (the gnuplot script of

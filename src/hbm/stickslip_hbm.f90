@@ -28,7 +28,7 @@ module stickslip_hbm
         force_excess_untrusted
     implicit none
     private
-    public :: solve_periodic, validate_options, convergence_scale
+    public :: solve_periodic, validate_options, convergence_scale, solution_from_forces
     public :: condensed_structure_t, solve_condensed
     public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns, newton_min_unknowns
     public :: energy_warning, energy_untrusted, dissipation_warning, dissipation_untrusted
@@ -138,6 +138,56 @@ contains
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine solve_periodic
+
+    !> The weighted-residual solution of `model` whose friction-force coefficients `rcoef`
+    !> (nb x channels, on the basis of `opts` with its weight rho > 0) were found elsewhere
+    !> (e.g. by a continuation that solved a larger system): no solve, the recovery of every
+    !> DOF, the energies, the stick statistics and the samples as solve_periodic gives them
+    !> (finish_solution), with sol%fnorm the residual of the projected equations at
+    !> `rcoef` and sol%converged = .true.; the checks of check_solution are left to the
+    !> caller (they judge a forced response). Errors: as new_hb_problem.
+    subroutine solution_from_forces(model, opts, rcoef, sol, error)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        !> Basis options, rho > 0.
+        type(hbm_options_t), intent(in) :: opts
+        !> Friction-force (channel) coefficients [N].
+        real(dp), intent(in) :: rcoef(:, :)
+        !> The solution.
+        type(hbm_solution_t), intent(out) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(hb_problem_t) :: prob
+        type(condensed_structure_t) :: s
+        real(dp), allocatable :: y(:), f(:)
+        integer :: k, stat
+        s = dense_structure(model)
+        call new_hb_problem(prob, model, opts%harmonics, opts%odd_only, opts%samples, opts%rho, &
+                            error)
+        if (allocated(error)) return
+        if (size(rcoef, 1) /= prob%basis%nb .or. size(rcoef, 2) /= prob%nc) then
+            call fatal_error(error, "solution_from_forces: rcoef must be nb x channels", &
+                             stickslip_stat%input)
+            call prob%destroy()
+            return
+        end if
+        sol%harmonics = opts%harmonics
+        sol%odd_only = opts%odd_only
+        sol%samples = opts%samples
+        sol%rho = opts%rho
+        sol%nb = prob%basis%nb
+        sol%omega = s%omega
+        sol%harmonic = prob%basis%harmonic_of([(k, k=1, prob%basis%nb)])
+        y = reshape(rcoef, [prob%n])
+        allocate (f(prob%n))
+        stat = 0
+        call prob%residual(y, f, stat)
+        sol%fnorm = norm2(f)
+        sol%converged = .true.
+        sol%diagnosis = ""
+        call finish_solution(s, opts, prob, y, sol, model)
+        call prob%destroy()
+    end subroutine solution_from_forces
 
     !> The data of a dense model the weighted-residual solve needs beside its dynamics.
     function dense_structure(model) result(s)

@@ -17,8 +17,8 @@ module stickslip_case
     use stickslip_reference_start, only: reference_start_options_t
     use stickslip_study, only: study_options_t
     use stickslip_robustness, only: robustness_options_t
-    use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance
-    use stickslip_namelist_values, only: get_logical
+    use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance, lower
+    use stickslip_namelist_values, only: get_logical, get_string
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         max_dof, max_terms, group_error, system_files_t, max_file_dof, &
         sparse_system_t
@@ -30,20 +30,20 @@ module stickslip_case
     use stickslip_case_friction, only: read_friction_group, friction_form_t
     use stickslip_diagnostics, only: diagnostics_t, level_warning
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
-        sweep_run_options_t
+        sweep_run_options_t, read_modes_group, modes_run_options_t
     implicit none
     private
     public :: case_t, read_case, write_case, max_dof, max_terms, known_groups
     public :: system_files_t, max_file_dof, reduction_case_t
-    public :: sweep_run_options_t
+    public :: sweep_run_options_t, modes_run_options_t
     public :: max_sample_values
     public :: put, rtoa, ltoa, rlist, ilist, llist
     public :: selected_dofs, default_output_dofs
 
     !> The groups of a case file.
-    character(len=10), parameter :: known_groups(12) = [character(len=10) :: 'system', &
+    character(len=10), parameter :: known_groups(13) = [character(len=10) :: 'system', &
         'forcing', 'friction', 'hbm', 'output', 'run', 'euler', 'reference', 'study', 'sweep', &
-        'robustness', 'reduction']
+        'robustness', 'reduction', 'modes']
     !> Most doubles of the sampled results of one run (samples or steps per period times
     !> 2 ndof + 3 ncontact + 1): 2**27 doubles = 1 GiB.
     integer(int64), parameter :: max_sample_values = 2_int64**27
@@ -91,6 +91,10 @@ module stickslip_case
         type(sweep_run_options_t) :: sweep
         !> The &sweep group was given.
         logical :: has_sweep = .false.
+        !> Nonlinear modal analysis options with plot (&modes; used by method 'modes').
+        type(modes_run_options_t) :: modes
+        !> The &modes group was given.
+        logical :: has_modes = .false.
         !> Robustness study options (&robustness; used by method 'robustness').
         type(robustness_options_t) :: robustness = robustness_options_t()
         !> Output directory (&output directory), created if missing.
@@ -143,7 +147,8 @@ contains
         call read_system_group(nml, case%model, case%system_files, error, &
                                case%reduction%method, sparse)
         if (allocated(error)) return
-        call read_forcing_group(nml, case%model, error, case%system_files)
+        call read_forcing_group(nml, case%model, error, case%system_files, &
+                                optional_group=modes_case(nml))
         if (allocated(error)) return
         call read_friction_group(nml, case%model, error, case%system_files, case%friction_form)
         if (allocated(error)) return
@@ -219,6 +224,8 @@ contains
         if (allocated(error)) return
         call read_robustness_group(nml, case%robustness, error)
         if (allocated(error)) return
+        call read_modes_group(nml, case%modes, case%has_modes, error)
+        if (allocated(error)) return
 
         call choose_method(nml, method, method_given, error)
         if (allocated(error)) return
@@ -226,6 +233,16 @@ contains
         if (method == 'sweep' .and. .not. case%has_sweep) then
             call group_error(nml, error, "&sweep: missing (method = 'sweep' needs the group "// &
                              "with at least start and stop)")
+            return
+        end if
+        if (method == 'modes' .and. .not. case%has_modes) then
+            call group_error(nml, error, "&modes: missing (method = 'modes' needs the group "// &
+                             "with at least amplitude_start and amplitude_stop)")
+            return
+        end if
+        if (method == 'modes' .and. case%model%ncontact() == 0) then
+            call group_error(nml, error, "&run method = 'modes': the model has no friction "// &
+                             "contact (give &friction)")
             return
         end if
         call check_sizes(nml, case, error)
@@ -253,6 +270,19 @@ contains
             if (allocated(error)) return
         end if
     end subroutine read_case
+
+    !> Whether the case computes nonlinear modes (a &modes group or &run method = 'modes'),
+    !> which need no &forcing. A bad &run method is left to read_run_group.
+    logical function modes_case(nml)
+        type(nml_file_t), intent(in) :: nml
+        character(len=:), allocatable :: method
+        type(error_type), allocatable :: error
+        method = ''
+        modes_case = nml%find("modes") > 0
+        if (modes_case .or. nml%find("run") == 0) return
+        call get_string(nml, "run", "method", method, error)
+        if (.not. allocated(error)) modes_case = lower(trim(method)) == 'modes'
+    end function modes_case
 
     !> &reduction method = 'none' on a model above max_file_dof runs only the weighted
     !> residual (method 'hbm', and 'sweep' with &sweep stability = .false.) without the
@@ -415,14 +445,14 @@ contains
         character(len=:), allocatable, intent(inout) :: method
         logical, intent(in) :: given
         type(error_type), allocatable, intent(out) :: error
-        character(len=10), parameter :: studies(3) = [character(len=10) :: 'study', 'sweep', &
-                                                      'robustness']
-        logical :: present(3)
+        character(len=10), parameter :: studies(4) = [character(len=10) :: 'study', 'sweep', &
+                                                      'robustness', 'modes']
+        logical :: present(4)
         character(len=:), allocatable :: names
         integer :: k
-        present = [(nml%find(trim(studies(k))) > 0, k=1, 3)]
+        present = [(nml%find(trim(studies(k))) > 0, k=1, 4)]
         if (given) then
-            do k = 1, 3
+            do k = 1, 4
                 if (present(k) .and. method /= trim(studies(k))) then
                     call group_error(nml, error, "&"//trim(studies(k))//" given but &run "// &
                                      "method = '"//method//"'; set method = '"// &
@@ -434,7 +464,7 @@ contains
             method = trim(studies(findloc(present, .true., 1)))
         else if (count(present) > 1) then
             names = ""
-            do k = 1, 3
+            do k = 1, 4
                 if (present(k)) names = names//" &"//trim(studies(k))
             end do
             call group_error(nml, error, "&run method: missing, and"//names//" are given: "// &
@@ -459,7 +489,7 @@ contains
         ! the highest H the method's weighted-residual solves reach
         h = -1
         select case (case%method)
-        case ('hbm', 'all', 'sweep', 'reference')
+        case ('hbm', 'all', 'sweep', 'reference', 'modes')
             if (case%method /= 'reference' .or. case%reference%start /= 'euler') then
                 h = case%hbm%harmonics
                 what = "&hbm harmonics = "//itoa(h)
@@ -576,9 +606,12 @@ contains
                 end if
             end associate
             call put(unit, "/", stat, msg)
-            call put(unit, "&forcing", stat, msg)
-            call put(unit, "  omega = "//rtoa(m%omega), stat, msg)
-            if (allocated(case%system_files%force_absolute)) then
+            if (m%nforce() > 0) call put(unit, "&forcing", stat, msg)
+            if (m%nforce() > 0) call put(unit, "  omega = "//rtoa(m%omega), stat, msg)
+            if (m%nforce() == 0) then
+                ! a case without forcing (method 'modes'): no &forcing group
+                continue
+            else if (allocated(case%system_files%force_absolute)) then
                 call put(unit, "  force_file = "//quoted(case%system_files%force_absolute), &
                          stat, msg)
             else if (allocated(m%force_shape)) then
@@ -591,10 +624,12 @@ contains
             else
                 call put(unit, "  force_dof = "//ilist(m%force_dof), stat, msg)
             end if
-            call put(unit, "  force_harmonic = "//ilist(m%force_harmonic), stat, msg)
-            call put(unit, "  force_amplitude = "//rlist(m%force_amplitude), stat, msg)
-            call put(unit, "  force_phase = "//rlist(m%force_phase), stat, msg)
-            call put(unit, "/", stat, msg)
+            if (m%nforce() > 0) then
+                call put(unit, "  force_harmonic = "//ilist(m%force_harmonic), stat, msg)
+                call put(unit, "  force_amplitude = "//rlist(m%force_amplitude), stat, msg)
+                call put(unit, "  force_phase = "//rlist(m%force_phase), stat, msg)
+                call put(unit, "/", stat, msg)
+            end if
             call put(unit, "&friction", stat, msg)
             if (m%ncontact() > 0) then
                 if (allocated(case%system_files%direction_absolute)) then
@@ -704,6 +739,17 @@ contains
                     call put(unit, "  warm = "//ltoa(b%warm), stat, msg)
                     call put(unit, "  error_samples = "//itoa(b%error_samples), stat, msg)
                     call put(unit, "  wrong_tol = "//rtoa(b%wrong_tol), stat, msg)
+                    call put(unit, "/", stat, msg)
+                end associate
+            end if
+            if (case%has_modes .and. case%method == 'modes') then
+                associate (w => case%modes)
+                    call put(unit, "&modes", stat, msg)
+                    call put(unit, "  mode = "//itoa(w%mode), stat, msg)
+                    call put(unit, "  amplitude_start = "//rtoa(w%amplitude_start), stat, msg)
+                    call put(unit, "  amplitude_stop = "//rtoa(w%amplitude_stop), stat, msg)
+                    call put(unit, "  points = "//itoa(w%points), stat, msg)
+                    call put(unit, "  plot = "//ltoa(w%plot), stat, msg)
                     call put(unit, "/", stat, msg)
                 end associate
             end if

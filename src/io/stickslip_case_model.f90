@@ -512,7 +512,9 @@ contains
     !> n_terms, column k the load shape of term k, relative paths against the case file's
     !> folder; force_dof not allowed beside it), force_amplitude (one per column, default 1);
     !> force_harmonic (default 1) and force_phase (default 0) one per term.
-    subroutine read_forcing_group(nml, model, error, files)
+    !> With `optional_group` (a case of nonlinear modes, which need no forcing) an absent
+    !> group leaves the model without forcing terms (omega 1 rad/s, a placeholder).
+    subroutine read_forcing_group(nml, model, error, files, optional_group)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model (ndof set): omega and the forcing terms set.
@@ -521,12 +523,23 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The file variables: force_file, force_path, force_absolute set when given.
         type(system_files_t), intent(inout), optional :: files
+        !> The group may be absent (default .false.).
+        logical, intent(in), optional :: optional_group
         logical :: found
         integer :: nf
         real(dp) :: omega
         character(len=:), allocatable :: given, path, absolute
         if (nml%find("forcing") == 0) then
-            call group_error(nml, error, "&forcing: required group not found")
+            if (present(optional_group)) then
+                if (optional_group) then
+                    model%omega = 1.0_dp
+                    allocate (model%force_dof(0), model%force_harmonic(0), &
+                              model%force_amplitude(0), model%force_phase(0))
+                    return
+                end if
+            end if
+            call group_error(nml, error, "&forcing: required group not found (every "// &
+                             "method but 'modes' needs it)")
             return
         end if
         call check_names(nml, "forcing", [character(len=15) :: "omega", "force_dof", &

@@ -198,6 +198,16 @@ contains
             return
         end if
 
+        ! a case of nonlinear modes without &forcing has no frequency of its own
+        if (model%nforce() == 0 .and. red%modes == 0 .and. red%max_frequency == 0.0_dp) then
+            call group_error(nml, error, "&reduction: a case of nonlinear modes without "// &
+                             "&forcing gives no frequency to choose the fixed-interface "// &
+                             "modes from: give &reduction max_frequency [rad/s] (about 3 H "// &
+                             "times the mode's frequency) or modes, or a &forcing group whose "// &
+                             "omega is near the mode (its terms are not applied by method "// &
+                             "'modes')")
+            return
+        end if
         ! the run's highest harmonic frequency
         omega_max = abs(model%omega)
         parameter = ""

@@ -24,8 +24,8 @@ module stickslip_case_solvers
     public :: read_output_group, default_output_dofs, known_methods
 
     !> Methods of &run method.
-    character(len=10), parameter :: known_methods(7) = [character(len=10) :: 'hbm', 'euler', &
-        'reference', 'all', 'study', 'sweep', 'robustness']
+    character(len=10), parameter :: known_methods(8) = [character(len=10) :: 'hbm', 'euler', &
+        'reference', 'all', 'study', 'sweep', 'robustness', 'modes']
 
 contains
 
@@ -168,7 +168,8 @@ contains
         if (allocated(error)) return
         if (.not. any(known_methods == method) .or. len_trim(method) == 0) then
             call group_error(nml, error, "&run method = '"//method//"': must be 'hbm', "// &
-                             "'euler', 'reference', 'all', 'study', 'sweep' or 'robustness'")
+                             "'euler', 'reference', 'all', 'study', 'sweep', 'robustness' or "// &
+                             "'modes'")
             return
         end if
         method = trim(method)

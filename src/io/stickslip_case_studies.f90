@@ -13,6 +13,7 @@ module stickslip_case_studies
     use stickslip_sweep, only: sweep_options_t, validate_sweep_options
     use stickslip_robustness, only: robustness_options_t, default_robustness_options, &
         validate_robustness_options
+    use stickslip_modes, only: modes_options_t, validate_modes_options
     use stickslip_namelist, only: nml_file_t, lower
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string, &
         get_integers, get_reals
@@ -20,8 +21,8 @@ module stickslip_case_studies
     use stickslip_case_messages, only: to_case_message
     implicit none
     private
-    public :: read_study_group, read_sweep_group, read_robustness_group
-    public :: sweep_run_options_t
+    public :: read_study_group, read_sweep_group, read_robustness_group, read_modes_group
+    public :: sweep_run_options_t, modes_run_options_t
 
     !> The &sweep group of a case: the options of run_sweep and what the run of a case does
     !> around it (the checkpoint, the picture), which run_sweep does not use.
@@ -32,7 +33,56 @@ module stickslip_case_studies
         logical :: plot = .true.
     end type sweep_run_options_t
 
+    !> The &modes group of a case: the options of run_modes and whether the program draws
+    !> modes.png.
+    type, extends(modes_options_t) :: modes_run_options_t
+        !> Draw modes.png with gnuplot (the command-line program).
+        logical :: plot = .true.
+    end type modes_run_options_t
+
 contains
+
+    !> Read &modes (optional; `given` tells whether it is present): mode, amplitude_start and
+    !> amplitude_stop (both required with the group), points, plot; validate.
+    subroutine read_modes_group(nml, opts, given, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> Modal-analysis options with plot (defaults for absent variables).
+        type(modes_run_options_t), intent(out) :: opts
+        !> The group is present.
+        logical, intent(out) :: given
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        logical :: found
+        character(len=*), parameter :: g = "modes"
+        given = nml%find(g) > 0
+        if (.not. given) return
+        call check_names(nml, g, [character(len=16) :: "mode", "amplitude_start", &
+                             "amplitude_stop", "points", "plot"], error)
+        if (allocated(error)) return
+        call get_integer(nml, g, "mode", opts%mode, error)
+        if (allocated(error)) return
+        call get_real(nml, g, "amplitude_start", opts%amplitude_start, error, found)
+        if (allocated(error)) return
+        if (.not. found) then
+            call group_error(nml, error, "&modes amplitude_start: missing (the smallest "// &
+                             "modal amplitude, > 0)")
+            return
+        end if
+        call get_real(nml, g, "amplitude_stop", opts%amplitude_stop, error, found)
+        if (allocated(error)) return
+        if (.not. found) then
+            call group_error(nml, error, "&modes amplitude_stop: missing (the largest "// &
+                             "modal amplitude, > 0)")
+            return
+        end if
+        call get_integer(nml, g, "points", opts%points, error)
+        if (allocated(error)) return
+        call get_logical(nml, g, "plot", opts%plot, error)
+        if (allocated(error)) return
+        call validate_modes_options(opts%modes_options_t, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['modes'])
+    end subroutine read_modes_group
 
     !> Read &study (optional): lists harmonics, samples, steps_per_period (at most max_terms
     !> each; a single 0 asks for no run of that method), error_samples, repeats,

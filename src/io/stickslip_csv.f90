@@ -16,7 +16,8 @@ module stickslip_csv
     use stickslip_flow, only: event_name, law_event_name
     use stickslip_compare, only: quantity_names
     use stickslip_study, only: study_result_t
-    use stickslip_sweep, only: sweep_result_t
+    use stickslip_sweep, only: sweep_result_t, frc_point_t
+    use stickslip_modes, only: modes_result_t
     use stickslip_robustness, only: robustness_row_t
     use stickslip_case, only: ltoa
     use stickslip_files, only: open_temporary, close_and_rename
@@ -25,6 +26,7 @@ module stickslip_csv
     private
     public :: write_hbm_csv, write_samples_csv, write_coefficients_csv, write_events_csv
     public :: write_study_csv, write_frc_csv, write_frc_harmonics_csv, write_robustness_csv
+    public :: write_modes_csv, write_modes_harmonics_csv
     public :: real_fmt
     public :: format_real, real_width, contact_columns
 
@@ -428,6 +430,34 @@ contains
         integer, intent(in), optional :: labels(:)
         !> The contacts' channel layout (absent: one tangential channel per contact).
         type(contact_set_t), intent(in), optional :: contacts
+        if (res%npoints == 0) then
+            call write_harmonics_csv(dir, "frc_harmonics.csv", "parameter", [frc_point_t ::], &
+                                     error, dofs, labels, contacts)
+        else
+            call write_harmonics_csv(dir, "frc_harmonics.csv", "parameter", &
+                                     res%points(1:res%npoints), error, dofs, labels, contacts)
+        end if
+    end subroutine write_frc_harmonics_csv
+
+    !> Write `dir`/`name`: the Fourier coefficients of `points` (frc_harmonics.csv,
+    !> modes_harmonics.csv), header point,<parameter_name>,omega,harmonic,kind,x<d>..,
+    !> r<j>..,u<j>.. (see write_frc_harmonics_csv). Error: stat io.
+    subroutine write_harmonics_csv(dir, name, parameter_name, points, error, dofs, labels, &
+                                   contacts)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> File name, and the title of the second column (the points' parameter).
+        character(len=*), intent(in) :: name, parameter_name
+        !> The points.
+        type(frc_point_t), intent(in) :: points(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The DOFs written (columns of the points' xcoef, as frc.csv's); absent: all.
+        integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (default: `dofs`).
+        integer, intent(in), optional :: labels(:)
+        !> The contacts' channel layout (absent: one tangential channel per contact).
+        type(contact_set_t), intent(in), optional :: contacts
         integer :: u, k, i, m, stat, n, nch
         character(len=512) :: msg
         character(len=:), allocatable :: header, kind
@@ -438,10 +468,10 @@ contains
         msg = ''
         n = 0
         nch = 0
-        do k = 1, res%npoints
-            if (.not. allocated(res%points(k)%xcoef)) cycle
-            n = size(res%points(k)%xcoef, 2)
-            nch = size(res%points(k)%rcoef, 2)
+        do k = 1, size(points)
+            if (.not. allocated(points(k)%xcoef)) cycle
+            n = size(points(k)%xcoef, 2)
+            nch = size(points(k)%rcoef, 2)
             exit
         end do
         if (present(dofs)) then
@@ -453,7 +483,7 @@ contains
         call contact_columns(nch, rnames, channel, gap_of, contacts)
         rnames = pack(rnames, channel > 0)
         channel = pack(channel, channel > 0)
-        header = "point,parameter,omega,harmonic,kind"
+        header = "point,"//parameter_name//",omega,harmonic,kind"
         do i = 1, size(sel)
             header = header//",x"//itoa(numbers(i))
         end do
@@ -469,11 +499,11 @@ contains
         end do
         write (fmt, '(a,i0,a)') '(i0,",",2(' // real_fmt // ',","),i0,",",a,",",', &
             size(sel) + 2*size(channel), '(' // real_fmt // ',:,","))'
-        call open_temporary(dir, "frc_harmonics.csv", u, error)
+        call open_temporary(dir, name, u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
-        do k = 1, res%npoints
-            associate (p => res%points(k))
+        do k = 1, size(points)
+            associate (p => points(k))
                 if (.not. allocated(p%xcoef)) cycle
                 do m = 1, size(p%harmonic)
                     if (stat /= 0) exit
@@ -485,8 +515,120 @@ contains
             end associate
             if (stat /= 0) exit
         end do
-        call close_and_rename(dir, "frc_harmonics.csv", u, stat, msg, error)
-    end subroutine write_frc_harmonics_csv
+        call close_and_rename(dir, name, u, stat, msg, error)
+    end subroutine write_harmonics_csv
+
+    !> Write `dir`/modes.csv, one row per point of a backbone (nonlinear modal analysis):
+    !> amplitude (modal amplitude a [m sqrt(kg)]), omega [rad/s], frequency [Hz], xi
+    !> (negative modal damping [1/s]), damping_ratio (D = xi / (2 omega)), amp_<d> (max_t
+    !> |x_d| [m] of the DOFs selected, as frc.csv's), dissipation, diss_friction,
+    !> diss_viscous [J per cycle], energy_error (|input - dissipation| / input),
+    !> rmax_1..rmax_C [N], stick_1..stick_C, harmonics, residual, status, nfev; with contact
+    !> laws then open_1..open_C, slip_1..slip_C, normal_max_1..normal_max_C. Error: stat io.
+    subroutine write_modes_csv(dir, res, error, dofs, labels)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The backbone.
+        type(modes_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The DOFs written (each in 1..N); absent: all.
+        integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (default: the DOF numbers).
+        integer, intent(in), optional :: labels(:)
+        integer :: u, k, i, stat, n, nc
+        character(len=512) :: msg
+        character(len=:), allocatable :: header
+        logical :: laws
+        integer, allocatable :: sel(:), numbers(:)
+        real(dp), parameter :: two_pi = 2.0_dp*acos(-1.0_dp)
+        stat = 0
+        msg = ''
+        n = 0
+        nc = 0
+        laws = .false.
+        if (res%npoints > 0) then
+            n = size(res%points(1)%p%amplitude)
+            nc = size(res%points(1)%p%rmax)
+            laws = allocated(res%points(1)%p%open)
+        end if
+        if (present(dofs)) then
+            sel = dofs
+        else
+            sel = selection(n)
+        end if
+        numbers = column_numbers(sel, labels)
+        header = "amplitude,omega,frequency,xi,damping_ratio"
+        do i = 1, size(sel)
+            header = header//",amp_"//itoa(numbers(i))
+        end do
+        header = header//",dissipation,diss_friction,diss_viscous,energy_error"
+        do i = 1, nc
+            header = header//",rmax_"//itoa(i)
+        end do
+        do i = 1, nc
+            header = header//",stick_"//itoa(i)
+        end do
+        header = header//",harmonics,residual,status,nfev"
+        if (laws) then
+            do i = 1, nc
+                header = header//",open_"//itoa(i)
+            end do
+            do i = 1, nc
+                header = header//",slip_"//itoa(i)
+            end do
+            do i = 1, nc
+                header = header//",normal_max_"//itoa(i)
+            end do
+        end if
+        call open_temporary(dir, "modes.csv", u, error)
+        if (allocated(error)) return
+        write (u, '(a)', iostat=stat, iomsg=msg) header
+        do k = 1, res%npoints
+            if (stat /= 0) exit
+            associate (m => res%points(k), p => res%points(k)%p)
+                write (u, '(*(' // real_fmt // ',:,","))', iostat=stat, iomsg=msg, &
+                    advance='no') p%parameter, p%omega, p%omega/two_pi, m%xi, &
+                    m%damping_ratio, p%amplitude(sel), p%dissipation, p%diss_friction, &
+                    p%diss_damping, m%energy_error, p%rmax, p%stick
+                if (stat == 0) write (u, '(",",i0,",",' // real_fmt // ',",",a,",",i0)', &
+                                      iostat=stat, iomsg=msg, advance='no') p%harmonics, &
+                    p%residual, trim(p%status), p%nfev
+                if (stat == 0 .and. laws) write (u, '(*(",",' // real_fmt // '))', &
+                                                 iostat=stat, iomsg=msg, advance='no') &
+                    p%open, 1.0_dp - p%open - p%stick, p%normal_max
+                if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) ""
+            end associate
+        end do
+        call close_and_rename(dir, "modes.csv", u, stat, msg, error)
+    end subroutine write_modes_csv
+
+    !> Write `dir`/modes_harmonics.csv: the shape of the mode at every point of the
+    !> backbone, as Fourier coefficients (the format of frc_harmonics.csv, second column
+    !> `amplitude`, the modal amplitude of the point: row `point` of modes.csv). Error: stat
+    !> io.
+    subroutine write_modes_harmonics_csv(dir, res, error, dofs, labels, contacts)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The backbone.
+        type(modes_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The DOFs written (columns of the points' xcoef); absent: all.
+        integer, intent(in), optional :: dofs(:)
+        !> Column numbers of the selected DOFs (default: `dofs`).
+        integer, intent(in), optional :: labels(:)
+        !> The contacts' channel layout.
+        type(contact_set_t), intent(in), optional :: contacts
+        type(frc_point_t), allocatable :: points(:)
+        integer :: k
+        allocate (points(res%npoints))
+        do k = 1, res%npoints
+            points(k) = res%points(k)%p
+        end do
+        call write_harmonics_csv(dir, "modes_harmonics.csv", "amplitude", points, error, dofs, &
+                                 labels, contacts)
+    end subroutine write_modes_harmonics_csv
 
     !> Write `dir`/robustness.csv: header
     !> method,omega,mu,harmonics,rho,rho_auto,samples,converged,success,iterations,

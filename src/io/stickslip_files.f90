@@ -23,12 +23,12 @@ module stickslip_files
     !> Every result file stickslip writes into an output directory (doc/outputs.md):
     !> the files that a run removes when it does not write them itself. Never the case
     !> file, the sweep checkpoint or anything else.
-    character(len=*), parameter :: result_file_names(17) = [character(len=24) :: &
+    character(len=*), parameter :: result_file_names(21) = [character(len=24) :: &
         "hbm.csv", "coefficients.csv", "full_field.mtx", "euler.csv", "reference.csv", "events.csv", &
         "study.csv", "frc.csv", "frc_harmonics.csv", "frc.gp", "frc.png", &
         "frc_dissipation.png", &
         "robustness.csv", "robustness.gp", "robustness_cold.png", "robustness_warm.png", &
-        "summary.nml"]
+        "modes.csv", "modes_harmonics.csv", "modes.gp", "modes.png", "summary.nml"]
 
     !> The lock of an output directory, held from acquire_lock to release_lock.
     type :: directory_lock_t

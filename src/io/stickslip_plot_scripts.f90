@@ -1,6 +1,7 @@
 !> The gnuplot scripts of the pictures: frc.gp (frc.png, a forced-response curve, and
 !> frc_dissipation.png, the dissipation per cycle against amplitude) and
-!> robustness.gp (robustness_cold.png, robustness_warm.png, the robustness maps). Each
+!> robustness.gp (robustness_cold.png, robustness_warm.png, the robustness maps) and
+!> modes.gp (modes.png, the backbone of a nonlinear mode). Each
 !> script reads its CSV file by a relative name, so it runs in the output directory
 !> (`cd DIR && gnuplot frc.gp`), and writes its PNGs with the name suffix held by the
 !> gnuplot variable `suffix` ('' unless given with -e). Writing a script starts nothing:
@@ -13,7 +14,7 @@ module stickslip_plot_scripts
     use stickslip_files, only: open_temporary, close_and_rename
     implicit none
     private
-    public :: write_frc_plot_script, write_robustness_plot_script
+    public :: write_frc_plot_script, write_robustness_plot_script, write_modes_plot_script
 
 contains
 
@@ -125,6 +126,65 @@ contains
                  stat, msg)
         call close_and_rename(dir, "frc.gp", u, stat, msg, error)
     end subroutine write_frc_plot_script
+
+    !> Write `dir`/modes.gp, the gnuplot script that draws modes.png from modes.csv: the
+    !> backbone's frequency [rad/s] (upper panel) and modal damping ratio (lower panel)
+    !> against the modal amplitude (log scale), with the linear limits of the contacts stuck
+    !> and slipping (`omega_stuck`, `omega_slipping` [rad/s], 0: none) as dashed lines.
+    !> Error: stat io.
+    subroutine write_modes_plot_script(dir, mode, omega_stuck, omega_slipping, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The mode's number (for the title).
+        integer, intent(in) :: mode
+        !> The linear limits [rad/s].
+        real(dp), intent(in) :: omega_stuck, omega_slipping
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat
+        character(len=512) :: msg
+        stat = 0
+        msg = ''
+        call open_temporary(dir, "modes.gp", u, error)
+        if (allocated(error)) return
+        call put(u, "# Backbone of a nonlinear mode from modes.csv: gnuplot modes.gp (in this "// &
+                 "directory; writes modes.png)", stat, msg)
+        call put(u, "set terminal pngcairo size 1000,800 noenhanced font ',11'", stat, msg)
+        call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
+        call put(u, "set output 'modes.png'.suffix", stat, msg)
+        call put(u, "set datafile separator ','", stat, msg)
+        call put(u, "set key autotitle columnhead", stat, msg)
+        call put(u, "set grid lc rgb '#dddddd'", stat, msg)
+        call put(u, "set logscale x", stat, msg)
+        call put(u, "f = 'modes.csv'", stat, msg)
+        call put(u, "w_stuck = "//rtoa(omega_stuck)//"; w_slip = "//rtoa(omega_slipping), &
+                 stat, msg)
+        call put(u, "set multiplot layout 2,1 title 'Nonlinear mode "//itoa(mode)// &
+                 " (EPMC): frequency and damping against the modal amplitude'", stat, msg)
+        call put(u, "# the frequency range: the backbone's (a linear limit far outside it is "// &
+                 "named in the key, not drawn)", stat, msg)
+        call put(u, "stats f using 2 nooutput", stat, msg)
+        call put(u, "pad = (STATS_max - STATS_min)*0.08 + 1e-3*STATS_max", stat, msg)
+        call put(u, "set yrange [STATS_min - pad:STATS_max + pad]", stat, msg)
+        call put(u, "set ylabel 'frequency omega [rad/s]'", stat, msg)
+        call put(u, "set format x ''", stat, msg)
+        call put(u, "set key bottom right box opaque", stat, msg)
+        call put(u, "plot f using 1:2 with linespoints lw 1.5 pt 7 ps 0.4 title 'backbone', \", &
+                 stat, msg)
+        call put(u, "     (w_stuck > 0 ? w_stuck : 1/0) with lines dt 2 lc rgb 'gray40' "// &
+                 "title sprintf('contacts stuck (linear): %.6g rad/s', w_stuck), \", stat, msg)
+        call put(u, "     (w_slip > 0 ? w_slip : 1/0) with lines dt 3 lc rgb 'gray20' "// &
+                 "title sprintf('contacts slipping (linear): %.6g rad/s', w_slip)", stat, msg)
+        call put(u, "unset yrange", stat, msg)
+        call put(u, "set format x '%g'", stat, msg)
+        call put(u, "set xlabel 'modal amplitude a = sqrt(x1^T M x1) [m sqrt(kg)]'", stat, msg)
+        call put(u, "set ylabel 'modal damping ratio D = xi / (2 omega) [-]'", stat, msg)
+        call put(u, "set key top right box opaque", stat, msg)
+        call put(u, "plot f using 1:5 with linespoints lw 1.5 pt 7 ps 0.4 lc rgb '#d62728' "// &
+                 "title 'damping ratio'", stat, msg)
+        call put(u, "unset multiplot", stat, msg)
+        call close_and_rename(dir, "modes.gp", u, stat, msg, error)
+    end subroutine write_modes_plot_script
 
     !> The axis label of a swept parameter, with its unit.
     pure function parameter_label(parameter) result(label)

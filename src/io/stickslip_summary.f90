@@ -14,6 +14,7 @@ module stickslip_summary
     use stickslip_compare, only: comparison_t, quantity_names
     use stickslip_side_by_side, only: side_by_side_t
     use stickslip_study, only: study_result_t
+    use stickslip_modes, only: modes_result_t
     use stickslip_sweep, only: sweep_result_t
     use stickslip_checks, only: hbm_checks_t
     use stickslip_robustness, only: robustness_row_t
@@ -22,7 +23,7 @@ module stickslip_summary
     private
     public :: write_summary, write_euler_summary, write_reference_summary
     public :: write_side_by_side_summary, write_study_summary, write_sweep_summary
-    public :: write_robustness_summary
+    public :: write_robustness_summary, write_modes_summary
     public :: energy_balance_error, reference_balance_error
 
 contains
@@ -458,6 +459,57 @@ contains
         end if
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_sweep_summary
+
+    !> Write `dir`/summary.nml for a nonlinear modal analysis: &summary (method = 'modes',
+    !> complete, points, the linear limits omega_stuck and omega_slipping [rad/s], start,
+    !> rho, odd_only, amplitude_first/last, omega_min/max, damping_ratio_max and the
+    !> amplitude where it is reached, max_energy_error, folds, rejected_steps,
+    !> factorizations, cpu_seconds, diagnosis), then the effective case. Error: stat io.
+    subroutine write_modes_summary(dir, case, res, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case.
+        type(case_t), intent(in) :: case
+        !> The backbone.
+        type(modes_result_t), intent(in) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, n, k
+        character(len=512) :: msg
+        n = res%npoints
+        call begin_summary(dir, "modes", case, res%diagnostics, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
+        if (allocated(error)) return
+        call put(u, "  complete = "//ltoa(res%complete), stat, msg)
+        call put(u, "  points = "//itoa(n), stat, msg)
+        call put(u, "  omega_stuck = "//rtoa(res%omega_stuck), stat, msg)
+        call put(u, "  omega_slipping = "//rtoa(res%omega_slipping), stat, msg)
+        call put(u, "  start = '"//trim(res%start)//"'", stat, msg)
+        call put(u, "  rho = "//rtoa(res%rho), stat, msg)
+        call put(u, "  odd_only = "//ltoa(res%odd_only), stat, msg)
+        if (n > 0) then
+            associate (pts => res%points(1:n))
+                call put(u, "  amplitude_first = "//rtoa(pts(1)%p%parameter), stat, msg)
+                call put(u, "  amplitude_last = "//rtoa(pts(n)%p%parameter), stat, msg)
+                call put(u, "  omega_min = "//rtoa(minval(pts%p%omega)), stat, msg)
+                call put(u, "  omega_max = "//rtoa(maxval(pts%p%omega)), stat, msg)
+                k = maxloc(pts%damping_ratio, 1)
+                call put(u, "  damping_ratio_max = "//rtoa(pts(k)%damping_ratio), stat, msg)
+                call put(u, "  damping_ratio_max_amplitude = "//rtoa(pts(k)%p%parameter), &
+                         stat, msg)
+                call put(u, "  max_energy_error = "//rtoa(maxval(pts%energy_error)), stat, msg)
+                call put(u, "  max_residual = "//rtoa(maxval(pts%p%residual)), stat, msg)
+            end associate
+        end if
+        call put(u, "  folds = "//itoa(res%folds), stat, msg)
+        call put(u, "  rejected_steps = "//itoa(res%rejected), stat, msg)
+        call put(u, "  factorizations = "//itoa(res%factorizations), stat, msg)
+        call put(u, "  cpu_seconds = "//rtoa(res%seconds), stat, msg)
+        if (allocated(res%diagnosis)) then
+            call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        end if
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_modes_summary
 
     !> Write `dir`/summary.nml for a robustness study: &summary (method = 'robustness', rows,
     !> then per method runs_<m> and successes_<m>, m = hbm_cold, hbm_warm, euler), then the

@@ -1,0 +1,624 @@
+!> Nonlinear modal analysis (&run method = 'modes'): the backbone of one mode of a
+!> friction-damped structure, its frequency, modal damping ratio and shape against the
+!> modal amplitude, by the extended periodic motion concept on the equality formulation
+!> (stickslip_modes_family) continued in ln a by the pseudo-arclength continuation of the
+!> sweeps (stickslip_continuation).
+!>
+!> The family starts from the structure's linear mode `mode` with its contacts stuck (the
+!> low-amplitude limit; with its contacts slipping when the stuck structure has no such
+!> mode, e.g. a single mass on a friction contact): the start point at amplitude_start is
+!> corrected from that linear motion, or from the slipping mode with Coulomb's first
+!> harmonic when the stuck guess does not converge. Every point is then finished as a
+!> weighted-residual solution (solution_from_forces: samples, stick statistics,
+!> dissipation) and checked: the energy the negative modal damping feeds in per cycle must
+!> equal what friction and viscous damping dissipate.
+module stickslip_modes
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use stickslip_kinds, only: dp, pi
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
+    use stickslip_progress, only: progress_t
+    use stickslip_thread_clock, only: thread_cpu_seconds
+    use stickslip_model, only: model_t, validate_model, preload_force
+    use stickslip_lapack, only: dgesv
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: validate_options, solution_from_forces, energy_warning, &
+        energy_untrusted, force_excess_warning, force_excess_untrusted
+    use stickslip_rho, only: automatic_rho
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions, &
+        channel_normal
+    use stickslip_linear_modes, only: linear_modes
+    use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
+        continuation_report_t, start_continuation, continuation_step, reason_running, &
+        reason_end
+    use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
+    use stickslip_sweep_result, only: frc_point_t, reason_text
+    use stickslip_sweep_point, only: point_tally_t, keep_coefficients
+    use stickslip_sweep_options, only: sweep_options_t
+    implicit none
+    private
+    public :: modes_options_t, mode_point_t, modes_result_t, run_modes, validate_modes_options
+    public :: modes_max_points
+
+    !> Largest `points` accepted.
+    integer, parameter :: modes_max_points = 100000
+
+    !> Options of a nonlinear modal analysis.
+    type :: modes_options_t
+        !> Which linear mode the family starts from (1: the lowest of the stuck structure).
+        integer :: mode = 1
+        !> Range of the modal amplitude a = sqrt(c1^T M c1 + s1^T M s1) [m sqrt(kg)], > 0.
+        real(dp) :: amplitude_start = 0.0_dp, amplitude_stop = 0.0_dp
+        !> Points of the backbone over the range at the largest step (the continuation takes
+        !> more where the curve bends); it stops after 20 x points.
+        integer :: points = 100
+        !> Observed combinations of the DOFs (rows), as a sweep's: the amplitude columns of a
+        !> reduced model's recovered DOFs; unallocated: every DOF of the model.
+        real(dp), allocatable :: observe(:, :)
+    end type modes_options_t
+
+    !> One point of a backbone.
+    type :: mode_point_t
+        !> Modal amplitude a [m sqrt(kg)] (the point's parameter), angular frequency omega
+        !> [rad/s], negative modal damping xi [1/s] and modal damping ratio D = xi / (2
+        !> omega); the frc_point_t part holds amplitudes per DOF, forces, stick shares,
+        !> dissipations (diss_damping: the viscous part, C only) and coefficients, its
+        !> parameter = a.
+        type(frc_point_t) :: p
+        real(dp) :: xi = 0.0_dp, damping_ratio = 0.0_dp
+        !> Energy fed in per cycle by the negative modal damping [J], and the balance error
+        !> |input - friction - viscous| / input.
+        real(dp) :: energy_input = 0.0_dp, energy_error = 0.0_dp
+    end type mode_point_t
+
+    !> A backbone.
+    type :: modes_result_t
+        type(mode_point_t), allocatable :: points(:)
+        integer :: npoints = 0
+        !> The end of the range was reached.
+        logical :: complete = .false.
+        character(len=:), allocatable :: diagnosis
+        !> The linear limits: frequencies of the mode with every contact stuck and slipping
+        !> [rad/s] (0 when the structure has no such mode), and which start was taken
+        !> ('stuck' or 'slipping').
+        real(dp) :: omega_stuck = 0.0_dp, omega_slipping = 0.0_dp
+        character(len=8) :: start = ''
+        !> Weight rho in effect, harmonics of the family (odd only for plain contacts).
+        real(dp) :: rho = 0.0_dp
+        logical :: odd_only = .false.
+        !> CPU seconds, factorizations of the dynamic stiffnesses, continuation counts.
+        real(dp) :: seconds = 0.0_dp
+        integer :: factorizations = 0, rejected = 0, folds = 0
+        !> What the checks found.
+        type(diagnostics_t) :: diagnostics
+    end type modes_result_t
+
+contains
+
+    !> Check modal-analysis options. Errors (stat input) name the component.
+    subroutine validate_modes_options(opts, error)
+        !> The options.
+        type(modes_options_t), intent(in) :: opts
+        !> Set on the first problem.
+        type(error_type), allocatable, intent(out) :: error
+        if (opts%mode < 1) then
+            call fatal_error(error, "opts%mode = "//itoa(opts%mode)//": must be >= 1", &
+                             stickslip_stat%input)
+        else if (.not. (opts%amplitude_start > 0.0_dp .and. &
+                        ieee_is_finite(opts%amplitude_start))) then
+            call fatal_error(error, "opts%amplitude_start: must be finite and > 0", &
+                             stickslip_stat%input)
+        else if (.not. (opts%amplitude_stop > 0.0_dp .and. &
+                        ieee_is_finite(opts%amplitude_stop))) then
+            call fatal_error(error, "opts%amplitude_stop: must be finite and > 0", &
+                             stickslip_stat%input)
+        else if (opts%amplitude_start == opts%amplitude_stop) then
+            call fatal_error(error, "opts%amplitude_start = opts%amplitude_stop: the range "// &
+                             "is empty", stickslip_stat%input)
+        else if (opts%points < 2 .or. opts%points > modes_max_points) then
+            call fatal_error(error, "opts%points = "//itoa(opts%points)//": must be in 2.."// &
+                             itoa(modes_max_points), stickslip_stat%input)
+        end if
+    end subroutine validate_modes_options
+
+    !> The backbone of mode opts%mode of `model` (its forcing ignored; dense M, C, K: a
+    !> reduced FE model is dense) on the basis of `hbm` (rho = 0: automatic, at the mode's
+    !> linear frequency), from amplitude_start to amplitude_stop. A backbone that stops
+    !> early (the continuation failed) is returned with complete = .false. and a
+    !> diagnosis. Errors: stat input (bad options, no contact, no such mode), stat
+    !> numerical (no solution at the start, singular dynamics at the linear frequency).
+    subroutine run_modes(model, hbm, opts, res, error, progress)
+        !> A validated model with contacts.
+        type(model_t), intent(in) :: model
+        !> Basis and tolerance options.
+        type(hbm_options_t), intent(in) :: hbm
+        !> Modal-analysis options.
+        type(modes_options_t), intent(in) :: opts
+        !> The backbone.
+        type(modes_result_t), intent(out) :: res
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress hook, told after every point.
+        type(progress_t), intent(inout), optional :: progress
+        type(modes_family_t) :: fam
+        type(continuation_options_t) :: copts
+        type(continuation_state_t) :: state
+        type(continuation_report_t) :: rep
+        type(hbm_options_t) :: ho
+        type(model_t) :: free
+        type(point_tally_t) :: tally
+        real(dp), allocatable :: ws(:), phis(:, :), phif(:, :), wfv(:), guess(:, :)
+        real(dp), allocatable :: phi(:), phi_slip(:)
+        real(dp) :: omega_ref, c0, fscale, last_tl
+        integer :: k, nguess, g
+        type(error_type), allocatable :: err_stuck, err_slip
+        character(len=16) :: names(2)
+        character(len=32) :: buf
+
+        c0 = thread_cpu_seconds()
+        call validate_model(model, error)
+        if (allocated(error)) return
+        call validate_options(hbm, error)
+        if (allocated(error)) return
+        call validate_modes_options(opts, error)
+        if (allocated(error)) return
+        if (model%ncontact() == 0) then
+            call fatal_error(error, "nonlinear modes: the model has no friction contact", &
+                             stickslip_stat%input)
+            return
+        end if
+        free = free_structure(model)
+        ! the linear limits: mode `mode` of the stuck structure, and the slipping mode most
+        ! like it (largest |phi_f^T M phi_s|)
+        call linear_modes(free, .true., ws, phis, err_stuck)
+        call linear_modes(free, .false., wfv, phif, err_slip)
+        if (allocated(err_stuck)) allocate (ws(0), phis(model%ndof, 0))
+        if (allocated(err_slip)) allocate (wfv(0), phif(model%ndof, 0))
+        if (size(ws) >= opts%mode) then
+            phi = phis(:, opts%mode)
+            omega_ref = ws(opts%mode)
+            res%omega_stuck = omega_ref
+            if (size(wfv) > 0) then
+                k = maxloc(abs(matmul(transpose(phif), matmul(free%mass, phi))), 1)
+                phi_slip = phif(:, k)
+                res%omega_slipping = wfv(k)
+            end if
+        else if (size(wfv) >= opts%mode) then
+            phi = phif(:, opts%mode)
+            phi_slip = phi
+            omega_ref = wfv(opts%mode)
+            res%omega_slipping = omega_ref
+        else
+            call fatal_error(error, "nonlinear modes: mode "//itoa(opts%mode)//" does not "// &
+                             "exist (the structure has "//itoa(max(size(ws), size(wfv)))// &
+                             " modes with its contacts stuck or slipping)", stickslip_stat%input)
+            return
+        end if
+        ho = hbm
+        if (ho%rho == 0.0_dp) then
+            free%omega = omega_ref
+            ho%rho = automatic_rho(free)
+        end if
+        call new_modes_family(fam, free, ho, phi, omega_ref, error)
+        if (allocated(error)) return
+        res%rho = ho%rho
+        res%odd_only = fam%opts%odd_only
+        ! the continuation in lambda = ln a, at most (points - 1) steps over the range
+        copts%start = log(opts%amplitude_start)
+        copts%stop = log(opts%amplitude_stop)
+        copts%max_step = abs(copts%stop - copts%start)/real(opts%points - 1, dp)
+        copts%step = copts%max_step
+        copts%min_step = 1.0e-3_dp*copts%max_step
+        copts%max_points = 20*opts%points
+        copts%tol = hbm%tol
+        copts%fscale = tiny(1.0_dp)
+        copts%maxfev = max(100, 20*(fam%n + 2))
+        ! the scales of the unknowns, times the parameter's range: the arclength then
+        ! follows ln a (evenly spaced points), shortened only where the mode changes fast
+        ! (the stick-slip transition), not where the stuck reactions grow like a
+        fscale = force_scale(free)
+        copts%yscale = abs(copts%stop - copts%start)*[spread(fscale, 1, fam%n), omega_ref, &
+                                                      0.1_dp*omega_ref]
+        ! the start: the stuck guess first when the stuck contacts hold (the reaction of the
+        ! linear motion within the friction limits), else the slipping one first
+        allocate (guess(fam%n + 2, 0))
+        nguess = 0
+        if (res%omega_stuck > 0.0_dp) then
+            guess = reshape([guess, stuck_guess(fam, free, phi, omega_ref, &
+                                                opts%amplitude_start)], [fam%n + 2, 1])
+            names(1) = 'stuck'
+            nguess = 1
+        end if
+        if (allocated(phi_slip)) then
+            if (res%omega_stuck > 0.0_dp .and. .not. stuck_holds(free, phi, omega_ref, &
+                                                                opts%amplitude_start)) then
+                guess = reshape([slip_guess(fam, free, phi_slip, res%omega_slipping, &
+                                            opts%amplitude_start), guess], [fam%n + 2, 2])
+                names = [character(len=16) :: 'slipping', 'stuck']
+            else
+                guess = reshape([guess, slip_guess(fam, free, phi_slip, res%omega_slipping, &
+                                                   opts%amplitude_start)], &
+                                [fam%n + 2, nguess + 1])
+                names(nguess + 1) = 'slipping'
+            end if
+            nguess = nguess + 1
+        end if
+        do g = 1, nguess
+            call start_continuation(fam, copts, guess(:, g), state, rep, error)
+            if (allocated(error)) then
+                call fam%destroy()
+                return
+            end if
+            if (rep%accepted) then
+                res%start = names(g)
+                exit
+            end if
+        end do
+        if (.not. rep%accepted) then
+            call fam%destroy()
+            write (buf, '(es12.4e3)') opts%amplitude_start
+            call fatal_error(error, "nonlinear modes: no periodic motion found at "// &
+                             "amplitude_start = "//trim(adjustl(buf))//" from the stuck or "// &
+                             "the slipping linear mode (try another amplitude_start, more "// &
+                             "harmonics or &hbm rho = 0)", stickslip_stat%numerical)
+            return
+        end if
+        allocate (res%points(64))
+        call add_point('start')
+        if (allocated(error)) return
+        last_tl = state%tl
+        do while (state%reason == reason_running)
+            call continuation_step(fam, copts, state, rep, error)
+            if (allocated(error)) exit
+            if (.not. rep%accepted) exit
+            if (state%tl*last_tl < 0.0_dp) res%folds = res%folds + 1
+            last_tl = state%tl
+            if (state%reason == reason_end) then
+                call add_point('end')
+            else if (rep%recovered) then
+                call add_point('recovered')
+            else if (rep%halvings > 0) then
+                call add_point('halved')
+            else
+                call add_point('ok')
+            end if
+            if (allocated(error)) exit
+        end do
+        res%factorizations = fam%factorizations
+        res%rejected = state%rejected
+        call fam%destroy()
+        if (allocated(error)) return
+        res%complete = state%reason == reason_end
+        if (res%complete) then
+            res%diagnosis = ""
+        else
+            res%diagnosis = reason_text(state%reason)
+            if (allocated(rep%message)) then
+                if (len(rep%message) > 0) res%diagnosis = rep%message
+            end if
+        end if
+        call tally%report("amplitude", res%diagnostics)
+        res%seconds = thread_cpu_seconds() - c0
+
+    contains
+
+        !> Finish the continuation's current point as a solution and add it.
+        subroutine add_point(status)
+            character(len=*), intent(in) :: status
+            type(mode_point_t) :: mp
+            type(mode_point_t), allocatable :: grown(:)
+            call evaluate_mode_point(fam, state, opts, status, rep%nfev, mp, tally, error)
+            if (allocated(error)) return
+            if (res%npoints == size(res%points)) then
+                allocate (grown(2*res%npoints))
+                grown(1:res%npoints) = res%points(1:res%npoints)
+                call move_alloc(grown, res%points)
+            end if
+            res%npoints = res%npoints + 1
+            res%points(res%npoints) = mp
+            if (present(progress)) then
+                write (buf, '(g0.6)') exp(state%lambda)
+                call progress%report(res%npoints, 0, "amplitude = "//trim(adjustl(buf)))
+            end if
+        end subroutine add_point
+    end subroutine run_modes
+
+    !> The outputs of the continuation's point `state`: the weighted-residual solution of
+    !> the free structure with damping C - xi M at omega (solution_from_forces), the modal
+    !> quantities, the energy balance (input by -xi M = friction + viscous) and the
+    !> point's coefficients; its failed checks counted in `tally`.
+    subroutine evaluate_mode_point(fam, state, opts, status, nfev, mp, tally, error)
+        type(modes_family_t), intent(inout) :: fam
+        type(continuation_state_t), intent(in) :: state
+        type(modes_options_t), intent(in) :: opts
+        character(len=*), intent(in) :: status
+        integer, intent(in) :: nfev
+        type(mode_point_t), intent(out) :: mp
+        type(point_tally_t), intent(inout) :: tally
+        type(error_type), allocatable, intent(out) :: error
+        type(model_t) :: m
+        type(hbm_solution_t) :: ps
+        type(sweep_options_t) :: so
+        type(diagnostics_t) :: diag
+        real(dp) :: omega, xi, kinetic, viscous, period
+        integer :: n, nb, k
+        character(len=300) :: buf
+        n = fam%n
+        nb = fam%prob%basis%nb
+        omega = state%y(n + 1)
+        xi = state%y(n + 2)
+        m = fam%model
+        m%omega = omega
+        m%damping = m%damping - xi*m%mass
+        call solution_from_forces(m, fam%opts, reshape(state%y(1:n), [nb, fam%prob%nc]), ps, &
+                                  error)
+        if (allocated(error)) return
+        associate (p => mp%p)
+            p%parameter = exp(state%lambda)
+            p%arclength = state%arclength
+            p%status = status
+            p%nfev = nfev
+            p%harmonics = ps%harmonics
+            p%residual = ps%fnorm/max(fam%vref*p%parameter, tiny(1.0_dp))
+            if (allocated(opts%observe)) then
+                p%amplitude = maxval(abs(matmul(ps%x, transpose(opts%observe))), dim=1)
+            else
+                p%amplitude = [(maxval(abs(ps%x(:, k))), k=1, size(ps%x, 2))]
+            end if
+            if (ps%contacts%plain) then
+                p%rmax = [(maxval(abs(ps%r(:, k))), k=1, size(ps%r, 2))]
+            else
+                allocate (p%rmax(ps%contacts%ncontact))
+                do k = 1, ps%contacts%ncontact
+                    p%rmax(k) = maxval(norm2(ps%r(:, ps%contacts%first(k):ps%contacts% &
+                                                  first(k) + ps%contacts%ntangent(k) - 1), dim=2))
+                end do
+                p%open = ps%open_fraction
+                p%normal_max = maxval(ps%normal, dim=1)
+            end if
+            p%stick = ps%stick_fraction
+            if (allocated(opts%observe)) so%observe = opts%observe
+            call keep_coefficients(m, ps, so, p)
+            ! the energies per cycle: viscous (C) and the input of -xi M, from the velocity
+            ! coefficients (the integral of v^T A v over a period)
+            period = 2.0_dp*pi/omega
+            viscous = quadratic_mean(ps, fam%model%damping)*period
+            kinetic = quadratic_mean(ps, fam%model%mass)*period
+            mp%energy_input = xi*kinetic
+            p%diss_friction = ps%diss_friction
+            p%diss_damping = viscous
+            p%dissipation = ps%diss_friction + viscous
+            mp%energy_error = abs(mp%energy_input - p%dissipation)/ &
+                              max(abs(mp%energy_input), abs(p%dissipation), tiny(1.0_dp))
+            p%floquet_max = 0.0_dp
+            p%stable = -1
+            p%truncation = 0.0_dp
+        end associate
+        mp%xi = xi
+        mp%damping_ratio = xi/(2.0_dp*omega)
+        ! the checks: the energy balance and Coulomb's law
+        if (mp%energy_error > energy_untrusted) then
+            write (buf, '(a,es10.2e3)') "nonlinear mode: energy balance error (input of the "// &
+                "negative modal damping - friction - viscous dissipation, relative) ", &
+                mp%energy_error
+            call diag%add(level_untrusted, "energy_balance", trim(buf))
+        else if (mp%energy_error > energy_warning) then
+            write (buf, '(a,es10.2e3)') "nonlinear mode: energy balance error ", mp%energy_error
+            call diag%add(level_warning, "energy_balance", trim(buf))
+        end if
+        if (ps%max_force_ratio - 1.0_dp > force_excess_warning) then
+            write (buf, '(a,es10.2e3)') "nonlinear mode: friction force exceeds mu N (max "// &
+                "|r| / mu N - 1 = ", ps%max_force_ratio - 1.0_dp
+            call diag%add(merge(level_untrusted, level_warning, ps%max_force_ratio - 1.0_dp > &
+                                force_excess_untrusted), "coulomb_law", trim(buf))
+        end if
+        call tally%add_point(diag, 0.0_dp, mp%p%parameter)
+    end subroutine evaluate_mode_point
+
+    !> (1/T) integral over a period of v^T A v for the solution's velocity coefficients:
+    !> v0^T A v0 + (1/2) sum_h (a_h^T A a_h + b_h^T A b_h).
+    real(dp) function quadratic_mean(ps, a) result(q)
+        type(hbm_solution_t), intent(in) :: ps
+        real(dp), intent(in) :: a(:, :)
+        integer :: k
+        q = 0.0_dp
+        do k = 1, ps%nb
+            if (ps%harmonic(k) == 0) then
+                q = q + dot_product(ps%vcoef(k, :), matmul(a, ps%vcoef(k, :)))
+            else
+                q = q + 0.5_dp*dot_product(ps%vcoef(k, :), matmul(a, ps%vcoef(k, :)))
+            end if
+        end do
+    end function quadratic_mean
+
+    !> The force scale of the unknowns: the largest friction limit mu N, preload or mu
+    !> times a preload [N] (1 when all are 0).
+    real(dp) function force_scale(model) result(s)
+        type(model_t), intent(in) :: model
+        type(contact_set_t) :: cs
+        call new_contact_set(cs, model)
+        s = max(maxval(cs%mu*cs%normal_load), maxval(cs%preload), maxval(cs%mu*cs%preload))
+        if (.not. (s > 0.0_dp)) s = 1.0_dp
+    end function force_scale
+
+    !> Whether the stuck contacts hold the linear stuck motion a phi cos(omega t): every
+    !> tangential reaction within its friction limit mu N (mu times the preload for a
+    !> unilateral contact).
+    logical function stuck_holds(model, phi, omega, a) result(holds)
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: phi(:), omega, a
+        real(dp), allocatable :: r(:)
+        type(contact_set_t) :: cs
+        integer :: c, j
+        call new_contact_set(cs, model)
+        r = reactions(model, cs, phi, omega, a)
+        holds = .true.
+        do c = 1, cs%nchannel
+            if (cs%kind(c) == channel_normal) cycle
+            j = cs%contact_of(c)
+            if (abs(r(c)) > cs%mu(j)*max(cs%normal_load(j), cs%preload(j))) holds = .false.
+        end do
+    end function stuck_holds
+
+    !> The channel forces that hold the stuck linear motion a phi cos(omega t): the least-
+    !> squares solution r of D r = (K - omega^2 M) a phi (exact when phi is a stuck mode).
+    function reactions(model, cs, phi, omega, a) result(r)
+        type(model_t), intent(in) :: model
+        type(contact_set_t), intent(in) :: cs
+        real(dp), intent(in) :: phi(:), omega, a
+        real(dp), allocatable :: r(:), d(:, :), g(:, :), rhs(:)
+        integer :: info, c
+        d = channel_directions(model, cs)
+        rhs = matmul(transpose(d), a*(matmul(model%stiffness, phi) - omega**2* &
+                                     matmul(model%mass, phi)))
+        g = matmul(transpose(d), d)
+        r = rhs
+        call solve_small(g, r, info)
+        if (info /= 0) r = 0.0_dp
+        do c = 1, cs%nchannel
+            if (.not. ieee_is_finite(r(c))) r(c) = 0.0_dp
+        end do
+    end function reactions
+
+    !> Solve the small symmetric system g x = b in place (Gauss elimination with partial
+    !> pivoting); info /= 0 when singular.
+    subroutine solve_small(g, b, info)
+        real(dp), intent(inout) :: g(:, :), b(:)
+        integer, intent(out) :: info
+        integer :: n, k, p, i
+        real(dp) :: t
+        n = size(b)
+        info = 0
+        do k = 1, n
+            p = k - 1 + maxloc(abs(g(k:n, k)), 1)
+            if (abs(g(p, k)) <= 1.0e-14_dp*maxval(abs(g))) then
+                info = k
+                return
+            end if
+            if (p /= k) then
+                g([k, p], :) = g([p, k], :)
+                t = b(k)
+                b(k) = b(p)
+                b(p) = t
+            end if
+            do i = k + 1, n
+                t = g(i, k)/g(k, k)
+                g(i, k:n) = g(i, k:n) - t*g(k, k:n)
+                b(i) = b(i) - t*b(k)
+            end do
+        end do
+        do k = n, 1, -1
+            b(k) = (b(k) - dot_product(g(k, k + 1:n), b(k + 1:n)))/g(k, k)
+        end do
+    end subroutine solve_small
+
+    !> The static normal force of every channel (0 for a tangential one) [N]: the linear
+    !> statics of the structure under its preloads with every closed unilateral contact a
+    !> spring k_n (an elastic one: lambda = -k_n (gap + n^T x)) or a constraint n^T x =
+    !> -gap (a rigid one: lambda its reaction); the tangential channels carry no mean force.
+    function static_normal_forces(model, cs) result(lambda)
+        type(model_t), intent(in) :: model
+        type(contact_set_t), intent(in) :: cs
+        real(dp) :: lambda(cs%nchannel)
+        real(dp), allocatable :: d(:, :), a(:, :), b(:)
+        integer, allocatable :: ipiv(:), rigid(:)
+        integer :: n, c, j, nr, info, k
+        n = model%ndof
+        lambda = 0.0_dp
+        d = channel_directions(model, cs)
+        allocate (rigid(0))
+        do c = 1, cs%nchannel
+            j = cs%contact_of(c)
+            if (cs%kind(c) /= channel_normal) cycle
+            if (.not. (cs%preload(j) > 0.0_dp .or. cs%gap(j) <= 0.0_dp)) cycle
+            if (cs%kn(j) <= 0.0_dp) rigid = [rigid, c]
+        end do
+        nr = size(rigid)
+        allocate (a(n + nr, n + nr), b(n + nr), ipiv(n + nr))
+        a = 0.0_dp
+        a(1:n, 1:n) = model%stiffness
+        b = 0.0_dp
+        b(1:n) = preload_force(model)
+        do c = 1, cs%nchannel
+            j = cs%contact_of(c)
+            if (cs%kind(c) /= channel_normal .or. cs%kn(j) <= 0.0_dp) cycle
+            if (.not. (cs%preload(j) > 0.0_dp .or. cs%gap(j) <= 0.0_dp)) cycle
+            a(1:n, 1:n) = a(1:n, 1:n) + cs%kn(j)*spread(d(:, c), 2, n)*spread(d(:, c), 1, n)
+            b(1:n) = b(1:n) - cs%kn(j)*cs%gap(j)*d(:, c)
+        end do
+        do k = 1, nr
+            a(1:n, n + k) = d(:, rigid(k))
+            a(n + k, 1:n) = d(:, rigid(k))
+            b(n + k) = -cs%gap(cs%contact_of(rigid(k)))
+        end do
+        call dgesv(n + nr, 1, a, n + nr, ipiv, b, n + nr, info)
+        if (info /= 0) return
+        do c = 1, cs%nchannel
+            j = cs%contact_of(c)
+            if (cs%kind(c) /= channel_normal) cycle
+            if (cs%kn(j) > 0.0_dp) then
+                lambda(c) = max(0.0_dp, -cs%kn(j)*(cs%gap(j) + dot_product(d(:, c), b(1:n))))
+            else if (findloc(rigid, c, 1) > 0) then
+                lambda(c) = max(0.0_dp, -b(n + findloc(rigid, c, 1)))
+            end if
+        end do
+    end function static_normal_forces
+
+    !> The start guess from the stuck linear mode: x = a phi cos(omega t), the channel
+    !> forces that hold it (the cosine of the fundamental; the preload as the mean of a
+    !> normal channel), xi = phi^T C phi (its viscous damping).
+    function stuck_guess(fam, model, phi, omega, a) result(y)
+        type(modes_family_t), intent(in) :: fam
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: phi(:), omega, a
+        real(dp) :: y(fam%n + 2)
+        type(contact_set_t) :: cs
+        real(dp), allocatable :: r(:), lambda(:)
+        integer :: c, nb
+        call new_contact_set(cs, model)
+        nb = fam%prob%basis%nb
+        r = reactions(model, cs, phi, omega, a)
+        lambda = static_normal_forces(model, cs)
+        y = 0.0_dp
+        do c = 1, cs%nchannel
+            y((c - 1)*nb + fam%ic1) = r(c)
+            if (cs%kind(c) == channel_normal .and. fam%prob%basis%i0 > 0) &
+                y((c - 1)*nb + fam%prob%basis%i0) = lambda(c)
+        end do
+        y(fam%n + 1) = omega
+        y(fam%n + 2) = dot_product(phi, matmul(model%damping, phi))
+    end function stuck_guess
+
+    !> The start guess from the slipping linear mode: x = a phi cos(omega t), each tangential
+    !> channel's force the fundamental of Coulomb's -mu N sign(v) (4 mu N / pi on sin),
+    !> xi from the energy balance 4 mu N |u| per cycle (+ the viscous phi^T C phi).
+    function slip_guess(fam, model, phi, omega, a) result(y)
+        type(modes_family_t), intent(in) :: fam
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: phi(:), omega, a
+        real(dp) :: y(fam%n + 2)
+        type(contact_set_t) :: cs
+        real(dp), allocatable :: d(:, :), lambda(:)
+        real(dp) :: limit, u, dissipated
+        integer :: c, nb, j
+        call new_contact_set(cs, model)
+        d = channel_directions(model, cs)
+        nb = fam%prob%basis%nb
+        y = 0.0_dp
+        dissipated = 0.0_dp
+        lambda = static_normal_forces(model, cs)
+        do c = 1, cs%nchannel
+            j = cs%contact_of(c)
+            if (cs%kind(c) == channel_normal) then
+                if (fam%prob%basis%i0 > 0) y((c - 1)*nb + fam%prob%basis%i0) = lambda(c)
+                cycle
+            end if
+            limit = cs%mu(j)*max(cs%normal_load(j), cs%preload(j))
+            u = a*dot_product(d(:, c), phi)
+            y((c - 1)*nb + fam%is1) = 4.0_dp*limit/pi*sign(1.0_dp, u)
+            dissipated = dissipated + 4.0_dp*limit*abs(u)
+        end do
+        y(fam%n + 1) = omega
+        y(fam%n + 2) = dissipated/(pi*omega*a*a) + dot_product(phi, matmul(model%damping, phi))
+    end function slip_guess
+end module stickslip_modes

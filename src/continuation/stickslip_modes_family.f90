@@ -1,0 +1,340 @@
+!> The nonlinear modes of a friction-damped structure as a family in the modal amplitude:
+!> the extended periodic motion concept (EPMC, Krack 2015) on the equality formulation of
+!> the friction laws. The autonomous structure gets a negative modal damping term that
+!> balances what the contacts (and the viscous damping) dissipate:
+!>     M x'' + (C - xi M) x' + K x = W r(t),   Psi(r, v) = 0 at every contact,
+!> and its periodic motions are sought at each modal amplitude a, the amplitude of the
+!> fundamental harmonic in the mass norm: a^2 = c1^T M c1 + s1^T M s1 (x(t) = a phi cos(omega
+!> t) + ... for a mass-normalized phi). A phase condition phi_ref^T M s1 = 0 fixes the time
+!> origin (phi_ref: the linear mode the family starts from). The modal damping ratio is
+!> D = xi / (2 omega).
+!>
+!> Unknowns y = [R; omega; xi], R the friction-force (channel) coefficients of the same
+!> condensed weighted residual as a forced solve (stickslip_hb_residual: the dynamics
+!> Z_h = K - (h omega)^2 M + i h omega (C - xi M) eliminated exactly, no forcing);
+!> parameter lambda = ln a. Equations: the projected friction laws; v_s (Q / a^2 - 1) = 0
+!> with Q = c1^T M c1 + s1^T M s1; v_s phi_ref^T M s1 / a = 0; v_s = v_ref a the velocity
+!> scale of the mode (v_ref = omega_ref max |phi_ref|), so that every row is a velocity.
+!> Jacobian: dF/dR the exact generalized one, the normalization rows analytic in R (x1 is
+!> linear in R1: X1 = Y1 (R_cos - i R_sin)), dF/domega and dF/dxi by central differences
+!> (each a new factorization of the Z_h), dF/dlambda analytic. A structure with plain
+!> contacts and no static load vibrates half-wave symmetrically: its family uses the odd
+!> harmonics only (the constant and even terms vanish, and the mean force of a stuck
+!> contact, which nothing determines, is not an unknown). With contact laws the basis keeps
+!> the constant (the mean normal force holds the preload); a tangential mean force, which
+!> nothing determines while its contact sticks all period (a singular direction of dF/dR
+!> that would leave the continuation's tangent undefined), gets a Tikhonov term
+!> mean_weight rho R_0 in its row.
+module stickslip_modes_family
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_model, only: model_t
+    use stickslip_solution, only: hbm_options_t
+    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
+    use stickslip_dynamics, only: new_dynamics
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
+    use stickslip_hb_laws, only: new_hb_laws
+    use stickslip_continuation, only: parametric_system_t
+    implicit none
+    private
+    public :: modes_family_t, new_modes_family, free_structure, mean_weight
+
+    !> The weight of the tangential mean forces' Tikhonov term (modes_family_t%mean_weight):
+    !> small enough to leave a determined mean force (one with slip phases) unchanged to
+    !> about this relative size, large enough to pin an undetermined one.
+    real(dp), parameter :: mean_weight = 1.0e-8_dp
+
+    !> The nonlinear-mode equations as a family in lambda = ln a.
+    type, extends(parametric_system_t) :: modes_family_t
+        !> The free structure (no forcing terms) with its viscous damping C.
+        type(model_t) :: model
+        !> Basis options in effect (rho > 0; odd harmonics for plain contacts).
+        type(hbm_options_t) :: opts
+        !> The projected friction equations at (omega, xi) = (current_omega, current_xi).
+        type(hb_problem_t) :: prob
+        real(dp) :: current_omega = -1.0_dp, current_xi = 0.0_dp
+        logical :: have_current = .false.
+        !> The reference shape of the phase condition (mass-normalized) and M phi_ref.
+        real(dp), allocatable :: phi(:), mphi(:)
+        !> Velocity scale per unit modal amplitude [1/s]: omega_ref max |phi_ref|.
+        real(dp) :: vref = 1.0_dp
+        !> Basis indices of cos(omega t) and sin(omega t), and the column of harmonic 1 in
+        !> the dynamics' per-harmonic arrays.
+        integer :: ic1 = 0, is1 = 0, ih1 = 0
+        !> Friction-force unknowns nb x channels.
+        integer :: n = 0
+        !> Factorizations of the dynamic stiffnesses so far (one per (omega, xi) met).
+        integer :: factorizations = 0
+        !> Tikhonov weight of the tangential mean forces (contact laws with the constant in
+        !> the basis): mean_weight rho R_0 is added to the rows of their constant terms, so
+        !> that a contact stuck all period, whose mean force nothing determines, keeps
+        !> R_0 = 0 and the curve a unique tangent [dimensionless].
+        real(dp) :: mean_weight = 0.0_dp
+        integer, allocatable :: mean_rows(:)
+    contains
+        procedure :: residual => modes_residual
+        procedure :: jacobian => modes_jacobian
+        procedure :: residual_scale => modes_scale
+        procedure :: set => modes_set
+        procedure :: harmonic_one => modes_harmonic_one
+        procedure :: destroy => modes_destroy
+    end type modes_family_t
+
+contains
+
+    !> `model` without its forcing terms: the free structure whose modes are sought.
+    function free_structure(model) result(m)
+        !> A validated model.
+        type(model_t), intent(in) :: model
+        type(model_t) :: m
+        m = model
+        if (allocated(m%force_shape)) deallocate (m%force_shape)
+        m%force_dof = [integer ::]
+        m%force_harmonic = [integer ::]
+        m%force_amplitude = [real(dp) ::]
+        m%force_phase = [real(dp) ::]
+    end function free_structure
+
+    !> Build the family of `model` (its forcing is ignored) on the basis of `hbm` (rho > 0;
+    !> odd harmonics only when every contact is plain), phase-referenced to the
+    !> mass-normalized shape `phi` of frequency `omega_ref` [rad/s]. Errors: as
+    !> new_hb_problem (stat numerical: a singular dynamic stiffness at omega_ref).
+    subroutine new_modes_family(fam, model, hbm, phi, omega_ref, error)
+        !> The family.
+        type(modes_family_t), intent(out) :: fam
+        !> A validated model with contacts.
+        type(model_t), intent(in) :: model
+        !> Basis options (rho > 0).
+        type(hbm_options_t), intent(in) :: hbm
+        !> Reference shape (N), mass-normalized.
+        real(dp), intent(in) :: phi(:)
+        !> Its frequency [rad/s] (> 0).
+        real(dp), intent(in) :: omega_ref
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(contact_set_t) :: cs
+        integer :: k, nb, j, c
+        type(model_t) :: m
+        fam%model = free_structure(model)
+        fam%model%omega = omega_ref
+        fam%opts = hbm
+        call new_contact_set(cs, fam%model)
+        if (cs%plain) fam%opts%odd_only = .true.
+        ! built at (omega_ref, xi = 0.01 omega_ref): omega_ref may be a natural frequency of
+        ! the undamped structure (the slipping limit), where Z_1 is singular without damping
+        m = fam%model
+        m%damping = m%damping - 0.01_dp*omega_ref*m%mass
+        call new_hb_problem(fam%prob, m, fam%opts%harmonics, fam%opts%odd_only, &
+                            fam%opts%samples, fam%opts%rho, error)
+        if (allocated(error)) return
+        fam%factorizations = 1
+        fam%current_omega = omega_ref
+        fam%current_xi = 0.01_dp*omega_ref
+        fam%have_current = .true.
+        fam%phi = phi
+        fam%mphi = matmul(fam%model%mass, phi)
+        fam%vref = omega_ref*maxval(abs(phi))
+        nb = fam%prob%basis%nb
+        fam%n = nb*fam%prob%nc
+        do k = 1, nb
+            if (fam%prob%basis%harmonic_of(k) == 1) then
+                if (fam%ic1 == 0) then
+                    fam%ic1 = k
+                else
+                    fam%is1 = k
+                end if
+            end if
+        end do
+        fam%ih1 = findloc(fam%prob%dyn%harm, 1, 1)
+        if (fam%ic1 == 0 .or. fam%is1 == 0 .or. fam%ih1 == 0) then
+            call fatal_error(error, "nonlinear modes: the basis has no fundamental harmonic", &
+                             stickslip_stat%input)
+            return
+        end if
+        allocate (fam%mean_rows(0))
+        if (.not. cs%plain .and. fam%prob%basis%i0 > 0) then
+            fam%mean_weight = mean_weight
+            do j = 1, cs%ncontact
+                do c = cs%first(j), cs%first(j) + cs%ntangent(j) - 1
+                    fam%mean_rows = [fam%mean_rows, (c - 1)*nb + fam%prob%basis%i0]
+                end do
+            end do
+        end if
+    end subroutine new_modes_family
+
+    !> Move the family's dynamics to (omega, xi): Z_h with damping C - xi M, factorized
+    !> anew unless already there. stat = 1 when omega is not > 0 or a Z_h is singular.
+    subroutine modes_set(self, omega, xi, stat)
+        !> The family.
+        class(modes_family_t), intent(inout) :: self
+        !> Angular frequency [rad/s] and negative modal damping [1/s].
+        real(dp), intent(in) :: omega, xi
+        !> Set to 1 when the family has no equations there.
+        integer, intent(inout) :: stat
+        type(model_t) :: m
+        type(error_type), allocatable :: error
+        type(contact_set_t) :: cs
+        if (self%have_current .and. omega == self%current_omega .and. xi == self%current_xi) &
+            return
+        if (.not. (omega > 0.0_dp .and. ieee_is_finite(omega) .and. ieee_is_finite(xi))) then
+            stat = 1
+            return
+        end if
+        m = self%model
+        m%omega = omega
+        m%damping = m%damping - xi*m%mass
+        call new_dynamics(self%prob%dyn, m, self%prob%basis, error)
+        self%factorizations = self%factorizations + 1
+        if (allocated(error)) then
+            stat = 1
+            self%have_current = .false.
+            return
+        end if
+        if (.not. self%prob%plain) then
+            call new_contact_set(cs, m)
+            call new_hb_laws(self%prob%laws, cs, omega, self%prob%basis%nb, &
+                             self%prob%basis%nt)
+        end if
+        self%current_omega = omega
+        self%current_xi = xi
+        self%have_current = .true.
+    end subroutine modes_set
+
+    !> The fundamental-harmonic displacement coefficients c1, s1 (N) of the motion whose
+    !> friction-force coefficients are `r` (nb x channels), at the family's current
+    !> (omega, xi): X1 = Y1 (R_cos - i R_sin), c1 = Re X1, s1 = -Im X1.
+    subroutine modes_harmonic_one(self, r, c1, s1)
+        !> The family (set at the point's omega and xi).
+        class(modes_family_t), intent(in) :: self
+        !> Channel-force coefficients [N].
+        real(dp), intent(in) :: r(:, :)
+        !> Cosine and sine coefficients of x at omega [m].
+        real(dp), intent(out) :: c1(:), s1(:)
+        complex(dp) :: x1(size(c1))
+        x1 = matmul(self%prob%dyn%y(:, :, self%ih1), &
+                    cmplx(r(self%ic1, :), -r(self%is1, :), dp))
+        c1 = real(x1, dp)
+        s1 = -aimag(x1)
+    end subroutine modes_harmonic_one
+
+    !> F(y, lambda): the projected friction laws, the amplitude and the phase conditions.
+    subroutine modes_residual(self, y, lambda, f, stat)
+        !> The family.
+        class(modes_family_t), intent(inout) :: self
+        !> [R; omega; xi], and lambda = ln a.
+        real(dp), intent(in) :: y(:), lambda
+        !> The residual (huge when there are no equations at this omega, xi).
+        real(dp), intent(out) :: f(:)
+        !> Nonzero on failure.
+        integer, intent(inout) :: stat
+        integer :: n, nb, nc
+        real(dp) :: a, c1(self%model%ndof), s1(self%model%ndof)
+        n = self%n
+        nb = self%prob%basis%nb
+        nc = self%prob%nc
+        call self%set(y(n + 1), y(n + 2), stat)
+        if (stat /= 0) then
+            f = huge(1.0_dp)
+            return
+        end if
+        call self%prob%residual(y(1:n), f(1:n), stat)
+        if (self%mean_weight > 0.0_dp) f(self%mean_rows) = f(self%mean_rows) + &
+            self%mean_weight*self%prob%rho*y(self%mean_rows)
+        call self%harmonic_one(reshape(y(1:n), [nb, nc]), c1, s1)
+        a = exp(lambda)
+        f(n + 1) = self%vref*(quad(c1, s1)/a - a)
+        f(n + 2) = self%vref*dot_product(self%mphi, s1)
+    contains
+        real(dp) function quad(c, s)
+            real(dp), intent(in) :: c(:), s(:)
+            quad = dot_product(c, matmul(self%model%mass, c)) + &
+                   dot_product(s, matmul(self%model%mass, s))
+        end function quad
+    end subroutine modes_residual
+
+    !> dF/dy (the exact generalized Jacobian in R, analytic normalization rows, central
+    !> differences in omega and xi) and dF/dlambda.
+    subroutine modes_jacobian(self, y, lambda, jy, jl, stat)
+        !> The family.
+        class(modes_family_t), intent(inout) :: self
+        !> [R; omega; xi], and lambda = ln a.
+        real(dp), intent(in) :: y(:), lambda
+        !> dF/dy and dF/dlambda.
+        real(dp), intent(out) :: jy(:, :), jl(:)
+        !> Nonzero on failure.
+        integer, intent(inout) :: stat
+        integer :: n, nb, nc, j, k
+        real(dp) :: a, h, c1(self%model%ndof), s1(self%model%ndof), mc(self%model%ndof), &
+                    ms(self%model%ndof), dc(self%model%ndof), ds(self%model%ndof)
+        real(dp), allocatable :: yp(:), fp(:), fm(:)
+        n = self%n
+        nb = self%prob%basis%nb
+        nc = self%prob%nc
+        jy = 0.0_dp
+        jl = 0.0_dp
+        allocate (yp(n + 2), fp(n + 2), fm(n + 2))
+        ! the omega and xi columns: central differences of the whole residual
+        do k = 1, 2
+            if (k == 1) then
+                h = 1.0e-6_dp*y(n + 1)
+            else
+                h = 1.0e-6_dp*max(abs(y(n + 2)), 1.0e-3_dp*y(n + 1))
+            end if
+            yp = y
+            yp(n + k) = y(n + k) + h
+            call modes_residual(self, yp, lambda, fp, stat)
+            yp(n + k) = y(n + k) - h
+            if (stat == 0) call modes_residual(self, yp, lambda, fm, stat)
+            if (stat /= 0) return
+            jy(:, n + k) = (fp - fm)/(2.0_dp*h)
+        end do
+        call self%set(y(n + 1), y(n + 2), stat)
+        if (stat /= 0) return
+        call self%prob%jacobian(y(1:n), jy(1:n, 1:n), stat)
+        if (stat /= 0) return
+        do k = 1, size(self%mean_rows)
+            j = self%mean_rows(k)
+            jy(j, j) = jy(j, j) + self%mean_weight*self%prob%rho
+        end do
+        ! the normalization rows in R: only the fundamental's coefficients enter
+        call self%harmonic_one(reshape(y(1:n), [nb, nc]), c1, s1)
+        a = exp(lambda)
+        mc = matmul(self%model%mass, c1)
+        ms = matmul(self%model%mass, s1)
+        associate (y1 => self%prob%dyn%y(:, :, self%ih1))
+            do j = 1, nc
+                ! d/dR_cos(j): dX1 = Y1(:, j); d/dR_sin(j): dX1 = -i Y1(:, j)
+                dc = real(y1(:, j), dp)
+                ds = -aimag(y1(:, j))
+                jy(n + 1, (j - 1)*nb + self%ic1) = self%vref*2.0_dp*(dot_product(mc, dc) + &
+                                                                   dot_product(ms, ds))/a
+                jy(n + 2, (j - 1)*nb + self%ic1) = self%vref*dot_product(self%mphi, ds)
+                dc = aimag(y1(:, j))
+                ds = real(y1(:, j), dp)
+                jy(n + 1, (j - 1)*nb + self%is1) = self%vref*2.0_dp*(dot_product(mc, dc) + &
+                                                                   dot_product(ms, ds))/a
+                jy(n + 2, (j - 1)*nb + self%is1) = self%vref*dot_product(self%mphi, ds)
+            end do
+        end associate
+        ! f(n+1) = v_ref (Q / a - a), a = exp(lambda); the other rows do not depend on lambda
+        jl(n + 1) = -self%vref*((dot_product(c1, mc) + dot_product(s1, ms))/a + a)
+        if (.not. (all(ieee_is_finite(jy)) .and. all(ieee_is_finite(jl)))) stat = 1
+    end subroutine modes_jacobian
+
+    !> The velocity scale of the mode at lambda = ln a: v_ref a [m/s].
+    real(dp) function modes_scale(self, lambda) result(s)
+        !> The family.
+        class(modes_family_t), intent(inout) :: self
+        !> lambda = ln a.
+        real(dp), intent(in) :: lambda
+        s = self%vref*exp(lambda)
+    end function modes_scale
+
+    !> Release the FFT plans.
+    subroutine modes_destroy(self)
+        !> The family.
+        class(modes_family_t), intent(inout) :: self
+        call self%prob%destroy()
+    end subroutine modes_destroy
+end module stickslip_modes_family

@@ -1,0 +1,128 @@
+!> The undamped linear modes of a model's structure in its two friction limits: every
+!> contact stuck (the low-amplitude limit of its nonlinear modes) or every contact slipping
+!> freely (the high-amplitude limit). Stuck: a rigid channel (a tangential direction without
+!> tangential_stiffness, a closed unilateral normal without normal_stiffness) is a
+!> constraint d^T x = 0, an elastic one a spring k d d^T. Slipping: the tangential
+!> channels carry nothing (a Jenkins element's slider slips), a closed unilateral normal
+!> stays a constraint or a spring. A unilateral contact counts as closed when it is
+!> pressed (preload > 0) or its gap is closed (gap <= 0). The constraints are eliminated
+!> with an orthonormal basis of their null space (LAPACK QR), the reduced pencil solved by
+!> LAPACK dsygv. Dense: for the models the weighted residual solves densely (reduced FE
+!> models included).
+module stickslip_linear_modes
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_model, only: model_t
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions, &
+        channel_normal
+    use stickslip_lapack, only: dsygv, dgeqrf, dorgqr
+    implicit none
+    private
+    public :: linear_modes
+
+contains
+
+    !> The undamped modes of `model` with every contact stuck (`stuck` = .true.) or slipping
+    !> (.false.), natural frequencies increasing: omegas [rad/s] and mass-normalized shapes
+    !> (N x m, phi^T M phi = I; each shape's largest component positive). Modes of zero
+    !> frequency (rigid-body motions of the slipping structure) are left out. Errors (stat
+    !> numerical): the constraints leave no motion, the eigensolver fails (M not positive
+    !> definite on the free motions).
+    subroutine linear_modes(model, stuck, omegas, shapes, error)
+        !> A validated model (dense M and K).
+        type(model_t), intent(in) :: model
+        !> Contacts stuck (.true.) or slipping (.false.).
+        logical, intent(in) :: stuck
+        !> Natural frequencies [rad/s], increasing.
+        real(dp), allocatable, intent(out) :: omegas(:)
+        !> Mass-normalized mode shapes, N x size(omegas).
+        real(dp), allocatable, intent(out) :: shapes(:, :)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(contact_set_t) :: cs
+        real(dp), allocatable :: d(:, :), kk(:, :), cons(:, :), q(:, :), tau(:), work(:), &
+                                 kr(:, :), mr(:, :), w(:), t(:, :)
+        real(dp) :: k, wq(1), scale
+        integer :: n, c, j, ncons, nfree, info, lwork, m
+        logical :: closed
+        n = model%ndof
+        kk = model%stiffness
+        allocate (cons(n, 0))
+        if (model%ncontact() > 0) then
+            call new_contact_set(cs, model)
+            d = channel_directions(model, cs)
+            do c = 1, cs%nchannel
+                j = cs%contact_of(c)
+                if (cs%kind(c) == channel_normal) then
+                    closed = cs%preload(j) > 0.0_dp .or. cs%gap(j) <= 0.0_dp
+                    if (.not. closed) cycle
+                    k = cs%kn(j)
+                else
+                    if (.not. stuck) cycle
+                    k = cs%kt(j)
+                end if
+                if (k > 0.0_dp) then
+                    kk = kk + k*spread(d(:, c), 2, n)*spread(d(:, c), 1, n)
+                else
+                    cons = reshape([cons, d(:, c)], [n, size(cons, 2) + 1])
+                end if
+            end do
+        end if
+        ncons = size(cons, 2)
+        ! an orthonormal basis t of the motions the constraints allow: the last columns of
+        ! the complete Q of cons = Q R (rank = ncons: the channels are independent)
+        if (ncons > 0) then
+            allocate (q(n, n), tau(min(n, ncons)))
+            q = 0.0_dp
+            q(:, 1:ncons) = cons
+            call dgeqrf(n, ncons, q, n, tau, wq, -1, info)
+            lwork = max(1, int(wq(1)), n*64)
+            allocate (work(lwork))
+            call dgeqrf(n, ncons, q, n, tau, work, lwork, info)
+            if (info == 0) call dorgqr(n, n, min(n, ncons), q, n, tau, work, lwork, info)
+            if (info /= 0) then
+                call fatal_error(error, "linear modes: QR of the contact constraints failed "// &
+                                 "(info "//itoa(info)//")", stickslip_stat%numerical)
+                return
+            end if
+            nfree = n - ncons
+            t = q(:, ncons + 1:n)
+        else
+            nfree = n
+            allocate (t(n, n))
+            t = 0.0_dp
+            do j = 1, n
+                t(j, j) = 1.0_dp
+            end do
+        end if
+        if (nfree < 1) then
+            call fatal_error(error, "linear modes: the stuck contacts hold every degree of "// &
+                             "freedom (no motion left)", stickslip_stat%numerical)
+            return
+        end if
+        kr = matmul(transpose(t), matmul(kk, t))
+        mr = matmul(transpose(t), matmul(model%mass, t))
+        kr = 0.5_dp*(kr + transpose(kr))
+        mr = 0.5_dp*(mr + transpose(mr))
+        allocate (w(nfree))
+        call dsygv(1, 'V', 'U', nfree, kr, nfree, mr, nfree, w, wq, -1, info)
+        lwork = max(1, int(wq(1)), 3*nfree)
+        if (allocated(work)) deallocate (work)
+        allocate (work(lwork))
+        call dsygv(1, 'V', 'U', nfree, kr, nfree, mr, nfree, w, work, lwork, info)
+        if (info /= 0) then
+            call fatal_error(error, "linear modes: the eigensolver failed (dsygv info "// &
+                             itoa(info)//"): the mass matrix is not positive definite on "// &
+                             "the motions the contacts allow", stickslip_stat%numerical)
+            return
+        end if
+        ! drop the zero-frequency (rigid-body) modes of a structure held only by friction
+        scale = max(maxval(abs(w)), tiny(1.0_dp))
+        m = count(w > 1.0e-10_dp*scale)
+        omegas = sqrt(pack(w, w > 1.0e-10_dp*scale))
+        shapes = matmul(t, kr(:, pack([(j, j=1, nfree)], w > 1.0e-10_dp*scale)))
+        do j = 1, m
+            if (shapes(maxloc(abs(shapes(:, j)), 1), j) < 0.0_dp) shapes(:, j) = -shapes(:, j)
+        end do
+    end subroutine linear_modes
+end module stickslip_linear_modes

@@ -41,6 +41,9 @@ module stickslip
     ! forced-response curves
     use stickslip_sweep, only: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, &
         run_sweep
+    ! nonlinear modes
+    use stickslip_modes, only: modes_options_t, mode_point_t, modes_result_t, run_modes
+    use stickslip_linear_modes, only: linear_modes
     ! studies
     use stickslip_side_by_side, only: side_by_side_t, solve_side_by_side
     use stickslip_study, only: study_options_t, study_row_t, study_result_t, run_study, &
@@ -68,6 +71,7 @@ module stickslip
     public :: truncation_t, estimate_truncation, solve_to_tolerance
     public :: comparison_t, compare_samples
     public :: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, run_sweep
+    public :: modes_options_t, mode_point_t, modes_result_t, run_modes, linear_modes
     public :: side_by_side_t, solve_side_by_side
     public :: study_options_t, study_row_t, study_result_t, run_study, default_study_options
     public :: robustness_options_t, robustness_row_t, run_robustness, default_robustness_options

@@ -15,10 +15,12 @@ module test_modes
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_linear_modes, only: linear_modes
-    use stickslip_modes, only: modes_options_t, modes_result_t, run_modes
+    use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes
+    use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
+    use stickslip_reference, only: reference_options_t
     use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
     use test_cli, only: cli
-    use fixtures, only: liftoff_model, scratch, write_lines, first_line
+    use fixtures, only: liftoff_model, planar_model, scratch, write_lines, first_line
     use testing, only: test_counter_t, check, check_error
     implicit none
     private
@@ -34,6 +36,7 @@ contains
         call test_jacobian(t)
         call test_synthesis(t)
         call test_unilateral(t)
+        call test_jenkins_planar(t)
         call test_cli_modes(t)
     end subroutine run_modes_tests
 
@@ -266,7 +269,11 @@ contains
         type(hbm_solution_t) :: sol
         type(model_t) :: m
         type(error_type), allocatable :: error
-        real(dp) :: a, w, d, g, disc, q, big_omega, af, worst, c1(2), s1(2), f(2)
+        type(sweep_options_t) :: so
+        type(reference_options_t) :: ro
+        type(sweep_result_t) :: curve
+        real(dp) :: a, w, d, g, disc, q, big_omega, af, worst, c1(2), s1(2), f(2), peak, d1, &
+                    d2, swept
         integer :: k, side, ic, is, checked, i
         ho%harmonics = 15
         ho%samples = 256
@@ -312,10 +319,53 @@ contains
                 checked = checked + 1
             end do
         end do
+        ! the peak: the synthesized one (where the two Omega meet, disc = 0, interpolated
+        ! between the backbone points around it) against the forced sweep's largest modal
+        ! amplitude over 1.30 .. 1.55 rad/s
+        peak = 0.0_dp
+        do k = 1, res%npoints - 1
+            d1 = peak_disc(res%points(k))
+            d2 = peak_disc(res%points(k + 1))
+            if (d1 >= 0.0_dp .and. d2 < 0.0_dp) then
+                peak = res%points(k)%p%parameter + (res%points(k + 1)%p%parameter - &
+                       res%points(k)%p%parameter)*d1/(d1 - d2)
+                exit
+            end if
+        end do
+        so%parameter = 'omega'
+        so%start = 1.30_dp
+        so%stop = 1.55_dp
+        so%step = 0.002_dp
+        so%max_step = 0.002_dp
+        so%stability = .false.
+        call run_sweep(m, fo, ro, so, curve, error)
+        call check_error(t, error, "modes: synthesis: forced sweep", .false.)
+        if (allocated(error)) return
+        swept = 0.0_dp
+        do k = 1, curve%npoints
+            ic = findloc(curve%points(k)%harmonic, 1, 1)
+            swept = max(swept, sqrt(sum(curve%points(k)%xcoef(ic:ic + 1, :)**2)))
+        end do
+        call check(t, peak > 0.0_dp .and. abs(swept - peak) <= 0.02_dp*peak, "modes: "// &
+                   "synthesis: the peak synthesized from the backbone = the forced sweep's", &
+                   "synthesized "//real_text(peak)//", swept "//real_text(swept))
         call check(t, checked >= 8 .and. worst <= 0.02_dp, "modes: synthesis: the forced "// &
                    "response near resonance follows the backbone (single nonlinear mode)", &
                    "points "//real_text(real(checked, dp))//", worst relative amplitude "// &
                    "difference "//real_text(worst))
+    contains
+
+        !> The discriminant of the synthesis at a backbone point: >= 0 where the forced
+        !> response reaches that modal amplitude.
+        real(dp) function peak_disc(p) result(dd)
+            type(mode_point_t), intent(in) :: p
+            integer :: j1
+            real(dp) :: gg
+            j1 = findloc(p%p%harmonic, 1, 1)
+            gg = sqrt(dot_product(p%p%xcoef(j1, :), f)**2 + &
+                      dot_product(p%p%xcoef(j1 + 1, :), f)**2)/p%p%parameter**2
+            dd = p%p%omega**4*(1.0_dp - 2.0_dp*p%damping_ratio**2)**2 - p%p%omega**4 + gg*gg
+        end function peak_disc
     end subroutine test_synthesis
 
     !> A contact law: tangential friction on DOF 1 with a unilateral elastic contact (k_n =
@@ -347,6 +397,37 @@ contains
                    <= 1.0e-9_dp, "modes: unilateral: energy balance along the backbone", &
                    res%diagnosis)
     end subroutine test_unilateral
+
+    !> 2D friction with a contact stiffness: a unit mass on unit springs in the plane,
+    !> held by a Jenkins element (k_t = 3, mu N = 0.3). At small amplitude the slider sticks:
+    !> omega = sqrt(1 + 3) = 2 (the viscous D = 0.1 / (2 omega)); at large amplitude it
+    !> slips: omega -> 1; the energy balance holds along the backbone.
+    subroutine test_jenkins_planar(t)
+        type(test_counter_t), intent(inout) :: t
+        type(hbm_options_t) :: ho
+        type(modes_options_t) :: mo
+        type(modes_result_t) :: res
+        type(error_type), allocatable :: error
+        integer :: n
+        ho%harmonics = 9
+        ho%samples = 128
+        mo%amplitude_start = 0.01_dp
+        mo%amplitude_stop = 100.0_dp
+        mo%points = 21
+        call run_modes(planar_model(1.0_dp, 1.0_dp, 3.0_dp), ho, mo, res, error)
+        call check_error(t, error, "modes: planar Jenkins: backbone", .false.)
+        if (allocated(error)) return
+        n = res%npoints
+        call check(t, res%complete .and. res%start == 'stuck' .and. &
+                   abs(res%points(1)%p%omega - 2.0_dp) <= 1.0e-10_dp .and. &
+                   abs(res%points(1)%damping_ratio - 0.025_dp) <= 1.0e-10_dp, &
+                   "modes: planar Jenkins: stuck limit omega = sqrt(k + k_t), viscous D", &
+                   res%diagnosis)
+        call check(t, abs(res%points(n)%p%omega - 1.0_dp) <= 1.0e-2_dp .and. &
+                   maxval(res%points(1:n)%energy_error) <= 1.0e-9_dp, "modes: planar "// &
+                   "Jenkins: slipping limit omega -> 1, energy balance", &
+                   real_text(res%points(n)%p%omega))
+    end subroutine test_jenkins_planar
 
     !> The command line runs examples/seed_modes.nml (exit 0, modes.csv with its header, no
     !> warning); bad &modes input is one error naming the group and variable (exit 1); a

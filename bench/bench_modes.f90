@@ -29,63 +29,53 @@ program bench_modes
     end if
     write (output_unit, '(a)') "case                                   points  total [s]  "// &
         "per point [ms]  factorizations  complete"
-    call backbone("seed_modes (2 DOF)", "examples/seed_modes.nml")
-    call backbone("calculix_beam/modes (2412 -> 8 DOF)", "examples/calculix_beam/modes.nml")
-    call sweep("calculix_beam/case sweep, no stability", "examples/calculix_beam/case.nml")
+    call measure("seed_modes (2 DOF)", "examples/seed_modes.nml", .true.)
+    call measure("calculix_beam/modes (2412 -> 8 DOF)", "examples/calculix_beam/modes.nml", &
+                 .true.)
+    call measure("calculix_beam/case sweep, no stability", "examples/calculix_beam/case.nml", &
+                 .false.)
 
 contains
 
-    !> The median CPU time of the backbone of case `path` over `repeats` runs.
-    subroutine backbone(name, path)
+    !> The median CPU time over `repeats` runs of the backbone of case `path` (`modes`), or
+    !> of its forced sweep without stability.
+    subroutine measure(name, path, modes)
         character(len=*), intent(in) :: name, path
+        logical, intent(in) :: modes
         type(case_t) :: c
-        type(modes_result_t) :: res
+        type(modes_result_t) :: backbone
+        type(sweep_result_t) :: curve
         type(error_type), allocatable :: error
         real(dp) :: t(repeats), t0
-        integer :: r
+        integer :: r, points, factorizations
+        logical :: complete
         call read_case(path, c, error)
-        if (allocated(error)) then
-            write (output_unit, '(a)') "error: "//error%message
-            return
-        end if
-        do r = 1, repeats
-            t0 = thread_cpu_seconds()
-            call run_modes(c%model, c%hbm, c%modes%modes_options_t, res, error)
-            t(r) = thread_cpu_seconds() - t0
-            if (allocated(error)) then
-                write (output_unit, '(a)') "error: "//error%message
-                return
-            end if
-        end do
-        write (output_unit, '(a38,i7,f11.3,f16.3,i16,l10)') name, res%npoints, median(t), &
-            1.0e3_dp*median(t)/res%npoints, res%factorizations, res%complete
-    end subroutine backbone
-
-    !> The median CPU time of the case's sweep without stability.
-    subroutine sweep(name, path)
-        character(len=*), intent(in) :: name, path
-        type(case_t) :: c
-        type(sweep_result_t) :: res
-        type(error_type), allocatable :: error
-        real(dp) :: t(repeats), t0
-        integer :: r
-        call read_case(path, c, error)
-        if (allocated(error)) then
-            write (output_unit, '(a)') "error: "//error%message
-            return
-        end if
         c%sweep%stability = .false.
         do r = 1, repeats
+            if (allocated(error)) exit
             t0 = thread_cpu_seconds()
-            call run_sweep(c%model, c%hbm, c%reference%reference_options_t, &
-                           c%sweep%sweep_options_t, res, error)
-            t(r) = thread_cpu_seconds() - t0
-            if (allocated(error)) then
-                write (output_unit, '(a)') "error: "//error%message
-                return
+            if (modes) then
+                call run_modes(c%model, c%hbm, c%modes%modes_options_t, backbone, error)
+            else
+                call run_sweep(c%model, c%hbm, c%reference%reference_options_t, &
+                               c%sweep%sweep_options_t, curve, error)
             end if
+            t(r) = thread_cpu_seconds() - t0
         end do
-        write (output_unit, '(a38,i7,f11.3,f16.3,i16,l10)') name, res%npoints, median(t), &
-            1.0e3_dp*median(t)/res%npoints, res%factorizations, res%complete
-    end subroutine sweep
+        if (allocated(error)) then
+            write (output_unit, '(a)') "error: "//error%message
+            return
+        end if
+        if (modes) then
+            points = backbone%npoints
+            factorizations = backbone%factorizations
+            complete = backbone%complete
+        else
+            points = curve%npoints
+            factorizations = curve%factorizations
+            complete = curve%complete
+        end if
+        write (output_unit, '(a38,i7,f11.3,f16.3,i16,l10)') name, points, median(t), &
+            1.0e3_dp*median(t)/points, factorizations, complete
+    end subroutine measure
 end program bench_modes

@@ -108,7 +108,7 @@ contains
                 worst_e = max(worst_e, p%energy_error)
             end associate
         end do
-        call check(t, worst_d <= 1.0e-3_dp, "modes: 1 DOF: D = 2 mu N / (pi k a_x) (the "// &
+        call check(t, worst_d <= 1.0e-4_dp, "modes: 1 DOF: D = 2 mu N / (pi k a_x) (the "// &
                    "describing function) at H = 1", "worst relative error "//real_text(worst_d))
         call check(t, worst_w <= 1.0e-10_dp, "modes: 1 DOF: omega = sqrt(k / m)", &
                    real_text(worst_w))

@@ -466,51 +466,17 @@ contains
         type(model_t), intent(in) :: model
         type(contact_set_t), intent(in) :: cs
         real(dp), intent(in) :: phi(:), omega, a
-        real(dp), allocatable :: r(:), d(:, :), g(:, :), rhs(:)
-        integer :: info, c
+        real(dp), allocatable :: r(:), d(:, :), g(:, :)
+        integer, allocatable :: ipiv(:)
+        integer :: info
         d = channel_directions(model, cs)
-        rhs = matmul(transpose(d), a*(matmul(model%stiffness, phi) - omega**2* &
-                                     matmul(model%mass, phi)))
+        r = matmul(transpose(d), a*(matmul(model%stiffness, phi) - omega**2* &
+                                   matmul(model%mass, phi)))
         g = matmul(transpose(d), d)
-        r = rhs
-        call solve_small(g, r, info)
-        if (info /= 0) r = 0.0_dp
-        do c = 1, cs%nchannel
-            if (.not. ieee_is_finite(r(c))) r(c) = 0.0_dp
-        end do
+        allocate (ipiv(cs%nchannel))
+        call dgesv(cs%nchannel, 1, g, cs%nchannel, ipiv, r, cs%nchannel, info)
+        if (info /= 0 .or. .not. all(ieee_is_finite(r))) r = 0.0_dp
     end function reactions
-
-    !> Solve the small symmetric system g x = b in place (Gauss elimination with partial
-    !> pivoting); info /= 0 when singular.
-    subroutine solve_small(g, b, info)
-        real(dp), intent(inout) :: g(:, :), b(:)
-        integer, intent(out) :: info
-        integer :: n, k, p, i
-        real(dp) :: t
-        n = size(b)
-        info = 0
-        do k = 1, n
-            p = k - 1 + maxloc(abs(g(k:n, k)), 1)
-            if (abs(g(p, k)) <= 1.0e-14_dp*maxval(abs(g))) then
-                info = k
-                return
-            end if
-            if (p /= k) then
-                g([k, p], :) = g([p, k], :)
-                t = b(k)
-                b(k) = b(p)
-                b(p) = t
-            end if
-            do i = k + 1, n
-                t = g(i, k)/g(k, k)
-                g(i, k:n) = g(i, k:n) - t*g(k, k:n)
-                b(i) = b(i) - t*b(k)
-            end do
-        end do
-        do k = n, 1, -1
-            b(k) = (b(k) - dot_product(g(k, k + 1:n), b(k + 1:n)))/g(k, k)
-        end do
-    end subroutine solve_small
 
     !> The static normal force of every channel (0 for a tangential one) [N]: the linear
     !> statics of the structure under its preloads with every closed unilateral contact a

@@ -32,9 +32,9 @@ module stickslip_modes_family
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
-    use stickslip_dynamics, only: new_dynamics
+    use stickslip_dynamics, only: dynamics_t, new_dynamics
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_hb_laws, only: new_hb_laws
+    use stickslip_hb_laws, only: hb_laws_t, new_hb_laws
     use stickslip_continuation, only: parametric_system_t
     implicit none
     private
@@ -268,27 +268,14 @@ contains
         real(dp) :: a, h, c1(self%model%ndof), s1(self%model%ndof), mc(self%model%ndof), &
                     ms(self%model%ndof), dc(self%model%ndof), ds(self%model%ndof)
         real(dp), allocatable :: yp(:), fp(:), fm(:)
+        type(dynamics_t) :: dyn_at
+        type(hb_laws_t) :: laws_at
         n = self%n
         nb = self%prob%basis%nb
         nc = self%prob%nc
         jy = 0.0_dp
         jl = 0.0_dp
         allocate (yp(n + 2), fp(n + 2), fm(n + 2))
-        ! the omega and xi columns: central differences of the whole residual
-        do k = 1, 2
-            if (k == 1) then
-                h = 1.0e-6_dp*y(n + 1)
-            else
-                h = 1.0e-6_dp*max(abs(y(n + 2)), 1.0e-3_dp*y(n + 1))
-            end if
-            yp = y
-            yp(n + k) = y(n + k) + h
-            call modes_residual(self, yp, lambda, fp, stat)
-            yp(n + k) = y(n + k) - h
-            if (stat == 0) call modes_residual(self, yp, lambda, fm, stat)
-            if (stat /= 0) return
-            jy(:, n + k) = (fp - fm)/(2.0_dp*h)
-        end do
         call self%set(y(n + 1), y(n + 2), stat)
         if (stat /= 0) return
         call self%prob%jacobian(y(1:n), jy(1:n, 1:n), stat)
@@ -319,6 +306,29 @@ contains
         end associate
         ! f(n+1) = v_ref (Q / a - a), a = exp(lambda); the other rows do not depend on lambda
         jl(n + 1) = -self%vref*((dot_product(c1, mc) + dot_product(s1, ms))/a + a)
+        ! the omega and xi columns: central differences of the whole residual; the dynamics
+        ! at (omega, xi) are kept and put back afterwards (no new factorization)
+        dyn_at = self%prob%dyn
+        if (.not. self%prob%plain) laws_at = self%prob%laws
+        do k = 1, 2
+            if (k == 1) then
+                h = 1.0e-6_dp*y(n + 1)
+            else
+                h = 1.0e-6_dp*max(abs(y(n + 2)), 1.0e-3_dp*y(n + 1))
+            end if
+            yp = y
+            yp(n + k) = y(n + k) + h
+            call modes_residual(self, yp, lambda, fp, stat)
+            yp(n + k) = y(n + k) - h
+            if (stat == 0) call modes_residual(self, yp, lambda, fm, stat)
+            if (stat /= 0) exit
+            jy(:, n + k) = (fp - fm)/(2.0_dp*h)
+        end do
+        self%prob%dyn = dyn_at
+        if (.not. self%prob%plain) self%prob%laws = laws_at
+        self%current_omega = y(n + 1)
+        self%current_xi = y(n + 2)
+        self%have_current = .true.
         if (.not. (all(ieee_is_finite(jy)) .and. all(ieee_is_finite(jl)))) stat = 1
     end subroutine modes_jacobian
 

@@ -21,7 +21,7 @@ module stickslip_flow
     use stickslip_flow_modes, only: ngauss, mode_t, flow_modes_t, new_flow_modes, mode_index, &
         zero_velocity_modes, propagate, gauss_exponentials, project_stuck, identity_matrix
     use stickslip_flow_events, only: event_stick, event_slip, event_reversal, event_graze, &
-        event_kind, event_name, find_event
+        event_kind, event_name, find_event, grid_step, event_guard, add_saltation, end_monodromy
     use stickslip_flow_orbit, only: orbit_t
     use stickslip_flow_law_map, only: law_period_map, law_event_name
     implicit none
@@ -90,7 +90,7 @@ contains
                                  jac(:, :), sal(:, :), c(:), fm(:), fp(:)
         real(dp) :: t, tb, te, tp, tend, h
         logical :: found, want_mono, want_orbit, full_step, want_energy
-        character(len=200) :: buf
+        character(len=:), allocatable :: why
 
         if (self%laws) then
             ! contact laws: unilateral contacts, impacts (stickslip_flow_law_map)
@@ -141,16 +141,7 @@ contains
         zero_length = 0
         do
             if (t >= tend) exit
-            if (tend - t <= self%delta*(1.0_dp + 1.0e-9_dp)) then
-                tb = tend
-                full_step = .false.
-                call propagate(self%modes(im), self%delta, tb - t, yb, ybb)
-            else
-                tb = t + self%delta
-                full_step = .true.
-                ybb = matmul(self%modes(im)%ladder(:, :, 0), yb)
-            end if
-            ybb(nz + 1:) = self%se*self%exo(tb)
+            call grid_step(self, self%modes(im), t, tend, yb, tb, ybb, full_step)
             if (.not. all(ieee_is_finite(ybb))) then
                 call fail("the state is not finite (unbounded response)")
                 return
@@ -199,9 +190,7 @@ contains
                 h = dot_product(c, fm)
                 if (abs(h) > 1.0e-300_dp) then
                     sal = identity_matrix(nz)
-                    do k = 1, nz
-                        sal(:, k) = sal(:, k) + (fp(1:nz) - fm(1:nz))*c(k)/h
-                    end do
+                    call add_saltation(sal, fp, fm, c, h)
                     jac = matmul(sal, jac)
                 end if
             end if
@@ -214,22 +203,10 @@ contains
                 end do
                 call orbit%add_phase(te, ye, imnew)
             end if
-            nevents = nevents + 1
-            if (te - tp <= 1.0e-12_dp*self%period) then
-                zero_length = zero_length + 1
-            else
-                zero_length = 0
-            end if
-            if (zero_length > max_zero_length + 2*self%nc) then
-                write (buf, '(a,es13.5e3,a)') "no consistent contact mode at t = ", te, &
-                    " s: the contacts switch again at the same instant"
-                call fail(trim(buf))
-                return
-            end if
-            if (nevents > max_events) then
-                write (buf, '(a,i0,a)') "more than ", max_events, " events in one period "// &
-                    "(chattering between stick and slip)"
-                call fail(trim(buf))
+            why = event_guard(te, tp, self%period, max_zero_length + 2*self%nc, max_events, &
+                              "chattering between stick and slip", zero_length, nevents)
+            if (len(why) > 0) then
+                call fail(why)
                 return
             end if
             im = imnew
@@ -240,11 +217,8 @@ contains
         end do
         y = matmul(self%tbi, yb)
         y(nz + 1:) = self%exo(tend)
-        if (want_mono) then
-            ! back to the model's coordinates: mono = tbi_zz (phase flow x jac) tb_zz
-            call expm(self%modes(im)%b(1:nz, 1:nz)*(tend - tp), phi, stat)
-            mono = matmul(self%tbi(1:nz, 1:nz), matmul(matmul(phi, jac), self%tb(1:nz, 1:nz)))
-        end if
+        ! back to the model's coordinates: mono = tbi_zz (phase flow x jac) tb_zz
+        if (want_mono) call end_monodromy(self, self%modes(im), tend - tp, jac, mono)
         if (want_orbit) call close_phase(self%modes(im), yp, y, tend - tp)
         z1 = y(1:nz)
 

@@ -15,10 +15,11 @@
 module stickslip_flow_events
     use stickslip_kinds, only: dp
     use stickslip_flow_modes, only: mode_t, flow_modes_t, propagate
+    use stickslip_expm, only: expm
     implicit none
     private
     public :: event_stick, event_slip, event_reversal, event_graze, event_kind, event_name
-    public :: find_event, row_crossing
+    public :: find_event, row_crossing, grid_step, event_guard, add_saltation, end_monodromy
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
     !> reverses without sticking; a slipping contact's velocity touches zero and it goes on.
@@ -217,4 +218,106 @@ contains
         end do
     end function first_crossing
 
+    !> One grid step of the flow in mode md from t (balanced state yb): to t + delta by the
+    !> cached exponential (full_step), or the remainder to tend; the exogenous part of ybb
+    !> set at the step's end tb. The step of both period maps (plain and contact laws).
+    subroutine grid_step(self, md, t, tend, yb, tb, ybb, full_step)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> The contact mode of the step.
+        type(mode_t), intent(in) :: md
+        !> Start of the step and end of the period [s].
+        real(dp), intent(in) :: t, tend
+        !> State at t (balanced coordinates).
+        real(dp), intent(in) :: yb(:)
+        !> End of the step [s].
+        real(dp), intent(out) :: tb
+        !> State at tb.
+        real(dp), intent(out) :: ybb(:)
+        !> The step is a whole grid step (its cached exponentials apply).
+        logical, intent(out) :: full_step
+        if (tend - t <= self%delta*(1.0_dp + 1.0e-9_dp)) then
+            tb = tend
+            full_step = .false.
+            call propagate(md, self%delta, tb - t, yb, ybb)
+        else
+            tb = t + self%delta
+            full_step = .true.
+            ybb = matmul(md%ladder(:, :, 0), yb)
+        end if
+        ybb(2*self%n + 1:) = self%se*self%exo(tb)
+    end subroutine grid_step
+
+    !> Count an event at te (the phase before it began at tp) and say whether the period map
+    !> must stop: '' when it goes on; why, when the contacts switched again at the same
+    !> instant more than max_zero times in a row (no consistent contact mode) or when there
+    !> were more than max_events events in the period (`chattering` names what chatters).
+    function event_guard(te, tp, period, max_zero, max_events, chattering, zero_length, &
+                         nevents) result(message)
+        !> Event time and start of the phase it ends [s], the period [s].
+        real(dp), intent(in) :: te, tp, period
+        !> Most zero-length phases in a row, most events per period.
+        integer, intent(in) :: max_zero, max_events
+        !> What chatters, for the message.
+        character(len=*), intent(in) :: chattering
+        !> Zero-length phases in a row so far, and events so far (both updated).
+        integer, intent(inout) :: zero_length, nevents
+        character(len=:), allocatable :: message
+        character(len=200) :: buf
+        message = ""
+        nevents = nevents + 1
+        if (te - tp <= 1.0e-12_dp*period) then
+            zero_length = zero_length + 1
+        else
+            zero_length = 0
+        end if
+        if (zero_length > max_zero) then
+            write (buf, '(a,es13.5e3,a)') "no consistent contact mode at t = ", te, &
+                " s: the contacts switch again at the same instant"
+            message = trim(buf)
+        else if (nevents > max_events) then
+            write (buf, '(a,i0,a)') "more than ", max_events, " events in one period ("// &
+                chattering//")"
+            message = trim(buf)
+        end if
+    end function event_guard
+
+    !> The rank-one part of the saltation matrix of an event, added to `sal`: the jump of
+    !> the vector field across the event, (fp - fm) c^T / h, with c the event row and h = c^T
+    !> fm its rate (nothing when h vanishes).
+    pure subroutine add_saltation(sal, fp, fm, c, h)
+        !> The saltation matrix (nz x nz), the identity or an impact's jump on entry.
+        real(dp), intent(inout) :: sal(:, :)
+        !> Vector fields after and before the event, the event row (first nz entries used).
+        real(dp), intent(in) :: fp(:), fm(:), c(:)
+        !> c^T fm.
+        real(dp), intent(in) :: h
+        integer :: k, nz
+        nz = size(sal, 1)
+        if (.not. abs(h) > 1.0e-300_dp) return
+        do k = 1, nz
+            sal(:, k) = sal(:, k) + (fp(1:nz) - fm(1:nz))*c(k)/h
+        end do
+    end subroutine add_saltation
+
+    !> The monodromy matrix of a period map in the model's coordinates, from the Jacobian
+    !> `jac` of the balanced state up to the last phase's start and that phase (mode md,
+    !> `duration` [s]): tbi_zz expm(B duration) jac tb_zz.
+    subroutine end_monodromy(self, md, duration, jac, mono)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> The last phase's mode.
+        type(mode_t), intent(in) :: md
+        !> Its duration [s].
+        real(dp), intent(in) :: duration
+        !> Jacobian of the balanced state at the last phase's start.
+        real(dp), intent(in) :: jac(:, :)
+        !> dz1/dz0.
+        real(dp), intent(out) :: mono(:, :)
+        real(dp) :: phi(size(jac, 1), size(jac, 1))
+        integer :: nz, stat
+        nz = size(jac, 1)
+        call expm(md%b(1:nz, 1:nz)*duration, phi, stat)
+        mono = matmul(self%tbi(1:nz, 1:nz), matmul(matmul(phi, jac), self%tb(1:nz, 1:nz)))
+    end subroutine end_monodromy
 end module stickslip_flow_events

@@ -16,7 +16,8 @@ module stickslip_flow_law_map
     use stickslip_lapack, only: dgesv
     use stickslip_flow_modes, only: ngauss, mode_t, flow_modes_t, propagate, &
         gauss_exponentials, identity_matrix
-    use stickslip_flow_events, only: event_kind, event_name, row_crossing
+    use stickslip_flow_events, only: event_kind, event_name, row_crossing, grid_step, &
+        event_guard, add_saltation, end_monodromy
     use stickslip_flow_laws, only: law_mode_index, law_modes_at, impact_jump, law_start_codes, &
         event_open, event_close
     use stickslip_flow_orbit, only: orbit_t
@@ -76,7 +77,7 @@ contains
                                  pj(:, :)
         real(dp) :: t, tb, te, tp, tend, h, loss, vn
         logical :: found, want_mono, want_orbit, full_step, want_energy, impact
-        character(len=200) :: buf
+        character(len=:), allocatable :: why
 
         n = self%n
         nz = 2*n
@@ -119,16 +120,7 @@ contains
         zero_length = 0
         do
             if (t >= tend) exit
-            if (tend - t <= self%delta*(1.0_dp + 1.0e-9_dp)) then
-                tb = tend
-                full_step = .false.
-                call propagate(self%modes(im), self%delta, tb - t, yb, ybb)
-            else
-                tb = t + self%delta
-                full_step = .true.
-                ybb = matmul(self%modes(im)%ladder(:, :, 0), yb)
-            end if
-            ybb(nz + 1:) = self%se*self%exo(tb)
+            call grid_step(self, self%modes(im), t, tend, yb, tb, ybb, full_step)
             if (.not. all(ieee_is_finite(ybb))) then
                 call fail("the state is not finite (unbounded response)")
                 return
@@ -202,9 +194,7 @@ contains
                 sal = jump
                 if (abs(h) > 1.0e-300_dp) then
                     fm(1:nz) = matmul(jump, fm(1:nz))
-                    do k = 1, nz
-                        sal(:, k) = sal(:, k) + (fp(1:nz) - fm(1:nz))*c(k)/h
-                    end do
+                    call add_saltation(sal, fp, fm, c, h)
                 end if
                 jac = matmul(sal, jac)
             end if
@@ -218,22 +208,10 @@ contains
                 end do
                 call orbit%add_phase(te, ye, imnew)
             end if
-            nevents = nevents + 1
-            if (te - tp <= 1.0e-12_dp*self%period) then
-                zero_length = zero_length + 1
-            else
-                zero_length = 0
-            end if
-            if (zero_length > max_zero_length + 3*self%nc) then
-                write (buf, '(a,es13.5e3,a)') "no consistent contact mode at t = ", te, &
-                    " s: the contacts switch again at the same instant"
-                call fail(trim(buf))
-                return
-            end if
-            if (nevents > max_events) then
-                write (buf, '(a,i0,a)') "more than ", max_events, " events in one period "// &
-                    "(chattering)"
-                call fail(trim(buf))
+            why = event_guard(te, tp, self%period, max_zero_length + 3*self%nc, max_events, &
+                              "chattering", zero_length, nevents)
+            if (len(why) > 0) then
+                call fail(why)
                 return
             end if
             im = imnew
@@ -244,10 +222,7 @@ contains
         end do
         y = matmul(self%tbi, yb)
         y(nz + 1:) = self%exo(tend)
-        if (want_mono) then
-            call expm(self%modes(im)%b(1:nz, 1:nz)*(tend - tp), phi, stat)
-            mono = matmul(self%tbi(1:nz, 1:nz), matmul(matmul(phi, jac), self%tb(1:nz, 1:nz)))
-        end if
+        if (want_mono) call end_monodromy(self, self%modes(im), tend - tp, jac, mono)
         if (want_orbit) call close_phase(self%modes(im), tend - tp)
         z1 = y(1:nz)
 

@@ -285,10 +285,7 @@ contains
         end associate
         if (len(problem) > 0) then
             close (u)
-            res%npoints = 0
-            call fatal_error(error, path//": a damaged checkpoint ("//problem// &
-                             "): delete it, or set &sweep resume = .false.", &
-                             stickslip_stat%input)
+            call damaged(problem)
             return
         end if
         if (stat == 0) allocate (res%points(res%npoints))
@@ -309,18 +306,9 @@ contains
             res%points(k) = p
         end do
         close (u)
+        if (len(problem) == 0 .and. stat /= 0) problem = "unreadable: "//trim(msg)
         if (len(problem) > 0) then
-            res%npoints = 0
-            call fatal_error(error, path//": a damaged checkpoint ("//problem// &
-                             "): delete it, or set &sweep resume = .false.", &
-                             stickslip_stat%input)
-            return
-        end if
-        if (stat /= 0) then
-            res%npoints = 0
-            call fatal_error(error, path//": a damaged checkpoint (unreadable: "// &
-                             trim(msg)//"): delete it, or set &sweep resume = .false.", &
-                             stickslip_stat%input)
+            call damaged(problem)
             return
         end if
         ! the values: finite where a curve holds numbers (floquet_max and truncation are NaN
@@ -346,14 +334,17 @@ contains
                     "point is not where its continuation state stands"
             end if
         end associate
-        if (len(problem) > 0) then
-            res%npoints = 0
-            call fatal_error(error, path//": a damaged checkpoint ("//problem// &
-                             "): delete it, or set &sweep resume = .false.", &
-                             stickslip_stat%input)
-        end if
+        if (len(problem) > 0) call damaged(problem)
 
     contains
+
+        !> Refuse the checkpoint as damaged, saying why (no point taken from it).
+        subroutine damaged(why)
+            character(len=*), intent(in) :: why
+            res%npoints = 0
+            call fatal_error(error, path//": a damaged checkpoint ("//why//"): delete it, "// &
+                             "or set &sweep resume = .false.", stickslip_stat%input)
+        end subroutine damaged
 
         !> The coefficient lines of point `q` (counts checked against the contacts and the
         !> size of the file before anything is allocated; `problem` says what is wrong).

@@ -114,12 +114,8 @@ contains
         if (.not. present(gap)) gap_of = 0*gap_of
         nc = size(rnames)
         header = "t"
-        do i = 1, n
-            header = header//",x"//itoa(numbers(i))
-        end do
-        do i = 1, n
-            header = header//",v"//itoa(numbers(i))
-        end do
+        header = header//columns("x", numbers(1:n))
+        header = header//columns("v", numbers(1:n))
         do i = 1, nc
             header = header//","//trim(rnames(i))
         end do
@@ -192,9 +188,7 @@ contains
         channel = pack(channel, channel > 0)
         nc = size(channel)
         header = "harmonic,kind"
-        do i = 1, n
-            header = header//",x"//itoa(numbers(i))
-        end do
+        header = header//columns("x", numbers(1:n))
         do i = 1, nc
             header = header//","//trim(rnames(i))
         end do
@@ -353,32 +347,16 @@ contains
         numbers = column_numbers(sel, labels)
         n = size(sel)
         header = "parameter"
-        do i = 1, n
-            header = header//",amp_"//itoa(numbers(i))
-        end do
+        header = header//columns("amp_", numbers(1:n))
         header = header//",dissipation"
-        do i = 1, nc
-            header = header//",rmax_"//itoa(i)
-        end do
-        do i = 1, nc
-            header = header//",stick_"//itoa(i)
-        end do
+        header = header//columns("rmax_", [(i, i=1, nc)])
+        header = header//columns("stick_", [(i, i=1, nc)])
         header = header//",harmonics,residual,status,floquet_max,stable,truncation,"// &
                  "arclength,diss_friction,diss_damping,nfev"
         ! contact laws: each contact's open and slip shares and largest normal force
         laws = .false.
         if (res%npoints > 0) laws = allocated(res%points(1)%open)
-        if (laws) then
-            do i = 1, nc
-                header = header//",open_"//itoa(i)
-            end do
-            do i = 1, nc
-                header = header//",slip_"//itoa(i)
-            end do
-            do i = 1, nc
-                header = header//",normal_max_"//itoa(i)
-            end do
-        end if
+        if (laws) header = header//law_columns(nc)
         write (fmt, '(a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // ',","),i0,",",' // &
             real_fmt // ',",",a,",",' // real_fmt // ',",",i0,",",4(' // real_fmt // &
             ',","),i0)'
@@ -484,9 +462,7 @@ contains
         rnames = pack(rnames, channel > 0)
         channel = pack(channel, channel > 0)
         header = "point,"//parameter_name//",omega,harmonic,kind"
-        do i = 1, size(sel)
-            header = header//",x"//itoa(numbers(i))
-        end do
+        header = header//columns("x", numbers)
         do i = 1, size(channel)
             header = header//","//trim(rnames(i))
         end do
@@ -558,29 +534,11 @@ contains
             sel = selection(n)
         end if
         numbers = column_numbers(sel, labels)
-        header = "amplitude,omega,frequency,xi,damping_ratio"
-        do i = 1, size(sel)
-            header = header//",amp_"//itoa(numbers(i))
-        end do
-        header = header//",dissipation,diss_friction,diss_viscous,energy_error"
-        do i = 1, nc
-            header = header//",rmax_"//itoa(i)
-        end do
-        do i = 1, nc
-            header = header//",stick_"//itoa(i)
-        end do
-        header = header//",harmonics,residual,status,nfev"
-        if (laws) then
-            do i = 1, nc
-                header = header//",open_"//itoa(i)
-            end do
-            do i = 1, nc
-                header = header//",slip_"//itoa(i)
-            end do
-            do i = 1, nc
-                header = header//",normal_max_"//itoa(i)
-            end do
-        end if
+        header = "amplitude,omega,frequency,xi,damping_ratio"//columns("amp_", numbers)// &
+                 ",dissipation,diss_friction,diss_viscous,energy_error"// &
+                 columns("rmax_", [(i, i=1, nc)])//columns("stick_", [(i, i=1, nc)])// &
+                 ",harmonics,residual,status,nfev"
+        if (laws) header = header//law_columns(nc)
         call open_temporary(dir, "modes.csv", u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
@@ -774,6 +732,29 @@ contains
         two = 2*mod(ae, 100)
         s(24:25) = digit_pairs(two + 1:two + 2)
     end function format_real
+
+    !> The contact-law columns of frc.csv and modes.csv for `nc` contacts: open_1..,
+    !> slip_1.., normal_max_1.. (each after a comma).
+    pure function law_columns(nc) result(text)
+        integer, intent(in) :: nc
+        character(len=:), allocatable :: text
+        integer :: i
+        text = columns("open_", [(i, i=1, nc)])//columns("slip_", [(i, i=1, nc)])// &
+               columns("normal_max_", [(i, i=1, nc)])
+    end function law_columns
+
+    !> The header columns prefix<k> for each k of `numbers`, each after a comma:
+    !> columns("amp_", [7, 781]) = ",amp_7,amp_781".
+    pure function columns(prefix, numbers) result(text)
+        character(len=*), intent(in) :: prefix
+        integer, intent(in) :: numbers(:)
+        character(len=:), allocatable :: text
+        integer :: i
+        text = ""
+        do i = 1, size(numbers)
+            text = text//","//prefix//itoa(numbers(i))
+        end do
+    end function columns
 
     !> The kind of basis function k of a basis whose harmonic numbers are `harmonic`:
     !> 'c0' (the constant), 'cos' (the first of a harmonic) or 'sin' (the second).

@@ -56,19 +56,12 @@ contains
         if (present(labels) .and. present(dofs)) then
             if (any(labels /= dofs)) dof_name = "full-model DOF "
         end if
-        stat = 0
-        msg = ''
-        call open_temporary(dir, "frc.gp", u, error)
+        call begin_script(dir, "frc", "Forced-response curve and dissipation per cycle "// &
+                          "(frc.png, frc_dissipation.png)", u, stat, msg, error)
         if (allocated(error)) return
-        call put(u, "# Forced-response curve and dissipation per cycle from frc.csv:", stat, msg)
-        call put(u, "#   gnuplot frc.gp   (in this directory; writes frc.png and "// &
-                 "frc_dissipation.png)", stat, msg)
         call put(u, "set terminal pngcairo size 1100,700 noenhanced font ',11'", stat, msg)
-        call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
-        call put(u, "set datafile separator ','", stat, msg)
         call put(u, "set key autotitle columnhead top right box opaque", stat, msg)
         call put(u, "set grid lc rgb '#dddddd'", stat, msg)
-        call put(u, "f = 'frc.csv'", stat, msg)
         call put(u, "# the amplitude range: from the smallest amplitude, but at most four "// &
                  "decades below the largest (a contact stuck all period drives its DOF to "// &
                  "roundoff)", stat, msg)
@@ -143,20 +136,14 @@ contains
         type(error_type), allocatable, intent(out) :: error
         integer :: u, stat
         character(len=512) :: msg
-        stat = 0
-        msg = ''
-        call open_temporary(dir, "modes.gp", u, error)
+        call begin_script(dir, "modes", "Backbone of a nonlinear mode (modes.png)", u, stat, &
+                          msg, error)
         if (allocated(error)) return
-        call put(u, "# Backbone of a nonlinear mode from modes.csv: gnuplot modes.gp (in this "// &
-                 "directory; writes modes.png)", stat, msg)
         call put(u, "set terminal pngcairo size 1000,800 noenhanced font ',11'", stat, msg)
-        call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
         call put(u, "set output 'modes.png'.suffix", stat, msg)
-        call put(u, "set datafile separator ','", stat, msg)
         call put(u, "set key autotitle columnhead", stat, msg)
         call put(u, "set grid lc rgb '#dddddd'", stat, msg)
         call put(u, "set logscale x", stat, msg)
-        call put(u, "f = 'modes.csv'", stat, msg)
         call put(u, "w_stuck = "//rtoa(omega_stuck)//"; w_slip = "//rtoa(omega_slipping), &
                  stat, msg)
         call put(u, "set multiplot layout 2,1 title 'Nonlinear mode "//itoa(mode)// &
@@ -185,6 +172,35 @@ contains
         call put(u, "unset multiplot", stat, msg)
         call close_and_rename(dir, "modes.gp", u, stat, msg, error)
     end subroutine write_modes_plot_script
+
+    !> Open `dir`/<name>.gp (a temporary until close_and_rename) and write what every script
+    !> starts with: a comment saying what it draws and how to run it, the PNG name suffix
+    !> (variable `suffix`, '' unless given with -e), CSV input and `f` = '<name>.csv'.
+    !> Error: stat io (the file cannot be created).
+    subroutine begin_script(dir, name, what, u, stat, msg, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The script's and its table's name without extension ('frc': frc.gp, frc.csv).
+        character(len=*), intent(in) :: name
+        !> What the script draws (for the comment).
+        character(len=*), intent(in) :: what
+        !> The open unit.
+        integer, intent(out) :: u
+        !> The write status and message so far (0, '': put keeps the first failure).
+        integer, intent(out) :: stat
+        character(len=*), intent(out) :: msg
+        !> Set when the file cannot be created.
+        type(error_type), allocatable, intent(out) :: error
+        stat = 0
+        msg = ''
+        call open_temporary(dir, name//".gp", u, error)
+        if (allocated(error)) return
+        call put(u, "# "//what//" from "//name//".csv:", stat, msg)
+        call put(u, "#   gnuplot "//name//".gp   (in this directory)", stat, msg)
+        call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
+        call put(u, "set datafile separator ','", stat, msg)
+        call put(u, "f = '"//name//".csv'", stat, msg)
+    end subroutine begin_script
 
     !> The axis label of a swept parameter, with its unit.
     pure function parameter_label(parameter) result(label)
@@ -223,23 +239,17 @@ contains
         character(len=4), parameter :: tags(2) = [character(len=4) :: 'cold', 'warm']
         character(len=:), allocatable :: sel, label, legend
         integer :: width, height
-        stat = 0
-        msg = ''
-        call open_temporary(dir, "robustness.gp", u, error)
+        call begin_script(dir, "robustness", "Robustness maps (robustness_cold.png, "// &
+                          "robustness_warm.png)", u, stat, msg, error)
         if (allocated(error)) return
-        call put(u, "# Robustness maps from robustness.csv: gnuplot robustness.gp (in this "// &
-                 "directory)", stat, msg)
         call put(u, "# green: converged to the right solution; orange: converged, error > "// &
                  "wrong_tol; red: not converged", stat, msg)
-        call put(u, "if (!exists('suffix')) suffix = ''", stat, msg)
-        call put(u, "set datafile separator ','", stat, msg)
         call put(u, "set logscale y", stat, msg)
         call put(u, "set key off", stat, msg)
         call put(u, "set tics font ',8'", stat, msg)
         call put(u, "set offsets graph 0.04, graph 0.04, graph 0.08, graph 0.08", stat, msg)
         call put(u, "colour(c, s) = (s eq 'T' ? 0x2ca02c : (c eq 'T' ? 0xff7f0e : 0xd62728))", &
                  stat, msg)
-        call put(u, "f = 'robustness.csv'", stat, msg)
         do m = 1, 2
             if (m == 2 .and. .not. opts%warm) exit
             ! the canvas: 260 x 215 pixels a panel, a band on top for the title and one at

@@ -240,8 +240,8 @@ contains
         call check(t, .not. allocated(error), "contact_hbm: sparse dynamics built")
         if (allocated(error)) return
         call new_contact_set(cs, m)
-        call new_condensed_problem(ps, dyn, m%mu*m%normal_load, 4, .false., 32, 0.4_dp, error, &
-                                   m%force_harmonic, cs)
+        call new_condensed_problem(ps, dyn, cs, 4, .false., 32, 0.4_dp, error, &
+                                   m%force_harmonic)
         call check(t, .not. allocated(error), "contact_hbm: sparse problem built")
         if (allocated(error)) return
         allocate (x(pd%n), fd(pd%n), fs(pd%n), jd(pd%n, pd%n), js(pd%n, pd%n))

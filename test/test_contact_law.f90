@@ -11,8 +11,8 @@ module test_contact_law
         contact_state, state_open, state_stick, state_slip
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t, validate_model
-    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions, &
-        channel_tangent, channel_tangent2, channel_normal
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
+    use stickslip_contact_element, only: along_tangent, along_tangent2, along_normal
     use fixtures, only: seed_model
     use testing, only: test_counter_t, check
     implicit none
@@ -104,14 +104,14 @@ contains
         type(test_counter_t), intent(inout) :: t
         type(model_t) :: m
         type(contact_set_t) :: cs
-        type(contact_law_t) :: law
         type(error_type), allocatable :: error
         real(dp), allocatable :: d(:, :)
         integer :: i
         m = seed_model()
         call new_contact_set(cs, m)
-        call check(t, cs%plain .and. cs%nchannel == 1 .and. cs%normal(1) == 0, &
-                   "contact_law: a plain contact is one channel")
+        call check(t, cs%coulomb_only .and. cs%nchannel == 1 .and. cs%normal(1) == 0 .and. &
+                   cs%elements(1)%e%law_name() == 'coulomb', &
+                   "contact_law: a Coulomb contact is one channel")
         m%ndof = 4
         m%mass = 0.0_dp*reshape([(1.0_dp, i=1, 16)], [4, 4])
         do i = 1, 4
@@ -134,17 +134,20 @@ contains
         call check(t, .not. allocated(error), "contact_law: a mixed model validates")
         call new_contact_set(cs, m)
         d = channel_directions(m, cs)
-        call check(t, .not. cs%plain .and. cs%nchannel == 4 .and. all(cs%first == [1, 2]) &
-                   .and. all(cs%normal == [0, 4]) .and. all(cs%ntangent == [1, 2]) .and. &
-                   all(cs%kind == [channel_tangent, channel_tangent, channel_tangent2, &
-                                   channel_normal]) .and. all(cs%contact_of == [1, 2, 2, 2]), &
+        call check(t, .not. cs%coulomb_only .and. cs%nchannel == 4 .and. &
+                   all(cs%first == [1, 2]) .and. all(cs%normal == [0, 4]) .and. &
+                   all(cs%ntangent == [1, 2]) .and. &
+                   all(cs%along == [along_tangent, along_tangent, along_tangent2, &
+                                    along_normal]) .and. all(cs%contact_of == [1, 2, 2, 2]), &
                    "contact_law: the channels of a mixed model")
         call check(t, d(1, 1) == 1.0_dp .and. d(2, 2) == 1.0_dp .and. d(3, 3) == 1.0_dp .and. &
                    d(4, 4) == -1.0_dp .and. sum(abs(d)) == 4.0_dp, &
                    "contact_law: channel directions w, t, n")
-        law = cs%law(2)
-        call check(t, cs%constant_limit(1) == 0.3_dp .and. cs%constant_limit(2) == 0.0_dp &
-                   .and. law%unilateral .and. law%ntangent == 2, &
+        call check(t, cs%elements(1)%e%force_scale() == 0.3_dp .and. &
+                   cs%elements(2)%e%force_scale() == 2.0_dp .and. &
+                   cs%elements(2)%e%law_name() == 'unilateral' .and. &
+                   cs%elements(2)%e%preload() == 2.0_dp .and. &
+                   cs%elements(1)%e%law_name() == 'coulomb', &
                    "contact_law: limits and laws of the contacts")
     end subroutine test_layout
 

@@ -9,6 +9,7 @@ module test_hbm
     use stickslip_hbm, only: solve_periodic
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_friction, only: psi
+    use stickslip_contact_element, only: state_stick
     use testing, only: test_counter_t, check, check_close, check_error
     use fixtures, only: seed_model, chain_model
     implicit none
@@ -56,6 +57,7 @@ contains
         type(error_type), allocatable :: error
         real(dp), allocatable :: x(:), jac(:, :), fd(:, :), fp(:), fm(:), xp(:), rs(:, :), &
                                  vs(:, :), ss(:, :)
+        integer, allocatable :: st(:, :)
         integer :: n, q, stat
         real(dp) :: eps, frac
         character(len=80) :: tag
@@ -70,7 +72,7 @@ contains
         if (allocated(error)) return
         n = p%n
         allocate (x(n), jac(n, n), fd(n, n), fp(n), fm(n), xp(n))
-        allocate (rs(nt, p%nc), vs(nt, p%nc), ss(nt, p%nc))
+        allocate (rs(nt, p%nc), vs(nt, p%nc), ss(nt, p%nc), st(nt, p%nc))
         call random_number(x)
         select case (state)
         case ("slip")
@@ -84,7 +86,8 @@ contains
         end select
         stat = 0
         call p%jacobian(x, jac, stat)
-        call p%contact_samples(x, rs, vs, ss)
+        call p%law_samples(x, rs, vs, st)
+        ss = merge(1.0_dp, 0.0_dp, st == state_stick)
         frac = sum(ss)/size(ss)
         write (tag, '(a,a,a,i0,a,l1,a,f5.3,a)') "jacobian vs FD (", state, ", H=", h, &
             ", odd=", odd, ", stick fraction ", frac, ")"

@@ -35,11 +35,11 @@ module stickslip_truncation
     use stickslip_model, only: model_t, contact_velocity_direction, force_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_basis, only: basis_t, new_basis
-    use stickslip_friction, only: psi, psi_stick
     use stickslip_hbm, only: solve_periodic
     use stickslip_dynamics, only: dynamics_t
-    use stickslip_contact_set, only: channel_directions, channel_normal
-    use stickslip_contact_law, only: contact_psi, contact_state, state_stick, state_open
+    use stickslip_contact_set, only: channel_directions
+    use stickslip_contact_element, only: channel_t, kinematics_gap, along_normal, state_stick, &
+        state_open
     implicit none
     private
     public :: truncation_t, estimate_truncation, solve_to_tolerance, coarse_harmonics
@@ -434,28 +434,7 @@ contains
         ! the weight the solution was solved with (opts%rho = 0 asks for the automatic one)
         rho = sol%rho
         if (.not. (rho > 0.0_dp)) rho = opts%rho
-        if (.not. sol%contacts%plain .and. model%ncontact() > 0) then
-            call laws_defect(model, sol, fb, grid, rho, vfloor, est)
-            j = model%ncontact() + 1
-        else
-            j = 1
-        end if
-        do j = j, model%ncontact()
-            limit = model%mu(j)*model%normal_load(j)
-            vc = matmul(sol%vcoef, contact_velocity_direction(model, j))
-            call grid%synthesize(fb, sol%rcoef(:, j), rt)
-            call grid%synthesize(fb, vc, vt)
-            pt = psi(rt, vt, limit, rho)
-            st = psi_stick(rt, vt, limit, rho)
-            vslip = max(maxval(abs(vt)), vfloor)
-            where (st > 0.5_dp)
-                pt = pt/max(vslip, tiny(1.0_dp))
-            elsewhere
-                pt = pt/max(rho*limit, vfloor, tiny(1.0_dp))
-            end where
-            est%psi_rms = max(est%psi_rms, sqrt(sum(pt**2)/nf))
-            est%psi_max = max(est%psi_max, maxval(abs(pt)))
-        end do
+        if (model%ncontact() > 0) call coulomb_defect(model, sol, fb, grid, rho, vfloor, est)
         call fb%destroy()
         est%available = sol%converged
         if (est%available) then
@@ -466,13 +445,13 @@ contains
         end if
     end subroutine diagnose
 
-    !> The Coulomb defect with contact laws (doc/contacts.md): Psi of every contact
-    !> (stickslip_contact_law) on the fine grid, each channel's kinematic quantity rebuilt
-    !> from the solution (slider velocity d^T v + r' / k_t, omega (gap + d^T x + lambda /
-    !> k_n)); a sample in stick (closed) divided by the channel's peak kinematic quantity,
-    !> one in slip (open) by rho times the contact's largest limit (largest normal force);
-    !> psi_rms and psi_max of `est` set.
-    subroutine laws_defect(model, sol, fb, grid, rho, vfloor, est)
+    !> The Coulomb defect (doc/contacts.md): every element's Psi on the fine grid, each
+    !> channel's kinematic quantity rebuilt from the solution (velocity channels d^T v +
+    !> c r', gap channels omega (gap + d^T x + c r), c the compliance); a sample in stick
+    !> (or at a closed normal) divided by the channel's peak kinematic quantity, one in slip
+    !> (open) by rho times the contact's force scale (its largest normal force when it has a
+    !> normal channel); psi_rms and psi_max of `est` set.
+    subroutine coulomb_defect(model, sol, fb, grid, rho, vfloor, est)
         type(model_t), intent(in) :: model
         type(hbm_solution_t), intent(in) :: sol
         type(basis_t), intent(in) :: fb
@@ -481,24 +460,27 @@ contains
         type(truncation_t), intent(inout) :: est
         real(dp), allocatable :: d(:, :), r(:, :), u(:, :), p(:, :), coef(:), dr(:), &
                                  uscale(:), gmax(:)
-        integer :: j, c, k, m, c0, nf, state
+        integer, allocatable :: state(:)
+        integer :: j, c, k, m, c0, nf
         real(dp) :: q
+        type(channel_t) :: ch
         associate (cs => sol%contacts)
             nf = est%fine_samples
             d = channel_directions(model, cs)
-            allocate (r(nf, cs%nchannel), u(nf, cs%nchannel), p(nf, 3), coef(sol%nb), &
-                      dr(sol%nb), uscale(cs%nchannel), gmax(cs%ncontact))
+            allocate (r(nf, cs%nchannel), u(nf, cs%nchannel), coef(sol%nb), dr(sol%nb), &
+                      uscale(cs%nchannel), gmax(cs%ncontact), state(nf))
             do c = 1, cs%nchannel
-                j = cs%contact_of(c)
-                if (cs%kind(c) == channel_normal) then
+                ch = cs%channel(c)
+                if (ch%kinematics == kinematics_gap) then
                     coef = model%omega*matmul(sol%xcoef, d(:, c))
-                    if (fb%has_zero) coef(fb%i0) = coef(fb%i0) + model%omega*cs%gap(j)
-                    if (cs%kn(j) > 0.0_dp) coef = coef + model%omega*sol%rcoef(:, c)/cs%kn(j)
+                    if (fb%has_zero) coef(fb%i0) = coef(fb%i0) + model%omega*ch%gap
+                    if (ch%compliance > 0.0_dp) coef = coef + model%omega*ch%compliance* &
+                                                       sol%rcoef(:, c)
                 else
                     coef = matmul(sol%vcoef, d(:, c))
-                    if (cs%kt(j) > 0.0_dp) then
+                    if (ch%compliance > 0.0_dp) then
                         call fb%derivative(sol%rcoef(:, c), model%omega, dr)
-                        coef = coef + dr/cs%kt(j)
+                        coef = coef + ch%compliance*dr
                     end if
                 end if
                 call grid%synthesize(fb, coef, u(:, c))
@@ -511,30 +493,29 @@ contains
                 if (cs%normal(j) > 0) then
                     gmax(j) = max(maxval(r(:, cs%normal(j))), tiny(1.0_dp))
                 else
-                    gmax(j) = max(cs%mu(j)*cs%normal_load(j), tiny(1.0_dp))
+                    gmax(j) = max(cs%elements(j)%e%force_scale(), tiny(1.0_dp))
                 end if
-                do k = 1, nf
-                    call contact_psi(cs%law(j), rho, r(k, c0:c0 + m - 1), u(k, c0:c0 + m - 1), &
-                                     p(k, 1:m))
-                    state = contact_state(cs%law(j), rho, r(k, c0:c0 + m - 1), &
-                                          u(k, c0:c0 + m - 1))
-                    do c = 1, m
-                        if (state == state_stick .or. (cs%kind(c0 + c - 1) == channel_normal &
-                                                       .and. state /= state_open)) then
+                allocate (p(nf, m))
+                call cs%elements(j)%e%psi(rho, r(:, c0:c0 + m - 1), u(:, c0:c0 + m - 1), p)
+                call cs%elements(j)%e%states(rho, r(:, c0:c0 + m - 1), u(:, c0:c0 + m - 1), &
+                                             state)
+                do c = 1, m
+                    do k = 1, nf
+                        if (state(k) == state_stick .or. (cs%along(c0 + c - 1) == along_normal &
+                                                          .and. state(k) /= state_open)) then
                             p(k, c) = p(k, c)/uscale(c0 + c - 1)
                         else
                             p(k, c) = p(k, c)/max(rho*gmax(j), vfloor, tiny(1.0_dp))
                         end if
                     end do
-                end do
-                do c = 1, m
                     q = sqrt(sum(p(:, c)**2)/nf)
                     est%psi_rms = max(est%psi_rms, q)
                     est%psi_max = max(est%psi_max, maxval(abs(p(:, c))))
                 end do
+                deallocate (p)
             end do
         end associate
-    end subroutine laws_defect
+    end subroutine coulomb_defect
 
     !> Add to est (already diagnosed for `fine`) the changes from the solution `coarse` on
     !> a prefix basis of fine's, and fold them into the estimate.

@@ -25,7 +25,8 @@ module stickslip_friction_family
     use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_friction, only: psi_limit_derivative
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_hb_laws, only: new_hb_laws
+    use stickslip_contact_element, only: state_stick
+    use stickslip_model, only: preload_force
     use stickslip_continuation, only: parametric_system_t
     use stickslip_sweep_options, only: set_sweep_parameter
     implicit none
@@ -67,6 +68,7 @@ module stickslip_friction_family
         !> The forcing amplitudes of the case [N], and work arrays of the Jacobian.
         real(dp), allocatable :: amplitude0(:), rs(:, :), vs(:, :), ss(:, :), dv(:, :), &
                                  dvs(:)
+        integer, allocatable :: states(:, :)
         complex(dp), allocatable :: cw(:)
         !> The model's sparse matrices (a sweep of the exact sparse condensation; its
         !> %model follows `model`), and the DOFs whose rows the dynamics keep.
@@ -136,24 +138,14 @@ contains
                 type(basis_t) :: basis
                 type(dynamics_t) :: dyn
                 type(contact_set_t) :: cs
-                integer :: j
                 call new_basis(basis, hbm%harmonics, hbm%odd_only, hbm%samples, error)
                 if (allocated(error)) return
                 call new_sparse_dynamics(dyn, fam%sparse, basis, fam%kept, error)
                 call basis%destroy()
                 if (allocated(error)) return
                 call new_contact_set(cs, fam%model)
-                if (cs%plain) then
-                    call new_condensed_problem(fam%prob, dyn, fam%model%mu* &
-                                               fam%model%normal_load, hbm%harmonics, &
-                                               hbm%odd_only, hbm%samples, rho, error, &
-                                               fam%model%force_harmonic)
-                else
-                    call new_condensed_problem(fam%prob, dyn, cs%constant_limit([(j, j=1, &
-                                               cs%ncontact)]), hbm%harmonics, hbm%odd_only, &
-                                               hbm%samples, rho, error, &
-                                               fam%model%force_harmonic, contacts=cs)
-                end if
+                call new_condensed_problem(fam%prob, dyn, cs, hbm%harmonics, hbm%odd_only, &
+                                           hbm%samples, rho, error, fam%model%force_harmonic)
             end block
         else
             call new_hb_problem(fam%prob, fam%model, hbm%harmonics, hbm%odd_only, &
@@ -163,9 +155,10 @@ contains
         if (allocated(error)) return
         nb = fam%prob%basis%nb
         nc = fam%prob%nc
+        allocate (fam%states(hbm%samples, fam%prob%contacts%ncontact))
         allocate (fam%rs(hbm%samples, nc), fam%vs(hbm%samples, nc), fam%ss(hbm%samples, nc), &
                   fam%dv(nb, nc), fam%dvs(hbm%samples), fam%cw(hbm%samples/2 + 1))
-        if (parameter == 'force_amplitude') then
+        if (parameter == 'force_amplitude' .and. .not. any(preload_force(fam%model) /= 0.0_dp)) then
             block
                 type(model_t) :: m1
                 m1 = fam%model
@@ -197,28 +190,52 @@ contains
         !> Set to 1 when the family has no point there (p not finite or out of range,
         !> singular dynamics).
         integer, intent(inout) :: stat
+        integer :: k
         if (self%have_current .and. p == self%current) return
         if (.not. ieee_is_finite(p)) then
             stat = 1
             return
         end if
-        if (.not. self%prob%plain) then
-            call set_laws_parameter(self, p, stat)
+        if (p < 0.0_dp .or. (self%parameter == 'omega' .and. .not. (p > 0.0_dp))) then
+            stat = 1
             return
         end if
+        call set_sweep_parameter(self%model, self%parameter, p, self%amplitude0)
         select case (self%parameter)
-        case ('omega')
-            if (.not. (p > 0.0_dp)) then
-                stat = 1
-                return
-            end if
-            self%model%omega = p
+        case ('omega', 'preload')
+            ! the condensed dynamics (the preload is in the static load), built once per
+            ! value and cached; the kinematics of gap channels and contact stiffnesses follow
+            ! the dynamics' omega
             call set_omega_dynamics(self, p, stat)
             if (stat /= 0) return
         case ('force_amplitude')
+            if (allocated(self%unit%v0)) then
+                call scale_forcing(self, p)
+            else
+                call set_omega_dynamics(self, p, stat)
+                if (stat /= 0) return
+            end if
+        end select
+        select case (self%parameter)
+        case ('mu', 'normal_load', 'preload')
+            call self%prob%contacts%set_parameter(self%parameter, p, k)
+        end select
+        self%current = p
+        self%have_current = .true.
+    end subroutine family_set
+
+    !> The dynamics at forcing amplitude p scaled from those at unit amplitude (the
+    !> response to the forcing is linear in it; no preload: the static load is forcing
+    !> alone).
+    subroutine scale_forcing(self, p)
+        !> The family in the forcing amplitude.
+        class(friction_family_t), intent(inout) :: self
+        !> The amplitude of forcing term 1 [N].
+        real(dp), intent(in) :: p
             self%prob%dyn%v0 = p*self%unit%v0
             self%prob%dyn%x0 = p*self%unit%x0
             if (allocated(self%unit%x0_static)) self%prob%dyn%x0_static = p*self%unit%x0_static
+            if (allocated(self%unit%u_static)) self%prob%dyn%u_static = p*self%unit%u_static
             if (allocated(self%unit%forcing_gram)) then
                 ! the Gram matrices of [X0, Y]: the X0 row and column scale with p
                 self%prob%dyn%forcing_gram(1, :) = p*p*self%unit%forcing_gram(1, :)
@@ -228,48 +245,7 @@ contains
                 self%prob%dyn%damping_gram(:, 1, :) = p*self%unit%damping_gram(:, 1, :)
                 self%prob%dyn%damping_gram(1, 1, :) = p*p*self%unit%damping_gram(1, 1, :)
             end if
-        case ('mu', 'normal_load')
-            if (p < 0.0_dp) then
-                stat = 1
-                return
-            end if
-            call set_sweep_parameter(self%model, self%parameter, p, self%amplitude0)
-            self%prob%limit = self%model%mu*self%model%normal_load
-        end select
-        self%current = p
-        self%have_current = .true.
-    end subroutine family_set
-
-    !> Move a family with contact laws to parameter p: omega, the forcing amplitude and the
-    !> preload change the dynamics (the preload is in the static load; built once per
-    !> value, cached as in omega), every parameter the laws (mu, the normal loads, the
-    !> preloads, omega). stat = 1 when the family has no point at p.
-    subroutine set_laws_parameter(self, p, stat)
-        !> The family.
-        class(friction_family_t), intent(inout) :: self
-        !> The parameter value.
-        real(dp), intent(in) :: p
-        !> Set to 1 when the family has no point there.
-        integer, intent(inout) :: stat
-        type(contact_set_t) :: cs
-        integer :: j
-        if (p < 0.0_dp .or. (self%parameter == 'omega' .and. .not. (p > 0.0_dp))) then
-            stat = 1
-            return
-        end if
-        call set_sweep_parameter(self%model, self%parameter, p, self%amplitude0)
-        select case (self%parameter)
-        case ('omega', 'force_amplitude', 'preload')
-            call set_omega_dynamics(self, p, stat)
-            if (stat /= 0) return
-        end select
-        call new_contact_set(cs, self%model)
-        call new_hb_laws(self%prob%laws, cs, self%model%omega, self%prob%basis%nb, &
-                         self%prob%basis%nt)
-        self%prob%limit = cs%constant_limit([(j, j=1, cs%ncontact)])
-        self%current = p
-        self%have_current = .true.
-    end subroutine set_laws_parameter
+    end subroutine scale_forcing
 
     !> The dynamics of a family in omega at omega = p (self%model%omega already p): from
     !> the cache when p was met before (exactly), else factorized and cached. stat = 1 when
@@ -385,13 +361,15 @@ contains
             return
         end if
         call self%prob%jacobian(y, jy, stat)
-        if (.not. self%prob%plain) then
+        if (.not. self%prob%contacts%coulomb_only) then
             call laws_parameter_derivative(self, y, lambda, jl, stat)
             return
         end if
+        ! Coulomb contacts only: the analytic derivative (their stick indicators and limits)
         nb = self%prob%basis%nb
         nc = self%prob%nc
-        call self%prob%contact_samples(y, self%rs, self%vs, self%ss)
+        call self%prob%law_samples(y, self%rs, self%vs, self%states)
+        self%ss = merge(1.0_dp, 0.0_dp, self%states == state_stick)
         select case (self%parameter)
         case ('omega')
             call self%prob%dyn%contact_velocity_derivative(self%prob%basis, &
@@ -409,10 +387,12 @@ contains
                 self%dvs = self%ss(:, j)*self%dvs
             case ('mu')
                 self%dvs = psi_limit_derivative(self%rs(:, j), self%vs(:, j), &
-                           self%prob%limit(j), self%prob%rho)*self%model%normal_load(j)
+                           self%prob%contacts%elements(j)%e%force_scale(), self%prob%rho)* &
+                           self%prob%contacts%elements(j)%e%normal_load()
             case default
                 self%dvs = psi_limit_derivative(self%rs(:, j), self%vs(:, j), &
-                           self%prob%limit(j), self%prob%rho)*self%model%mu(j)
+                           self%prob%contacts%elements(j)%e%force_scale(), self%prob%rho)* &
+                           self%model%mu(j)
             end select
             call self%prob%basis%analyse(self%dvs, jl((j - 1)*nb + 1:j*nb), self%cw)
         end do

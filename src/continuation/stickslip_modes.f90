@@ -25,15 +25,15 @@ module stickslip_modes
     use stickslip_hbm, only: validate_options, solution_from_forces, energy_warning, &
         energy_untrusted, force_excess_warning, force_excess_untrusted
     use stickslip_rho, only: automatic_rho
-    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions, &
-        channel_normal
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
+    use stickslip_contact_element, only: channel_t, kinematics_gap, along_normal
     use stickslip_linear_modes, only: linear_modes
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step, reason_running, &
         reason_end
     use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
     use stickslip_sweep_result, only: frc_point_t, reason_text
-    use stickslip_sweep_point, only: point_tally_t, keep_coefficients
+    use stickslip_sweep_point, only: point_tally_t, keep_coefficients, contact_point_values
     use stickslip_sweep_options, only: sweep_options_t
     implicit none
     private
@@ -365,17 +365,7 @@ contains
             else
                 p%amplitude = [(maxval(abs(ps%x(:, k))), k=1, size(ps%x, 2))]
             end if
-            if (ps%contacts%plain) then
-                p%rmax = [(maxval(abs(ps%r(:, k))), k=1, size(ps%r, 2))]
-            else
-                allocate (p%rmax(ps%contacts%ncontact))
-                do k = 1, ps%contacts%ncontact
-                    p%rmax(k) = maxval(norm2(ps%r(:, ps%contacts%first(k):ps%contacts% &
-                                                  first(k) + ps%contacts%ntangent(k) - 1), dim=2))
-                end do
-                p%open = ps%open_fraction
-                p%normal_max = maxval(ps%normal, dim=1)
-            end if
+            call contact_point_values(ps, p)
             p%stick = ps%stick_fraction
             if (allocated(opts%observe)) so%observe = opts%observe
             call keep_coefficients(m, ps, so, p)
@@ -437,7 +427,7 @@ contains
         type(model_t), intent(in) :: model
         type(contact_set_t) :: cs
         call new_contact_set(cs, model)
-        s = max(maxval(cs%mu*cs%normal_load), maxval(cs%preload), maxval(cs%mu*cs%preload))
+        s = cs%force_scale()
         if (.not. (s > 0.0_dp)) s = 1.0_dp
     end function force_scale
 
@@ -454,9 +444,9 @@ contains
         r = reactions(model, cs, phi, omega, a)
         holds = .true.
         do c = 1, cs%nchannel
-            if (cs%kind(c) == channel_normal) cycle
+            if (cs%along(c) == along_normal) cycle
             j = cs%contact_of(c)
-            if (abs(r(c)) > cs%mu(j)*max(cs%normal_load(j), cs%preload(j))) holds = .false.
+            if (abs(r(c)) > cs%elements(j)%e%rest_limit(c - cs%first(j) + 1)) holds = .false.
         end do
     end function stuck_holds
 
@@ -488,16 +478,16 @@ contains
         real(dp) :: lambda(cs%nchannel)
         real(dp), allocatable :: d(:, :), a(:, :), b(:)
         integer, allocatable :: ipiv(:), rigid(:)
-        integer :: n, c, j, nr, info, k
+        integer :: n, c, nr, info, k
+        type(channel_t) :: ch
         n = model%ndof
         lambda = 0.0_dp
         d = channel_directions(model, cs)
         allocate (rigid(0))
         do c = 1, cs%nchannel
-            j = cs%contact_of(c)
-            if (cs%kind(c) /= channel_normal) cycle
-            if (.not. (cs%preload(j) > 0.0_dp .or. cs%gap(j) <= 0.0_dp)) cycle
-            if (cs%kn(j) <= 0.0_dp) rigid = [rigid, c]
+            ch = cs%channel(c)
+            if (.not. closed_at_rest(c, ch)) cycle
+            if (ch%compliance <= 0.0_dp) rigid = [rigid, c]
         end do
         nr = size(rigid)
         allocate (a(n + nr, n + nr), b(n + nr), ipiv(n + nr))
@@ -506,28 +496,40 @@ contains
         b = 0.0_dp
         b(1:n) = preload_force(model)
         do c = 1, cs%nchannel
-            j = cs%contact_of(c)
-            if (cs%kind(c) /= channel_normal .or. cs%kn(j) <= 0.0_dp) cycle
-            if (.not. (cs%preload(j) > 0.0_dp .or. cs%gap(j) <= 0.0_dp)) cycle
-            a(1:n, 1:n) = a(1:n, 1:n) + cs%kn(j)*spread(d(:, c), 2, n)*spread(d(:, c), 1, n)
-            b(1:n) = b(1:n) - cs%kn(j)*cs%gap(j)*d(:, c)
+            ch = cs%channel(c)
+            if (.not. closed_at_rest(c, ch) .or. ch%compliance <= 0.0_dp) cycle
+            a(1:n, 1:n) = a(1:n, 1:n) + spread(d(:, c), 2, n)*spread(d(:, c), 1, n)/ &
+                          ch%compliance
+            b(1:n) = b(1:n) - ch%gap*d(:, c)/ch%compliance
         end do
         do k = 1, nr
             a(1:n, n + k) = d(:, rigid(k))
             a(n + k, 1:n) = d(:, rigid(k))
-            b(n + k) = -cs%gap(cs%contact_of(rigid(k)))
+            ch = cs%channel(rigid(k))
+            b(n + k) = -ch%gap
         end do
         call dgesv(n + nr, 1, a, n + nr, ipiv, b, n + nr, info)
         if (info /= 0) return
         do c = 1, cs%nchannel
-            j = cs%contact_of(c)
-            if (cs%kind(c) /= channel_normal) cycle
-            if (cs%kn(j) > 0.0_dp) then
-                lambda(c) = max(0.0_dp, -cs%kn(j)*(cs%gap(j) + dot_product(d(:, c), b(1:n))))
+            ch = cs%channel(c)
+            if (ch%kinematics /= kinematics_gap) cycle
+            if (ch%compliance > 0.0_dp) then
+                lambda(c) = max(0.0_dp, -(ch%gap + dot_product(d(:, c), b(1:n)))/ch%compliance)
             else if (findloc(rigid, c, 1) > 0) then
                 lambda(c) = max(0.0_dp, -b(n + findloc(rigid, c, 1)))
             end if
         end do
+
+    contains
+
+        !> A gap channel closed at rest: preloaded, or without an initial gap.
+        logical function closed_at_rest(c, ch)
+            integer, intent(in) :: c
+            type(channel_t), intent(in) :: ch
+            closed_at_rest = ch%kinematics == kinematics_gap .and. &
+                             (cs%elements(cs%contact_of(c))%e%preload() > 0.0_dp .or. &
+                              ch%gap <= 0.0_dp)
+        end function closed_at_rest
     end function static_normal_forces
 
     !> The start guess from the stuck linear mode: x = a phi cos(omega t), the channel
@@ -548,7 +550,7 @@ contains
         y = 0.0_dp
         do c = 1, cs%nchannel
             y((c - 1)*nb + fam%ic1) = r(c)
-            if (cs%kind(c) == channel_normal .and. fam%prob%basis%i0 > 0) &
+            if (cs%along(c) == along_normal .and. fam%prob%basis%i0 > 0) &
                 y((c - 1)*nb + fam%prob%basis%i0) = lambda(c)
         end do
         y(fam%n + 1) = omega
@@ -575,11 +577,11 @@ contains
         lambda = static_normal_forces(model, cs)
         do c = 1, cs%nchannel
             j = cs%contact_of(c)
-            if (cs%kind(c) == channel_normal) then
+            if (cs%along(c) == along_normal) then
                 if (fam%prob%basis%i0 > 0) y((c - 1)*nb + fam%prob%basis%i0) = lambda(c)
                 cycle
             end if
-            limit = cs%mu(j)*max(cs%normal_load(j), cs%preload(j))
+            limit = cs%elements(j)%e%rest_limit(c - cs%first(j) + 1)
             u = a*dot_product(d(:, c), phi)
             y((c - 1)*nb + fam%is1) = 4.0_dp*limit/pi*sign(1.0_dp, u)
             dissipated = dissipated + 4.0_dp*limit*abs(u)

@@ -34,7 +34,7 @@ module stickslip_modes_family
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_dynamics, only: dynamics_t, new_dynamics
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_hb_laws, only: hb_laws_t, new_hb_laws
+    use stickslip_contact_element, only: along_normal
     use stickslip_continuation, only: parametric_system_t
     implicit none
     private
@@ -97,7 +97,7 @@ contains
     end function free_structure
 
     !> Build the family of `model` (its forcing is ignored) on the basis of `hbm` (rho > 0;
-    !> odd harmonics only when every contact is plain), phase-referenced to the
+    !> odd harmonics only unless a contact needs the constant term), phase-referenced to the
     !> mass-normalized shape `phi` of frequency `omega_ref` [rad/s]. Errors: as
     !> new_hb_problem (stat numerical: a singular dynamic stiffness at omega_ref).
     subroutine new_modes_family(fam, model, hbm, phi, omega_ref, error)
@@ -120,7 +120,9 @@ contains
         fam%model%omega = omega_ref
         fam%opts = hbm
         call new_contact_set(cs, fam%model)
-        if (cs%plain) fam%opts%odd_only = .true.
+        ! the odd harmonics unless a contact needs the constant term (a gap channel: its gap,
+        ! preload and mean normal force)
+        if (.not. cs%needs_constant()) fam%opts%odd_only = .true.
         ! built at (omega_ref, xi = 0.01 omega_ref): omega_ref may be a natural frequency of
         ! the undamped structure (the slipping limit), where Z_1 is singular without damping
         m = fam%model
@@ -153,12 +155,12 @@ contains
             return
         end if
         allocate (fam%mean_rows(0))
-        if (.not. cs%plain .and. fam%prob%basis%i0 > 0) then
+        if (fam%prob%basis%i0 > 0) then
+            ! the tangential channels' mean forces (undetermined where they stick all period)
             fam%mean_weight = mean_weight
-            do j = 1, cs%ncontact
-                do c = cs%first(j), cs%first(j) + cs%ntangent(j) - 1
+            do c = 1, cs%nchannel
+                if (cs%along(c) /= along_normal) &
                     fam%mean_rows = [fam%mean_rows, (c - 1)*nb + fam%prob%basis%i0]
-                end do
             end do
         end if
     end subroutine new_modes_family
@@ -174,7 +176,6 @@ contains
         integer, intent(inout) :: stat
         type(model_t) :: m
         type(error_type), allocatable :: error
-        type(contact_set_t) :: cs
         if (self%have_current .and. omega == self%current_omega .and. xi == self%current_xi) &
             return
         if (.not. (omega > 0.0_dp .and. ieee_is_finite(omega) .and. ieee_is_finite(xi))) then
@@ -190,11 +191,6 @@ contains
             stat = 1
             self%have_current = .false.
             return
-        end if
-        if (.not. self%prob%plain) then
-            call new_contact_set(cs, m)
-            call new_hb_laws(self%prob%laws, cs, omega, self%prob%basis%nb, &
-                             self%prob%basis%nt)
         end if
         self%current_omega = omega
         self%current_xi = xi
@@ -269,7 +265,6 @@ contains
                     ms(self%model%ndof), dc(self%model%ndof), ds(self%model%ndof)
         real(dp), allocatable :: yp(:), fp(:), fm(:)
         type(dynamics_t) :: dyn_at
-        type(hb_laws_t) :: laws_at
         n = self%n
         nb = self%prob%basis%nb
         nc = self%prob%nc
@@ -309,7 +304,6 @@ contains
         ! the omega and xi columns: central differences of the whole residual; the dynamics
         ! at (omega, xi) are kept and put back afterwards (no new factorization)
         dyn_at = self%prob%dyn
-        if (.not. self%prob%plain) laws_at = self%prob%laws
         do k = 1, 2
             if (k == 1) then
                 h = 1.0e-6_dp*y(n + 1)
@@ -325,7 +319,6 @@ contains
             jy(:, n + k) = (fp - fm)/(2.0_dp*h)
         end do
         self%prob%dyn = dyn_at
-        if (.not. self%prob%plain) self%prob%laws = laws_at
         self%current_omega = y(n + 1)
         self%current_xi = y(n + 2)
         self%have_current = .true.

@@ -363,10 +363,7 @@ contains
         type(model_t), intent(in) :: model
         real(dp) :: f
         type(contact_set_t) :: cs
-        integer :: j
         call new_contact_set(cs, model)
-        f = maxval([0.0_dp, cs%constant_limit([(j, j=1, cs%ncontact)])])
-        if (.not. cs%plain) f = max(f, maxval([0.0_dp, cs%preload]), &
-                                    maxval([0.0_dp, cs%mu*cs%preload]))
+        f = cs%force_scale()
     end function force_scale
 end module stickslip_sweep

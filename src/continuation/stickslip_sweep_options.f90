@@ -175,8 +175,9 @@ contains
     end function sweep_parameter_value
 
     !> Set the swept parameter of `model` to p ('force_amplitude' scales every term from
-    !> the amplitudes `amplitude0` of the case, term 1 taking the value p).
-    pure subroutine set_sweep_parameter(model, parameter, p, amplitude0)
+    !> the amplitudes `amplitude0` of the case, term 1 taking the value p; mu, the normal
+    !> load and the preload also on the explicit laws that have them).
+    subroutine set_sweep_parameter(model, parameter, p, amplitude0)
         !> The model, changed.
         type(model_t), intent(inout) :: model
         !> 'omega', 'force_amplitude', 'mu', 'normal_load' or 'preload'.
@@ -186,6 +187,13 @@ contains
         !> The forcing amplitudes of the case.
         real(dp), intent(in) :: amplitude0(:)
         integer :: j
+        logical :: done
+        if (allocated(model%laws)) then
+            do j = 1, size(model%laws)
+                if (allocated(model%laws(j)%e)) &
+                    call model%laws(j)%e%set_parameter(parameter, p, done)
+            end do
+        end if
         select case (parameter)
         case ('omega')
             model%omega = p

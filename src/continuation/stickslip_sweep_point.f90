@@ -23,7 +23,7 @@ module stickslip_sweep_point
     use stickslip_contact_set, only: channel_directions
     implicit none
     private
-    public :: point_tally_t, evaluate_point, keep_coefficients
+    public :: point_tally_t, evaluate_point, keep_coefficients, contact_point_values
 
     !> Which checks the points of a curve failed: per diagnostics key, how many points, the
     !> worst level and the parameter of the first (sweep_result_t%diagnostics gets one
@@ -43,6 +43,34 @@ module stickslip_sweep_point
     end type point_tally_t
 
 contains
+
+    !> The contact values of a curve's point from its solution: each contact's largest
+    !> friction force (the modulus of the sum of its channels along w and t2); besides
+    !> Coulomb contacts only, its open share and largest normal force (frc.csv's open_<j>,
+    !> normal_max_<j> columns).
+    subroutine contact_point_values(ps, pt)
+        !> The point's weighted-residual solution (with samples).
+        type(hbm_solution_t), intent(in) :: ps
+        !> The point.
+        type(frc_point_t), intent(inout) :: pt
+        real(dp) :: f(size(ps%r, 1), 2), lambda(size(ps%r, 1))
+        integer :: k
+        associate (cs => ps%contacts)
+            allocate (pt%rmax(cs%ncontact))
+            do k = 1, cs%ncontact
+                call cs%contact_forces(ps%r, k, f, lambda)
+                if (cs%ntangent(k) == 2) then
+                    pt%rmax(k) = maxval(hypot(f(:, 1), f(:, 2)))
+                else
+                    pt%rmax(k) = maxval(abs(f(:, 1)))
+                end if
+            end do
+            if (.not. cs%coulomb_only) then
+                pt%open = ps%open_fraction
+                pt%normal_max = maxval(ps%normal, dim=1)
+            end if
+        end associate
+    end subroutine contact_point_values
 
     !> Solve the accepted point `state` of the family's curve for its outputs (with
     !> opts%observe, the amplitudes of those combinations), with opts%truncation its harmonic
@@ -118,21 +146,7 @@ contains
         pt%diss_friction = ps%diss_friction
         pt%diss_damping = ps%diss_damping
         pt%dissipation = ps%diss_friction + ps%diss_damping
-        if (fam%prob%plain) then
-            pt%rmax = [(maxval(abs(ps%r(:, k))), k=1, nc)]
-        else
-            ! the friction force of each contact (its modulus in 2D), its open share and
-            ! largest normal force
-            associate (cs => ps%contacts)
-                allocate (pt%rmax(cs%ncontact))
-                do k = 1, cs%ncontact
-                    pt%rmax(k) = maxval(norm2(ps%r(:, cs%first(k):cs%first(k) + &
-                                                  cs%ntangent(k) - 1), dim=2))
-                end do
-            end associate
-            pt%open = ps%open_fraction
-            pt%normal_max = maxval(ps%normal, dim=1)
-        end if
+        call contact_point_values(ps, pt)
         pt%stick = ps%stick_fraction
         call keep_coefficients(m, ps, opts, pt)
         pt%harmonics = ps%harmonics

@@ -163,7 +163,7 @@ contains
                 code(jev) = 2
             else if (kev == event_close) then
                 vn = dot_product(self%nt(:, jev), yeb(n + 1:nz))
-                if (self%cs%kn(jev) == 0.0_dp .and. vn < 0.0_dp) then
+                if (self%ckn(jev) == 0.0_dp .and. vn < 0.0_dp) then
                     ! a rigid contact closing with a normal velocity: a plastic impact
                     call impact_jump(self, yeb, jev, code, jump, loss)
                     impact = .true.
@@ -174,7 +174,7 @@ contains
                 if (impact) then
                     do j = 1, self%nc
                         if (j /= jev .and. code(j) /= 2 .and. self%cs%normal(j) > 0 .and. &
-                            self%cs%kn(j) == 0.0_dp) zset = [zset, j]
+                            self%ckn(j) == 0.0_dp) zset = [zset, j]
                     end do
                 end if
                 call law_modes_at(self, yeb, zset, code, error)
@@ -331,7 +331,7 @@ contains
                 gscale = self%gref(jj)*self%omega
                 call test(3*jj, event_close)
             case (0)
-                gscale = self%fref(jj)*max(self%cs%mu(jj), 1.0e-3_dp)
+                gscale = self%fref(jj)*max(self%cmu(jj), 1.0e-3_dp)
                 do side = 1, 2
                     call test(3*jj - 3 + side, 2*side - 3)
                 end do
@@ -385,10 +385,10 @@ contains
         rhs = reshape([real(dp) ::], [0, 1])
         q = yb(1:n)/self%s
         do j = 1, self%nc
-            if (self%cs%normal(j) == 0 .or. self%cs%kn(j) > 0.0_dp) cycle
-            if (dot_product(self%nt(:, j), q) + self%cs%gap(j) > 1.0e-9_dp*self%gref(j)) cycle
+            if (self%cs%normal(j) == 0 .or. self%ckn(j) > 0.0_dp) cycle
+            if (dot_product(self%nt(:, j), q) + self%cgap(j) > 1.0e-9_dp*self%gref(j)) cycle
             nt = reshape([nt, self%nt(:, j)], [n, size(nt, 2) + 1])
-            rhs = reshape([rhs(:, 1), dot_product(self%nt(:, j), q) + self%cs%gap(j)], &
+            rhs = reshape([rhs(:, 1), dot_product(self%nt(:, j), q) + self%cgap(j)], &
                           [size(nt, 2), 1])
         end do
         m = size(nt, 2)
@@ -426,7 +426,7 @@ contains
             if (code(jj) == 0 .and. (self%limit(jj) > 0.0_dp .or. self%cs%normal(jj) > 0)) &
                 ctm = reshape([ctm, self%wt(:, jj)], [n, size(ctm, 2) + 1])
             if (self%cs%normal(jj) > 0) then
-                if (code(jj) /= 2 .and. self%cs%kn(jj) == 0.0_dp) &
+                if (code(jj) /= 2 .and. self%ckn(jj) == 0.0_dp) &
                     ctm = reshape([ctm, self%nt(:, jj)], [n, size(ctm, 2) + 1])
             end if
         end do

@@ -19,8 +19,9 @@ module stickslip_flow_laws
     use stickslip_lapack, only: dgesv
     use stickslip_flow_modes, only: mode_t, flow_modes_t, mode_index, build_ladder
     use stickslip_contact_law, only: contact_law_t
-    use stickslip_contact_step, only: contact_step_forces
     use stickslip_contact_set, only: contact_set_t
+    use stickslip_contact_element, only: along_tangent, along_normal
+    use stickslip_unilateral_element, only: new_unilateral_element
     implicit none
     private
     public :: law_mode_index, law_modes_at, impact_jump, law_start_codes
@@ -88,7 +89,7 @@ contains
                     end if
                     cycle
                 end if
-                associate (cn => self%cs%normal(j), mu => self%cs%mu(j))
+                associate (cn => self%cs%normal(j), mu => self%cmu(j))
                     select case (code(j))
                     case (0)
                         md%rows(:, 3*j - 2) = mu*fb(cn, :) - fb(c, :)
@@ -116,7 +117,7 @@ contains
         real(dp) :: row(self%na)
         row = 0.0_dp
         row(1:self%n) = self%nt(:, j)/self%s
-        row(2*self%n + 1) = self%cs%gap(j)/self%se
+        row(2*self%n + 1) = self%cgap(j)/self%se
     end function gap_row
 
     !> The algebra of a mode in balanced coordinates: the modal accelerations u' = hb y
@@ -158,15 +159,15 @@ contains
                 cycle
             end if
             if (code(j) == 2) cycle
-            if (self%cs%kn(j) > 0.0_dp) then
+            if (self%ckn(j) > 0.0_dp) then
                 ! elastic normal: lambda = -k_n (gap + n^T x), linear in the state
-                lrow = -self%cs%kn(j)*gap_row(self, j)
+                lrow = -self%ckn(j)*gap_row(self, j)
                 fb(cn, :) = lrow
                 call add_force(self%nt(:, j), lrow)
                 if (code(j) == 0) then
                     call constrain(self%wt(:, j), self%wt(:, j), c, 0, 0.0_dp)
                 else
-                    fb(c, :) = -code(j)*self%cs%mu(j)*lrow
+                    fb(c, :) = -code(j)*self%cmu(j)*lrow
                     call add_force(self%wt(:, j), fb(c, :))
                 end if
             else if (code(j) == 0) then
@@ -175,8 +176,8 @@ contains
                 call constrain(self%nt(:, j), self%nt(:, j), cn, 0, 0.0_dp)
             else
                 ! rigid normal, slipping: n^T v = 0 held by lambda (n - s mu w)
-                call constrain(self%nt(:, j), self%nt(:, j) - code(j)*self%cs%mu(j)* &
-                               self%wt(:, j), cn, c, -code(j)*self%cs%mu(j))
+                call constrain(self%nt(:, j), self%nt(:, j) - code(j)*self%cmu(j)* &
+                               self%wt(:, j), cn, c, -code(j)*self%cmu(j))
             end if
         end do
         k = size(chan)
@@ -347,7 +348,7 @@ contains
                 case (0)
                     r = dot_product(fb(c, :), yb)
                     if (cn > 0) then
-                        if (abs(r) > self%cs%mu(j)*max(lam, 0.0_dp) + tol*self%fref(j)) &
+                        if (abs(r) > self%cmu(j)*max(lam, 0.0_dp) + tol*self%fref(j)) &
                             consistent = .false.
                     else if (abs(r) > self%limit(j)*(1.0_dp + tol)) then
                         consistent = .false.
@@ -401,11 +402,12 @@ contains
         integer :: n, j, k, m, sweeps, info, nz
         integer, allocatable :: ipiv(:)
         real(dp) :: ke0, resid, scale, pn, pt
+        type(contact_set_t) :: impacts
         n = self%n
         nz = 2*n
         allocate (involved(0))
         do j = 1, self%nc
-            if (self%cs%normal(j) == 0 .or. self%cs%kn(j) > 0.0_dp) cycle
+            if (self%cs%normal(j) == 0 .or. self%ckn(j) > 0.0_dp) cycle
             if (j == jimp .or. code(j) /= 2) involved = [involved, j]
         end do
         m = size(involved)
@@ -416,7 +418,7 @@ contains
             dirs(:, 2*k) = self%nt(:, j)
             one%ntangent = 1
             one%unilateral = .true.
-            one%mu = self%cs%mu(j)
+            one%mu = self%cmu(j)
             laws(k) = one
         end do
         a = matmul(transpose(dirs), dirs)
@@ -424,8 +426,8 @@ contains
         allocate (p(2*m))
         p = 0.0_dp
         scale = max(maxval(abs(q))/max(maxval(abs(a)), tiny(1.0_dp)), tiny(1.0_dp))
-        call contact_step_forces(pair_set(m), laws, a, q, p, scale, 1.0e-14_dp, 1000, sweeps, &
-                                 resid)
+        impacts = pair_set(m)
+        call impacts%step_forces(a, q, p, scale, 1.0e-14_dp, 1000, sweeps, resid)
         ke0 = 0.5_dp*dot_product(yb(n + 1:2*n), yb(n + 1:2*n))
         yb(n + 1:2*n) = yb(n + 1:2*n) + matmul(dirs, p)
         loss = ke0 - 0.5_dp*dot_product(yb(n + 1:2*n), yb(n + 1:2*n))
@@ -462,14 +464,21 @@ contains
         function pair_set(m) result(cs)
             integer, intent(in) :: m
             type(contact_set_t) :: cs
-            integer :: i
+            integer :: i, k
             cs%ncontact = m
             cs%nchannel = 2*m
-            cs%plain = .false.
+            cs%coulomb_only = .false.
             cs%first = [(2*i - 1, i=1, m)]
             cs%width = [(2, i=1, m)]
             cs%ntangent = [(1, i=1, m)]
             cs%normal = [(2*i, i=1, m)]
+            cs%contact_of = [((i, i, k=1, 1), i=1, m)]
+            cs%along = [((along_tangent, along_normal, k=1, 1), i=1, m)]
+            allocate (cs%elements(m))
+            do i = 1, m
+                allocate (cs%elements(i)%e, source=new_unilateral_element(1, laws(i)%mu, &
+                          0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp))
+            end do
         end function pair_set
     end subroutine impact_jump
 end module stickslip_flow_laws

@@ -19,10 +19,7 @@ module stickslip_condensed_structure
         real(dp) :: omega = 0.0_dp
         !> Number of contacts.
         integer :: ncontact = 0
-        !> Friction limits mu_j N_j [N] of the constant-load contacts (0 for a unilateral
-        !> one).
-        real(dp), allocatable :: limit(:)
-        !> The contacts and their force channels (contact laws when not plain).
+        !> The contact elements and their force channels.
         type(contact_set_t) :: contacts
         !> The automatic rho of the structure (stickslip_rho) [m/(N s)].
         real(dp) :: rho_auto = 1.0_dp

@@ -197,7 +197,6 @@ contains
         integer :: i
         s%omega = model%omega
         s%ncontact = model%ncontact()
-        s%limit = model%mu*model%normal_load
         call new_contact_set(s%contacts, model)
         s%rho_auto = automatic_rho(model)
         allocate (s%force_rows(model%ndof, model%nforce()))
@@ -379,15 +378,8 @@ contains
         fscale = 0.0_dp
         if (prob%nc == 0) return
         rzero = 0.0_dp
-        if (prob%plain) then
-            call prob%dyn%contact_velocity(prob%basis, rzero, vfree)
-            fmax = maxval(prob%limit)
-        else
-            call prob%laws%kinematics(prob%basis, prob%dyn, rzero, vfree)
-            associate (cs => prob%laws%cs)
-                fmax = max(maxval(prob%limit), maxval(cs%preload), maxval(cs%mu*cs%preload))
-            end associate
-        end if
+        call prob%kinematics(rzero, vfree)
+        fmax = prob%contacts%force_scale()
         vnorm = norm2(vfree)
         rstop = vnorm*rho_fraction/rho_auto
         rs = max(min(fmax, rstop), 1.0e-6_dp*rstop)

@@ -6,16 +6,16 @@
 module stickslip_hbm_finish
     use stickslip_kinds, only: dp, two_pi
     use stickslip_diagnostics, only: level_warning, level_untrusted
-    use stickslip_model, only: model_t, contact_velocity_direction
+    use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t
     use stickslip_dynamics, only: near_singular_threshold
     use stickslip_condensed_structure, only: condensed_structure_t, rho_ratio, &
         rho_out_of_band, rho_ratio_min, rho_ratio_max
     use stickslip_contact_set, only: channel_directions
-    use stickslip_contact_law, only: state_stick
-    use stickslip_hbm_finish_laws, only: laws_samples_settled, laws_fractions, laws_coulomb, &
-        laws_normal
+    use stickslip_contact_element, only: state_stick, state_open, channel_t
+    use stickslip_contact_measures, only: contact_measures_t, measure_contacts, coulomb_check, &
+        energy_balance_error
     implicit none
     private
     public :: finish_solution, check_solution
@@ -40,63 +40,61 @@ module stickslip_hbm_finish
 
 contains
 
-    !> Settle undetermined mean forces, recover every DOF, energies, stick statistics and
-    !> samples.
+    !> Settle undetermined mean forces, recover every DOF, energies, contact measures
+    !> (stickslip_contact_measures), samples, normal forces and gaps with the checks of the
+    !> normal law.
     subroutine finish_solution(s, opts, prob, y, sol, model)
         !> The structure's data (omega, forcing).
         type(condensed_structure_t), intent(in) :: s
         !> Solver options as given (harmonics, want_samples).
         type(hbm_options_t), intent(in) :: opts
-        !> The projected friction equations the solve used.
+        !> The projected contact equations the solve used.
         type(hb_problem_t), intent(inout) :: prob
-        !> Friction-force coefficients [N] found; an undetermined mean force is settled.
+        !> Channel-force coefficients [N] found; an undetermined mean force is settled.
         real(dp), intent(inout) :: y(:)
-        !> The solution: recovery, energies, stick statistics and samples filled in.
+        !> The solution: recovery, energies, contact measures and samples filled in.
         type(hbm_solution_t), intent(inout) :: sol
-        !> The dense model (dense path only: W^T v and its C for the energies).
+        !> The dense model (dense path only: the velocities along the channel directions and
+        !> its C for the energies).
         type(model_t), intent(in), optional :: model
-        real(dp), allocatable :: rs(:, :), vs(:, :), ss(:, :), fcoef(:, :), vc(:, :), work(:)
-        real(dp), allocatable :: dirs(:, :), ucoef(:, :)
+        real(dp), allocatable :: rs(:, :), vs(:, :), fcoef(:, :), vc(:, :), work(:), &
+                                 dirs(:, :), ucoef(:, :), mean(:)
         integer, allocatable :: state(:, :)
         complex(dp), allocatable :: cw(:)
-        integer :: nb, nc, nt, n, j, i, k, p, q, i0, ncontact
-        real(dp) :: period, lo, hi, shift, coulomb_slip, max_force_ratio
+        integer :: nb, nc, nt, n, j, i, k, p, q, i0, ncontact, c0, m
+        real(dp) :: period
+        logical :: settled
+        type(contact_measures_t) :: cm
 
-        max_force_ratio = 0.0_dp
         nb = prob%basis%nb
         nc = prob%nc
         nt = prob%basis%nt
         n = size(prob%dyn%x0, 1)
         i0 = prob%basis%i0
         period = two_pi/s%omega
-        ! contacts (nc counts the force channels of contact laws)
-        ncontact = s%ncontact
-        sol%contacts = s%contacts
-        allocate (rs(nt, nc), vs(nt, nc), ss(nt, ncontact), sol%offset_undetermined(ncontact), &
+        ncontact = prob%contacts%ncontact
+        sol%contacts = prob%contacts
+        allocate (rs(nt, nc), vs(nt, nc), sol%offset_undetermined(ncontact), &
                   state(nt, ncontact))
         sol%offset_undetermined = .false.
-        if (.not. prob%plain) then
-            ! the force channels, their kinematic quantities and the contact states
-            call laws_samples_settled(prob, y, rs, vs, state, sol%offset_undetermined)
-            ss = merge(1.0_dp, 0.0_dp, state == state_stick)
-        else if (nc > 0) then
-            call prob%contact_samples(y, rs, vs, ss)
-            state = merge(1, 2, ss > 0.5_dp)
-        end if
+        if (nc > 0) call prob%law_samples(y, rs, vs, state)
 
-        ! A contact stuck over the whole period holds any mean force in an interval:
-        ! choose the admissible value closest to zero (minimum norm), never an arbitrary one.
-        if (prob%basis%has_zero .and. prob%plain) then
-            do j = 1, nc
-                if (all(ss(:, j) > 0.5_dp)) then
-                    sol%offset_undetermined(j) = .true.
-                    k = (j - 1)*nb + i0
-                    lo = -prob%limit(j) - minval(rs(:, j) - y(k))
-                    hi = prob%limit(j) - maxval(rs(:, j) - y(k))
-                    shift = min(max(0.0_dp, lo), hi) - y(k)
-                    y(k) = y(k) + shift
-                    rs(:, j) = rs(:, j) + shift
-                end if
+        ! A contact stuck over the whole period holds any mean force in an admissible set:
+        ! its element chooses the admissible value closest to zero (minimum norm), never an
+        ! arbitrary one.
+        if (prob%basis%has_zero) then
+            do j = 1, ncontact
+                if (.not. all(state(:, j) == state_stick)) cycle
+                c0 = prob%contacts%first(j)
+                m = prob%contacts%width(j)
+                mean = [(y((c0 + k - 2)*nb + i0), k=1, m)]
+                call prob%contacts%elements(j)%e%settle_offset(rs(:, c0:c0 + m - 1), mean, &
+                                                               settled)
+                if (.not. settled) cycle
+                sol%offset_undetermined(j) = .true.
+                do k = 1, m
+                    y((c0 + k - 2)*nb + i0) = mean(k)
+                end do
             end do
         end if
 
@@ -107,20 +105,13 @@ contains
             call prob%basis%derivative(sol%xcoef(:, p), s%omega, sol%vcoef(:, p))
         end do
 
-        allocate (sol%stick_fraction(ncontact), sol%stick_phases(ncontact), &
-                  sol%open_fraction(ncontact), sol%slip_fraction(ncontact))
-        do j = 1, ncontact
-            sol%stick_fraction(j) = sum(ss(:, j))/real(nt, dp)
-            sol%stick_phases(j) = count_phases(ss(:, j) > 0.5_dp, &
-                                               max(1, nt/max(1, opts%harmonics)))
-        end do
-        if (prob%plain) then
-            sol%open_fraction = 0.0_dp
-            sol%slip_fraction = 1.0_dp - sol%stick_fraction
-        else
-            call laws_fractions(state, sol%open_fraction, sol%stick_fraction, &
-                                sol%slip_fraction)
-        end if
+        ! shares, stick phases, Coulomb's dissipation, the force-limit ratio
+        call measure_contacts(prob%contacts, rs, vs, state, period, &
+                              max(1, nt/max(1, opts%harmonics)), cm)
+        sol%open_fraction = cm%open_fraction
+        sol%stick_fraction = cm%stick_fraction
+        sol%slip_fraction = cm%slip_fraction
+        sol%stick_phases = cm%stick_phases
 
         ! energy balance over one period, exact for the truncated series (Parseval)
         allocate (fcoef(nb, n), vc(nb, nc))
@@ -137,13 +128,11 @@ contains
                                   s%force_rows(:, i)
             end if
         end do
-        if (present(model) .and. .not. prob%plain) then
+        if (present(model)) then
             ! the velocities along the channel directions (the normal channels' too)
-            dirs = channel_directions(model, s%contacts)
-            vc = matmul(sol%vcoef, dirs)
-        else if (present(model)) then
+            dirs = channel_directions(model, prob%contacts)
             do j = 1, nc
-                vc(:, j) = matmul(sol%vcoef, contact_velocity_direction(model, j))
+                vc(:, j) = matmul(sol%vcoef, dirs(:, j))
             end do
         else if (nc > 0) then
             call prob%dyn%contact_velocity(prob%basis, sol%rcoef, vc)
@@ -169,29 +158,12 @@ contains
             end do
             sol%work_gross = period*sum(abs(pw))/nt
         end block
+        ! every channel's work (a normal force's is zero over a period for an exact solution)
         sol%diss_friction = 0.0_dp
-        sol%diss_coulomb = 0.0_dp
-        coulomb_slip = 0.0_dp
-        if (.not. prob%plain) then
-            ! every channel's work (the normal forces' is zero over a period for an exact
-            ! solution); Coulomb's with the varying limit and the slider velocities
-            do j = 1, nc
-                sol%diss_friction = sol%diss_friction - inner(sol%rcoef(:, j), vc(:, j))
-            end do
-            call laws_coulomb(s%contacts, rs, vs, state, period, sol%diss_coulomb, &
-                              coulomb_slip, max_force_ratio)
-        end if
-        do j = 1, merge(nc, 0, prob%plain)
+        do j = 1, nc
             sol%diss_friction = sol%diss_friction - inner(sol%rcoef(:, j), vc(:, j))
-            sol%diss_coulomb = sol%diss_coulomb + prob%limit(j)*period*sum(abs(vs(:, j)))/nt
-            ! what Coulomb's law dissipates: mu N |v| where the contact slips, |r v| (<= mu
-            ! N |v|, ~0) where it sticks (a stuck contact's roundoff slip times a huge mu N
-            ! is no dissipation)
-            coulomb_slip = coulomb_slip + period*sum(merge(abs(rs(:, j)*vs(:, j)), &
-                prob%limit(j)*abs(vs(:, j)), ss(:, j) > 0.5_dp))/nt
-            if (prob%limit(j) > 0.0_dp) max_force_ratio = max(max_force_ratio, &
-                                                              maxval(abs(rs(:, j)))/prob%limit(j))
         end do
+        sol%diss_coulomb = cm%diss_coulomb
         sol%diss_damping = 0.0_dp
         if (present(model)) then
             do q = 1, n
@@ -204,10 +176,9 @@ contains
             sol%diss_damping = gram_energy(.false.)
         end if
 
-        sol%coulomb_check = abs(coulomb_slip - sol%diss_friction)/ &
-                            max(coulomb_slip, abs(sol%diss_friction) + abs(sol%diss_damping), &
-                                1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
-        sol%max_force_ratio = max_force_ratio
+        sol%coulomb_check = coulomb_check(cm%diss_law, sol%diss_friction, sol%diss_damping, &
+                                          sol%work_gross)
+        sol%max_force_ratio = cm%force_ratio
 
         if (opts%want_samples) then
             allocate (sol%t(nt), sol%x(nt, n), sol%v(nt, n), work(nt), cw(nt/2 + 1))
@@ -217,27 +188,19 @@ contains
                 call prob%basis%synthesize(sol%vcoef(:, p), sol%v(:, p), cw)
             end do
             sol%r = rs
-            sol%stick = ss
+            sol%stick = merge(1.0_dp, 0.0_dp, state == state_stick)
             sol%state = state
         end if
         ! normal forces, gaps and the checks of the normal law
-        allocate (sol%normal(nt, ncontact), sol%gap(nt, ncontact))
-        if (prob%plain) then
-            do j = 1, ncontact
-                sol%normal(:, j) = s%contacts%normal_load(j)
-            end do
-            sol%gap = 0.0_dp
-        else
-            allocate (ucoef(nb, nc))
-            call prob%laws%kinematics(prob%basis, prob%dyn, sol%rcoef, ucoef)
-            call laws_normal(prob, rs, vs, state, ucoef, sol%normal, sol%gap, &
-                             sol%signorini_check, sol%impact_check)
-        end if
+        allocate (sol%normal(nt, ncontact), sol%gap(nt, ncontact), ucoef(nb, nc))
+        if (nc > 0) call prob%kinematics(sol%rcoef, ucoef)
+        call normal_samples(prob, rs, vs, state, ucoef, sol%normal, sol%gap, &
+                            sol%signorini_check, sol%impact_check)
 
     contains
 
         !> Energy per period from the Gram matrices of a sparse condensation, with
-        !> u_h = [1; R_h] (R_h = r_cos - i r_sin of each contact): the forcing work
+        !> u_h = [1; R_h] (R_h = r_cos - i r_sin of each channel): the forcing work
         !> (`forcing`; q_h = forcing_gram) sum_h (T/2) Re(i h omega q_h u_h), or the viscous
         !> dissipation (P_h = damping_gram) sum_h (T/2) (h omega)^2 u_h^H P_h u_h.
         real(dp) function gram_energy(forcing) result(e)
@@ -268,6 +231,70 @@ contains
             if (i0 > 0) inner = inner + 0.5_dp*period*a(i0)*b(i0)
         end function inner
     end subroutine finish_solution
+
+    !> The normal force and gap samples of every contact (nt x n_c), and the checks of the
+    !> normal law: `signorini` the largest pulling normal force relative to the largest one,
+    !> or penetration of the gap + lambda / k_n relative to the normal displacement amplitude;
+    !> `impact` the largest normal velocity of a rigid contact where it closes, relative to
+    !> its normal velocity amplitude. A contact without a normal channel: its constant normal
+    !> load and a zero gap. `ucoef` holds the kinematic coefficients of the channels (omega
+    !> times the gap of a normal channel).
+    subroutine normal_samples(prob, rs, us, state, ucoef, normal, gap, signorini, impact)
+        !> The problem.
+        type(hb_problem_t), intent(inout) :: prob
+        !> Channel forces [N] and kinematic quantities [m/s], nt x n_ch.
+        real(dp), intent(in) :: rs(:, :), us(:, :)
+        !> Contact states, nt x n_c.
+        integer, intent(in) :: state(:, :)
+        !> Kinematic coefficients of the channels, nb x n_ch [m/s].
+        real(dp), intent(in) :: ucoef(:, :)
+        !> Normal force [N] and gap [m] samples, nt x n_c.
+        real(dp), intent(out) :: normal(:, :), gap(:, :)
+        !> The checks (dimensionless).
+        real(dp), intent(out) :: signorini, impact
+        integer :: j, c, nt, k, kprev
+        real(dp) :: omega, lmax, amp, vamp, cn
+        real(dp), allocatable :: geff(:), dcoef(:), vn(:)
+        complex(dp), allocatable :: cw(:)
+        type(channel_t) :: ch
+        nt = size(normal, 1)
+        omega = prob%dyn%omega
+        signorini = 0.0_dp
+        impact = 0.0_dp
+        allocate (dcoef(size(ucoef, 1)), vn(nt), cw(nt/2 + 1))
+        associate (cs => prob%contacts)
+            do j = 1, cs%ncontact
+                c = cs%normal(j)
+                if (c == 0) then
+                    normal(:, j) = cs%elements(j)%e%normal_load()
+                    gap(:, j) = 0.0_dp
+                    cycle
+                end if
+                ch = cs%channel(c)
+                cn = ch%compliance
+                normal(:, j) = rs(:, c)
+                geff = us(:, c)/omega
+                gap(:, j) = geff
+                if (cn > 0.0_dp) gap(:, j) = geff - cn*rs(:, c)
+                lmax = maxval(rs(:, c))
+                amp = maxval(gap(:, j)) - minval(gap(:, j))
+                if (lmax > 0.0_dp) signorini = max(signorini, -minval(rs(:, c))/lmax)
+                if (amp > 0.0_dp) signorini = max(signorini, -minval(geff)/amp)
+                if (cn > 0.0_dp) cycle
+                ! a rigid contact: its normal velocity where it closes (open -> closed)
+                call prob%basis%derivative(ucoef(:, c), omega, dcoef)
+                call prob%basis%synthesize(dcoef, vn, cw)
+                vn = vn/omega
+                vamp = maxval(abs(vn))
+                if (.not. (vamp > 0.0_dp)) cycle
+                do k = 1, nt
+                    kprev = modulo(k - 2, nt) + 1
+                    if (state(kprev, j) == state_open .and. state(k, j) /= state_open) &
+                        impact = max(impact, abs(vn(kprev))/vamp)
+                end do
+            end do
+        end associate
+    end subroutine normal_samples
 
     !> The checks of a solution as diagnostics items (doc/where-methods-fail.md):
     !> not_converged; rho_out_of_range (rho / contact mobility outside [rho_ratio_min,
@@ -303,8 +330,8 @@ contains
             call sol%diagnostics%add(level_untrusted, "near_resonance", trim(buf))
         end if
         if (.not. sol%converged .or. prob%nc == 0) return
-        e = abs(sol%work_forcing - sol%diss_friction - sol%diss_damping)/ &
-            max(abs(sol%work_forcing), 1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
+        e = energy_balance_error(sol%work_forcing, sol%diss_friction, sol%diss_damping, &
+                                 0.0_dp, sol%work_gross)
         call graded("energy_balance", e, energy_warning, energy_untrusted, &
                     "energy balance error (forcing work - friction - viscous dissipation, "// &
                     "relative to the work per period)")
@@ -314,7 +341,6 @@ contains
         call graded("coulomb_law", sol%max_force_ratio - 1.0_dp, force_excess_warning, &
                     force_excess_untrusted, "friction force exceeds mu N (max |r| / mu N "// &
                     "- 1, beyond the Gibbs overshoot of a truncated series)")
-        if (prob%plain) return
         call graded("signorini", sol%signorini_check, signorini_warning, signorini_untrusted, &
                     "the normal contact law is broken beyond the ripple of a truncated "// &
                     "series (a pulling normal force relative to the largest one, or a "// &
@@ -345,60 +371,4 @@ contains
             end if
         end subroutine graded
     end subroutine check_solution
-
-    !> Number of stick phases in one period of the cyclic stick indicator `stick`, counted at
-    !> the resolution of the basis: slip gaps and stick phases shorter than `minlen` samples
-    !> (one period of the highest harmonic) are ripples of the truncated series around the
-    !> friction limit, not phases: gaps are closed, then short phases are not counted.
-    pure integer function count_phases(stick, minlen) result(phases)
-        !> Stick indicator at the samples.
-        logical, intent(in) :: stick(:)
-        !> Shortest run, in samples, the basis can resolve.
-        integer, intent(in) :: minlen
-        logical :: s(size(stick))
-        integer :: nt, k, first, len
-        nt = size(stick)
-        phases = 0
-        if (all(stick)) phases = 1
-        if (all(stick) .or. .not. any(stick)) return
-        first = 1
-        do k = 1, nt
-            if (stick(k) .neqv. stick(modulo(k - 2, nt) + 1)) then
-                first = k
-                exit
-            end if
-        end do
-        s = cshift(stick, first - 1)
-        ! close short slip gaps
-        k = 1
-        do while (k <= nt)
-            len = run_length(k)
-            if (.not. s(k) .and. len < minlen) s(k:k + len - 1) = .true.
-            k = k + len
-        end do
-        if (all(s)) then
-            phases = 1
-            return
-        end if
-        ! count the stick runs the basis resolves (a run may now wrap around the end)
-        ! (one rotation to the first slip sample: linear in nt)
-        if (s(1)) s = cshift(s, findloc(s, .false., 1) - 1)
-        k = 1
-        do while (k <= nt)
-            len = run_length(k)
-            if (s(k) .and. len >= minlen) phases = phases + 1
-            k = k + len
-        end do
-
-    contains
-
-        pure integer function run_length(k0)
-            integer, intent(in) :: k0
-            run_length = 1
-            do while (k0 + run_length <= nt)
-                if (s(k0 + run_length) .neqv. s(k0)) exit
-                run_length = run_length + 1
-            end do
-        end function run_length
-    end function count_phases
 end module stickslip_hbm_finish

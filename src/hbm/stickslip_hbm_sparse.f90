@@ -14,7 +14,7 @@ module stickslip_hbm_sparse
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
     use stickslip_hbm, only: condensed_structure_t, solve_condensed, validate_options
-    use stickslip_rho, only: rho_from_mobility, rho_from_channels, dominant_harmonic
+    use stickslip_rho, only: rho_from_channels, dominant_harmonic
     use stickslip_contact_set, only: new_contact_set
     implicit none
     private
@@ -70,16 +70,11 @@ contains
         associate (m => smodel%model)
             s%omega = m%omega
             s%ncontact = m%ncontact()
-            s%limit = m%mu*m%normal_load
             call new_contact_set(s%contacts, m)
             call sparse_contact_mobility(smodel, mob, error)
             if (allocated(error)) return
-            if (s%contacts%plain) then
-                s%rho_auto = rho_from_mobility(mob, m%mu, m%normal_load)
-            else
-                s%rho_auto = rho_from_channels(mob, s%contacts, m%omega, &
-                                               dominant_harmonic(m)*m%omega)
-            end if
+            s%rho_auto = rho_from_channels(mob, s%contacts, m%omega, &
+                                           dominant_harmonic(m)*m%omega)
             allocate (s%force_rows(size(kept), m%nforce()))
             do i = 1, m%nforce()
                 s%force_rows(:, i) = force_rows_of(i)
@@ -109,8 +104,8 @@ contains
                 return
             end if
             call system_clock(c3)
-            call new_condensed_problem(prob, dyn, s%limit, o%harmonics, o%odd_only, o%samples, &
-                                       o%rho, error, s%force_harmonic, s%contacts)
+            call new_condensed_problem(prob, dyn, s%contacts, o%harmonics, o%odd_only, &
+                                       o%samples, o%rho, error, s%force_harmonic)
         else
             call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
             if (allocated(error)) return
@@ -118,8 +113,8 @@ contains
             call system_clock(c3)
             call basis%destroy()
             if (allocated(error)) return
-            call new_condensed_problem(prob, built, s%limit, o%harmonics, o%odd_only, &
-                                       o%samples, o%rho, error, s%force_harmonic, s%contacts)
+            call new_condensed_problem(prob, built, s%contacts, o%harmonics, o%odd_only, &
+                                       o%samples, o%rho, error, s%force_harmonic)
         end if
         if (allocated(error)) return
         call solve_condensed(s, prob, opts, o, sol, error, r_start, dyn_out)

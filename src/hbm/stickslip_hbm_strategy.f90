@@ -222,8 +222,8 @@ contains
             nt = opts%samples
             if (present(warm)) nt = level_samples(opts%samples, opts%harmonics, rungs(i))
             ! the lower basis is a subset of prob's: its dynamics without a factorization
-            call new_condensed_problem(low, prob%dyn, prob%limit, rungs(i), opts%odd_only, &
-                                       nt, opts%rho, error, s%force_harmonic, s%contacts)
+            call new_condensed_problem(low, prob%dyn, prob%contacts, rungs(i), &
+                                       opts%odd_only, nt, opts%rho, error, s%force_harmonic)
             if (allocated(error)) return
             nbl = low%basis%nb
             ylow = reshape(rfull(1:nbl, :), [nbl*nc])

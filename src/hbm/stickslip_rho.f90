@@ -48,13 +48,13 @@ module stickslip_rho
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_model, only: model_t, force_direction
-    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions, &
-        channel_normal
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
+    use stickslip_contact_element, only: channel_t, kinematics_gap
     use stickslip_lapack, only: dgetrf, dgetrs
     implicit none
     private
-    public :: automatic_rho, contact_mobility, rho_fraction, rho_from_mobility, &
-        rho_from_channels, dominant_harmonic
+    public :: automatic_rho, contact_mobility, rho_fraction, rho_from_channels, &
+        dominant_harmonic
 
     !> The automatic rho as a fraction of the contact mobility (see the module header).
     real(dp), parameter :: rho_fraction = 0.5_dp
@@ -62,8 +62,8 @@ module stickslip_rho
 contains
 
     !> The automatic weight rho of Psi for `model` [m/(N s)]: rho_fraction times the
-    !> geometric mean over the contacts (those with mu N > 0, or all when none has) of the
-    !> resonance-free contact mobility (contact_mobility) at the dominant forcing frequency.
+    !> geometric mean over the force channels that can hold a force (all when none can) of
+    !> their resonance-free mobility at the dominant forcing frequency (rho_from_channels).
     !> Always finite and > 0; 1 for a model without contacts (rho is then unused). `model`
     !> must be valid (validate_model); no error can occur.
     function automatic_rho(model) result(rho)
@@ -77,20 +77,17 @@ contains
         if (model%ncontact() == 0) return
         mob = contact_mobility(model)
         call new_contact_set(cs, model)
-        if (cs%plain) then
-            rho = rho_from_mobility(mob, model%mu, model%normal_load)
-        else
-            rho = rho_from_channels(mob, cs, model%omega, dominant_harmonic(model)*model%omega)
-        end if
+        rho = rho_from_channels(mob, cs, model%omega, dominant_harmonic(model)*model%omega)
     end function automatic_rho
 
-    !> The automatic rho of a model with contact laws from the resonance-free mobilities
-    !> `mob` of its force channels (contact_mobility: Omega d^T (K + Omega^2 M)^-1 d): for
-    !> a normal channel, whose kinematic quantity is omega times the gap, times omega /
-    !> Omega, plus omega / k_n; for a tangential channel with a contact stiffness, plus
-    !> Omega / k_t; rho_fraction times their geometric mean over the channels that can
-    !> hold a force (every normal channel; a tangential one with mu > 0 and a normal load or
-    !> a normal channel; all when none can) [m/(N s)].
+    !> The automatic rho from the resonance-free mobilities `mob` of the force channels
+    !> (contact_mobility: Omega d^T (K + Omega^2 M)^-1 d), in the units of each channel's
+    !> kinematic quantity: for a gap channel (omega times a gap) times omega / Omega, plus
+    !> omega times its compliance; for a velocity channel plus Omega times its compliance
+    !> (a contact stiffness in series); rho_fraction times their geometric mean over the
+    !> channels that can hold a force (channel_t%holds; all when none can) [m/(N s)]. For
+    !> rigid Coulomb contacts: the geometric mean of the contact mobilities over the contacts
+    !> with mu N > 0.
     pure function rho_from_channels(mob, cs, omega, big_omega) result(rho)
         !> Mobility of each force channel [m/(N s)].
         real(dp), intent(in) :: mob(:)
@@ -101,21 +98,20 @@ contains
         real(dp) :: rho
         real(dp) :: m(size(mob))
         logical :: holds(size(mob))
-        integer :: c, j
+        type(channel_t) :: ch
+        integer :: c
         rho = 1.0_dp
         if (size(mob) == 0) return
         do c = 1, size(mob)
-            j = cs%contact_of(c)
-            if (cs%kind(c) == channel_normal) then
+            ch = cs%channel(c)
+            if (ch%kinematics == kinematics_gap) then
                 m(c) = mob(c)*omega/big_omega
-                if (cs%kn(j) > 0.0_dp) m(c) = m(c) + omega/cs%kn(j)
-                holds(c) = .true.
+                if (ch%compliance > 0.0_dp) m(c) = m(c) + omega*ch%compliance
             else
                 m(c) = mob(c)
-                if (cs%kt(j) > 0.0_dp) m(c) = m(c) + big_omega/cs%kt(j)
-                holds(c) = cs%mu(j) > 0.0_dp .and. (cs%normal_load(j) > 0.0_dp .or. &
-                                                    cs%normal(j) > 0)
+                if (ch%compliance > 0.0_dp) m(c) = m(c) + big_omega*ch%compliance
             end if
+            holds(c) = ch%holds
         end do
         if (.not. any(holds)) holds = .true.
         rho = rho_fraction*exp(sum(log(m), mask=holds)/real(count(holds), dp))
@@ -139,23 +135,6 @@ contains
             end if
         end do
     end function dominant_harmonic
-
-    !> The automatic rho from the contact mobilities `mob` (contact_mobility, or its sparse
-    !> twin): rho_fraction times their geometric mean over the contacts with mu N > 0 (all
-    !> when none has) [m/(N s)]; 1 without contacts.
-    pure function rho_from_mobility(mob, mu, normal_load) result(rho)
-        !> Mobility of each contact [m/(N s)].
-        real(dp), intent(in) :: mob(:)
-        !> Friction coefficient and normal load [N] of each contact.
-        real(dp), intent(in) :: mu(:), normal_load(:)
-        real(dp) :: rho
-        logical :: holds(size(mob))
-        rho = 1.0_dp
-        if (size(mob) == 0) return
-        holds = mu*normal_load > 0.0_dp
-        if (.not. any(holds)) holds = .true.
-        rho = rho_fraction*exp(sum(log(mob), mask=holds)/real(count(holds), dp))
-    end function rho_from_mobility
 
     !> Resonance-free mobility of every contact (of every force channel, direction d, for a
     !> model with contact laws), Omega w_j^T (K + Omega^2 M)^{-1} w_j

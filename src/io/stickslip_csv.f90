@@ -22,6 +22,7 @@ module stickslip_csv
     use stickslip_case, only: ltoa
     use stickslip_files, only: open_temporary, close_and_rename
     use stickslip_contact_set, only: contact_set_t
+    use stickslip_contact_element, only: along_tangent, along_tangent2
     implicit none
     private
     public :: write_hbm_csv, write_samples_csv, write_coefficients_csv, write_events_csv
@@ -137,7 +138,7 @@ contains
             end do
             do i = 1, nc
                 if (channel(i) > 0) then
-                    call put(r(k, channel(i)))
+                    call put(column_force(r(k, :), channel(i)))
                 else if (gap_of(i) > 0) then
                     call put(gap(k, gap_of(i)))
                 else
@@ -148,6 +149,15 @@ contains
         end do
         call close_and_rename(dir, name, u, stat, msg, error)
     contains
+        !> The column of primary channel c at one instant (summed over its sliders).
+        real(dp) function column_force(row, c)
+            real(dp), intent(in) :: row(:)
+            integer, intent(in) :: c
+            real(dp) :: v(1)
+            v = summed(row, [c], contacts)
+            column_force = v(1)
+        end function column_force
+
         !> Append one field and its comma to line(1:pos).
         subroutine put(value)
             real(dp), intent(in) :: value
@@ -200,7 +210,7 @@ contains
             if (stat /= 0) exit
             kind = basis_kind(sol%harmonic, k)
             write (u, fmt, iostat=stat, iomsg=msg) sol%harmonic(k), kind, sol%xcoef(k, sel), &
-                sol%rcoef(k, channel)
+                summed(sol%rcoef(k, :), channel, sol%contacts)
         end do
         call close_and_rename(dir, "coefficients.csv", u, stat, msg, error)
     end subroutine write_coefficients_csv
@@ -485,8 +495,8 @@ contains
                     if (stat /= 0) exit
                     kind = basis_kind(p%harmonic, m)
                     write (u, fmt, iostat=stat, iomsg=msg) k, p%parameter, p%omega, &
-                        p%harmonic(m), kind, p%xcoef(m, sel), p%rcoef(m, channel), &
-                        p%ucoef(m, channel)
+                        p%harmonic(m), kind, p%xcoef(m, sel), &
+                        summed(p%rcoef(m, :), channel, contacts), p%ucoef(m, channel)
                 end do
             end associate
             if (stat /= 0) exit
@@ -830,7 +840,7 @@ contains
         integer :: j, k
         logical :: laws
         laws = .false.
-        if (present(contacts)) laws = .not. contacts%plain .and. contacts%nchannel == nr
+        if (present(contacts)) laws = .not. contacts%coulomb_only .and. contacts%nchannel == nr
         if (.not. laws) then
             allocate (names(nr), channel(nr), gap_of(nr))
             do k = 1, nr
@@ -843,10 +853,11 @@ contains
         associate (cs => contacts)
             allocate (names(0), channel(0), gap_of(0))
             do j = 1, cs%ncontact
-                call add("r"//itoa(j), cs%first(j), 0)
+                call add("r"//itoa(j), first_along(j, along_tangent), 0)
             end do
             do j = 1, cs%ncontact
-                if (cs%ntangent(j) == 2) call add("r"//itoa(j)//"_2", cs%first(j) + 1, 0)
+                if (cs%ntangent(j) == 2) call add("r"//itoa(j)//"_2", &
+                                                  first_along(j, along_tangent2), 0)
             end do
             do j = 1, cs%ncontact
                 if (cs%normal(j) > 0) call add("normal"//itoa(j), cs%normal(j), 0)
@@ -856,6 +867,15 @@ contains
             end do
         end associate
     contains
+        !> The first channel of contact j along `along`.
+        integer function first_along(j, along) result(c)
+            integer, intent(in) :: j, along
+            do c = contacts%first(j), contacts%first(j) + contacts%width(j) - 1
+                if (contacts%along(c) == along) return
+            end do
+            c = contacts%first(j)
+        end function first_along
+
         subroutine add(name, c, g)
             character(len=*), intent(in) :: name
             integer, intent(in) :: c, g
@@ -867,4 +887,30 @@ contains
         end subroutine add
     end subroutine contact_columns
 
+
+    !> The values of the force columns `channel` (contact_columns' primary channels) from one
+    !> row of channel values: each column the sum over its contact's channels along the same
+    !> direction (the sliders of a microslip element add up), or the value itself without
+    !> `contacts`.
+    pure function summed(row, channel, contacts) result(v)
+        !> Channel values (forces or their coefficients).
+        real(dp), intent(in) :: row(:)
+        !> The columns' primary channels.
+        integer, intent(in) :: channel(:)
+        !> The contacts' channel layout.
+        type(contact_set_t), intent(in), optional :: contacts
+        real(dp) :: v(size(channel))
+        integer :: i, c, j
+        do i = 1, size(channel)
+            v(i) = row(channel(i))
+            if (.not. present(contacts)) cycle
+            if (contacts%nchannel /= size(row)) cycle
+            j = contacts%contact_of(channel(i))
+            if (contacts%width(j) == 1) cycle
+            v(i) = 0.0_dp
+            do c = contacts%first(j), contacts%first(j) + contacts%width(j) - 1
+                if (contacts%along(c) == contacts%along(channel(i))) v(i) = v(i) + row(c)
+            end do
+        end do
+    end function summed
 end module stickslip_csv

@@ -11,6 +11,7 @@ module stickslip_summary
     use stickslip_euler, only: euler_result_t
     use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist
     use stickslip_reference, only: reference_result_t, reference_energy_error
+    use stickslip_contact_measures, only: contact_energy_error => energy_balance_error
     use stickslip_compare, only: comparison_t, quantity_names
     use stickslip_side_by_side, only: side_by_side_t
     use stickslip_study, only: study_result_t
@@ -35,8 +36,8 @@ contains
     pure real(dp) function energy_balance_error(sol) result(e)
         !> The solution.
         type(hbm_solution_t), intent(in) :: sol
-        e = abs(sol%work_forcing - sol%diss_friction - sol%diss_damping)/ &
-            max(abs(sol%work_forcing), 1.0e-6_dp*sol%work_gross, tiny(1.0_dp))
+        e = contact_energy_error(sol%work_forcing, sol%diss_friction, sol%diss_damping, &
+                                 0.0_dp, sol%work_gross)
     end function energy_balance_error
 
     !> Relative energy balance error of a reference over one period (the impact losses of
@@ -190,7 +191,7 @@ contains
             call put(u, "  stick_phases = "//ilist(sol%stick_phases), stat, msg)
             call put(u, "  offset_undetermined = "//llist(sol%offset_undetermined), stat, msg)
         end if
-        if (nc > 0 .and. .not. sol%contacts%plain) then
+        if (nc > 0 .and. .not. sol%contacts%coulomb_only) then
             ! contact laws: the open and slip shares, the normal law's checks
             call put(u, "  open_fraction = "//rlist(sol%open_fraction), stat, msg)
             call put(u, "  slip_fraction = "//rlist(sol%slip_fraction), stat, msg)
@@ -248,7 +249,7 @@ contains
         call put(u, "  work_forcing = "//rtoa(ref%work_forcing), stat, msg)
         call put(u, "  diss_friction = "//rtoa(ref%diss_friction), stat, msg)
         call put(u, "  diss_damping = "//rtoa(ref%diss_damping), stat, msg)
-        if (.not. ref%contacts%plain .and. allocated(ref%open_fraction)) then
+        if (.not. ref%contacts%coulomb_only .and. allocated(ref%open_fraction)) then
             call put(u, "  impact_loss = "//rtoa(ref%impact_loss), stat, msg)
             call put(u, "  open_fraction = "//rlist(ref%open_fraction), stat, msg)
             call put(u, "  slip_fraction = "//rlist(1.0_dp - ref%open_fraction - &

@@ -229,8 +229,8 @@ contains
                                 exp(cmplx(0.0_dp, model%force_phase(i), dp))*force_direction(model, i)
                 end if
             end do
-            ! the static preload of unilateral contacts (none for a plain model)
-            if (h == 0 .and. .not. cs%plain) rhs(:, 1) = rhs(:, 1) + preload_force(model)
+            ! the static preload of unilateral contacts (a zero vector without)
+            if (h == 0) rhs(:, 1) = rhs(:, 1) + preload_force(model)
             do j = 1, nc
                 rhs(:, j + 1) = d(:, j)
             end do

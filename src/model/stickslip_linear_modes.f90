@@ -1,10 +1,11 @@
 !> The undamped linear modes of a model's structure in its two friction limits: every
 !> contact stuck (the low-amplitude limit of its nonlinear modes) or every contact slipping
-!> freely (the high-amplitude limit). Stuck: a rigid channel (a tangential direction without
-!> tangential_stiffness, a closed unilateral normal without normal_stiffness) is a
-!> constraint d^T x = 0, an elastic one a spring k d d^T. Slipping: the tangential
-!> channels carry nothing (a Jenkins element's slider slips), a closed unilateral normal
-!> stays a constraint or a spring. A unilateral contact counts as closed when it is
+!> freely (the high-amplitude limit). Stuck: a rigid force channel (a tangential direction
+!> without tangential_stiffness, a closed unilateral normal without normal_stiffness) is a
+!> constraint d^T x = 0, an elastic one a spring k d d^T (k = 1 / its compliance; the
+!> sliders of a microslip element in parallel). Slipping: the tangential channels carry
+!> nothing (a Jenkins element's slider slips), a closed unilateral normal stays a
+!> constraint or a spring. A unilateral contact counts as closed when it is
 !> pressed (preload > 0) or its gap is closed (gap <= 0). The constraints are eliminated
 !> with an orthonormal basis of their null space (LAPACK QR), the reduced pencil solved by
 !> LAPACK dsygv. Dense: for the models the weighted residual solves densely (reduced FE
@@ -13,8 +14,8 @@ module stickslip_linear_modes
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
-    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions, &
-        channel_normal
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
+    use stickslip_contact_element, only: channel_t, kinematics_gap
     use stickslip_lapack, only: dsygv, dgeqrf, dorgqr
     implicit none
     private
@@ -45,6 +46,7 @@ contains
         real(dp) :: k, wq(1), scale
         integer :: n, c, j, ncons, nfree, info, lwork, m
         logical :: closed
+        type(channel_t) :: ch
         n = model%ndof
         kk = model%stiffness
         allocate (cons(n, 0))
@@ -53,14 +55,15 @@ contains
             d = channel_directions(model, cs)
             do c = 1, cs%nchannel
                 j = cs%contact_of(c)
-                if (cs%kind(c) == channel_normal) then
-                    closed = cs%preload(j) > 0.0_dp .or. cs%gap(j) <= 0.0_dp
+                ch = cs%channel(c)
+                if (ch%kinematics == kinematics_gap) then
+                    closed = cs%elements(j)%e%preload() > 0.0_dp .or. ch%gap <= 0.0_dp
                     if (.not. closed) cycle
-                    k = cs%kn(j)
                 else
                     if (.not. stuck) cycle
-                    k = cs%kt(j)
                 end if
+                k = 0.0_dp
+                if (ch%compliance > 0.0_dp) k = 1.0_dp/ch%compliance
                 if (k > 0.0_dp) then
                     kk = kk + k*spread(d(:, c), 2, n)*spread(d(:, c), 1, n)
                 else

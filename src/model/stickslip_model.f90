@@ -15,11 +15,15 @@
 !> plane of w_j and t2_j, the force in the disk of radius mu N), a normal contact stiffness
 !> and a tangential contact stiffness (Jenkins element). All of it is optional: a model
 !> without these fields is the model of before, and every method gives the same numbers.
+!> A contact may instead be given its law explicitly as a contact element (`laws`, e.g. the
+!> microslip element): the arrays then give its directions only. The methods see every
+!> contact as an element (stickslip_contact_set), never these arrays' flags.
 module stickslip_model
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_lapack, only: dpotrf
+    use stickslip_contact_element, only: element_box_t
     implicit none
     private
     public :: model_t, validate_model, contact_velocity_direction, force_direction
@@ -88,6 +92,12 @@ module stickslip_model
         !> Tangential contact stiffness of each contact [N/m] (>= 0; 0 = rigid Coulomb): a
         !> spring k_t in series with the Coulomb slider (Jenkins element), in 1D and 2D.
         real(dp), allocatable :: tangential_stiffness(:)
+        !> Explicit contact laws (optional; empty, or one slot per contact): an allocated
+        !> slot j gives contact j its law (a contact element, e.g. stickslip_iwan_element),
+        !> whose channels act along the contact's directions; mu(j) and normal_load(j) are
+        !> then not used (give 0), and the contact has no normal, second tangent or contact
+        !> stiffness of the arrays. Unallocated slots: the law the arrays describe.
+        type(element_box_t), allocatable :: laws(:)
     contains
         !> Number of contacts.
         procedure :: ncontact
@@ -462,8 +472,39 @@ contains
             end if
         end do
         call check_contact_laws(error)
+        if (allocated(error)) return
+        call check_explicit_laws(error)
 
     contains
+
+        !> The explicit laws: one slot per contact (or none); an element's own parameters
+        !> (its validate); no array law beside it.
+        subroutine check_explicit_laws(error)
+            type(error_type), allocatable, intent(out) :: error
+            integer :: q
+            if (.not. allocated(model%laws)) return
+            if (size(model%laws) == 0) return
+            if (size(model%laws) /= model%ncontact()) then
+                call fatal_error(error, "model%laws: "//itoa(size(model%laws))//" slots, "// &
+                                 "expected one per contact ("//itoa(model%ncontact())//")", &
+                                 stickslip_stat%input)
+                return
+            end if
+            do q = 1, size(model%laws)
+                if (.not. allocated(model%laws(q)%e)) cycle
+                if (is_unilateral(model, q) .or. is_planar(model, q) .or. &
+                    tangential_stiffness_of(model, q) /= 0.0_dp) then
+                    call fatal_error(error, "model%laws("//itoa(q)//"): contact "//itoa(q)// &
+                                     " has the law '"//model%laws(q)%e%law_name()//"' and "// &
+                                     "also a normal direction, a second tangent or a "// &
+                                     "tangential stiffness: give one law per contact", &
+                                     stickslip_stat%input)
+                    return
+                end if
+                call model%laws(q)%e%validate(q, error)
+                if (allocated(error)) return
+            end do
+        end subroutine check_explicit_laws
 
         !> The optional contact-law data: one entry per contact, finite, signs; normal and
         !> second tangential directions N x n_c; per contact, a unilateral contact has no

@@ -9,8 +9,7 @@ module stickslip_sparse_model
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_model, only: model_t, validate_model, force_direction, has_contact_laws, &
-        preload_force
+    use stickslip_model, only: model_t, validate_model, force_direction, preload_force
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_sparse, only: sparse_matrix_t, sparse_symmetry_defect
     implicit none
@@ -126,7 +125,7 @@ contains
                     exp(cmplx(0.0_dp, m%force_phase(i), dp))*force_direction(m, i)
             end do
             ! the static preload of the unilateral contacts (zero for a plain model)
-            if (h == 0 .and. has_contact_laws(m)) f = f + preload_force(m)
+            if (h == 0) f = f + preload_force(m)
         end associate
     end function sparse_load
 end module stickslip_sparse_model

@@ -6,11 +6,19 @@
 !>     Coulomb's law between r_{n+1} and the slip velocities u = W^T v_{n+1}
 !>
 !> With S = M + h C + h^2 K (factorized once per step size, LAPACK dgetrf):
-!> v_{n+1} = v_free + h S^{-1} W r, and u = u_free + D r, D = h W^T S^{-1} W.
-!> The friction forces solve min 1/2 r^T D r + u_free^T r over the box |r_j| <= mu_j N_j (its
+!> v_{n+1} = v_free + h S^{-1} D r (D the channel directions of the contact elements,
+!> stickslip_contact_set), and every channel's kinematic quantity at the end of the step is
+!> u = q + A r, A = h D^T S^{-1} D plus the compliances / h:
+!>     velocity channel: u = d^T v_{n+1} + c (r_{n+1} - r_n) / h    (a slider behind a spring),
+!>     gap channel:      u = (gap + d^T x_{n+1} + c r_{n+1}) / h   (position level: impacts of
+!>                       a rigid normal are plastic as h -> 0),
+!> and the elements' laws Psi(r, u) = 0 give the forces (contact_set_t%step_forces: block
+!> Gauss-Seidel over the elements, each by its own local solve). For Coulomb contacts only
+!> the forces solve min 1/2 r^T D r + u_free^T r over the box |r_j| <= mu_j N_j (its
 !> optimality conditions are Coulomb's law): closed form for one contact, projected
 !> Gauss-Seidel for several (it converges when D is symmetric positive definite, i.e. for
-!> symmetric C and K; stickslip_contact_solve). The step is first order: errors are O(h).
+!> symmetric C and K; stickslip_contact_solve): the kernels below, written out for speed.
+!> The step is first order: errors are O(h).
 !>
 !> The free velocity v_free = S^{-1} (M v - h K x + h f(t)): up to opts%inverse_max_ndof
 !> unknowns the matrices S^{-1} M, S^{-1} h K and S^{-1} F (F the load shapes) are formed
@@ -26,11 +34,10 @@ module stickslip_euler
     use stickslip_progress, only: progress_t
     use stickslip_diagnostics, only: diagnostics_t, level_untrusted
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
-        force_direction, has_contact_laws, preload_force
+    use stickslip_model, only: model_t, validate_model, force_direction, preload_force, &
+        contact_normal_direction
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
-    use stickslip_contact_law, only: state_stick, state_slip
-    use stickslip_euler_laws, only: euler_laws_t, new_euler_laws, step_block_laws, free_velocity
+    use stickslip_contact_element, only: channel_t, kinematics_gap, kinematics_velocity
     use stickslip_lapack, only: dgetrf, dgetrs
     use stickslip_contact_solve, only: contact_forces
     implicit none
@@ -154,11 +161,11 @@ contains
         !> Progress of the periods (a line at most once a second when its unit is set).
         type(progress_t), intent(inout), optional :: progress
         integer :: n, nc, nf, ny, ns, info, i, j, k, period, step, first, last, nblock, nch
-        logical :: inverse, ftz, gradual, laws
-        type(euler_laws_t) :: el
-        integer, allocatable :: sts(:, :)
-        real(dp), allocatable :: nrm(:, :), gps(:, :), rstart(:)
-        real(dp) :: dr
+        logical :: inverse, ftz, gradual, fast, sliders
+        real(dp), allocatable :: rstart(:), us(:, :), q(:), uprev(:), ch_gap(:), ch_c(:), &
+                                 pf(:)
+        logical, allocatable :: gap_channel(:)
+        real(dp) :: dr, fscale
         character(len=40) :: defect_text
         real(dp) :: h, period_t, t, ampx, ampv, dx, dv, acc
         real(dp), allocatable :: s(:, :), sw(:, :), d(:, :), w(:, :), a(:, :), y(:), &
@@ -167,6 +174,8 @@ contains
         integer, allocatable :: ipiv(:)
         integer(int64) :: c0, c1, rate
         character(len=300) :: buf
+        integer :: c
+        type(channel_t) :: ch
 
         call system_clock(c0, rate)
         call validate_model(model, error)
@@ -200,13 +209,13 @@ contains
         end if
         nc = model%ncontact()
         nf = model%nforce()
-        ! contact laws: the force channels (nch of them), the preload a constant load term
-        laws = has_contact_laws(model)
+        ! the contact elements and their force channels (nch of them); Coulomb contacts only:
+        ! the written-out kernels; a preload is a constant load term
         call new_contact_set(res%contacts, model)
         nch = res%contacts%nchannel
-        if (laws) then
-            if (any(res%contacts%preload > 0.0_dp)) nf = nf + 1
-        end if
+        fast = res%contacts%coulomb_only
+        pf = preload_force(model)
+        if (any(pf /= 0.0_dp)) nf = nf + 1
         ny = 2*n + nf
         ns = opts%steps_per_period
         period_t = two_pi/model%omega
@@ -218,7 +227,8 @@ contains
         ! M v - h K x + h f(t) is A y with A = [M, -h K, F] (F: the load shapes); the free
         ! velocity S^{-1} A y is one product when A holds S^{-1} [M, -h K, F].
         allocate (s(n, n), sw(n, nch), d(nch, nch), w(n, nch), a(n, ny), y(ny), ystart(ny), &
-                  vf(n), r(nch), ufree(nch), limit(nc), ipiv(n))
+                  vf(n), r(nch), ufree(nch), limit(nc), ipiv(n), q(nch), uprev(nch), &
+                  ch_gap(nch), ch_c(nch), gap_channel(nch))
         s = model%mass + h*model%damping + h*h*model%stiffness
         call dgetrf(n, n, s, n, ipiv, info)
         if (info /= 0) then
@@ -226,24 +236,32 @@ contains
                              "singular", stickslip_stat%numerical)
             return
         end if
-        if (laws) then
-            w = channel_directions(model, res%contacts)
-        else
-            do j = 1, nc
-                w(:, j) = contact_velocity_direction(model, j)
-            end do
-        end if
+        w = channel_directions(model, res%contacts)
         sw = w
         if (nch > 0) call dgetrs('N', n, nch, s, n, ipiv, sw, n, info)
         d = h*matmul(transpose(w), sw)
-        limit = model%mu*model%normal_load
+        do j = 1, nc
+            limit(j) = res%contacts%elements(j)%e%force_scale()
+        end do
         a(:, 1:n) = model%mass
         a(:, n + 1:2*n) = -h*model%stiffness
         do i = 1, model%nforce()
             a(:, 2*n + i) = force_direction(model, i)
         end do
-        if (nf > model%nforce()) a(:, 2*n + nf) = preload_force(model)
-        if (laws) call new_euler_laws(el, res%contacts, d, h)
+        if (nf > model%nforce()) a(:, 2*n + nf) = pf
+        ! the channels' kinematics: the compliances / h on the diagonal of the step matrix
+        ! (the Delassus matrix d becomes A), gaps, which channels are gaps
+        fscale = max(res%contacts%force_scale(), tiny(1.0_dp))
+        sliders = .false.
+        do c = 1, nch
+            ch = res%contacts%channel(c)
+            gap_channel(c) = ch%kinematics == kinematics_gap
+            ch_gap(c) = ch%gap
+            ch_c(c) = ch%compliance/h
+            d(c, c) = d(c, c) + ch_c(c)
+            if (ch%kinematics == kinematics_velocity .and. ch%compliance > 0.0_dp) &
+                sliders = .true.
+        end do
         if (inverse) then
             call dgetrs('N', n, ny, s, n, ipiv, a, n, info)
             ! S^{-1} of a chain or a beam decays away from the diagonal into subnormal
@@ -277,8 +295,10 @@ contains
         end if
 
         nblock = min(ns, block_steps)
-        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nch), fc(nf, nblock))
-        allocate (sts(ns, nc), nrm(ns, nc), gps(ns, nc))
+        allocate (res%t(ns), res%x(ns, n), res%v(ns, n), res%r(ns, nch), fc(nf, nblock), &
+                  us(ns, nch))
+        us = 0.0_dp
+        uprev = 0.0_dp
         do k = 1, ns
             res%t(k) = period_t*real(k - 1, dp)/real(ns, dp)
         end do
@@ -312,11 +332,11 @@ contains
                         fc(i, step - first + 1) = famp(i)*cos(fh(i)*t + fph(i))
                     end do
                 end do
-                if (laws) then
-                    call step_block_laws(el, n, nch, nf, ns, first, last, h, inverse, a, s, &
-                                         ipiv, w, sw, opts%contact_tol, &
-                                         opts%contact_max_sweeps, fc, y, vf, r, res%x, &
-                                         res%v, res%r, sts, nrm, gps, res%max_sweeps)
+                if (.not. fast) then
+                    call step_block_elements(res%contacts, n, nch, nf, ns, first, last, h, &
+                                             inverse, a, s, ipiv, w, sw, d, ch_gap, ch_c, &
+                                             gap_channel, fscale, opts, fc, y, vf, r, q, &
+                                             uprev, res%x, res%v, res%r, us, res%max_sweeps)
                 else if (n == 2 .and. nc == 1 .and. nf >= 1 .and. inverse) then
                     call step_block_2(nf, ns, first, last, h, a, wa, sw, d(1, 1), limit(1), fc, y, &
                                       r(1), res%x, res%v, res%r)
@@ -349,13 +369,11 @@ contains
                 dv = 0.0_dp
             end if
             res%defect = max(dx, dv)
-            if (laws) then
-                ! a tangential contact stiffness keeps the slider's force as state
-                if (any(res%contacts%kt > 0.0_dp)) then
-                    dr = maxval(abs(r - rstart))/max(maxval(abs(res%r)), tiny(1.0_dp))
-                    if (maxval(abs(res%r)) == 0.0_dp) dr = 0.0_dp
-                    res%defect = max(res%defect, dr)
-                end if
+            if (sliders) then
+                ! a slider behind a spring keeps its force as state
+                dr = maxval(abs(r - rstart))/max(maxval(abs(res%r)), tiny(1.0_dp))
+                if (maxval(abs(res%r)) == 0.0_dp) dr = 0.0_dp
+                res%defect = max(res%defect, dr)
             end if
             if (res%defect <= opts%tol) then
                 res%periodic = .true.
@@ -380,20 +398,30 @@ contains
         end if
         if (.not. res%periodic) call res%diagnostics%add(level_untrusted, "not_periodic", &
                                                          res%diagnosis)
-        ! the contacts' states, normal forces and gaps over the last period
-        if (laws) then
-            res%state = sts
-            res%normal = nrm
-            res%gap = gps
-        else
-            allocate (res%state(ns, nc), res%normal(ns, nc), res%gap(ns, nc))
-            res%gap = 0.0_dp
+        ! the contacts' states, normal forces and gaps over the last period (each sample:
+        ! after the step before it)
+        allocate (res%state(ns, nc), res%normal(ns, nc), res%gap(ns, nc))
+        associate (cs => res%contacts)
             do j = 1, nc
-                res%normal(:, j) = model%normal_load(j)
-                res%state(:, j) = merge(state_slip, state_stick, &
-                                        abs(res%r(:, j)) >= limit(j)*(1.0_dp - 1.0e-12_dp))
+                associate (c0 => cs%first(j), m => cs%width(j))
+                    acc = 0.0_dp
+                    do k = c0, c0 + m - 1
+                        acc = acc + d(k, k)/m
+                    end do
+                    call cs%elements(j)%e%step_states(max(acc, tiny(1.0_dp)), &
+                                                      res%r(:, c0:c0 + m - 1), &
+                                                      us(:, c0:c0 + m - 1), res%state(:, j))
+                end associate
+                if (cs%normal(j) > 0) then
+                    res%normal(:, j) = res%r(:, cs%normal(j))
+                    res%gap(:, j) = ch_gap(cs%normal(j)) + &
+                                    matmul(res%x, contact_normal_direction(model, j))
+                else
+                    res%normal(:, j) = cs%elements(j)%e%normal_load()
+                    res%gap(:, j) = 0.0_dp
+                end if
             end do
-        end if
+        end associate
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler
@@ -559,6 +587,131 @@ contains
         y(4) = x2
         y(5:) = fc(:, last - first + 1)
     end subroutine step_block_2
+
+    !> Steps first..last of a period with contact elements (the kernel of integrate_euler
+    !> beside the Coulomb kernels): from the state y = [v; x; c] and the channel forces r,
+    !> store each step's starting state in xs, vs, rs, us (the forces and kinematic
+    !> quantities of the step before), set the forcing coefficients from fc, form the free
+    !> velocity, the free kinematic quantities q of the channels (velocity channels: d^T v_free
+    !> - c r_n / h; gap channels: d^T v_free + (gap + d^T x_n) / h), the forces of every
+    !> element (contact_set_t%step_forces on u = q + A r), and the new v and x.
+    subroutine step_block_elements(cs, n, nch, nf, ns, first, last, h, inverse, amat, s, ipiv, &
+                                   w, sw, am, ch_gap, ch_c, gap_channel, fscale, opts, fc, y, &
+                                   vf, r, q, uprev, xs, vs, rs, us, max_sweeps_used)
+        !> The contact elements.
+        type(contact_set_t), intent(in) :: cs
+        !> Degrees of freedom, channels, forcing terms (with the preload), steps per period.
+        integer, intent(in) :: n, nch, nf, ns
+        !> First and last step of the block (1..ns).
+        integer, intent(in) :: first, last
+        !> Time step [s].
+        real(dp), intent(in) :: h
+        !> amat holds S^{-1} [M, -h K, F] (else [M, -h K, F] and s the LU factors of S).
+        logical, intent(in) :: inverse
+        !> The free-velocity matrix, N x (2N + n_f).
+        real(dp), intent(in) :: amat(n, 2*n + nf)
+        !> LU factors of S and their pivots.
+        real(dp), intent(in) :: s(n, n)
+        integer, intent(in) :: ipiv(n)
+        !> Channel directions D and S^{-1} D, N x n_ch.
+        real(dp), intent(in) :: w(n, nch), sw(n, nch)
+        !> A = h D^T S^{-1} D + diag(compliance / h), n_ch x n_ch [m/(N s)].
+        real(dp), intent(in) :: am(nch, nch)
+        !> Per channel: its gap [m], compliance / h [m/(N s)], whether it is a gap channel.
+        real(dp), intent(in) :: ch_gap(nch), ch_c(nch)
+        logical, intent(in) :: gap_channel(nch)
+        !> Force scale of the tolerances [N].
+        real(dp), intent(in) :: fscale
+        !> Contact tolerance and sweeps.
+        type(euler_options_t), intent(in) :: opts
+        !> Forcing coefficients of the block's steps, n_f x (last - first + 1).
+        real(dp), intent(in) :: fc(nf, *)
+        !> State [v; x; c]: start of the block on entry, end on exit.
+        real(dp), intent(inout) :: y(2*n + nf)
+        !> Work: the free velocity, the free kinematic quantities.
+        real(dp), intent(inout) :: vf(n), q(nch)
+        !> Channel forces and kinematic quantities of the last step (updated).
+        real(dp), intent(inout) :: r(nch), uprev(nch)
+        !> The samples of the period: displacements, velocities (ns x N), channel forces and
+        !> kinematic quantities (ns x n_ch).
+        real(dp), intent(inout) :: xs(ns, n), vs(ns, n), rs(ns, nch), us(ns, nch)
+        !> Most sweeps of a step so far.
+        integer, intent(inout) :: max_sweeps_used
+        integer :: i, j, k, step, ny, sweeps
+        real(dp) :: acc, resid
+        ny = 2*n + nf
+        do step = first, last
+            do k = 1, n
+                vs(step, k) = y(k)
+                xs(step, k) = y(n + k)
+            end do
+            rs(step, :) = r
+            us(step, :) = uprev
+            do i = 1, nf
+                y(2*n + i) = fc(i, step - first + 1)
+            end do
+            call free_velocity(n, ny, amat, y, inverse, s, ipiv, vf)
+            do j = 1, nch
+                acc = 0.0_dp
+                do k = 1, n
+                    acc = acc + w(k, j)*vf(k)
+                end do
+                q(j) = acc
+                if (gap_channel(j)) then
+                    acc = ch_gap(j)
+                    do k = 1, n
+                        acc = acc + w(k, j)*y(n + k)
+                    end do
+                    q(j) = q(j) + acc/h
+                else
+                    q(j) = q(j) - ch_c(j)*r(j)
+                end if
+            end do
+            call cs%step_forces(am, q, r, max(fscale, maxval(abs(r))), opts%contact_tol, &
+                                opts%contact_max_sweeps, sweeps, resid)
+            max_sweeps_used = max(max_sweeps_used, sweeps)
+            do k = 1, n
+                acc = 0.0_dp
+                do j = 1, nch
+                    acc = acc + sw(k, j)*r(j)
+                end do
+                y(k) = vf(k) + h*acc
+            end do
+            do k = 1, n
+                y(n + k) = y(n + k) + h*y(k)
+            end do
+            uprev = q + matmul(am, r)
+        end do
+    end subroutine step_block_elements
+
+    !> The free velocity of a step, vf = S^-1 A y: the written-out product A y (no array
+    !> temporary), then solved with the LU factors of S unless A already holds S^-1 [M,
+    !> -h K, F] (`inverse`). Shared by the Coulomb and the elements' step kernels.
+    subroutine free_velocity(n, ny, a, y, inverse, s, ipiv, vf)
+        !> DOFs and the size of y.
+        integer, intent(in) :: n, ny
+        !> [M, -h K, F] or S^-1 times it, n x ny.
+        real(dp), intent(in) :: a(n, ny)
+        !> [v; x; forcing terms].
+        real(dp), intent(in) :: y(ny)
+        !> a holds S^-1 [M, -h K, F].
+        logical, intent(in) :: inverse
+        !> LU factors of S and their pivots (used when not inverse).
+        real(dp), intent(in) :: s(n, n)
+        integer, intent(in) :: ipiv(n)
+        !> The free velocity [m/s].
+        real(dp), intent(out) :: vf(n)
+        integer :: j, k, info
+        do k = 1, n
+            vf(k) = a(k, 1)*y(1)
+        end do
+        do j = 2, ny
+            do k = 1, n
+                vf(k) = vf(k) + a(k, j)*y(j)
+            end do
+        end do
+        if (.not. inverse) call dgetrs('N', n, 1, s, n, ipiv, vf, n, info)
+    end subroutine free_velocity
 
     !> True when every entry of `z` is finite.
     pure logical function finite_state(z) result(ok)

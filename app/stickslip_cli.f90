@@ -22,7 +22,7 @@ module stickslip_cli
     use stickslip_study, only: study_result_t
     use stickslip_modes, only: modes_result_t
     use stickslip_compare, only: comparison_t
-    use stickslip_flow, only: law_event_name
+    use stickslip_flow, only: event_name
     use stickslip_contact_set, only: contact_set_t
     use stickslip_contact_law, only: state_open, state_slip
     use stickslip_summary, only: energy_balance_error, reference_balance_error
@@ -597,7 +597,7 @@ contains
                 " phase(s); events"
             do k = 1, ref%nevent
                 if (ref%event_contact(k) == j) write (u, '(a,a,a,f0.5)', advance='no') " ", &
-                    trim(law_event_name(ref%event_kind(k))), " t=", ref%event_t(k)
+                    trim(event_name(ref%event_kind(k))), " t=", ref%event_t(k)
             end do
             write (u, '(a)') limit_text(case, ref%contacts, j, ref%normal(:, j), ref%state(:, j))
         end do

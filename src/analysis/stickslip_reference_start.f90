@@ -107,7 +107,7 @@ contains
             c0 = thread_cpu_seconds()
             if (attempt == 1) then
                 if (given_hbm()) then
-                    call shoot("hbm", hbm_start%x, hbm_start%v)
+                    call shoot("hbm", hbm_start%x, hbm_start%v, hbm_start%r)
                 else
                     if (present(hbm_opts)) ho = hbm_opts
                     ho%want_samples = .true.
@@ -122,12 +122,12 @@ contains
                     else if (.not. hs%converged) then
                         call note("the weighted-residual start did not converge")
                     else
-                        call shoot("hbm", hs%x, hs%v)
+                        call shoot("hbm", hs%x, hs%v, hs%r)
                     end if
                 end if
             else
                 if (given_euler()) then
-                    call shoot("euler", euler_start%x, euler_start%v)
+                    call shoot("euler", euler_start%x, euler_start%v, euler_start%r)
                 else
                     if (present(euler_opts)) eo = euler_opts
                     call integrate_euler(model, eo, es, start_error)
@@ -139,7 +139,7 @@ contains
                     else if (.not. es%periodic) then
                         call note("the implicit Euler start reached no periodic state")
                     else
-                        call shoot("euler", es%x, es%v)
+                        call shoot("euler", es%x, es%v, es%r)
                     end if
                 end if
             end if
@@ -181,11 +181,11 @@ contains
         end function given_euler
 
         !> One fresh shooting from the samples (xs, vs); its result becomes res.
-        subroutine shoot(name, xs, vs)
+        subroutine shoot(name, xs, vs, rs)
             character(len=*), intent(in) :: name
-            real(dp), intent(in) :: xs(:, :), vs(:, :)
+            real(dp), intent(in) :: xs(:, :), vs(:, :), rs(:, :)
             call solve_reference(model, opts%reference_options_t, xs, vs, trial, error, &
-                                 start_name=name)
+                                 start_name=name, r_start=rs)
             if (allocated(error)) return
             shot = .true.
             nfev = nfev + trial%nfev

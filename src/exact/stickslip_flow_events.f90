@@ -1,38 +1,44 @@
 !> Events of the exact flow (stickslip_flow): their kinds, and the location of the earliest
 !> one in a step of a contact mode (stickslip_flow_modes) on its exact solution.
 !>
-!> Events, all zeros of functions linear in y:
-!> - slip -> stick or reversal: a slipping contact's velocity s_j w_j^T v reaches zero. The new
-!>   mode of every contact at zero velocity (the stuck ones and this one) is the unique
-!>   solution of Coulomb's law at acceleration level, min 1/2 r^T D r + b^T r over the box
-!>   |r_k| <= mu_k N_k, D = W_Z^T M^{-1} W_Z symmetric positive definite for independent
-!>   contact directions (so the mode determination is sound for any number of contacts).
-!> - stick -> slip: a stuck force reaches the limit, mu_j N_j -/+ r_j = 0; the contact slips
-!>   against the force, s_j = -sign(r_j) (the force is continuous, the others are unchanged).
-!> Events are bracketed on a grid of `steps` per period (with the slopes of the event
-!> functions at both ends: a dip below zero between two positive values is caught too) and
-!> located to roundoff by safeguarded Newton iteration on the exact solution.
+!> Events are zeros of the mode's event rows (stickslip_contact_modes: each element gives
+!> its own, functions linear in y that stay positive while the mode lasts: a slip velocity,
+!> a stuck force's margin to its limit, a normal force, a gap). They are bracketed on a grid
+!> of `steps` per period (with the slopes of the event functions at both ends: a dip below
+!> zero between two positive values is caught too) and located to roundoff by safeguarded
+!> Newton iteration on the exact solution.
 module stickslip_flow_events
     use stickslip_kinds, only: dp
     use stickslip_flow_modes, only: mode_t, flow_modes_t, propagate
     use stickslip_expm, only: expm
     implicit none
     private
-    public :: event_stick, event_slip, event_reversal, event_graze, event_kind, event_name
+    public :: event_stick, event_slip, event_reversal, event_graze, event_open, event_close, &
+        event_impact, event_kind, event_name
     public :: find_event, row_crossing, grid_step, event_guard, add_saltation, end_monodromy
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
-    !> reverses without sticking; a slipping contact's velocity touches zero and it goes on.
+    !> reverses without sticking; a slipping contact's velocity touches zero and it goes on;
+    !> a unilateral contact opens, closes, or closes with a normal velocity (a plastic
+    !> impact of a rigid normal).
     integer, parameter :: event_stick = 1, event_slip = 2, event_reversal = 3, event_graze = 4
+    integer, parameter :: event_open = 10, event_close = 11, event_impact = 12
 
 contains
 
-    !> Kind of the change of one contact's code at an event: one of event_stick,
-    !> event_slip, event_reversal, event_graze.
-    pure integer function event_kind(old, new)
-        !> The contact's code before and after the event (0 stuck, +1 / -1 slipping).
+    !> Kind of the change of one code slot at an event (0 stuck, +1 / -1 slipping, 2 open):
+    !> event_open, event_close or event_impact (`impacted`) for the normal law, else
+    !> event_stick, event_slip, event_reversal or event_graze.
+    pure integer function event_kind(old, new, impacted)
+        !> The slot's code before and after the event.
         integer, intent(in) :: old, new
-        if (new == 0) then
+        !> The contact closed with an impact.
+        logical, intent(in) :: impacted
+        if (new == 2) then
+            event_kind = event_open
+        else if (old == 2) then
+            event_kind = merge(event_impact, event_close, impacted)
+        else if (new == 0) then
             event_kind = event_stick
         else if (old == 0) then
             event_kind = event_slip
@@ -45,7 +51,7 @@ contains
 
     !> Name of an event kind, as written to events.csv.
     pure function event_name(kind) result(name)
-        !> One of event_stick, event_slip, event_reversal, event_graze.
+        !> One of event_*.
         integer, intent(in) :: kind
         character(len=:), allocatable :: name
         select case (kind)
@@ -55,16 +61,21 @@ contains
             name = "slip"
         case (event_reversal)
             name = "reversal"
+        case (event_open)
+            name = "open"
+        case (event_close)
+            name = "close"
+        case (event_impact)
+            name = "impact"
         case default
             name = "graze"
         end select
     end function event_name
 
-    !> The earliest event in (ta, tb] of the mode md, if any: its time te, state ye, contact
-    !> jev, kind kev (0: slip velocity reaches zero; +1 / -1: stuck force reaches -/+ the
-    !> limit, the slip direction that follows) and the row c of its event function. States
-    !> and rows in balanced coordinates.
-    subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, jev, kev, c)
+    !> The earliest event in (ta, tb] of the mode md, if any: its time te, state ye and the
+    !> index k of its event row (md%rows(:, k); its element, slot and action in md%row_*).
+    !> States and rows in balanced coordinates.
+    subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, k)
         !> The dynamics md belongs to.
         class(flow_modes_t), intent(in) :: self
         !> The contact mode of the step.
@@ -75,47 +86,26 @@ contains
         logical, intent(out) :: found
         !> With found: the event's time [s] and state.
         real(dp), intent(out) :: te, ye(:)
-        !> With found: the event's contact and kind (0, +1 or -1).
-        integer, intent(out) :: jev, kev
-        !> With found: the row of the event function (its value at y is c . y).
-        real(dp), intent(out) :: c(:)
-        real(dp) :: tau, best, gscale
-        integer :: j, side
+        !> With found: its event row.
+        integer, intent(out) :: k
+        real(dp) :: tau, best
+        integer :: col
         found = .false.
         best = huge(1.0_dp)
-        jev = 0
-        kev = 0
-        do j = 1, self%nc
-            if (self%limit(j) <= 0.0_dp) cycle
-            if (md%code(j) /= 0) then
-                gscale = self%vref(j)
-                call test(2*j - 1, 0)
-            else
-                gscale = self%limit(j)
-                do side = 1, 2
-                    call test(2*j - 2 + side, 2*side - 3)
-                end do
+        k = 0
+        do col = 1, size(md%row_scale)
+            tau = row_crossing(self, md, col, md%row_scale(col), ta, ya, tb, yb)
+            if (tau < best) then
+                best = tau
+                found = .true.
+                k = col
             end if
         end do
         if (found) then
             te = ta + best
             call propagate(md, self%delta, best, ya, ye)
-            ye(2*self%n + 1:) = self%se*self%exo(te)
+            ye(self%nz + 1:) = self%se*self%exo(te)
         end if
-
-    contains
-
-        subroutine test(col, kind)
-            integer, intent(in) :: col, kind
-            tau = row_crossing(self, md, col, gscale, ta, ya, tb, yb)
-            if (tau < best) then
-                best = tau
-                found = .true.
-                jev = j
-                kev = kind
-                c = md%rows(:, col)
-            end if
-        end subroutine test
     end subroutine find_event
 
     !> The first time tau in (0, tb - ta] where event row `col` of mode md crosses zero from
@@ -245,7 +235,7 @@ contains
             full_step = .true.
             ybb = matmul(md%ladder(:, :, 0), yb)
         end if
-        ybb(2*self%n + 1:) = self%se*self%exo(tb)
+        ybb(self%nz + 1:) = self%se*self%exo(tb)
     end subroutine grid_step
 
     !> Count an event at te (the phase before it began at tp) and say whether the period map

@@ -14,18 +14,15 @@ module stickslip_reference
     use stickslip_kinds, only: dp, two_pi
     use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
-        contact_normal_direction, is_planar, tangential_stiffness_of, contact_gap, &
-        normal_stiffness_of
+        contact_normal_direction, contact_tangent2_direction
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_contact_element, only: state_open, state_stick, state_slip
+    use stickslip_contact_element, only: channel_t, state_open, state_stick, state_slip
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_flow, only: flow_t, new_flow, orbit_t
-    use stickslip_flow_modes, only: explicit_law
     use stickslip_contact_measures, only: energy_balance_error
-    use stickslip_lapack, only: dpotrf, dpotrs
     implicit none
     private
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference
@@ -102,6 +99,9 @@ module stickslip_reference
         !> Kinetic energy lost in the plastic impacts of rigid unilateral contacts over one
         !> period [J] (part of the energy balance).
         real(dp) :: impact_loss = 0.0_dp
+        !> The internal states of the elements at the samples (slider positions [m]),
+        !> samples x n_s (n_s = 0 without).
+        real(dp), allocatable :: s(:, :)
         !> The flow and the recorded orbit, to sample the solution on other grids.
         type(flow_t) :: flow
         type(orbit_t) :: orbit
@@ -130,36 +130,24 @@ module stickslip_reference
 
 contains
 
-    !> Whether the exact reference handles the contacts of `model`: 1D friction with a
-    !> constant normal load or a unilateral normal law (rigid or elastic). Not: 2D friction
-    !> (a contact slipping in a plane) or a tangential contact stiffness (Jenkins element);
-    !> `why` then says which contact and what the yardstick is (implicit Euler at small
-    !> steps).
+    !> Whether the exact reference handles the contacts of `model`: every contact element's
+    !> law (contact_element_t%exact_support). `why` is empty when it does; otherwise it
+    !> names the contact and the law, and the yardstick (implicit Euler at small steps).
     logical function reference_handles(model, why) result(ok)
         !> The model.
         type(model_t), intent(in) :: model
         !> Empty when handled; otherwise the reason.
         character(len=:), allocatable, intent(out) :: why
+        type(contact_set_t) :: cs
         integer :: j
-        character(len=20) :: num
         ok = .true.
         why = ""
-        do j = 1, model%ncontact()
-            write (num, '(i0)') j
-            if (explicit_law(model, j)) then
-                why = "the exact reference does not handle the law '"// &
-                      model%laws(j)%e%law_name()//"' of contact "//trim(num)//" yet: the "// &
-                      "yardstick for it is implicit Euler at small steps"
-            else if (is_planar(model, j)) then
-                why = "the exact reference handles 1D friction only (contact "//trim(num)// &
-                      " slips in a plane): the yardstick for 2D friction is implicit Euler "// &
-                      "at small steps"
-            else if (tangential_stiffness_of(model, j) > 0.0_dp) then
-                why = "the exact reference does not handle a tangential contact stiffness "// &
-                      "(contact "//trim(num)//", a Jenkins element): the yardstick for it is "// &
-                      "implicit Euler at small steps"
-            end if
+        call new_contact_set(cs, model)
+        do j = 1, cs%ncontact
+            why = cs%elements(j)%e%exact_support()
             if (len(why) > 0) then
+                why = why//" (contact "//itoa(j)//"): the yardstick for it is implicit "// &
+                      "Euler at small steps"
                 ok = .false.
                 return
             end if
@@ -209,7 +197,8 @@ contains
     !> checks of a converged orbit (energy balance, Coulomb's law) go to res%diagnostics.
     !> Errors: stat input (invalid model or options, start samples of the wrong shape or not
     !> finite); stat numerical (dependent stuck contact directions).
-    subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name, light)
+    subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name, light, &
+                               r_start)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Reference options.
@@ -229,6 +218,10 @@ contains
         !> no energy integrals and no checks of the converged orbit (res%diagnostics holds
         !> only a failure to converge).
         logical, intent(in), optional :: light
+        !> The channel forces of the start, ns x n_ch [N]: the internal states of elements
+        !> with one (the slider of a Jenkins or microslip element) come from them (absent:
+        !> the springs of the sliders unloaded).
+        real(dp), intent(in), optional :: r_start(:, :)
         character(len=:), allocatable :: name
         logical :: is_light
 
@@ -253,7 +246,7 @@ contains
         res%start = name
         is_light = .false.
         if (present(light)) is_light = light
-        call shoot_from(model, opts, name, x_start, v_start, res, error, is_light)
+        call shoot_from(model, opts, name, x_start, v_start, res, error, is_light, r_start)
         if (allocated(error)) return
         if (res%converged .and. is_light) then
             continue
@@ -264,14 +257,18 @@ contains
         end if
     end subroutine solve_reference
 
-    !> Checks of a converged reference orbit, as diagnostics items (doc/where-methods-fail.md, "Where each
-    !> method fails"): the energy balance over one period and Coulomb's law |r| <= mu N at
-    !> the samples.
+    !> Checks of a converged reference orbit, as diagnostics items (doc/where-methods-fail.md,
+    !> "Where each method fails"): the energy balance over one period; every element's force
+    !> within its limits at the samples (the force-limit ratio, stickslip_contact_measures,
+    !> at most 1 + coulomb_margin); the normal law of every gap channel: lambda >= 0, and
+    !> for its gap (with the compliance) u = g + c lambda >= 0 and min(u, lambda) = 0
+    !> (margins coulomb_margin of the contact's force and gap scales).
     subroutine check_reference(model, res)
         type(model_t), intent(in) :: model
         type(reference_result_t), intent(inout) :: res
-        real(dp) :: e, excess, limit
-        integer :: j
+        real(dp) :: e, ratio, fscale, gscale, un
+        integer :: j, c0, m, c, k
+        type(channel_t) :: ch
         character(len=300) :: buf
         e = reference_energy_error(res)
         ! NaN (work integrals that overflowed) fails the check too
@@ -286,54 +283,26 @@ contains
             call res%diagnostics%add(level_warning, "energy_balance", trim(buf))
         end if
         if (.not. allocated(res%r)) return
-        if (.not. res%contacts%coulomb_only) then
-            call check_reference_laws(model, res)
-            return
-        end if
-        do j = 1, size(res%r, 2)
-            limit = model%mu(j)*model%normal_load(j)
-            excess = maxval(abs(res%r(:, j))) - limit
-            if (excess > coulomb_margin*max(limit, tiny(1.0_dp))) then
-                write (buf, '(a,i0,a,es12.4e3,a,es12.4e3,a)') "reference: contact ", j, &
-                    " breaks Coulomb's law: max |r| = ", maxval(abs(res%r(:, j))), &
-                    " > mu N = ", limit, " [N]"
-                call res%diagnostics%add(level_untrusted, "coulomb_law", trim(buf))
-                exit
-            end if
-        end do
-    end subroutine check_reference
-
-    !> Coulomb's law with the varying limit and the normal law at the samples of a reference
-    !> with contact laws: |r_j| <= mu lambda_j, lambda_j >= 0, and for a rigid contact
-    !> g_j >= 0 and lambda_j g_j = 0 (margins coulomb_margin of the contact's force and gap
-    !> scales); a breach is a 'coulomb_law' or 'signorini' item, untrusted.
-    subroutine check_reference_laws(model, res)
-        type(model_t), intent(in) :: model
-        type(reference_result_t), intent(inout) :: res
-        real(dp) :: fscale, gscale, excess, un
-        integer :: j, c, k
-        character(len=300) :: buf
         associate (cs => res%contacts)
             do j = 1, cs%ncontact
-                c = cs%first(j)
-                fscale = max(maxval(abs(res%normal(:, j))), maxval(abs(res%r(:, c))), &
+                c0 = cs%first(j)
+                m = cs%width(j)
+                ratio = cs%elements(j)%e%force_ratio(res%r(:, c0:c0 + m - 1))
+                if (ratio > 1.0_dp + coulomb_margin) then
+                    write (buf, '(a,i0,a,es12.4e3,a)') "reference: contact ", j, &
+                        " breaks Coulomb's law: its friction force reaches ", ratio, &
+                        " of its limit"
+                    call res%diagnostics%add(level_untrusted, "coulomb_law", trim(buf))
+                    return
+                end if
+                c = cs%normal(j)
+                if (c == 0) cycle
+                ch = cs%channel(c)
+                fscale = max(maxval(abs(res%normal(:, j))), maxval(abs(res%r(:, c0))), &
                              tiny(1.0_dp))
                 gscale = max(maxval(abs(res%gap(:, j))), maxval(abs(res%x)), tiny(1.0_dp))
                 do k = 1, size(res%t)
-                    excess = abs(res%r(k, c)) - model%mu(j)*max(res%normal(k, j), 0.0_dp)
-                    if (excess > coulomb_margin*fscale) then
-                        write (buf, '(a,i0,a,es12.4e3,a,es12.4e3,a,es12.4e3,a)') &
-                            "reference: contact ", j, " breaks Coulomb's law at t = ", &
-                            res%t(k), " s: |r| = ", abs(res%r(k, c)), " > mu lambda = ", &
-                            model%mu(j)*max(res%normal(k, j), 0.0_dp), " [N]"
-                        call res%diagnostics%add(level_untrusted, "coulomb_law", trim(buf))
-                        return
-                    end if
-                    if (cs%normal(j) == 0) cycle
-                    ! the normal law's complementarity: u = g + lambda / k_n (g when rigid)
-                    un = res%gap(k, j)
-                    if (normal_stiffness_of(model, j) > 0.0_dp) &
-                        un = un + res%normal(k, j)/normal_stiffness_of(model, j)
+                    un = res%gap(k, j) + ch%compliance*res%normal(k, j)
                     if (res%normal(k, j) < -coulomb_margin*fscale .or. &
                         un < -coulomb_margin*gscale .or. &
                         min(abs(un)/gscale, max(res%normal(k, j), 0.0_dp)/fscale) > &
@@ -348,7 +317,7 @@ contains
                 end do
             end do
         end associate
-    end subroutine check_reference_laws
+    end subroutine check_reference
 
     !> Relative energy balance error of a reference orbit over one period:
     !> |work_forcing - diss_friction - diss_damping - impact_loss| / max(|work_forcing|,
@@ -362,8 +331,9 @@ contains
     end function reference_energy_error
 
     !> One shooting attempt from samples xs, vs (t_k = k T / size(xs, 1)) of an approximate
-    !> periodic solution, then the recording pass, the events and the samples.
-    subroutine shoot_from(model, opts, name, xs, vs, res, error, light)
+    !> periodic solution (rs its channel forces, for the internal states), then the recording
+    !> pass, the events and the samples.
+    subroutine shoot_from(model, opts, name, xs, vs, res, error, light, rs)
         type(model_t), intent(in) :: model
         type(reference_options_t), intent(in) :: opts
         character(len=*), intent(in) :: name
@@ -371,14 +341,15 @@ contains
         type(reference_result_t), intent(inout) :: res
         type(error_type), allocatable, intent(out) :: error
         logical, intent(in) :: light
+        real(dp), intent(in), optional :: rs(:, :)
         type(shooting_t) :: shooting
         type(hybrj_options_t) :: hopts
         type(hybrj_report_t) :: report
-        real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:)
-        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, gamp
-        integer :: n, nc, ns, j, k, ksec, nsamp
-        integer, allocatable :: code(:, :)
-        logical :: laws
+        real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:), ss(:), &
+                                 rk(:)
+        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3)
+        integer :: n, nc, ns, j, k, ksec, nsamp, nz, nstate, s0
+        type(channel_t) :: ch
         character(len=400) :: buf
 
         c0 = thread_cpu_seconds()
@@ -395,23 +366,20 @@ contains
         allocate (vref(nc), speed(ns))
         speed = huge(1.0_dp)
         call new_contact_set(res%contacts, model)
-        laws = .not. res%contacts%coulomb_only
         do j = 1, nc
             w = contact_velocity_direction(model, j)
             vref(j) = maxval(abs(matmul(vs, w)))
             if (.not. (vref(j) > 0.0_dp)) vref(j) = vscale
-            if (laws) then
-                if (res%contacts%normal(j) > 0) then
-                    ! a unilateral contact is away from its switching surfaces where it is
-                    ! clearly open or slips fast
-                    gs = contact_gap(model, j) + matmul(xs, contact_normal_direction(model, j))
-                    gamp = max(maxval(abs(gs)), tiny(1.0_dp))
-                    speed = min(speed, max(abs(matmul(vs, w))/vref(j), gs/gamp))
-                    cycle
-                end if
-            end if
-            if (model%mu(j)*model%normal_load(j) > 0.0_dp) &
+            if (res%contacts%normal(j) > 0) then
+                ! a unilateral contact is away from its switching surfaces where it is
+                ! clearly open or slips fast
+                ch = res%contacts%channel(res%contacts%normal(j))
+                gs = ch%gap + matmul(xs, contact_normal_direction(model, j))
+                gamp = max(maxval(abs(gs)), tiny(1.0_dp))
+                speed = min(speed, max(abs(matmul(vs, w))/vref(j), gs/gamp))
+            else if (res%contacts%elements(j)%e%force_scale() > 0.0_dp) then
                 speed = min(speed, abs(matmul(vs, w))/vref(j))
+            end if
         end do
         ! section: where the contacts slip fastest (away from the switching surfaces)
         ksec = maxloc(speed, 1)
@@ -420,10 +388,32 @@ contains
 
         call new_flow(shooting%flow, model, opts%bracket_steps, vref, error)
         if (allocated(error)) return
+        nz = shooting%flow%nz
+        nstate = shooting%flow%ns
+        ! the elements' internal states at the section, from the start's displacements and
+        ! channel forces
+        allocate (ss(nstate))
+        s0 = 0
+        do j = 1, nc
+            associate (e => res%contacts%elements(j)%e, c0j => res%contacts%first(j), &
+                       m => res%contacts%width(j))
+                if (e%nstate() == 0) cycle
+                dx(1) = dot_product(xs(ksec, :), shooting%flow%w(:, j))
+                dx(2) = dot_product(xs(ksec, :), contact_tangent2_direction(model, j))
+                dx(3) = dot_product(xs(ksec, :), contact_normal_direction(model, j))
+                rk = [(0.0_dp, k=1, m)]
+                if (present(rs)) then
+                    if (size(rs, 1) == ns .and. size(rs, 2) == res%contacts%nchannel) &
+                        rk = rs(ksec, c0j:c0j + m - 1)
+                end if
+                call e%initial_states(dx, rk, ss(s0 + 1:s0 + e%nstate()))
+                s0 = s0 + e%nstate()
+            end associate
+        end do
         shooting%t0 = res%t_section
-        shooting%scale = [(xscale, k=1, n), (vscale, k=1, n)]
-        allocate (shooting%mono(2*n, 2*n))
-        u = [xs(ksec, :), vs(ksec, :)]/shooting%scale
+        shooting%scale = [(xscale, k=1, n), (vscale, k=1, n), (xscale, k=1, nstate)]
+        allocate (shooting%mono(nz, nz))
+        u = [xs(ksec, :), vs(ksec, :), ss]/shooting%scale
         hopts%mode = 1
         hopts%maxfev = opts%maxfev
         hopts%xtol = 1.0e-15_dp
@@ -441,11 +431,12 @@ contains
             return
         end if
 
-        ! the recording pass over the final orbit
+        ! the recording pass over the final orbit (the period map projects its start onto
+        ! the constraints of the start mode; the monodromy includes the projection)
         z0 = u*shooting%scale
-        allocate (z1(2*n))
+        allocate (z1(nz))
         if (allocated(res%monodromy)) deallocate (res%monodromy)
-        allocate (res%monodromy(2*n, 2*n))
+        allocate (res%monodromy(nz, nz))
         call shooting%flow%period_map(res%t_section, z0, z1, error, mono=res%monodromy, &
                                       orbit=res%orbit, energies=.not. light)
         if (allocated(error)) then
@@ -453,21 +444,26 @@ contains
             deallocate (error, res%monodromy)
             return
         end if
-        ! (with contact laws the period map projects its start itself)
-        if (.not. laws) call project_stuck_start(shooting%flow, shooting%flow%modes( &
-                                                 res%orbit%phase_mode(1))%code, res%monodromy)
         nsamp = opts%samples
         if (light) nsamp = ns
         allocate (res%t(nsamp), res%x(nsamp, n), res%v(nsamp, n), &
-                  res%r(nsamp, res%contacts%nchannel), code(nsamp, nc))
+                  res%r(nsamp, res%contacts%nchannel), res%state(nsamp, nc), &
+                  res%s(nsamp, nstate))
         res%t = [(period*real(k, dp)/real(nsamp, dp), k=0, nsamp - 1)]
-        call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error, code)
+        call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error, res%state, &
+                                  res%s)
         if (allocated(error)) return
-        call contact_samples(model, res, code)
+        call contact_samples(model, res)
         ampx = max(maxval(abs(res%x)), maxval(abs(z0(1:n))))
-        ampv = max(maxval(abs(res%v)), maxval(abs(z0(n + 1:))))
+        ampv = max(maxval(abs(res%v)), maxval(abs(z0(n + 1:2*n))))
         res%defect = max(maxval(abs(z1(1:n) - z0(1:n)))/max(ampx, tiny(1.0_dp)), &
-                         maxval(abs(z1(n + 1:) - z0(n + 1:)))/max(ampv, tiny(1.0_dp)))
+                         maxval(abs(z1(n + 1:2*n) - z0(n + 1:2*n)))/max(ampv, tiny(1.0_dp)))
+        if (nstate > 0) then
+            ! the sliders, on the scale of the displacements
+            ampz = max(ampx, maxval(abs(z0(2*n + 1:))))
+            res%defect = max(res%defect, maxval(abs(z1(2*n + 1:) - z0(2*n + 1:)))/ &
+                             max(ampz, tiny(1.0_dp)))
+        end if
         if (ampx == 0.0_dp .and. ampv == 0.0_dp) res%defect = 0.0_dp
         res%converged = res%defect <= opts%tol .and. all(ieee_is_finite(z1))
         res%flow = shooting%flow
@@ -478,12 +474,7 @@ contains
         res%diss_damping = res%orbit%diss_damping
         res%stick_fraction = res%orbit%stick_time/period
         res%impact_loss = res%orbit%impact_loss
-        if (allocated(res%orbit%open_time)) then
-            res%open_fraction = res%orbit%open_time/period
-        else
-            allocate (res%open_fraction(nc))
-            res%open_fraction = 0.0_dp
-        end if
+        res%open_fraction = res%orbit%open_time/period
         res%stick_phases = count_stick_phases(res, nc)
         if (res%converged) then
             res%diagnosis = ""
@@ -500,66 +491,26 @@ contains
         res%seconds = res%seconds + (c1 - c0)
     end subroutine shoot_from
 
-    !> The contacts' states, normal forces and gaps at the samples of res, from the codes of
-    !> the modes (code: 0 stuck, +1 / -1 slipping, 2 open).
-    subroutine contact_samples(model, res, code)
+    !> The contacts' normal forces and gaps at the samples of res: a normal channel's force
+    !> and its gap + n^T x; without one the constant normal load and 0.
+    subroutine contact_samples(model, res)
         type(model_t), intent(in) :: model
         type(reference_result_t), intent(inout) :: res
-        integer, intent(in) :: code(:, :)
         integer :: j, ns
+        type(channel_t) :: ch
         ns = size(res%t)
-        allocate (res%state(ns, res%contacts%ncontact), res%normal(ns, res%contacts%ncontact), &
-                  res%gap(ns, res%contacts%ncontact))
+        allocate (res%normal(ns, res%contacts%ncontact), res%gap(ns, res%contacts%ncontact))
         do j = 1, res%contacts%ncontact
-            where (code(:, j) == 0)
-                res%state(:, j) = state_stick
-            elsewhere (code(:, j) == 2)
-                res%state(:, j) = state_open
-            elsewhere
-                res%state(:, j) = state_slip
-            end where
             if (res%contacts%normal(j) > 0) then
+                ch = res%contacts%channel(res%contacts%normal(j))
                 res%normal(:, j) = res%r(:, res%contacts%normal(j))
-                res%gap(:, j) = contact_gap(model, j) + &
-                                matmul(res%x, contact_normal_direction(model, j))
+                res%gap(:, j) = ch%gap + matmul(res%x, contact_normal_direction(model, j))
             else
-                res%normal(:, j) = model%normal_load(j)
+                res%normal(:, j) = res%contacts%elements(j)%e%normal_load()
                 res%gap(:, j) = 0.0_dp
             end if
         end do
     end subroutine contact_samples
-
-    !> mono <- mono P0, P0 the projection of a start perturbation [dx; dv] onto zero slip
-    !> velocity of the contacts stuck at the start (code 0): dv <- dv - M^-1 W_S G^-1 W_S^T dv,
-    !> G = W_S^T M^-1 W_S. A stuck contact given a slip velocity dv_S slips for a time
-    !> O(|dv_S|) and sticks again; the friction impulse that stops it lies in span(W_S), so
-    !> to first order the velocity is projected and the displacement unchanged. The stuck
-    !> mode's phase flow alone would carry dv_S unchanged.
-    subroutine project_stuck_start(flow, code, mono)
-        type(flow_t), intent(in) :: flow
-        integer, intent(in) :: code(:)
-        real(dp), intent(inout) :: mono(:, :)
-        integer, allocatable :: stuck(:)
-        real(dp), allocatable :: mws(:, :), g(:, :), q(:, :), p0(:, :)
-        integer :: n, ns, j, info
-        n = flow%n
-        stuck = pack([(j, j=1, flow%nc)], code == 0)
-        ns = size(stuck)
-        if (ns == 0) return
-        mws = matmul(flow%minv, flow%w(:, stuck))
-        g = matmul(transpose(flow%w(:, stuck)), mws)
-        q = transpose(flow%w(:, stuck))
-        call dpotrf('U', ns, g, ns, info)
-        if (info /= 0) return
-        call dpotrs('U', ns, n, g, ns, q, ns, info)
-        allocate (p0(2*n, 2*n))
-        p0 = 0.0_dp
-        do j = 1, 2*n
-            p0(j, j) = 1.0_dp
-        end do
-        p0(n + 1:, n + 1:) = p0(n + 1:, n + 1:) - matmul(mws, q)
-        mono = matmul(mono, p0)
-    end subroutine project_stuck_start
 
     !> Events of the recorded orbit, mapped to [0, T) and sorted by time.
     subroutine finish_events(res, period)
@@ -610,7 +561,7 @@ contains
                     dur = tend - res%orbit%phase_t(p)
                 end if
                 if (dur <= 0.0_dp) cycle
-                stuck = [stuck, res%flow%modes(res%orbit%phase_mode(p))%code(j) == 0]
+                stuck = [stuck, res%flow%state_of(res%orbit%phase_mode(p), j) == state_stick]
             end do
             phases(j) = 0
             if (size(stuck) == 0) cycle

@@ -25,7 +25,8 @@ module stickslip_stability
     use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_lapack, only: dgeev
-    use stickslip_model, only: model_t, validate_model, contact_velocity_direction
+    use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
+        contact_tangent2_direction, contact_normal_direction
     use stickslip_solution, only: hbm_solution_t
     use stickslip_flow, only: flow_t, new_flow
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
@@ -281,7 +282,7 @@ contains
         end if
         ! the full reference (energies, checks, opts%samples) only when the caller wants it
         call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
-                             light=.not. present(ref))
+                             light=.not. present(ref), r_start=sol%r)
         if (allocated(error)) then
             error%message = "periodic_stability: "//error%message
             return
@@ -403,8 +404,8 @@ contains
         end do
         call new_flow(flow, model, steps, vref, error)
         if (allocated(error)) return
-        allocate (defect(periods), z1(2*n))
-        z0 = [sol%x(1, :), sol%v(1, :)]
+        allocate (defect(periods), z1(flow%nz))
+        z0 = [sol%x(1, :), sol%v(1, :), start_states(flow, sol)]
         z = z0
         do k = 1, periods
             call flow%period_map(0.0_dp, z, z1, error)
@@ -413,10 +414,33 @@ contains
                 return
             end if
             z = z1
-            defect(k) = max(rel(z(1:n) - z0(1:n), ampx), rel(z(n + 1:) - z0(n + 1:), ampv))
+            defect(k) = max(rel(z(1:n) - z0(1:n), ampx), rel(z(n + 1:2*n) - z0(n + 1:2*n), ampv))
         end do
 
     contains
+
+        !> The elements' internal states at the solution's first sample (from its
+        !> displacements and channel forces).
+        function start_states(flow, sol) result(ss)
+            type(flow_t), intent(in) :: flow
+            type(hbm_solution_t), intent(in) :: sol
+            real(dp) :: ss(flow%ns), dx(3)
+            integer :: jj, s0, c0, m
+            s0 = 0
+            do jj = 1, flow%nc
+                associate (e => flow%cs%elements(jj)%e)
+                    if (e%nstate() == 0) cycle
+                    c0 = flow%cs%first(jj)
+                    m = flow%cs%width(jj)
+                    dx = [dot_product(sol%x(1, :), flow%w(:, jj)), &
+                          dot_product(sol%x(1, :), contact_tangent2_direction(model, jj)), &
+                          dot_product(sol%x(1, :), contact_normal_direction(model, jj))]
+                    call e%initial_states(dx, sol%r(1, c0:c0 + m - 1), &
+                                          ss(s0 + 1:s0 + e%nstate()))
+                    s0 = s0 + e%nstate()
+                end associate
+            end do
+        end function start_states
 
         !> max |d| / a, or max |d| when a = 0.
         pure real(dp) function rel(d, a)

@@ -13,7 +13,7 @@ module stickslip_csv
     use stickslip_error, only: error_type, itoa
     use stickslip_solution, only: hbm_solution_t
     use stickslip_reference, only: reference_result_t
-    use stickslip_flow, only: event_name, law_event_name
+    use stickslip_flow, only: event_name
     use stickslip_compare, only: quantity_names
     use stickslip_study, only: study_result_t
     use stickslip_sweep, only: sweep_result_t, frc_point_t
@@ -238,7 +238,7 @@ contains
         do k = 1, ref%nevent
             if (stat /= 0) exit
             write (u, fmt, iostat=stat, iomsg=msg) ref%event_t(k), ref%event_contact(k), &
-                law_event_name(ref%event_kind(k)), ref%event_direction(k), ref%event_force(k), &
+                event_name(ref%event_kind(k)), ref%event_direction(k), ref%event_force(k), &
                 ref%event_velocity(k)
         end do
         call close_and_rename(dir, "events.csv", u, stat, msg, error)

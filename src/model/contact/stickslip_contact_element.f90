@@ -27,6 +27,7 @@ module stickslip_contact_element
     use stickslip_error, only: error_type
     use stickslip_basis, only: basis_t
     use stickslip_contact_law, only: state_open, state_stick, state_slip
+    use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t
     implicit none
     private
     public :: contact_element_t, element_box_t, channel_t, hb_work_t
@@ -105,6 +106,41 @@ module stickslip_contact_element
         procedure :: project => element_project
         !> The element's rows of the weighted-residual Jacobian.
         procedure :: hb_jacobian => element_hb_jacobian
+        ! --- the exact event-driven flow (stickslip_contact_modes) ---
+        !> Why the exact flow cannot take the law ('' when it can).
+        procedure :: exact_support => element_exact_support
+        !> Code slots of the element's modes (default 1).
+        procedure :: ncode => element_ncode
+        !> Internal states (slider positions; default none).
+        procedure :: nstate => element_nstate
+        !> Scales c_k of the internal states in the flow's coordinates.
+        procedure :: state_scales => element_state_scales
+        !> The internal states of a start from its displacements and channel forces.
+        procedure :: initial_states => element_initial_states
+        !> What a mode puts on the structure.
+        procedure :: mode_terms => element_mode_terms
+        !> The event rows of a mode.
+        procedure :: event_rows => element_event_rows
+        !> The codes at a start state.
+        procedure :: start_code => element_start_code
+        !> Takes part in the joint decisions of rigid contacts (a rigid constraint).
+        procedure :: coupled => element_coupled
+        !> Holds a rigid constraint in a mode (its code may change when another's does).
+        procedure :: holds_constraint => element_holds_constraint
+        !> The candidate codes of a joint decision.
+        procedure :: candidates => element_candidates
+        !> Whether a trial mode is consistent with the law at a state.
+        procedure :: consistent => element_consistent
+        !> The codes of an elastic element at an event, decided alone.
+        procedure :: local_decide => element_local_decide
+        !> The contact state (open, stick, slip) of a mode.
+        procedure :: code_state => element_code_state
+        !> A rigid normal closing with a velocity at an event: an impact.
+        procedure :: impacts => element_impacts
+        !> A rigid normal, closed in the mode (part of an impact).
+        procedure :: rigid_closed => element_rigid_closed
+        !> A rigid normal at a zero or negative gap at the start (projected onto the gap).
+        procedure :: start_gap => element_start_gap
     end type contact_element_t
 
     !> A slot holding one element (arrays of polymorphic elements).
@@ -408,6 +444,205 @@ contains
             call basis%stick_product(work%cw, work%a)
         end subroutine product_matrix
     end subroutine element_hb_jacobian
+
+    !> The exact flow handles no law by default: the reason.
+    function element_exact_support(self) result(why)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        character(len=:), allocatable :: why
+        why = "the exact reference does not handle the law '"//self%law_name()//"'"
+    end function element_exact_support
+
+    !> One code slot.
+    pure integer function element_ncode(self) result(k)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        k = 1
+    end function element_ncode
+
+    !> No internal state.
+    pure integer function element_nstate(self) result(k)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        k = 0
+    end function element_nstate
+
+    !> The scales c_k of the internal states (sigma_k = c_k s_k): 1.
+    pure subroutine element_state_scales(self, c)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> The scales (nstate).
+        real(dp), intent(out) :: c(:)
+        c = 1.0_dp
+    end subroutine element_state_scales
+
+    !> The internal states of a start (none by default): from the displacements along the
+    !> contact's directions dx = (w^T x, t2^T x, n^T x) [m] and the channel forces r [N].
+    pure subroutine element_initial_states(self, dx, r, s)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Displacements along the directions [m], channel forces [N].
+        real(dp), intent(in) :: dx(:), r(:)
+        !> Internal states [m] (nstate).
+        real(dp), intent(out) :: s(:)
+        s = 0.0_dp
+    end subroutine element_initial_states
+
+    !> No terms (an element the exact flow does not handle: exact_support says why).
+    subroutine element_mode_terms(self, code, geom, terms)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> The element's codes in the mode.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The mode's terms, added to.
+        type(mode_terms_t), intent(inout) :: terms
+    end subroutine element_mode_terms
+
+    !> No events.
+    subroutine element_event_rows(self, code, geom, fb, events)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> The element's codes in the mode.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> Its channel forces as rows of y (m x na) in the mode, constraint forces included.
+        real(dp), intent(in) :: fb(:, :)
+        !> The events, added to.
+        type(event_list_t), intent(inout) :: events
+    end subroutine element_event_rows
+
+    !> Codes 1 (slipping) at the start, nothing to decide.
+    subroutine element_start_code(self, geom, y, code, decide)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The start state (balanced).
+        real(dp), intent(in) :: y(:)
+        !> Its codes.
+        integer, intent(out) :: code(:)
+        !> Whether the joint decision must settle them.
+        logical, intent(out) :: decide
+        code = 1
+        decide = .false.
+    end subroutine element_start_code
+
+    !> Not coupled (no rigid constraint).
+    pure logical function element_coupled(self) result(c)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        c = .false.
+    end function element_coupled
+
+    !> No rigid constraint held.
+    pure logical function element_holds_constraint(self, code) result(h)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes.
+        integer, intent(in) :: code(:)
+        h = .false.
+    end function element_holds_constraint
+
+    !> The candidate codes of a joint decision at state y: ncand code vectors in the
+    !> columns of cand (ncode x ncand), tried in that order. Default: the current codes.
+    subroutine element_candidates(self, code, geom, y, cand, ncand)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> The codes before.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The state (balanced).
+        real(dp), intent(in) :: y(:)
+        !> Candidates.
+        integer, intent(out) :: cand(:, :)
+        integer, intent(out) :: ncand
+        ncand = 1
+        cand(:, 1) = code
+    end subroutine element_candidates
+
+    !> Every trial is consistent by default.
+    logical function element_consistent(self, code, moving, geom, fb, y, ydot) result(ok)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> The trial codes, and whether the contact moves (nonzero slip velocity) there.
+        integer, intent(in) :: code(:)
+        logical, intent(in) :: moving
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> Its channel forces as rows of y in the trial mode (m x na).
+        real(dp), intent(in) :: fb(:, :)
+        !> The state and its rate in the trial mode (balanced).
+        real(dp), intent(in) :: y(:), ydot(:)
+        ok = .true.
+    end function element_consistent
+
+    !> Nothing to decide alone.
+    subroutine element_local_decide(self, code, geom, y, ydot)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes, updated.
+        integer, intent(inout) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The state and its rate (balanced).
+        real(dp), intent(in) :: y(:), ydot(:)
+    end subroutine element_local_decide
+
+    !> Stick when every slot sticks, open when a slot is open, slip otherwise.
+    pure integer function element_code_state(self, code) result(state)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes.
+        integer, intent(in) :: code(:)
+        if (any(code == 2)) then
+            state = state_open
+        else if (all(code == 0)) then
+            state = state_stick
+        else
+            state = state_slip
+        end if
+    end function element_code_state
+
+    !> No impact.
+    logical function element_impacts(self, code, geom, y) result(imp)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes before the event.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The state (balanced).
+        real(dp), intent(in) :: y(:)
+        imp = .false.
+    end function element_impacts
+
+    !> No rigid normal.
+    pure logical function element_rigid_closed(self, code) result(c)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes.
+        integer, intent(in) :: code(:)
+        c = .false.
+    end function element_rigid_closed
+
+    !> No gap to close at the start: active = .false.
+    subroutine element_start_gap(self, geom, y, active, gap)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The start state (balanced).
+        real(dp), intent(in) :: y(:)
+        !> A rigid normal at a zero or negative gap, and its gap there [m].
+        logical, intent(out) :: active
+        real(dp), intent(out) :: gap
+        active = .false.
+        gap = 0.0_dp
+    end subroutine element_start_gap
 
     !> Solve the small system a x = b (m <= a few) by Gaussian elimination with partial
     !> pivoting; info = 1 when a pivot vanishes.

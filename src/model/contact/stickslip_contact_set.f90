@@ -25,7 +25,7 @@ module stickslip_contact_set
     use stickslip_contact_solve, only: contact_forces
     implicit none
     private
-    public :: contact_set_t, new_contact_set, channel_directions
+    public :: contact_set_t, new_contact_set, new_element_set, channel_directions
 
     !> The elements and their channel layout.
     type :: contact_set_t
@@ -68,14 +68,26 @@ contains
         type(contact_set_t), intent(out) :: self
         !> A validated model.
         type(model_t), intent(in) :: model
-        integer :: nc, j, c, k, ntan
-        nc = model%ncontact()
-        self%ncontact = nc
-        allocate (self%elements(nc), self%first(nc), self%width(nc), self%ntangent(nc), &
-                  self%normal(nc))
-        do j = 1, nc
-            call element_of(model, j, self%elements(j))
+        type(element_box_t), allocatable :: boxes(:)
+        integer :: j
+        allocate (boxes(model%ncontact()))
+        do j = 1, model%ncontact()
+            call element_of(model, j, boxes(j))
         end do
+        call new_element_set(self, boxes)
+    end subroutine new_contact_set
+
+    !> The contact set of the elements `boxes` (moved in): their channel layout.
+    subroutine new_element_set(self, boxes)
+        !> The contact set.
+        type(contact_set_t), intent(out) :: self
+        !> The elements, one per contact (deallocated on return).
+        type(element_box_t), allocatable, intent(inout) :: boxes(:)
+        integer :: nc, j, c, k, ntan
+        nc = size(boxes)
+        self%ncontact = nc
+        call move_alloc(boxes, self%elements)
+        allocate (self%first(nc), self%width(nc), self%ntangent(nc), self%normal(nc))
         c = 0
         do j = 1, nc
             self%first(j) = c + 1
@@ -102,7 +114,7 @@ contains
                 self%coulomb_only = .false.
             end select
         end do
-    end subroutine new_contact_set
+    end subroutine new_element_set
 
     !> The element of contact j of the model.
     subroutine element_of(model, j, box)

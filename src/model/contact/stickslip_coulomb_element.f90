@@ -11,11 +11,14 @@ module stickslip_coulomb_element
     use stickslip_kinds, only: dp
     use stickslip_basis, only: basis_t
     use stickslip_friction, only: psi, psi_stick
-    use stickslip_contact_element, only: contact_element_t, channel_t, hb_work_t, &
-        state_stick, state_slip
+    use stickslip_contact_element, only: contact_element_t, element_box_t, channel_t, &
+        hb_work_t, state_stick, state_slip
+    use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
+        action_decide
+    use stickslip_contact_solve, only: contact_forces
     implicit none
     private
-    public :: coulomb_element_t, new_coulomb_element
+    public :: coulomb_element_t, new_coulomb_element, coulomb_decision
 
     !> Rigid 1D Coulomb friction with a constant normal load.
     type, extends(contact_element_t) :: coulomb_element_t
@@ -37,6 +40,14 @@ module stickslip_coulomb_element
         procedure :: settle_offset => coulomb_settle_offset
         procedure :: step_forces => coulomb_step_forces
         procedure :: hb_jacobian => coulomb_hb_jacobian
+        procedure :: exact_support => coulomb_exact_support
+        procedure :: mode_terms => coulomb_mode_terms
+        procedure :: event_rows => coulomb_event_rows
+        procedure :: start_code => coulomb_start_code
+        procedure :: coupled => coulomb_coupled
+        procedure :: holds_constraint => coulomb_holds_constraint
+        procedure :: candidates => coulomb_candidates
+        procedure :: consistent => coulomb_consistent
     end type coulomb_element_t
 
 contains
@@ -207,4 +218,162 @@ contains
             jac(i, rj + i) = jac(i, rj + i) + rho
         end do
     end subroutine coulomb_hb_jacobian
+
+    ! --- the exact flow: stuck, a constraint w^T v = 0 whose force is the friction force;
+    ! slipping with direction c, the constant force -c mu N ---
+
+    !> Handled by the exact flow.
+    function coulomb_exact_support(self) result(why)
+        class(coulomb_element_t), intent(in) :: self
+        character(len=:), allocatable :: why
+        why = ""
+    end function coulomb_exact_support
+
+    !> Stuck (code 0, a limit > 0): the constraint w^T v = 0; slipping with direction c: the
+    !> force -c mu N along w.
+    subroutine coulomb_mode_terms(self, code, geom, terms)
+        class(coulomb_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        type(mode_terms_t), intent(inout) :: terms
+        real(dp) :: row(geom%na)
+        if (code(1) == 0 .and. self%limit > 0.0_dp) then
+            call terms%constrain(geom%dt(:, 1), geom%dt(:, 1), geom%first, 0, 0.0_dp)
+        else if (self%limit > 0.0_dp) then
+            row = geom%const_row(-self%limit*code(1))
+            call terms%add_force(geom%dt(:, 1), row)
+            terms%fb(geom%first, :) = row
+        end if
+    end subroutine coulomb_mode_terms
+
+    !> Stuck: the margins mu N - r and mu N + r (at zero the contact slips against the
+    !> force); slipping with direction c: c w^T v (at zero the contacts decide).
+    subroutine coulomb_event_rows(self, code, geom, fb, events)
+        class(coulomb_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :)
+        type(event_list_t), intent(inout) :: events
+        if (.not. (self%limit > 0.0_dp)) return
+        if (code(1) == 0) then
+            call events%add(geom%const_row(self%limit) - fb(1, :), self%limit, 1, -1)
+            call events%add(geom%const_row(self%limit) + fb(1, :), self%limit, 1, 1)
+        else
+            call events%add(code(1)*geom%vel_row(1), geom%vref, 1, action_decide)
+        end if
+    end subroutine coulomb_event_rows
+
+    !> Slipping in the direction of a slip velocity above 1e-12 of its scale; at rest the
+    !> joint decision settles it (no limit: slipping, no force).
+    subroutine coulomb_start_code(self, geom, y, code, decide)
+        class(coulomb_element_t), intent(in) :: self
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:)
+        integer, intent(out) :: code(:)
+        logical, intent(out) :: decide
+        real(dp) :: v
+        v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
+        decide = .false.
+        if (abs(v) > 1.0e-12_dp*geom%vref) then
+            code(1) = nint(sign(1.0_dp, v))
+        else if (self%limit > 0.0_dp) then
+            code(1) = 0
+            decide = .true.
+        else
+            code(1) = 1
+        end if
+    end subroutine coulomb_start_code
+
+    !> A contact with a limit takes part in joint decisions.
+    pure logical function coulomb_coupled(self) result(c)
+        class(coulomb_element_t), intent(in) :: self
+        c = self%limit > 0.0_dp
+    end function coulomb_coupled
+
+    !> Stuck with a limit: a rigid constraint.
+    pure logical function coulomb_holds_constraint(self, code) result(h)
+        class(coulomb_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        h = code(1) == 0 .and. self%limit > 0.0_dp
+    end function coulomb_holds_constraint
+
+    !> Moving: its slip direction; at rest: stuck, then slipping either way.
+    subroutine coulomb_candidates(self, code, geom, y, cand, ncand)
+        class(coulomb_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:)
+        integer, intent(out) :: cand(:, :)
+        integer, intent(out) :: ncand
+        real(dp) :: v
+        v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
+        if (abs(v) > 1.0e-12_dp*geom%vref) then
+            ncand = 1
+            cand(1, 1) = nint(sign(1.0_dp, v))
+        else
+            ncand = 3
+            cand(1, 1:3) = [0, 1, -1]
+        end if
+    end subroutine coulomb_candidates
+
+    !> Stuck: the force within mu N (1e-9); slipping from rest: accelerating in its direction.
+    logical function coulomb_consistent(self, code, moving, geom, fb, y, ydot) result(ok)
+        class(coulomb_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        logical, intent(in) :: moving
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :), y(:), ydot(:)
+        real(dp), parameter :: tol = 1.0e-9_dp
+        real(dp) :: acc
+        ok = .true.
+        if (code(1) == 0) then
+            ok = abs(dot_product(fb(1, :), y)) <= self%limit*(1.0_dp + tol)
+        else if (.not. moving) then
+            acc = code(1)*dot_product(geom%dt(:, 1), ydot(geom%n + 1:2*geom%n))
+            ok = acc >= -tol*geom%vref*geom%omega
+        end if
+    end function coulomb_consistent
+
+    !> The joint decision of Coulomb contacts at zero slip velocity in one step (the fast
+    !> path of the exact flow): Coulomb's law at acceleration level, the box-constrained QP
+    !> min 1/2 r^T D r + b^T r, |r_k| <= limit_k (D = W_Z^T M^-1 W_Z, b = W_Z^T M^-1 f the
+    !> free accelerations, in modal coordinates), unique for independent directions: stuck
+    !> where the force is inside the limit, else slipping against it. ok = .false. when the
+    !> elements `idx` are not all Coulomb contacts (the caller then enumerates) or the forces
+    !> are not finite.
+    subroutine coulomb_decision(boxes, idx, d, b, codes, ok)
+        !> The elements.
+        type(element_box_t), intent(in) :: boxes(:)
+        !> The elements to decide.
+        integer, intent(in) :: idx(:)
+        !> D (k x k) and b (k).
+        real(dp), intent(in) :: d(:, :), b(:)
+        !> Their codes.
+        integer, intent(out) :: codes(:)
+        !> Whether the QP applied.
+        logical, intent(out) :: ok
+        real(dp) :: lim(size(idx)), r(size(idx))
+        integer :: k, sweeps
+        ok = .false.
+        codes = 0
+        do k = 1, size(idx)
+            select type (e => boxes(idx(k))%e)
+            type is (coulomb_element_t)
+                lim(k) = e%limit
+            class default
+                return
+            end select
+        end do
+        r = 0.0_dp
+        call contact_forces(d, b, lim, r, 1.0e-15_dp, 1000000, sweeps)
+        if (.not. all(abs(r) <= huge(1.0_dp))) return
+        do k = 1, size(idx)
+            if (abs(r(k)) < lim(k)*(1.0_dp - 1.0e-12_dp)) then
+                codes(k) = 0
+            else
+                codes(k) = -nint(sign(1.0_dp, r(k)))
+            end if
+        end do
+        ok = .true.
+    end subroutine coulomb_decision
 end module stickslip_coulomb_element

@@ -12,6 +12,7 @@ module stickslip_planar_element
     type, extends(friction_contact_t) :: planar_element_t
     contains
         procedure :: law_name => planar_name
+        procedure :: exact_support => planar_exact_support
     end type planar_element_t
 
 contains
@@ -24,6 +25,13 @@ contains
         call init_friction_contact(self, 2, .false., mu, normal_load, 0.0_dp, 0.0_dp, &
                                    0.0_dp, 0.0_dp)
     end function new_planar_element
+
+    !> Not yet in the exact flow.
+    function planar_exact_support(self) result(why)
+        class(planar_element_t), intent(in) :: self
+        character(len=:), allocatable :: why
+        why = "the exact reference does not handle 2D friction yet"
+    end function planar_exact_support
 
     pure function planar_name(self) result(name)
         class(planar_element_t), intent(in) :: self

@@ -3,17 +3,44 @@
 !> normal stiffness k_n: lambda = max(0, -k_n g)); friction in 1D or in the disk with the
 !> varying limit mu lambda(t), rigid or behind a tangential stiffness k_t; a static preload
 !> -P n pressing it closed.
+!>
+!> In the exact flow (1D friction, rigid tangentially; doc/contacts.md, section 5) its code
+!> is 0 (stuck), +1 / -1 (slipping) or 2 (open). Closed, an elastic normal carries lambda =
+!> -k_n (gap + n^T x) (an added stiffness and a constant); a rigid normal is the constraint
+!> n^T v = 0 whose force lambda comes from the flow's projection, as a stuck friction force
+!> does. A slipping contact's force is -s mu lambda: for a rigid normal the constraint's force
+!> direction is then n - s mu w (Painleve's paradox when that makes the constraint matrix
+!> singular: the mode fails). Event rows, positive while the mode lasts: stuck, mu lambda - r
+!> and mu lambda + r (the limit); slipping, s w^T v; closed, lambda (opening); open, the gap
+!> (closing: for a rigid normal with a closing velocity an impact, plastic, with Coulomb's
+!> impulse law, solved by the flow with this element's law at velocity level).
 module stickslip_unilateral_element
     use stickslip_kinds, only: dp
     use stickslip_friction_contact, only: friction_contact_t, init_friction_contact
+    use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
+        action_decide, action_close
     implicit none
     private
     public :: unilateral_element_t, new_unilateral_element
+
+    !> Tolerance of the consistency tests of a mode (relative to the scales).
+    real(dp), parameter :: tol = 1.0e-9_dp
 
     !> A unilateral contact with 1D or 2D friction.
     type, extends(friction_contact_t) :: unilateral_element_t
     contains
         procedure :: law_name => unilateral_name
+        procedure :: exact_support => unilateral_exact_support
+        procedure :: mode_terms => unilateral_mode_terms
+        procedure :: event_rows => unilateral_event_rows
+        procedure :: start_code => unilateral_start_code
+        procedure :: coupled => unilateral_coupled
+        procedure :: holds_constraint => unilateral_holds_constraint
+        procedure :: candidates => unilateral_candidates
+        procedure :: consistent => unilateral_consistent
+        procedure :: impacts => unilateral_impacts
+        procedure :: rigid_closed => unilateral_rigid_closed
+        procedure :: start_gap => unilateral_start_gap
     end type unilateral_element_t
 
 contains
@@ -35,4 +62,200 @@ contains
         character(len=:), allocatable :: name
         name = "unilateral"
     end function unilateral_name
+
+    !> 1D friction, rigid tangentially: handled.
+    function unilateral_exact_support(self) result(why)
+        class(unilateral_element_t), intent(in) :: self
+        character(len=:), allocatable :: why
+        why = ""
+        if (self%law%ntangent == 2) then
+            why = "the exact reference does not handle 2D friction on a unilateral contact yet"
+        else if (self%kt > 0.0_dp) then
+            why = "the exact reference does not handle a tangential stiffness on a "// &
+                  "unilateral contact yet"
+        end if
+    end function unilateral_exact_support
+
+    !> The gap gap + n^T x as a row of y [m].
+    pure function gap_row(self, geom) result(row)
+        class(unilateral_element_t), intent(in) :: self
+        type(element_geometry_t), intent(in) :: geom
+        real(dp) :: row(geom%na)
+        row = geom%disp_row(3) + geom%const_row(self%gap)
+    end function gap_row
+
+    !> Open: nothing. Elastic normal: lambda = -k_n g along n, the friction -s mu lambda along
+    !> w when slipping, the constraint w^T v = 0 when stuck. Rigid normal: stuck, both
+    !> directions constrained; slipping, n^T v = 0 held by lambda (n - s mu w).
+    subroutine unilateral_mode_terms(self, code, geom, terms)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        type(mode_terms_t), intent(inout) :: terms
+        real(dp) :: lrow(geom%na)
+        integer :: c, cn
+        c = geom%first
+        cn = geom%first + 1
+        associate (mu => self%law%mu, wt => geom%dt(:, 1), nt => geom%dt(:, 3))
+            if (code(1) == 2) return
+            if (self%kn > 0.0_dp) then
+                lrow = -self%kn*gap_row(self, geom)
+                terms%fb(cn, :) = lrow
+                call terms%add_force(nt, lrow)
+                if (code(1) == 0) then
+                    call terms%constrain(wt, wt, c, 0, 0.0_dp)
+                else
+                    terms%fb(c, :) = -code(1)*mu*lrow
+                    call terms%add_force(wt, terms%fb(c, :))
+                end if
+            else if (code(1) == 0) then
+                call terms%constrain(wt, wt, c, 0, 0.0_dp)
+                call terms%constrain(nt, nt, cn, 0, 0.0_dp)
+            else
+                call terms%constrain(nt, nt - code(1)*mu*wt, cn, c, -code(1)*mu)
+            end if
+        end associate
+    end subroutine unilateral_mode_terms
+
+    !> Stuck: mu lambda -/+ r (slip against the force), lambda (open); slipping: s w^T v
+    !> (decide), lambda (open); open: the gap (close).
+    subroutine unilateral_event_rows(self, code, geom, fb, events)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :)
+        type(event_list_t), intent(inout) :: events
+        associate (mu => self%law%mu)
+            select case (code(1))
+            case (0)
+                call events%add(mu*fb(2, :) - fb(1, :), geom%fref*max(mu, 1.0e-3_dp), 1, -1)
+                call events%add(mu*fb(2, :) + fb(1, :), geom%fref*max(mu, 1.0e-3_dp), 1, 1)
+                call events%add(fb(2, :), geom%fref, 1, 2)
+            case (2)
+                call events%add(gap_row(self, geom), geom%gref*geom%omega, 1, action_close)
+            case default
+                call events%add(code(1)*geom%vel_row(1), geom%vref, 1, action_decide)
+                call events%add(fb(2, :), geom%fref, 1, 2)
+            end select
+        end associate
+    end subroutine unilateral_event_rows
+
+    !> Open when the gap exceeds 1e-9 of its scale; otherwise (closed or at zero gap) the
+    !> joint decision settles it (slipping in the direction of a slip velocity above 1e-12
+    !> of its scale).
+    subroutine unilateral_start_code(self, geom, y, code, decide)
+        class(unilateral_element_t), intent(in) :: self
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:)
+        integer, intent(out) :: code(:)
+        logical, intent(out) :: decide
+        real(dp) :: v
+        decide = .false.
+        if (dot_product(gap_row(self, geom), y) > 1.0e-9_dp*geom%gref) then
+            code(1) = 2
+            return
+        end if
+        v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
+        code(1) = 0
+        if (abs(v) > 1.0e-12_dp*geom%vref) code(1) = nint(sign(1.0_dp, v))
+        decide = .true.
+    end subroutine unilateral_start_code
+
+    !> Takes part in joint decisions.
+    pure logical function unilateral_coupled(self) result(c)
+        class(unilateral_element_t), intent(in) :: self
+        c = .true.
+    end function unilateral_coupled
+
+    !> Stuck: a constraint (with the normal when rigid).
+    pure logical function unilateral_holds_constraint(self, code) result(h)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        h = code(1) == 0
+    end function unilateral_holds_constraint
+
+    !> Moving: its slip direction or open; at rest: stuck, slipping either way, open.
+    subroutine unilateral_candidates(self, code, geom, y, cand, ncand)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:)
+        integer, intent(out) :: cand(:, :)
+        integer, intent(out) :: ncand
+        real(dp) :: v
+        v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
+        if (abs(v) > 1.0e-12_dp*geom%vref) then
+            ncand = 2
+            cand(1, 1:2) = [nint(sign(1.0_dp, v)), 2]
+        else
+            ncand = 4
+            cand(1, 1:4) = [0, 1, -1, 2]
+        end if
+    end subroutine unilateral_candidates
+
+    !> lambda >= 0 when closed; stuck: |r| <= mu lambda; open: the gap does not close (gap
+    !> velocity, then acceleration, >= 0); slipping from rest: accelerating in its direction.
+    !> Tolerances 1e-9 of the scales.
+    logical function unilateral_consistent(self, code, moving, geom, fb, y, ydot) result(ok)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        logical, intent(in) :: moving
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :), y(:), ydot(:)
+        real(dp) :: lam, r, gvel, gacc, acc
+        integer :: n
+        n = geom%n
+        ok = .true.
+        lam = 0.0_dp
+        if (code(1) /= 2) then
+            lam = dot_product(fb(2, :), y)
+            if (lam < -tol*geom%fref) ok = .false.
+        end if
+        select case (code(1))
+        case (0)
+            r = dot_product(fb(1, :), y)
+            if (abs(r) > self%law%mu*max(lam, 0.0_dp) + tol*geom%fref) ok = .false.
+        case (2)
+            gvel = dot_product(geom%dt(:, 3), y(n + 1:2*n))
+            if (gvel < -tol*geom%gref*geom%omega) then
+                ok = .false.
+            else if (gvel <= tol*geom%gref*geom%omega) then
+                gacc = dot_product(geom%dt(:, 3), ydot(n + 1:2*n))
+                if (gacc < -tol*geom%gref*geom%omega**2) ok = .false.
+            end if
+        case default
+            if (.not. moving) then
+                acc = code(1)*dot_product(geom%dt(:, 1), ydot(n + 1:2*n))
+                if (acc < -tol*geom%vref*geom%omega) ok = .false.
+            end if
+        end select
+    end function unilateral_consistent
+
+    !> A rigid normal closing with a normal velocity: a plastic impact.
+    logical function unilateral_impacts(self, code, geom, y) result(imp)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:)
+        imp = self%kn == 0.0_dp .and. &
+              dot_product(geom%dt(:, 3), y(geom%n + 1:2*geom%n)) < 0.0_dp
+    end function unilateral_impacts
+
+    !> A rigid normal, closed.
+    pure logical function unilateral_rigid_closed(self, code) result(c)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        c = self%kn == 0.0_dp .and. code(1) /= 2
+    end function unilateral_rigid_closed
+
+    !> A rigid normal at a gap below 1e-9 of its scale.
+    subroutine unilateral_start_gap(self, geom, y, active, gap)
+        class(unilateral_element_t), intent(in) :: self
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:)
+        logical, intent(out) :: active
+        real(dp), intent(out) :: gap
+        gap = dot_product(gap_row(self, geom), y)
+        active = self%kn == 0.0_dp .and. .not. gap > 1.0e-9_dp*geom%gref
+    end subroutine unilateral_start_gap
 end module stickslip_unilateral_element

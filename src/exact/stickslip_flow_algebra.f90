@@ -1,0 +1,514 @@
+!> The algebra of the exact flow's contact modes (doc/contacts.md, section 5): a mode's
+!> dynamics from its elements' terms (mode_index), the elements' codes at the start and at
+!> events (start_codes, decide_codes), impacts of rigid normals (impact_jump), and the
+!> projections of a start onto the constraints of its mode (close_rigid_gaps,
+!> project_velocities). In balanced modal coordinates (M = I) every mode is
+!>     u' = hb y + Ft Lambda,   Lambda = -(Ct^T Ft)^-1 Ct^T hb y,
+!> Ct and Ft the directions of the elements' velocity constraints and of the forces that
+!> hold them (stickslip_contact_modes).
+!>
+!> The decision at an event concerns the element whose event fired and every element
+!> holding a rigid constraint (its code may change with the others'). The rigid ones
+!> (contact_element_t%coupled) decide jointly: Coulomb contacts only by Coulomb's law at
+!> acceleration level (the box QP of the Coulomb element, for any number of contacts),
+!> others by trying their candidate codes (stuck and closed first) until a combination is
+!> consistent with every law (at most 8 contacts at once enumerated). Elastic ones (a
+!> Jenkins or microslip slider) then decide alone with the accelerations of the new mode:
+!> their force is continuous at the event, so the structure's acceleration does not
+!> depend on their codes.
+module stickslip_flow_algebra
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_lapack, only: dgesv
+    use stickslip_flow_modes, only: mode_t, flow_modes_t, build_ladder, identity_matrix
+    use stickslip_contact_modes, only: mode_terms_t, event_list_t
+    use stickslip_contact_set, only: contact_set_t, new_element_set
+    use stickslip_contact_element, only: element_box_t, state_stick
+    use stickslip_coulomb_element, only: coulomb_decision
+    implicit none
+    private
+    public :: mode_index, assemble, start_codes, decide_codes, impact_jump, &
+        close_rigid_gaps, project_velocities
+
+    !> Most elements decided jointly by enumeration (beyond: the first combination only).
+    integer, parameter :: max_enumerated = 8
+
+contains
+
+    !> The terms of the mode `code` with its constraints solved: hb, sb, fb of `terms`
+    !> hold the dynamics, the constraint forces added (ok = .false. when the constraint
+    !> matrix Ct^T Ft is singular: dependent constraints or Painleve's paradox). Elements
+    !> flagged in `skip` add nothing (their forces left out: the free accelerations of a
+    !> joint decision).
+    subroutine assemble(self, code, terms, ok, skip)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> The codes of every slot.
+        integer, intent(in) :: code(:)
+        !> The terms.
+        type(mode_terms_t), intent(inout) :: terms
+        !> The constraints could be solved.
+        logical, intent(out) :: ok
+        !> Elements left out.
+        logical, intent(in), optional :: skip(:)
+        real(dp), allocatable :: g(:, :), l(:, :)
+        integer, allocatable :: ipiv(:)
+        integer :: n, na, j, k, info
+        n = self%n
+        na = self%na
+        ok = .true.
+        call terms%reset(n, na, self%ns, self%cs%nchannel)
+        do j = 1, n
+            terms%hb(j, j) = -self%lam(j)/self%s(j)
+        end do
+        terms%hb(:, n + 1:2*n) = -self%ct
+        terms%hb(:, self%nz + 1:) = self%ft/self%se
+        do j = 1, self%nc
+            if (present(skip)) then
+                if (skip(j)) cycle
+            end if
+            call self%cs%elements(j)%e%mode_terms(code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                  self%geom(j), terms)
+        end do
+        k = size(terms%chan)
+        if (k == 0) return
+        ! Lambda = -(Ct^T Ft)^-1 Ct^T hb
+        g = matmul(transpose(terms%ctm), terms%ftm)
+        l = -matmul(transpose(terms%ctm), terms%hb)
+        allocate (ipiv(k))
+        call dgesv(k, na, g, k, ipiv, l, k, info)
+        if (info /= 0 .or. .not. all(ieee_is_finite(l))) then
+            ok = .false.
+            return
+        end if
+        terms%hb = terms%hb + matmul(terms%ftm, l)
+        do j = 1, k
+            terms%fb(terms%chan(j), :) = terms%fb(terms%chan(j), :) + l(j, :)
+            if (terms%slip_ch(j) > 0) terms%fb(terms%slip_ch(j), :) = &
+                terms%fb(terms%slip_ch(j), :) + terms%slip_factor(j)*l(j, :)
+        end do
+    end subroutine assemble
+
+    !> The balanced dynamics b (na x na) of assembled terms: p' = S u, u' = hb y, sigma' =
+    !> sb y, the exosystem's rotations.
+    function dynamics_of(self, terms) result(b)
+        class(flow_modes_t), intent(in) :: self
+        type(mode_terms_t), intent(in) :: terms
+        real(dp) :: b(self%na, self%na)
+        integer :: j, k, e0
+        b = 0.0_dp
+        do j = 1, self%n
+            b(j, self%n + j) = self%s(j)
+        end do
+        b(self%n + 1:2*self%n, :) = terms%hb
+        if (self%ns > 0) b(2*self%n + 1:self%nz, :) = terms%sb
+        e0 = self%nz
+        do k = 1, size(self%eharm)
+            b(e0 + 2*k, e0 + 2*k + 1) = -self%eharm(k)*self%omega
+            b(e0 + 2*k + 1, e0 + 2*k) = self%eharm(k)*self%omega
+        end do
+    end function dynamics_of
+
+    !> Index of the mode with codes `code` in the cache, built on first use: its dynamics,
+    !> channel forces, constraint directions, event rows and ladder. Errors (stat
+    !> numerical): dependent constraints (Painleve), a non-finite exponential (the mode is
+    !> then not kept in the cache).
+    integer function mode_index(self, code, error) result(im)
+        !> The dynamics (its mode cache grows).
+        class(flow_modes_t), intent(inout) :: self
+        !> Codes of every slot.
+        integer, intent(in) :: code(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(inout) :: error
+        type(mode_t), allocatable :: grown(:)
+        type(mode_terms_t) :: terms
+        type(event_list_t) :: events
+        logical :: ok
+        integer :: j, m, k, c0, w
+        do im = 1, self%nmodes
+            if (all(self%modes(im)%code == code)) return
+        end do
+        call assemble(self, code, terms, ok)
+        if (.not. ok) then
+            call fatal_error(error, "reference: a contact mode has dependent constraints "// &
+                             "(the stuck and closed contact directions are not independent, "// &
+                             "or Painleve's paradox: a slipping rigid contact whose friction "// &
+                             "pushes it closed harder than it holds)", stickslip_stat%numerical)
+            im = 0
+            return
+        end if
+        if (self%nmodes == size(self%modes)) then
+            allocate (grown(2*size(self%modes)))
+            grown(1:self%nmodes) = self%modes(1:self%nmodes)
+            call move_alloc(grown, self%modes)
+        end if
+        self%nmodes = self%nmodes + 1
+        im = self%nmodes
+        self%modes(im) = mode_t()
+        associate (md => self%modes(im))
+            md%code = code
+            md%b = dynamics_of(self, terms)
+            md%force = matmul(terms%fb, self%tb)
+            md%ctm = terms%ctm
+            if (allocated(md%gauss)) deallocate (md%gauss)
+            ! the event rows of every element, with the forces of its channels
+            m = 0
+            allocate (md%rows(self%na, 0), md%row_scale(0), md%row_element(0), md%row_slot(0), &
+                      md%row_action(0))
+            do j = 1, self%nc
+                c0 = self%cs%first(j)
+                w = self%cs%width(j)
+                call events%clear(self%na)
+                call self%cs%elements(j)%e%event_rows(code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                      self%geom(j), &
+                                                      terms%fb(c0:c0 + w - 1, :), events)
+                do k = 1, events%count
+                    m = m + 1
+                    md%rows = reshape([md%rows, events%rows(:, k)], [self%na, m])
+                    md%row_scale = [md%row_scale, events%scale(k)]
+                    md%row_element = [md%row_element, j]
+                    md%row_slot = [md%row_slot, self%slot0(j) + events%slot(k)]
+                    md%row_action = [md%row_action, events%action(k)]
+                end do
+            end do
+            md%drows = matmul(transpose(md%b), md%rows)
+            call build_ladder(self, md, error)
+        end associate
+        ! never leave a broken mode in the cache
+        if (allocated(error)) self%nmodes = self%nmodes - 1
+    end function mode_index
+
+    !> The codes of every element at the start state yb (balanced): each element's own
+    !> (contact_element_t%start_code), those it cannot settle alone decided jointly.
+    !> Errors: no consistent mode.
+    subroutine start_codes(self, yb, code, error)
+        !> The dynamics.
+        class(flow_modes_t), intent(inout) :: self
+        !> Start state in balanced coordinates.
+        real(dp), intent(in) :: yb(:)
+        !> The codes.
+        integer, intent(out) :: code(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(inout) :: error
+        integer :: j
+        integer, allocatable :: zset(:)
+        logical :: decide
+        allocate (zset(0))
+        do j = 1, self%nc
+            call self%cs%elements(j)%e%start_code(self%geom(j), yb, &
+                                                  code(self%slot0(j) + 1:self%slot_hi(j)), decide)
+            if (decide) zset = [zset, j]
+        end do
+        call decide_codes(self, yb, zset, code, error)
+    end subroutine start_codes
+
+    !> New codes for the elements `zset` at state yb (balanced): the rigid ones jointly
+    !> (Coulomb's law at acceleration level for Coulomb contacts only, else the first
+    !> consistent combination of candidates), then the elastic ones alone with the
+    !> accelerations of that mode. Errors (stat numerical): no consistent combination.
+    subroutine decide_codes(self, yb, zset, code, error)
+        !> The dynamics.
+        class(flow_modes_t), intent(inout) :: self
+        !> State in balanced coordinates.
+        real(dp), intent(in) :: yb(:)
+        !> The elements to decide.
+        integer, intent(in) :: zset(:)
+        !> Codes of every slot; those of zset replaced.
+        integer, intent(inout) :: code(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(inout) :: error
+        integer, allocatable :: rigid(:), elastic(:)
+        type(mode_terms_t) :: terms
+        real(dp), allocatable :: ydot(:)
+        logical :: ok
+        integer :: k, j
+        if (size(zset) == 0) return
+        allocate (rigid(0), elastic(0))
+        do k = 1, size(zset)
+            j = zset(k)
+            if (any(rigid == j) .or. any(elastic == j)) cycle
+            if (self%cs%elements(j)%e%coupled()) then
+                rigid = [rigid, j]
+            else
+                elastic = [elastic, j]
+            end if
+        end do
+        if (size(rigid) > 0) then
+            call coulomb_qp(ok)
+            if (.not. ok) call enumerate(ok)
+            if (.not. ok) then
+                call fatal_error(error, "reference: no consistent contact mode at an event "// &
+                                 "(contacts "//itoa(rigid(1))//" ...)", stickslip_stat%numerical)
+                return
+            end if
+        end if
+        if (size(elastic) == 0) return
+        call assemble(self, code, terms, ok)
+        if (.not. ok) return
+        ydot = matmul(dynamics_of(self, terms), yb)
+        do k = 1, size(elastic)
+            j = elastic(k)
+            call self%cs%elements(j)%e%local_decide(code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                    self%geom(j), yb, ydot)
+        end do
+
+    contains
+
+        !> Coulomb contacts only, no other constraint: Coulomb's law at acceleration level
+        !> (stickslip_coulomb_element, coulomb_decision) on the free accelerations.
+        subroutine coulomb_qp(ok)
+            logical, intent(out) :: ok
+            logical :: skip(self%nc)
+            real(dp), allocatable :: wz(:, :), f(:)
+            integer :: codes(size(rigid)), q
+            ok = .false.
+            skip = .false.
+            skip(rigid) = .true.
+            call assemble(self, code, terms, ok, skip)
+            if (.not. ok) return
+            ok = .false.
+            if (size(terms%chan) > 0) return
+            allocate (wz(self%n, size(rigid)))
+            do q = 1, size(rigid)
+                wz(:, q) = self%geom(rigid(q))%dt(:, 1)
+            end do
+            f = matmul(terms%hb, yb)
+            call coulomb_decision(self%cs%elements, rigid, matmul(transpose(wz), wz), &
+                                  matmul(f, wz), codes, ok)
+            if (.not. ok) return
+            do q = 1, size(rigid)
+                code(self%slot0(rigid(q)) + 1) = codes(q)
+            end do
+        end subroutine coulomb_qp
+
+        !> Every combination of the rigid elements' candidates, in order; the first
+        !> consistent one is kept.
+        subroutine enumerate(ok)
+            logical, intent(out) :: ok
+            integer :: nz, q, total, combo, rem, mslot
+            integer, allocatable :: ncand(:), trial(:)
+            integer, allocatable :: cand(:, :, :)
+            logical, allocatable :: moving(:)
+            real(dp), allocatable :: yd(:)
+            logical :: good
+            ok = .false.
+            nz = size(rigid)
+            mslot = maxval(self%nslots(rigid))
+            allocate (ncand(nz), cand(mslot, 4, nz), moving(nz))
+            cand = 0
+            do q = 1, nz
+                j = rigid(q)
+                call self%cs%elements(j)%e%candidates(code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                      self%geom(j), yb, &
+                                                      cand(1:self%nslots(j), :, q), ncand(q))
+                moving(q) = abs(dot_product(self%geom(j)%dt(:, 1), yb(self%n + 1:2*self%n))) > &
+                            1.0e-12_dp*self%geom(j)%vref
+            end do
+            total = product(ncand)
+            if (nz > max_enumerated) total = 1
+            do combo = 0, total - 1
+                trial = code
+                rem = combo
+                do q = 1, nz
+                    j = rigid(q)
+                    trial(self%slot0(j) + 1:self%slot_hi(j)) = &
+                        cand(1:self%nslots(j), mod(rem, ncand(q)) + 1, q)
+                    rem = rem/ncand(q)
+                end do
+                call assemble(self, trial, terms, good)
+                if (.not. good) cycle
+                yd = matmul(dynamics_of(self, terms), yb)
+                do q = 1, nz
+                    j = rigid(q)
+                    associate (c0 => self%cs%first(j), w => self%cs%width(j))
+                        good = self%cs%elements(j)%e%consistent( &
+                               trial(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                                 moving(q), self%geom(j), &
+                                                                 terms%fb(c0:c0 + w - 1, :), &
+                                                                 yb, yd)
+                    end associate
+                    if (.not. good) exit
+                end do
+                if (good) then
+                    code = trial
+                    ok = .true.
+                    return
+                end if
+            end do
+        end subroutine enumerate
+    end subroutine decide_codes
+
+    !> A rigid normal closing with a normal velocity (an impact) at state yb (balanced):
+    !> the plastic impact with the laws of the element `jimp` and of the rigid normals
+    !> already closed (code), at velocity level, solved as one step of zero length by their
+    !> own local solves (contact_set_t%step_forces: u+ = u- + A P, A the modal Delassus
+    !> matrix of their channels). yb's velocities are replaced by the ones after the impact;
+    !> `jump` (nz x nz) is the Jacobian of the jump map of the state for the active
+    !> impulses (stuck: both directions held; sliding: the normal held by n + mu sign w);
+    !> `loss` the kinetic energy lost [J] (>= 0).
+    subroutine impact_jump(self, yb, jimp, code, jump, loss)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> State in balanced coordinates; its velocities updated.
+        real(dp), intent(inout) :: yb(:)
+        !> The element that closes.
+        integer, intent(in) :: jimp
+        !> Codes before the impact.
+        integer, intent(in) :: code(:)
+        !> The Jacobian of the jump.
+        real(dp), intent(out) :: jump(:, :)
+        !> Kinetic energy lost.
+        real(dp), intent(out) :: loss
+        integer, allocatable :: involved(:), ipiv(:)
+        real(dp), allocatable :: dirs(:, :), a(:, :), q(:), p(:), ctm(:, :), ftm(:, :), &
+                                 g(:, :), l(:, :), u(:)
+        integer :: state(1)
+        type(element_box_t), allocatable :: boxes(:)
+        type(contact_set_t) :: impacts
+        integer :: n, j, k, m, sweeps, info
+        real(dp) :: ke0, resid, scale, pn, pt
+        n = self%n
+        allocate (involved(0))
+        do j = 1, self%nc
+            if (j == jimp .or. &
+                self%cs%elements(j)%e%rigid_closed(code(self%slot0(j) + 1:self%slot_hi(j)))) &
+                involved = [involved, j]
+        end do
+        m = size(involved)
+        allocate (dirs(n, 2*m), boxes(m))
+        do k = 1, m
+            j = involved(k)
+            dirs(:, 2*k - 1) = self%geom(j)%dt(:, 1)
+            dirs(:, 2*k) = self%geom(j)%dt(:, 3)
+            allocate (boxes(k)%e, source=self%cs%elements(j)%e)
+        end do
+        call new_element_set(impacts, boxes)
+        a = matmul(transpose(dirs), dirs)
+        q = matmul(yb(n + 1:2*n), dirs)
+        allocate (p(2*m))
+        p = 0.0_dp
+        scale = max(maxval(abs(q))/max(maxval(abs(a)), tiny(1.0_dp)), tiny(1.0_dp))
+        call impacts%step_forces(a, q, p, scale, 1.0e-14_dp, 1000, sweeps, resid)
+        u = q + matmul(a, p)
+        ke0 = 0.5_dp*dot_product(yb(n + 1:2*n), yb(n + 1:2*n))
+        yb(n + 1:2*n) = yb(n + 1:2*n) + matmul(dirs, p)
+        loss = ke0 - 0.5_dp*dot_product(yb(n + 1:2*n), yb(n + 1:2*n))
+        ! the jump map of the active impulses: u+ = (I - Ft (Ct^T Ft)^-1 Ct^T) u-
+        allocate (ctm(n, 0), ftm(n, 0))
+        do k = 1, m
+            pt = p(2*k - 1)
+            pn = p(2*k)
+            if (pn <= 0.0_dp) cycle
+            ! the element's state at the impulse: stuck (both directions held) or sliding
+            ! (the normal held by n + (P_t / P_n) w, |P_t| = mu P_n)
+            call impacts%elements(k)%e%states(0.5_dp*(a(2*k - 1, 2*k - 1) + a(2*k, 2*k)), &
+                                   reshape(p(2*k - 1:2*k), [1, 2]), &
+                                   reshape(u(2*k - 1:2*k), [1, 2]), state)
+            if (state(1) == state_stick) then
+                ctm = reshape([ctm, dirs(:, 2*k - 1), dirs(:, 2*k)], [n, size(ctm, 2) + 2])
+                ftm = reshape([ftm, dirs(:, 2*k - 1), dirs(:, 2*k)], [n, size(ftm, 2) + 2])
+            else
+                ctm = reshape([ctm, dirs(:, 2*k)], [n, size(ctm, 2) + 1])
+                ftm = reshape([ftm, dirs(:, 2*k) + (pt/pn)*dirs(:, 2*k - 1)], &
+                              [n, size(ftm, 2) + 1])
+            end if
+        end do
+        jump = identity_matrix(size(jump, 1))
+        if (size(ctm, 2) == 0) return
+        g = matmul(transpose(ctm), ftm)
+        l = transpose(ctm)
+        allocate (ipiv(size(g, 1)))
+        call dgesv(size(g, 1), n, g, size(g, 1), ipiv, l, size(g, 1), info)
+        if (info /= 0) return
+        jump(n + 1:2*n, n + 1:2*n) = jump(n + 1:2*n, n + 1:2*n) - matmul(ftm, l)
+
+    end subroutine impact_jump
+
+    !> Put every rigid normal at a zero or negative gap (contact_element_t%start_gap) at zero
+    !> gap: the M-orthogonal projection of the displacement, in balanced coordinates p = S q
+    !> (x = Phi q): q <- q - Nt G^-1 (Nt^T q + gap), G = Nt^T Nt. pj (nz x nz) is set to
+    !> the Jacobian of the map of the state.
+    subroutine close_rigid_gaps(self, yb, pj)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> Balanced state, corrected in place.
+        real(dp), intent(inout) :: yb(:)
+        !> The Jacobian of the correction.
+        real(dp), intent(out) :: pj(:, :)
+        real(dp), allocatable :: nt(:, :), rhs(:), q(:), x(:, :)
+        integer :: j, n, m, k
+        logical :: ok, active
+        real(dp) :: gap
+        n = self%n
+        pj = identity_matrix(size(pj, 1))
+        allocate (nt(n, 0), rhs(0))
+        q = yb(1:n)/self%s
+        do j = 1, self%nc
+            call self%cs%elements(j)%e%start_gap(self%geom(j), yb, active, gap)
+            if (.not. active) cycle
+            nt = reshape([nt, self%geom(j)%dt(:, 3)], [n, size(nt, 2) + 1])
+            rhs = [rhs, gap]
+        end do
+        m = size(nt, 2)
+        if (m == 0) return
+        ! X = G^-1 [Nt^T q + gap, Nt^T]
+        call gram_solve(nt, reshape([rhs, transpose(nt)], [m, n + 1]), x, ok)
+        if (.not. ok) return
+        q = q - matmul(nt, x(:, 1))
+        yb(1:n) = q*self%s
+        ! d p_new / d p = S (I - Nt G^-1 Nt^T) S^-1
+        do k = 1, n
+            pj(1:n, k) = pj(1:n, k) - self%s*matmul(nt, x(:, k + 1))/self%s(k)
+        end do
+    end subroutine close_rigid_gaps
+
+    !> Remove from the balanced state the velocity along the constraint directions of the
+    !> mode md: u <- u - Ct (Ct^T Ct)^-1 Ct^T u (a roundoff-sized correction after an event;
+    !> at the start, the projection of a perturbation off the constraints). With pj: pj <-
+    !> P pj, P the Jacobian on the state.
+    subroutine project_velocities(self, md, yb, pj)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> The mode.
+        type(mode_t), intent(in) :: md
+        !> Balanced state, corrected in place.
+        real(dp), intent(inout) :: yb(:)
+        !> Jacobian of the start corrections, composed with this one's.
+        real(dp), intent(inout), optional :: pj(:, :)
+        real(dp), allocatable :: x(:, :)
+        integer :: m, n
+        logical :: ok
+        n = self%n
+        m = size(md%ctm, 2)
+        if (m == 0) return
+        ! X = G^-1 [Ct^T u, Ct^T]
+        call gram_solve(md%ctm, reshape([matmul(yb(n + 1:2*n), md%ctm), transpose(md%ctm)], &
+                                        [m, n + 1]), x, ok)
+        if (.not. ok) return
+        yb(n + 1:2*n) = yb(n + 1:2*n) - matmul(md%ctm, x(:, 1))
+        ! P = I - Ct G^-1 Ct^T on the velocities
+        if (present(pj)) pj(n + 1:2*n, :) = matmul(identity_matrix(n) - &
+                                                   matmul(md%ctm, x(:, 2:)), pj(n + 1:2*n, :))
+    end subroutine project_velocities
+
+    !> x = (C^T C)^-1 b for the m columns of c (n x m) and b (m x k) (LAPACK dgesv); ok =
+    !> .false. when C^T C is singular (dependent constraint directions).
+    subroutine gram_solve(c, b, x, ok)
+        !> The directions, n x m.
+        real(dp), intent(in) :: c(:, :)
+        !> Right-hand sides, m x k.
+        real(dp), intent(in) :: b(:, :)
+        !> The solutions, m x k.
+        real(dp), allocatable, intent(out) :: x(:, :)
+        !> The system was solved.
+        logical, intent(out) :: ok
+        real(dp) :: g(size(c, 2), size(c, 2))
+        integer :: ipiv(size(c, 2)), info, m
+        m = size(c, 2)
+        g = matmul(transpose(c), c)
+        x = b
+        call dgesv(m, size(b, 2), g, m, ipiv, x, m, info)
+        ok = info == 0 .and. all(ieee_is_finite(x))
+    end subroutine gram_solve
+end module stickslip_flow_algebra

@@ -84,11 +84,11 @@ contains
         ! arbitrary one.
         if (prob%basis%has_zero) then
             do j = 1, ncontact
-                if (.not. all(state(:, j) == state_stick)) cycle
                 c0 = prob%contacts%first(j)
                 m = prob%contacts%width(j)
                 mean = [(y((c0 + k - 2)*nb + i0), k=1, m)]
-                call prob%contacts%elements(j)%e%settle_offset(rs(:, c0:c0 + m - 1), mean, &
+                call prob%contacts%elements(j)%e%settle_offset(prob%rho, rs(:, c0:c0 + m - 1), &
+                                                               vs(:, c0:c0 + m - 1), mean, &
                                                                settled)
                 if (.not. settled) cycle
                 sol%offset_undetermined(j) = .true.
@@ -106,7 +106,7 @@ contains
         end do
 
         ! shares, stick phases, Coulomb's dissipation, the force-limit ratio
-        call measure_contacts(prob%contacts, rs, vs, state, period, &
+        call measure_contacts(prob%contacts, prob%rho, rs, vs, state, period, &
                               max(1, nt/max(1, opts%harmonics)), cm)
         sol%open_fraction = cm%open_fraction
         sol%stick_fraction = cm%stick_fraction

@@ -28,6 +28,8 @@ module stickslip_case
         read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
     use stickslip_case_friction, only: read_friction_group, friction_form_t
+    use stickslip_case_microslip, only: read_microslip_group
+    use stickslip_iwan_element, only: iwan_element_t
     use stickslip_diagnostics, only: diagnostics_t, level_warning
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t, read_modes_group, modes_run_options_t
@@ -41,9 +43,9 @@ module stickslip_case
     public :: selected_dofs, default_output_dofs
 
     !> The groups of a case file.
-    character(len=10), parameter :: known_groups(13) = [character(len=10) :: 'system', &
-        'forcing', 'friction', 'hbm', 'output', 'run', 'euler', 'reference', 'study', 'sweep', &
-        'robustness', 'reduction', 'modes']
+    character(len=10), parameter :: known_groups(14) = [character(len=10) :: 'system', &
+        'forcing', 'friction', 'microslip', 'hbm', 'output', 'run', 'euler', 'reference', &
+        'study', 'sweep', 'robustness', 'reduction', 'modes']
     !> Most doubles of the sampled results of one run (samples or steps per period times
     !> 2 ndof + 3 ncontact + 1): 2**27 doubles = 1 GiB.
     integer(int64), parameter :: max_sample_values = 2_int64**27
@@ -151,6 +153,8 @@ contains
                                 optional_group=modes_case(nml))
         if (allocated(error)) return
         call read_friction_group(nml, case%model, error, case%system_files, case%friction_form)
+        if (allocated(error)) return
+        call read_microslip_group(nml, case%model, error)
         if (allocated(error)) return
         call read_hbm_group(nml, case%hbm, case%checks, error)
         if (allocated(error)) return
@@ -669,6 +673,7 @@ contains
                     "  tangential_stiffness = "//rlist(m%tangential_stiffness), stat, msg)
             end if
             call put(unit, "/", stat, msg)
+            call put_microslip()
             call put(unit, "&reduction", stat, msg)
             call put(unit, "  method = '"//trim(case%reduction%method)//"'", stat, msg)
             call put(unit, "  modes = "//itoa(case%reduction%modes), stat, msg)
@@ -800,6 +805,48 @@ contains
                 end if
             end select
         end subroutine put_directions
+
+        !> &microslip, when some contact is a microslip joint: its contacts and either the
+        !> 4-parameter model (stiffness, chi, beta, sliders; F_S = mu N from &friction) or
+        !> the explicit sliders.
+        subroutine put_microslip()
+            integer, allocatable :: contact(:), sliders(:)
+            real(dp), allocatable :: kt(:), chi(:), beta(:), ks(:), fs(:)
+            logical :: explicit
+            integer :: jj
+            associate (m => case%model)
+                if (.not. allocated(m%laws)) return
+                allocate (contact(0), sliders(0), kt(0), chi(0), beta(0), ks(0), fs(0))
+                explicit = .false.
+                do jj = 1, size(m%laws)
+                    if (.not. allocated(m%laws(jj)%e)) cycle
+                    select type (e => m%laws(jj)%e)
+                    type is (iwan_element_t)
+                        contact = [contact, jj]
+                        sliders = [sliders, e%n]
+                        kt = [kt, e%kt]
+                        chi = [chi, e%chi]
+                        beta = [beta, e%beta]
+                        ks = [ks, e%k]
+                        fs = [fs, e%f]
+                        if (.not. e%mu_n) explicit = .true.
+                    end select
+                end do
+                if (size(contact) == 0) return
+                call put(unit, "&microslip", stat, msg)
+                call put(unit, "  contact = "//ilist(contact), stat, msg)
+                if (explicit) then
+                    call put(unit, "  slider_stiffness = "//rlist(ks), stat, msg)
+                    call put(unit, "  slider_force = "//rlist(fs), stat, msg)
+                else
+                    call put(unit, "  stiffness = "//rlist(kt), stat, msg)
+                    call put(unit, "  chi = "//rlist(chi), stat, msg)
+                    call put(unit, "  beta = "//rlist(beta), stat, msg)
+                end if
+                call put(unit, "  sliders = "//ilist(sliders), stat, msg)
+                call put(unit, "/", stat, msg)
+            end associate
+        end subroutine put_microslip
     end subroutine write_case
 
     !> Write one line to `unit` unless an earlier write failed (stat /= 0); record the first

@@ -220,6 +220,22 @@ contains
         call put(u, "  euler_seconds = "//rtoa(res%seconds), stat, msg)
         call put(u, "  steps_per_period = "//itoa(case%euler%steps_per_period), stat, msg)
         call put(u, "  max_sweeps = "//itoa(res%max_sweeps), stat, msg)
+        if (allocated(res%stick_fraction)) then
+            if (size(res%stick_fraction) > 0) then
+                call put(u, "  stick_fraction = "//rlist(res%stick_fraction), stat, msg)
+                call put(u, "  slip_fraction = "//rlist(res%slip_fraction), stat, msg)
+                call put(u, "  open_fraction = "//rlist(res%open_fraction), stat, msg)
+                call put(u, "  stick_phases = "//ilist(res%stick_phases), stat, msg)
+            end if
+            call put(u, "  work_forcing = "//rtoa(res%work_forcing), stat, msg)
+            call put(u, "  diss_friction = "//rtoa(res%diss_friction), stat, msg)
+            call put(u, "  diss_damping = "//rtoa(res%diss_damping), stat, msg)
+            call put(u, "  diss_coulomb = "//rtoa(res%diss_coulomb), stat, msg)
+            call put(u, "  max_force_ratio = "//rtoa(res%max_force_ratio), stat, msg)
+            call put(u, "  energy_balance_error = "//rtoa(contact_energy_error( &
+                     res%work_forcing, res%diss_friction, res%diss_damping, 0.0_dp, &
+                     res%work_gross)), stat, msg)
+        end if
         call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
     end subroutine put_euler_keys
 

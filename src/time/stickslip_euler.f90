@@ -38,6 +38,7 @@ module stickslip_euler
         contact_normal_direction
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: channel_t, kinematics_gap, kinematics_velocity
+    use stickslip_contact_measures, only: contact_measures_t, measure_contacts
     use stickslip_lapack, only: dgetrf, dgetrs
     use stickslip_contact_solve, only: contact_forces
     implicit none
@@ -105,6 +106,22 @@ module stickslip_euler
         !> Normal force [N] (the constant normal load of a plain contact) and gap [m] (0 for
         !> a plain contact) over the last period, steps x n_c.
         real(dp), allocatable :: normal(:, :), gap(:, :)
+        !> Kinematic quantity of every force channel over the last period (the slip or
+        !> slider velocity, omega times the gap; with the force of the same step), steps x
+        !> n_ch [m/s].
+        real(dp), allocatable :: u(:, :)
+        !> Shares of the last period each contact is open, sticks and slips, and its stick
+        !> phases (stickslip_contact_measures, from the samples).
+        real(dp), allocatable :: open_fraction(:), stick_fraction(:), slip_fraction(:)
+        integer, allocatable :: stick_phases(:)
+        !> Over the last period, by the rectangle rule on the steps [J]: work of the forcing,
+        !> its gross work integral |f . v| dt, friction dissipation -integral r . D^T v dt,
+        !> viscous dissipation, Coulomb's dissipation (stickslip_contact_measures). Their
+        !> balance is off by implicit Euler's own numerical dissipation, O(h).
+        real(dp) :: work_forcing = 0.0_dp, work_gross = 0.0_dp, diss_friction = 0.0_dp, &
+                    diss_damping = 0.0_dp, diss_coulomb = 0.0_dp
+        !> The force-limit ratio over the last period (stickslip_contact_measures).
+        real(dp) :: max_force_ratio = 0.0_dp
         !> What the checks found: notes, warnings, distrust (stickslip_diagnostics).
         type(diagnostics_t) :: diagnostics
     end type euler_result_t
@@ -399,7 +416,8 @@ contains
         if (.not. res%periodic) call res%diagnostics%add(level_untrusted, "not_periodic", &
                                                          res%diagnosis)
         ! the contacts' states, normal forces and gaps over the last period (each sample:
-        ! after the step before it)
+        ! after the step before it); the Coulomb kernels leave the slip velocities to here
+        if (fast) us = matmul(res%v, w)
         allocate (res%state(ns, nc), res%normal(ns, nc), res%gap(ns, nc))
         associate (cs => res%contacts)
             do j = 1, nc
@@ -422,6 +440,7 @@ contains
                 end if
             end do
         end associate
+        call last_period_measures(res, model, us, d, period_t)
         call system_clock(c1)
         res%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine integrate_euler
@@ -588,6 +607,46 @@ contains
         y(5:) = fc(:, last - first + 1)
     end subroutine step_block_2
 
+    !> The derived quantities of the last period (stickslip_contact_measures) and its
+    !> energies by the rectangle rule on the steps: sample k holds the velocity and the
+    !> forces at the end of the step before it.
+    subroutine last_period_measures(res, model, us, a, period)
+        type(euler_result_t), intent(inout) :: res
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: us(:, :), a(:, :), period
+        type(contact_measures_t) :: cm
+        real(dp), allocatable :: f(:, :), pw(:), d(:, :)
+        real(dp) :: h, rho
+        integer :: ns, i, k
+        ns = size(res%t)
+        h = period/ns
+        rho = 1.0_dp
+        if (size(a, 1) > 0) rho = max(sum([(a(k, k), k=1, size(a, 1))])/size(a, 1), tiny(1.0_dp))
+        call measure_contacts(res%contacts, rho, res%r, us, res%state, period, 1, cm)
+        res%open_fraction = cm%open_fraction
+        res%stick_fraction = cm%stick_fraction
+        res%slip_fraction = cm%slip_fraction
+        res%stick_phases = cm%stick_phases
+        res%diss_coulomb = cm%diss_coulomb
+        res%max_force_ratio = cm%force_ratio
+        res%u = us
+        ! the forcing at the samples (the force of the step ending there)
+        allocate (f(ns, model%ndof), pw(ns))
+        f = 0.0_dp
+        do i = 1, model%nforce()
+            do k = 1, ns
+                f(k, :) = f(k, :) + model%force_amplitude(i)*cos(model%force_harmonic(i)* &
+                          model%omega*res%t(k) + model%force_phase(i))*force_direction(model, i)
+            end do
+        end do
+        pw = sum(f*res%v, dim=2)
+        res%work_forcing = h*sum(pw)
+        res%work_gross = h*sum(abs(pw))
+        d = channel_directions(model, res%contacts)
+        res%diss_friction = -h*sum(res%r*matmul(res%v, d))
+        res%diss_damping = h*sum(res%v*matmul(res%v, model%damping))
+    end subroutine last_period_measures
+
     !> Steps first..last of a period with contact elements (the kernel of integrate_euler
     !> beside the Coulomb kernels): from the state y = [v; x; c] and the channel forces r,
     !> store each step's starting state in xs, vs, rs, us (the forces and kinematic
@@ -638,7 +697,7 @@ contains
         !> Most sweeps of a step so far.
         integer, intent(inout) :: max_sweeps_used
         integer :: i, j, k, step, ny, sweeps
-        real(dp) :: acc, resid
+        real(dp) :: acc
         ny = 2*n + nf
         do step = first, last
             do k = 1, n
@@ -668,7 +727,7 @@ contains
                 end if
             end do
             call cs%step_forces(am, q, r, max(fscale, maxval(abs(r))), opts%contact_tol, &
-                                opts%contact_max_sweeps, sweeps, resid)
+                                opts%contact_max_sweeps, sweeps)
             max_sweeps_used = max(max_sweeps_used, sweeps)
             do k = 1, n
                 acc = 0.0_dp
@@ -680,7 +739,13 @@ contains
             do k = 1, n
                 y(n + k) = y(n + k) + h*y(k)
             end do
-            uprev = q + matmul(am, r)
+            do j = 1, nch
+                acc = q(j)
+                do k = 1, nch
+                    acc = acc + am(j, k)*r(k)
+                end do
+                uprev(j) = acc
+            end do
         end do
     end subroutine step_block_elements
 

@@ -32,7 +32,7 @@ module stickslip_contact_element
     private
     public :: contact_element_t, element_box_t, channel_t, hb_work_t
     public :: kinematics_velocity, kinematics_gap, along_tangent, along_tangent2, along_normal
-    public :: state_open, state_stick, state_slip
+    public :: state_open, state_stick, state_slip, element_step_forces
 
     !> Kinematic quantity of a channel: a (slider) velocity, or omega times a gap.
     integer, parameter :: kinematics_velocity = 1, kinematics_gap = 2
@@ -184,14 +184,14 @@ module stickslip_contact_element
         end subroutine states_i
 
         !> Over one period of `period` [s] sampled uniformly (r, u: nt x m; state from
-        !> states): `diss` the dissipation Coulomb's law gives the slip velocities, the
-        !> integral of g(t) |u_t(t)| (g the friction limit, u_t the slip velocity) [J]; and
-        !> `law_diss`, what the law dissipates, g |u_t| where the contact slips and
-        !> |r . u_t| where it sticks [J] (the scale of the Coulomb check).
-        subroutine dissipation_i(self, r, u, state, period, diss, law_diss)
+        !> states with the weight rho): `diss` the dissipation Coulomb's law gives the slip
+        !> velocities, the integral of g(t) |u_t(t)| (g the friction limit, u_t the slip
+        !> velocity) [J]; and `law_diss`, what the law dissipates, g |u_t| where the contact
+        !> slips and |r . u_t| where it sticks [J] (the scale of the Coulomb check).
+        subroutine dissipation_i(self, rho, r, u, state, period, diss, law_diss)
             import :: contact_element_t, dp
             class(contact_element_t), intent(in) :: self
-            real(dp), intent(in) :: r(:, :), u(:, :), period
+            real(dp), intent(in) :: rho, r(:, :), u(:, :), period
             integer, intent(in) :: state(:)
             real(dp), intent(out) :: diss, law_diss
         end subroutine dissipation_i
@@ -281,12 +281,17 @@ contains
         done = .false.
     end subroutine element_set_parameter
 
-    !> Nothing to settle (a law whose stuck state leaves no mean force free).
-    subroutine element_settle_offset(self, r, mean, settled)
+    !> Nothing to settle (a law whose stuck state leaves no mean force free). An element
+    !> that settles does it for what sticks over the whole period in its samples (weight
+    !> rho of its states).
+    subroutine element_settle_offset(self, rho, r, u, mean, settled)
         !> The element.
         class(contact_element_t), intent(in) :: self
-        !> The channel forces at the samples (nt x m) [N], shifted with the mean.
-        real(dp), intent(inout) :: r(:, :)
+        !> Weight of the states [m/(N s)].
+        real(dp), intent(in) :: rho
+        !> The channel forces (shifted with the mean) and kinematic quantities at the
+        !> samples (nt x m) [N], [m/s].
+        real(dp), intent(inout) :: r(:, :), u(:, :)
         !> The channels' mean forces [N], settled.
         real(dp), intent(inout) :: mean(:)
         !> Whether a mean force was settled.

@@ -42,9 +42,11 @@ contains
     !> The measures of the contacts `cs` from the samples of one period of `period` [s]:
     !> channel forces r and kinematic quantities u (nt x n_ch), contact states (nt x n_c).
     !> Stick phases shorter than `minlen` samples are not counted (count_phases).
-    subroutine measure_contacts(cs, r, u, state, period, minlen, m)
+    subroutine measure_contacts(cs, rho, r, u, state, period, minlen, m)
         !> The contacts.
         type(contact_set_t), intent(in) :: cs
+        !> The weight of the states [m/(N s)].
+        real(dp), intent(in) :: rho
         !> Channel forces [N] and kinematic quantities [m/s] at the samples.
         real(dp), intent(in) :: r(:, :), u(:, :)
         !> Contact states at the samples.
@@ -67,8 +69,9 @@ contains
             m%stick_phases(j) = count_phases(state(:, j) == state_stick, minlen)
             c0 = cs%first(j)
             w = cs%width(j)
-            call cs%elements(j)%e%coulomb_dissipation(r(:, c0:c0 + w - 1), u(:, c0:c0 + w - 1), &
-                                                      state(:, j), period, d, dl)
+            call cs%elements(j)%e%coulomb_dissipation(rho, r(:, c0:c0 + w - 1), &
+                                                      u(:, c0:c0 + w - 1), state(:, j), &
+                                                      period, d, dl)
             m%diss_coulomb = m%diss_coulomb + d
             m%diss_law = m%diss_law + dl
             m%force_ratio = max(m%force_ratio, cs%elements(j)%e%force_ratio(r(:, c0:c0 + w - 1)))

@@ -224,12 +224,12 @@ contains
         integer, intent(in) :: max_sweeps
         !> Sweeps made.
         integer, intent(out) :: sweeps
-        !> Largest relative |Psi| left.
-        real(dp), intent(out) :: residual
-        integer :: j, c0, m
-        real(dp) :: change, old(size(r))
+        !> Largest relative |Psi| left (not computed when absent).
+        real(dp), intent(out), optional :: residual
+        integer :: j, c0, m, c, k
+        real(dp) :: change, old(size(r)), qj(size(r)), acc
         real(dp), allocatable :: limit(:)
-        residual = 0.0_dp
+        if (present(residual)) residual = 0.0_dp
         if (self%coulomb_only) then
             allocate (limit(self%ncontact))
             do j = 1, self%ncontact
@@ -238,24 +238,38 @@ contains
             call contact_forces(a, q, limit, r, tol, max_sweeps, sweeps)
             return
         end if
-        sweeps = 0
-        do sweeps = 1, max_sweeps
-            change = 0.0_dp
-            do j = 1, self%ncontact
-                c0 = self%first(j)
-                m = self%width(j)
-                old(1:m) = r(c0:c0 + m - 1)
-                call self%elements(j)%e%step_forces(a(c0:c0 + m - 1, c0:c0 + m - 1), &
-                                                    q(c0:c0 + m - 1) + &
-                                                    matmul(a(c0:c0 + m - 1, :), r) - &
-                                                    matmul(a(c0:c0 + m - 1, c0:c0 + m - 1), &
-                                                           r(c0:c0 + m - 1)), &
-                                                    r(c0:c0 + m - 1), scale)
-                change = max(change, maxval(abs(r(c0:c0 + m - 1) - old(1:m))))
+        if (self%ncontact == 1) then
+            ! one element: its own local solve on the whole system
+            sweeps = 1
+            call self%elements(1)%e%step_forces(a, q, r, scale)
+        else
+            sweeps = 0
+            do sweeps = 1, max_sweeps
+                change = 0.0_dp
+                do j = 1, self%ncontact
+                    c0 = self%first(j)
+                    m = self%width(j)
+                    ! q_j + sum over the other elements' channels of A_jl r_l
+                    do k = 1, m
+                        acc = q(c0 + k - 1)
+                        do c = 1, size(r)
+                            if (c >= c0 .and. c < c0 + m) cycle
+                            acc = acc + a(c0 + k - 1, c)*r(c)
+                        end do
+                        qj(k) = acc
+                        old(k) = r(c0 + k - 1)
+                    end do
+                    call self%elements(j)%e%step_forces(a(c0:c0 + m - 1, c0:c0 + m - 1), &
+                                                        qj(1:m), r(c0:c0 + m - 1), scale)
+                    do k = 1, m
+                        change = max(change, abs(r(c0 + k - 1) - old(k)))
+                    end do
+                end do
+                if (change <= tol*scale) exit
             end do
-            if (change <= tol*scale .or. self%ncontact == 1) exit
-        end do
-        sweeps = min(sweeps, max_sweeps)
+            sweeps = min(sweeps, max_sweeps)
+        end if
+        if (.not. present(residual)) return
         do j = 1, self%ncontact
             residual = max(residual, block_residual(self%first(j), self%width(j), j))
         end do

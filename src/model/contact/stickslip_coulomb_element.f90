@@ -108,9 +108,9 @@ contains
     !> mu N |v| over the period; what the law dissipates: mu N |v| where it slips, |r v|
     !> (<= mu N |v|, ~0) where it sticks (a stuck contact's roundoff slip times a huge mu N is
     !> no dissipation).
-    subroutine coulomb_dissipation(self, r, u, state, period, diss, law_diss)
+    subroutine coulomb_dissipation(self, rho, r, u, state, period, diss, law_diss)
         class(coulomb_element_t), intent(in) :: self
-        real(dp), intent(in) :: r(:, :), u(:, :), period
+        real(dp), intent(in) :: rho, r(:, :), u(:, :), period
         integer, intent(in) :: state(:)
         real(dp), intent(out) :: diss, law_diss
         integer :: nt
@@ -161,11 +161,14 @@ contains
 
     !> A contact stuck over the whole period holds any mean force that keeps |r(t)| <= mu N:
     !> the admissible value closest to zero (minimum norm).
-    subroutine coulomb_settle_offset(self, r, mean, settled)
+    subroutine coulomb_settle_offset(self, rho, r, u, mean, settled)
         class(coulomb_element_t), intent(in) :: self
-        real(dp), intent(inout) :: r(:, :), mean(:)
+        real(dp), intent(in) :: rho
+        real(dp), intent(inout) :: r(:, :), u(:, :), mean(:)
         logical, intent(out) :: settled
         real(dp) :: lo, hi, shift
+        settled = .false.
+        if (.not. all(psi_stick(r(:, 1), u(:, 1), self%limit, rho) > 0.5_dp)) return
         lo = -self%limit - minval(r(:, 1) - mean(1))
         hi = self%limit - maxval(r(:, 1) - mean(1))
         shift = min(max(0.0_dp, lo), hi) - mean(1)

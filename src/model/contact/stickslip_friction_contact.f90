@@ -10,7 +10,8 @@ module stickslip_friction_contact
     use stickslip_contact_law, only: contact_law_t, contact_psi, contact_psi_jacobian, &
         contact_state
     use stickslip_contact_element, only: contact_element_t, channel_t, kinematics_velocity, &
-        kinematics_gap, along_tangent, along_tangent2, along_normal, state_stick
+        kinematics_gap, along_tangent, along_tangent2, along_normal, state_stick, &
+        element_step_forces
     implicit none
     private
     public :: friction_contact_t, init_friction_contact
@@ -35,6 +36,7 @@ module stickslip_friction_contact
         procedure :: set_parameter => fc_set_parameter
         procedure :: settle_offset => fc_settle_offset
         procedure :: project => fc_project
+        procedure :: step_forces => fc_step_forces
         !> The friction limit at samples of the channel forces [N].
         procedure :: limit_samples => fc_limit_samples
     end type friction_contact_t
@@ -127,9 +129,9 @@ contains
 
     !> g |u_t| over the period (u_t the slider velocity, its modulus in 2D); what the law
     !> dissipates: that where the contact does not stick, |r . u_t| where it sticks.
-    subroutine fc_dissipation(self, r, u, state, period, diss, law_diss)
+    subroutine fc_dissipation(self, rho, r, u, state, period, diss, law_diss)
         class(friction_contact_t), intent(in) :: self
-        real(dp), intent(in) :: r(:, :), u(:, :), period
+        real(dp), intent(in) :: rho, r(:, :), u(:, :), period
         integer, intent(in) :: state(:)
         real(dp), intent(out) :: diss, law_diss
         real(dp) :: g(size(r, 1)), speed(size(r, 1)), power(size(r, 1))
@@ -219,12 +221,16 @@ contains
     !> The mean friction force of a contact stuck over the whole period, the admissible value
     !> closest to zero: in 1D the interval of shifts keeping |r(t)| <= g(t) at every sample;
     !> in 2D the largest step of the mean toward zero that keeps |r(t)| <= g(t) (bisection).
-    subroutine fc_settle_offset(self, r, mean, settled)
+    subroutine fc_settle_offset(self, rho, r, u, mean, settled)
         class(friction_contact_t), intent(in) :: self
-        real(dp), intent(inout) :: r(:, :), mean(:)
+        real(dp), intent(in) :: rho
+        real(dp), intent(inout) :: r(:, :), u(:, :), mean(:)
         logical, intent(out) :: settled
         real(dp) :: g(size(r, 1)), lo, hi, shift, t, tlo, thi, r0(2)
-        integer :: it, m
+        integer :: it, m, state(size(r, 1))
+        settled = .false.
+        call self%states(rho, r, u, state)
+        if (.not. all(state == state_stick)) return
         g = self%limit_samples(r)
         settled = .true.
         if (self%law%ntangent == 1) then
@@ -264,6 +270,24 @@ contains
             inside = all(hypot(r(:, 1) - t*r0(1), r(:, 2) - t*r0(2)) <= g)
         end function inside
     end subroutine fc_settle_offset
+
+    !> The forces of one implicit step: in 1D under a constant load (a rigid contact or a
+    !> Jenkins slider) in closed form, the stick force -q / a clamped to the limit;
+    !> otherwise the semismooth Newton iteration of contact_element_t (with fc_project as
+    !> its fallback).
+    subroutine fc_step_forces(self, a, q, r, scale)
+        class(friction_contact_t), intent(in) :: self
+        real(dp), intent(in) :: a(:, :), q(:)
+        real(dp), intent(inout) :: r(:)
+        real(dp), intent(in) :: scale
+        real(dp) :: g
+        if (self%law%ntangent == 1 .and. .not. self%law%unilateral) then
+            g = self%law%mu*self%law%normal_load
+            r(1) = max(-g, min(g, -q(1)/a(1, 1)))
+            return
+        end if
+        call element_step_forces(self, a, q, r, scale)
+    end subroutine fc_step_forces
 
     !> The projection iteration, the fallback of the step's Newton iteration: the normal force
     !> max(0, lambda - u_n / A_nn), then the friction force z_t - u_t / A_tt projected on the

@@ -611,6 +611,12 @@ contains
                 ref%impact_loss, " J lost per period (in the balance)"
             call emit(u)
         end if
+        if (ref%integration_error > 0.0_dp) then
+            write (buffer, '(a,es8.1,a,es8.1,a)') "  slip phases with a turning direction "// &
+                "integrated numerically: error estimate ", ref%integration_error, &
+                " of the state per period (ode_tol ", case%reference%ode_tol, " per step)"
+            call emit(u)
+        end if
     end subroutine print_reference_lines
 
     subroutine print_side_by_side_summary(u, case, sbs)

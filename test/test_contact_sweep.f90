@@ -4,11 +4,11 @@
 !> lifts off are the separate solves at their parameters, each warm-started from the
 !> previous (amplitudes, open shares, largest normal forces); the family's parameter derivative
 !> (central differences with the laws) against a difference quotient of wider step; a
-!> stability verdict of the exact reference at points; a planar contact asks for
-!> stability = .false. with the yardstick named.
+!> stability verdict of the exact reference at points; a planar contact swept with its
+!> stability.
 module test_contact_sweep
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, stickslip_stat, real_text, itoa
+    use stickslip_error, only: error_type, real_text, itoa
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -30,7 +30,7 @@ contains
         call test_points_are_solves(t, 'omega', 1.5_dp, 1.3_dp)
         call test_points_are_solves(t, 'preload', 0.5_dp, 2.0_dp)
         call test_parameter_derivative(t)
-        call test_planar_stability_refused(t)
+        call test_planar_stability(t)
     end subroutine run_contact_sweep_tests
 
     !> The damped seed with its contact made unilateral (rigid, never opening, preload 1 on
@@ -211,9 +211,10 @@ contains
         end do
     end subroutine test_parameter_derivative
 
-    !> A sweep over a planar contact with stability = .true.: an input error that names the
-    !> option and the yardstick (stability = .false. sweeps it).
-    subroutine test_planar_stability_refused(t)
+    !> A sweep over a planar contact with stability = .true.: complete, a largest Floquet
+    !> multiplier at every point from the exact reference (checked against the period
+    !> map's differences in test_reference_2d), the full slip stable.
+    subroutine test_planar_stability(t)
         type(test_counter_t), intent(inout) :: t
         type(hbm_options_t) :: ho
         type(reference_options_t) :: ro
@@ -225,17 +226,14 @@ contains
         so%parameter = 'omega'
         so%start = 1.7_dp
         so%stop = 1.9_dp
+        so%step = 0.05_dp
+        so%max_step = 0.05_dp
         so%stability = .true.
         call run_sweep(planar_model(1.0_dp, 0.5_dp, 0.0_dp), ho, ro, so, res, error)
-        call check(t, allocated(error), "contact_sweep: planar contact, stability: refused")
-        if (.not. allocated(error)) return
-        call check(t, error%stat == stickslip_stat%input .and. &
-                   index(error%message, "opts%stability") > 0 .and. &
-                   index(error%message, "implicit Euler") > 0, "contact_sweep: planar "// &
-                   "contact, stability: names the option and the yardstick", error%message)
-        so%stability = .false.
-        call run_sweep(planar_model(1.0_dp, 0.5_dp, 0.0_dp), ho, ro, so, res, error)
-        call check(t, .not. allocated(error) .and. res%complete, "contact_sweep: a planar "// &
-                   "contact sweeps without stability")
-    end subroutine test_planar_stability_refused
+        call check_error(t, error, "contact_sweep: planar contact with stability", .false.)
+        if (allocated(error)) return
+        call check(t, res%complete .and. all(res%points(1:res%npoints)%stable == 1) .and. &
+                   all(res%points(1:res%npoints)%floquet_max < 1.0_dp), "contact_sweep: "// &
+                   "a planar contact sweeps with stability, every point stable")
+    end subroutine test_planar_stability
 end module test_contact_sweep

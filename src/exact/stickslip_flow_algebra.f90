@@ -25,11 +25,10 @@ module stickslip_flow_algebra
     use stickslip_contact_modes, only: mode_terms_t, event_list_t
     use stickslip_contact_set, only: contact_set_t, new_element_set
     use stickslip_contact_element, only: element_box_t, state_stick
-    use stickslip_coulomb_element, only: coulomb_decision
     implicit none
     private
     public :: mode_index, assemble, start_codes, decide_codes, impact_jump, &
-        close_rigid_gaps, project_velocities
+        close_rigid_gaps, project_velocities, eval_inputs, rate_of
 
     !> Most elements decided jointly by enumeration (beyond: the first combination only).
     integer, parameter :: max_enumerated = 8
@@ -54,7 +53,7 @@ contains
         logical, intent(in), optional :: skip(:)
         real(dp), allocatable :: g(:, :), l(:, :)
         integer, allocatable :: ipiv(:)
-        integer :: n, na, j, k, info
+        integer :: n, na, j, k, info, m
         n = self%n
         na = self%na
         ok = .true.
@@ -73,20 +72,27 @@ contains
         end do
         k = size(terms%chan)
         if (k == 0) return
-        ! Lambda = -(Ct^T Ft)^-1 Ct^T hb
+        ! Lambda = -(Ct^T Ft)^-1 Ct^T [hb, gu] (the nonlinear inputs' part too)
+        m = size(terms%in_elem)
         g = matmul(transpose(terms%ctm), terms%ftm)
-        l = -matmul(transpose(terms%ctm), terms%hb)
+        l = -matmul(transpose(terms%ctm), reshape([terms%hb, terms%gu], [n, na + m]))
         allocate (ipiv(k))
-        call dgesv(k, na, g, k, ipiv, l, k, info)
+        call dgesv(k, na + m, g, k, ipiv, l, k, info)
         if (info /= 0 .or. .not. all(ieee_is_finite(l))) then
             ok = .false.
             return
         end if
-        terms%hb = terms%hb + matmul(terms%ftm, l)
+        terms%hb = terms%hb + matmul(terms%ftm, l(:, 1:na))
+        if (m > 0) terms%gu = terms%gu + matmul(terms%ftm, l(:, na + 1:))
         do j = 1, k
-            terms%fb(terms%chan(j), :) = terms%fb(terms%chan(j), :) + l(j, :)
-            if (terms%slip_ch(j) > 0) terms%fb(terms%slip_ch(j), :) = &
-                terms%fb(terms%slip_ch(j), :) + terms%slip_factor(j)*l(j, :)
+            terms%fb(terms%chan(j), :) = terms%fb(terms%chan(j), :) + l(j, 1:na)
+            if (m > 0) terms%gf(terms%chan(j), :) = terms%gf(terms%chan(j), :) + l(j, na + 1:)
+            if (terms%slip_ch(j) > 0) then
+                terms%fb(terms%slip_ch(j), :) = terms%fb(terms%slip_ch(j), :) + &
+                                                terms%slip_factor(j)*l(j, 1:na)
+                if (m > 0) terms%gf(terms%slip_ch(j), :) = terms%gf(terms%slip_ch(j), :) + &
+                                                           terms%slip_factor(j)*l(j, na + 1:)
+            end if
         end do
     end subroutine assemble
 
@@ -173,22 +179,128 @@ contains
                 end do
             end do
             md%drows = matmul(transpose(md%b), md%rows)
+            ! the quadratic events
+            allocate (md%qmat(self%na, self%na, 0), md%qc(0), md%q_scale(0), md%q_element(0), &
+                      md%q_slot(0), md%q_action(0))
+            do j = 1, self%nc
+                c0 = self%cs%first(j)
+                w = self%cs%width(j)
+                call events%clear(self%na)
+                call self%cs%elements(j)%e%event_rows(code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                      self%geom(j), &
+                                                      terms%fb(c0:c0 + w - 1, :), events)
+                do k = 1, events%nq
+                    md%qmat = reshape([md%qmat, events%qmat(:, :, k)], &
+                                      [self%na, self%na, size(md%qc) + 1])
+                    md%qc = [md%qc, events%qc(k)]
+                    md%q_scale = [md%q_scale, events%qscale(k)]
+                    md%q_element = [md%q_element, j]
+                    md%q_slot = [md%q_slot, self%slot0(j) + events%qslot(k)]
+                    md%q_action = [md%q_action, events%qaction(k)]
+                end do
+            end do
+            ! the nonlinear inputs (a 2D slip): their columns in y' and the channel forces
+            md%m = size(terms%in_elem)
+            allocate (md%gin(self%na, md%m), md%fin(self%cs%nchannel, md%m))
+            md%gin = 0.0_dp
+            if (md%m > 0) then
+                md%gin(self%n + 1:2*self%n, :) = terms%gu
+                if (self%ns > 0) md%gin(2*self%n + 1:self%nz, :) = terms%gs
+                md%fin = terms%gf
+            end if
+            md%in_elem = terms%in_elem
+            allocate (md%nl_elements(0), md%nl_first(0))
+            do k = 1, md%m
+                if (any(md%nl_elements == md%in_elem(k))) cycle
+                md%nl_elements = [md%nl_elements, md%in_elem(k)]
+                md%nl_first = [md%nl_first, k]
+            end do
             call build_ladder(self, md, error)
         end associate
         ! never leave a broken mode in the cache
         if (allocated(error)) self%nmodes = self%nmodes - 1
     end function mode_index
 
+    !> The values of the nonlinear inputs `in_elem` (their elements, grouped) of the mode
+    !> `code` at yb (balanced), q (m), and their Jacobian dq (m x na); dirs the elements'
+    !> slip memories (3 x n_c: a direction and a regime). With the mode's dynamics (y' = bmat y + gmat q)
+    !> each element also gets y' without its own inputs, its Jacobian and its input
+    !> columns (the direction of a slip starting from rest).
+    subroutine eval_inputs(self, code, in_elem, yb, dirs, q, dq, bmat, gmat)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> Codes of every slot, the element of each input.
+        integer, intent(in) :: code(:), in_elem(:)
+        !> State, slip directions.
+        real(dp), intent(in) :: yb(:), dirs(:, :)
+        !> Values and Jacobian.
+        real(dp), intent(out) :: q(:), dq(:, :)
+        !> The mode's linear dynamics (na x na) and input columns (na x m).
+        real(dp), intent(in), optional :: bmat(:, :), gmat(:, :)
+        real(dp), allocatable :: yd0(:), dyd0(:, :)
+        integer :: pass, k, k1, j
+        do pass = 1, merge(2, 1, present(bmat) .and. present(gmat))
+            if (pass == 2) then
+                yd0 = matmul(bmat, yb) + matmul(gmat, q)
+                dyd0 = bmat + matmul(gmat, dq)
+            end if
+            k = 1
+            do while (k <= size(in_elem))
+                j = in_elem(k)
+                k1 = k
+                do while (k1 < size(in_elem))
+                    if (in_elem(k1 + 1) /= j) exit
+                    k1 = k1 + 1
+                end do
+                associate (c => code(self%slot0(j) + 1:self%slot_hi(j)))
+                    if (pass == 1) then
+                        call self%cs%elements(j)%e%inputs(c, self%geom(j), yb, dirs(:, j), &
+                                                          q(k:k1), dq(k:k1, :))
+                    else
+                        ! without this element's own inputs (those of the first pass)
+                        call self%cs%elements(j)%e%inputs( &
+                            c, self%geom(j), yb, dirs(:, j), q(k:k1), dq(k:k1, :), &
+                            yd0 - matmul(gmat(:, k:k1), q(k:k1)), &
+                            dyd0 - matmul(gmat(:, k:k1), dq(k:k1, :)), gmat(:, k:k1))
+                    end if
+                end associate
+                k = k1 + 1
+            end do
+        end do
+    end subroutine eval_inputs
+
+    !> The rate y' of assembled terms at yb: the linear dynamics and the nonlinear inputs.
+    function rate_of(self, code, terms, yb, dirs) result(ydot)
+        class(flow_modes_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(mode_terms_t), intent(in) :: terms
+        real(dp), intent(in) :: yb(:), dirs(:, :)
+        real(dp) :: ydot(self%na)
+        real(dp) :: q(size(terms%in_elem)), dq(size(terms%in_elem), self%na), &
+                    bmat(self%na, self%na), gmat(self%na, size(terms%in_elem))
+        bmat = dynamics_of(self, terms)
+        ydot = matmul(bmat, yb)
+        if (size(q) == 0) return
+        gmat = 0.0_dp
+        gmat(self%n + 1:2*self%n, :) = terms%gu
+        if (self%ns > 0) gmat(2*self%n + 1:self%nz, :) = terms%gs
+        call eval_inputs(self, code, terms%in_elem, yb, dirs, q, dq, bmat, gmat)
+        ydot = ydot + matmul(gmat, q)
+    end function rate_of
+
     !> The codes of every element at the start state yb (balanced): each element's own
-    !> (contact_element_t%start_code), those it cannot settle alone decided jointly.
+    !> (contact_element_t%start_code), those it cannot settle alone decided jointly; the
+    !> slip directions of the elements that start slipping in 2D.
     !> Errors: no consistent mode.
-    subroutine start_codes(self, yb, code, error)
+    subroutine start_codes(self, yb, code, dirs, error)
         !> The dynamics.
         class(flow_modes_t), intent(inout) :: self
         !> Start state in balanced coordinates.
         real(dp), intent(in) :: yb(:)
         !> The codes.
         integer, intent(out) :: code(:)
+        !> The elements' slip memories (3 x n_c: a direction and a regime).
+        real(dp), intent(inout) :: dirs(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(inout) :: error
         integer :: j
@@ -199,15 +311,20 @@ contains
             call self%cs%elements(j)%e%start_code(self%geom(j), yb, &
                                                   code(self%slot0(j) + 1:self%slot_hi(j)), decide)
             if (decide) zset = [zset, j]
+            call self%cs%elements(j)%e%slip_direction(code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                      self%geom(j), &
+                                                      reshape([real(dp) ::], [0, self%na]), &
+                                                      yb, dirs(:, j))
         end do
-        call decide_codes(self, yb, zset, code, error)
+        call decide_codes(self, yb, zset, code, dirs, error)
     end subroutine start_codes
 
     !> New codes for the elements `zset` at state yb (balanced): the rigid ones jointly
-    !> (Coulomb's law at acceleration level for Coulomb contacts only, else the first
-    !> consistent combination of candidates), then the elastic ones alone with the
-    !> accelerations of that mode. Errors (stat numerical): no consistent combination.
-    subroutine decide_codes(self, yb, zset, code, error)
+    !> (by their laws at acceleration level when all can and no other constraint is held:
+    !> Coulomb's law, the disk of 2D friction; else the first consistent combination of
+    !> candidates), then the elastic ones alone with the accelerations of that mode.
+    !> Errors (stat numerical): no consistent combination.
+    subroutine decide_codes(self, yb, zset, code, dirs, error)
         !> The dynamics.
         class(flow_modes_t), intent(inout) :: self
         !> State in balanced coordinates.
@@ -216,6 +333,8 @@ contains
         integer, intent(in) :: zset(:)
         !> Codes of every slot; those of zset replaced.
         integer, intent(inout) :: code(:)
+        !> The elements' slip memories (3 x n_c: a direction and a regime).
+        real(dp), intent(inout) :: dirs(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(inout) :: error
         integer, allocatable :: rigid(:), elastic(:)
@@ -235,7 +354,7 @@ contains
             end if
         end do
         if (size(rigid) > 0) then
-            call coulomb_qp(ok)
+            call at_acceleration_level(ok)
             if (.not. ok) call enumerate(ok)
             if (.not. ok) then
                 call fatal_error(error, "reference: no consistent contact mode at an event "// &
@@ -246,7 +365,7 @@ contains
         if (size(elastic) == 0) return
         call assemble(self, code, terms, ok)
         if (.not. ok) return
-        ydot = matmul(dynamics_of(self, terms), yb)
+        ydot = rate_of(self, code, terms, yb, dirs)
         do k = 1, size(elastic)
             j = elastic(k)
             call self%cs%elements(j)%e%local_decide(code(self%slot0(j) + 1:self%slot_hi(j)), &
@@ -255,32 +374,67 @@ contains
 
     contains
 
-        !> Coulomb contacts only, no other constraint: Coulomb's law at acceleration level
-        !> (stickslip_coulomb_element, coulomb_decision) on the free accelerations.
-        subroutine coulomb_qp(ok)
+        !> Every rigid element decides by its law at acceleration level and no other
+        !> constraint is held: their laws between their forces r and the accelerations of
+        !> their channels a = a_free + D r (D the modal Delassus matrix of their channels,
+        !> a_free the accelerations without their forces) solved together by their own local
+        !> solves (contact_set_t%step_forces; Coulomb contacts only: the box QP of
+        !> stickslip_contact_solve), then each one's codes from its forces (accel_code).
+        subroutine at_acceleration_level(ok)
             logical, intent(out) :: ok
             logical :: skip(self%nc)
-            real(dp), allocatable :: wz(:, :), f(:)
-            integer :: codes(size(rigid)), q
+            real(dp), allocatable :: dirsub(:, :), accel(:), f(:), r(:), u(:)
+            type(element_box_t), allocatable :: boxes(:)
+            type(contact_set_t) :: sub
+            integer :: q, c, nch, a, sweeps, c0
             ok = .false.
+            do q = 1, size(rigid)
+                if (.not. self%cs%elements(rigid(q))%e%accel_decision()) return
+            end do
             skip = .false.
             skip(rigid) = .true.
             call assemble(self, code, terms, ok, skip)
             if (.not. ok) return
             ok = .false.
             if (size(terms%chan) > 0) return
-            allocate (wz(self%n, size(rigid)))
+            ! the rigid elements' channels and their modal directions
+            allocate (boxes(size(rigid)))
+            nch = 0
             do q = 1, size(rigid)
-                wz(:, q) = self%geom(rigid(q))%dt(:, 1)
+                allocate (boxes(q)%e, source=self%cs%elements(rigid(q))%e)
+                nch = nch + self%cs%width(rigid(q))
             end do
-            f = matmul(terms%hb, yb)
-            call coulomb_decision(self%cs%elements, rigid, matmul(transpose(wz), wz), &
-                                  matmul(f, wz), codes, ok)
-            if (.not. ok) return
+            allocate (dirsub(self%n, nch))
+            c = 0
             do q = 1, size(rigid)
-                code(self%slot0(rigid(q)) + 1) = codes(q)
+                j = rigid(q)
+                do a = 1, self%cs%width(j)
+                    c = c + 1
+                    dirsub(:, c) = self%geom(j)%dt(:, self%cs%along(self%cs%first(j) + a - 1))
+                end do
             end do
-        end subroutine coulomb_qp
+            accel = rate_of(self, code, terms, yb, dirs)
+            f = accel(self%n + 1:2*self%n)
+            call new_element_set(sub, boxes)
+            allocate (r(nch))
+            r = 0.0_dp
+            call sub%step_forces(matmul(transpose(dirsub), dirsub), matmul(f, dirsub), r, &
+                                 max(sub%force_scale(), tiny(1.0_dp)), 1.0e-15_dp, 1000000, &
+                                 sweeps)
+            if (.not. all(abs(r) <= huge(1.0_dp))) return
+            u = matmul(f, dirsub) + matmul(matmul(transpose(dirsub), dirsub), r)
+            c0 = 0
+            do q = 1, size(rigid)
+                j = rigid(q)
+                associate (w => self%cs%width(j))
+                    call self%cs%elements(j)%e%accel_code(r(c0 + 1:c0 + w), u(c0 + 1:c0 + w), &
+                                                          code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                          dirs(:, j))
+                    c0 = c0 + w
+                end associate
+            end do
+            ok = .true.
+        end subroutine at_acceleration_level
 
         !> Every combination of the rigid elements' candidates, in order; the first
         !> consistent one is kept.
@@ -318,19 +472,27 @@ contains
                 end do
                 call assemble(self, trial, terms, good)
                 if (.not. good) cycle
-                yd = matmul(dynamics_of(self, terms), yb)
+                yd = rate_of(self, trial, terms, yb, dirs)
                 do q = 1, nz
                     j = rigid(q)
                     associate (c0 => self%cs%first(j), w => self%cs%width(j))
                         good = self%cs%elements(j)%e%consistent( &
                                trial(self%slot0(j) + 1:self%slot_hi(j)), &
-                                                                 moving(q), self%geom(j), &
-                                                                 terms%fb(c0:c0 + w - 1, :), &
-                                                                 yb, yd)
+                               moving(q), self%geom(j), &
+                               terms%fb(c0:c0 + w - 1, :), &
+                               yb, yd)
                     end associate
                     if (.not. good) exit
                 end do
                 if (good) then
+                    do q = 1, nz
+                        j = rigid(q)
+                        associate (c0 => self%cs%first(j), w => self%cs%width(j))
+                            call self%cs%elements(j)%e%slip_direction( &
+                                trial(self%slot0(j) + 1:self%slot_hi(j)), self%geom(j), &
+                                terms%fb(c0:c0 + w - 1, :), yb, dirs(:, j))
+                        end associate
+                    end do
                     code = trial
                     ok = .true.
                     return

@@ -15,7 +15,8 @@ module stickslip_flow_events
     private
     public :: event_stick, event_slip, event_reversal, event_graze, event_open, event_close, &
         event_impact, event_kind, event_name
-    public :: find_event, row_crossing, grid_step, event_guard, add_saltation, end_monodromy
+    public :: find_event, row_crossing, quadratic_crossing, grid_step, event_guard, &
+        add_saltation, end_monodromy, event_hit_t
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
     !> reverses without sticking; a slipping contact's velocity touches zero and it goes on;
@@ -23,6 +24,14 @@ module stickslip_flow_events
     !> impact of a rigid normal).
     integer, parameter :: event_stick = 1, event_slip = 2, event_reversal = 3, event_graze = 4
     integer, parameter :: event_open = 10, event_close = 11, event_impact = 12
+
+    !> An event found: its function (a row of the mode, kind 1; a quadratic event, kind 2;
+    !> a row of the step, kind 3), the index among those, its element, code slot and action,
+    !> and the gradient of its function at the event state (balanced).
+    type :: event_hit_t
+        integer :: kind = 0, index = 0, element = 0, slot = 0, action = 0
+        real(dp), allocatable :: c(:)
+    end type event_hit_t
 
 contains
 
@@ -72,10 +81,10 @@ contains
         end select
     end function event_name
 
-    !> The earliest event in (ta, tb] of the mode md, if any: its time te, state ye and the
-    !> index k of its event row (md%rows(:, k); its element, slot and action in md%row_*).
-    !> States and rows in balanced coordinates.
-    subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, k)
+    !> The earliest event in (ta, tb] of the (linear) mode md, if any: its time te, state ye
+    !> and what it is (hit: a row or a quadratic event of the mode, with its gradient at
+    !> ye). States and rows in balanced coordinates.
+    subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, hit)
         !> The dynamics md belongs to.
         class(flow_modes_t), intent(in) :: self
         !> The contact mode of the step.
@@ -86,27 +95,158 @@ contains
         logical, intent(out) :: found
         !> With found: the event's time [s] and state.
         real(dp), intent(out) :: te, ye(:)
-        !> With found: its event row.
-        integer, intent(out) :: k
+        !> With found: the event.
+        type(event_hit_t), intent(out) :: hit
         real(dp) :: tau, best
         integer :: col
         found = .false.
         best = huge(1.0_dp)
-        k = 0
         do col = 1, size(md%row_scale)
             tau = row_crossing(self, md, col, md%row_scale(col), ta, ya, tb, yb)
             if (tau < best) then
                 best = tau
                 found = .true.
-                k = col
+                hit%kind = 1
+                hit%index = col
+            end if
+        end do
+        do col = 1, size(md%qc)
+            tau = quadratic_crossing(self, md, col, ta, ya, tb, yb)
+            if (tau < best) then
+                best = tau
+                found = .true.
+                hit%kind = 2
+                hit%index = col
             end if
         end do
         if (found) then
             te = ta + best
             call propagate(md, self%delta, best, ya, ye)
             ye(self%nz + 1:) = self%se*self%exo(te)
+            if (hit%kind == 1) then
+                hit%element = md%row_element(hit%index)
+                hit%slot = md%row_slot(hit%index)
+                hit%action = md%row_action(hit%index)
+                hit%c = md%rows(:, hit%index)
+            else
+                hit%element = md%q_element(hit%index)
+                hit%slot = md%q_slot(hit%index)
+                hit%action = md%q_action(hit%index)
+                hit%c = 2.0_dp*matmul(md%qmat(:, :, hit%index), ye)
+            end if
         end if
     end subroutine find_event
+
+    !> The first time tau in (0, tb - ta] where quadratic event k of mode md, g(y) = y^T Q y
+    !> + c, crosses zero from ya at ta (yb at tb), or huge: as row_crossing (a value that
+    !> ends non-positive, or a dip below zero between two positive values), located by
+    !> bisection safeguarding Newton steps on g(tau) = g(exp(b tau) ya).
+    real(dp) function quadratic_crossing(self, md, k, ta, ya, tb, yb) result(tau)
+        !> The dynamics md belongs to.
+        class(flow_modes_t), intent(in) :: self
+        !> The contact mode of the step.
+        type(mode_t), intent(in) :: md
+        !> The quadratic event.
+        integer, intent(in) :: k
+        !> Start time [s] and state, end time [s] and state of the step.
+        real(dp), intent(in) :: ta, ya(:), tb, yb(:)
+        real(dp) :: h, ga, gb, da, db, thr, lo, hi, tm
+        integer :: it
+        tau = huge(1.0_dp)
+        h = tb - ta
+        ga = gval(ya)
+        gb = gval(yb)
+        da = gdot(ya)
+        db = gdot(yb)
+        thr = 1.0e-9_dp*md%q_scale(k)*self%omega
+        if (gb <= 0.0_dp) then
+            tau = root(0.0_dp, h)
+        else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
+            ! a dip between two positive values: its minimum, where the slope changes sign
+            lo = 0.0_dp
+            hi = h
+            do it = 1, 100
+                tm = 0.5_dp*(lo + hi)
+                if (slope_at(tm) < 0.0_dp) then
+                    lo = tm
+                else
+                    hi = tm
+                end if
+                if (hi - lo <= 4.0_dp*epsilon(1.0_dp)*h) exit
+            end do
+            if (value_at(hi) > 0.0_dp) return
+            tau = root(0.0_dp, hi)
+        end if
+
+    contains
+
+        real(dp) function gval(y)
+            real(dp), intent(in) :: y(:)
+            gval = dot_product(y, matmul(md%qmat(:, :, k), y)) + md%qc(k)
+        end function gval
+
+        real(dp) function gdot(y)
+            real(dp), intent(in) :: y(:)
+            gdot = 2.0_dp*dot_product(matmul(md%qmat(:, :, k), y), matmul(md%b, y))
+        end function gdot
+
+        real(dp) function value_at(s)
+            real(dp), intent(in) :: s
+            real(dp) :: y(size(ya))
+            call propagate(md, self%delta, s, ya, y)
+            value_at = gval(y)
+        end function value_at
+
+        real(dp) function slope_at(s)
+            real(dp), intent(in) :: s
+            real(dp) :: y(size(ya))
+            call propagate(md, self%delta, s, ya, y)
+            slope_at = gdot(y)
+        end function slope_at
+
+        !> The end of the bracket (a, b] (g > 0 at a, <= 0 at b) where g <= 0, the bracket
+        !> a few ulps of the step wide: Newton steps inside it, bisection otherwise.
+        real(dp) function root(a, b) result(r)
+            real(dp), intent(in) :: a, b
+            real(dp) :: l, s, g, dg, y(size(ya)), step, old_step
+            integer :: iter
+            l = a
+            r = b
+            s = r
+            call propagate(md, self%delta, s, ya, y)
+            g = gval(y)
+            dg = gdot(y)
+            old_step = r - l
+            step = old_step
+            do iter = 1, 200
+                if (r - l <= 4.0_dp*epsilon(1.0_dp)*h + tiny(1.0_dp)) exit
+                ! Newton from s, unless it leaves (l, r) or does not halve the bracket
+                if (dg /= 0.0_dp .and. abs(2.0_dp*g) < abs(old_step*dg)) then
+                    old_step = step
+                    step = g/dg
+                    s = s - step
+                    if (.not. (s > l .and. s < r)) then
+                        s = 0.5_dp*(l + r)
+                        old_step = step
+                        step = r - l
+                    end if
+                else
+                    old_step = step
+                    step = 0.5_dp*(r - l)
+                    s = 0.5_dp*(l + r)
+                end if
+                call propagate(md, self%delta, s, ya, y)
+                g = gval(y)
+                dg = gdot(y)
+                if (g > 0.0_dp) then
+                    l = s
+                else
+                    r = s
+                end if
+                if (g == 0.0_dp) exit
+            end do
+        end function root
+    end function quadratic_crossing
 
     !> The first time tau in (0, tb - ta] where event row `col` of mode md crosses zero from
     !> the balanced state ya at ta (yb the state at tb), or huge when it does not: a row
@@ -276,7 +416,8 @@ contains
     !> the vector field across the event, (fp - fm) c^T / h, with c the event row and h = c^T
     !> fm its rate (nothing when h vanishes).
     pure subroutine add_saltation(sal, fp, fm, c, h)
-        !> The saltation matrix (nz x nz), the identity or an impact's jump on entry.
+        !> The saltation matrix (nz x nz); on entry the Jacobian of what the event does to
+        !> the state (an impact's jump, the projection onto new constraints) or the identity.
         real(dp), intent(inout) :: sal(:, :)
         !> Vector fields after and before the event, the event row (first nz entries used).
         real(dp), intent(in) :: fp(:), fm(:), c(:)

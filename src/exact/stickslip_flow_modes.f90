@@ -33,11 +33,19 @@ module stickslip_flow_modes
     use stickslip_expm, only: expm
     implicit none
     private
-    public :: ngauss, mode_t, flow_modes_t, new_flow_modes
-    public :: propagate, gauss_exponentials, build_ladder, identity_matrix
+    public :: ngauss, mode_t, level_t, flow_modes_t, new_flow_modes
+    public :: propagate, propagate_matrix, gauss_exponentials, build_ladder, identity_matrix, &
+        ladder_of
 
     !> Gauss-Legendre points per step for the energy integrals.
     integer, parameter :: ngauss = 8
+
+    !> The exponentials of a nonlinear mode's augmented dynamics at the collocation nodes and
+    !> at the end of a step of one length (stickslip_flow_nonlinear): e(:, :, i) = exp(c_i
+    !> h A_aug), i = 1..s, e(:, :, s + 1) = exp(h A_aug).
+    type :: level_t
+        real(dp), allocatable :: e(:, :, :)
+    end type level_t
 
     !> One contact mode: the codes of every element's slots and its linear dynamics.
     type :: mode_t
@@ -64,6 +72,22 @@ module stickslip_flow_modes
         integer :: nl = 0
         !> exp(b delta (1 + x_i) / 2) at the Gauss points x_i (balanced; built on first use).
         real(dp), allocatable :: gauss(:, :, :)
+        !> Quadratic event functions g = y^T Q y + c (balanced): Q (na x na x nq), c, the
+        !> scale of their values, their element, slot and action.
+        real(dp), allocatable :: qmat(:, :, :), qc(:), q_scale(:)
+        integer, allocatable :: q_element(:), q_slot(:), q_action(:)
+        !> Nonlinear inputs (a 2D slip; 0: a linear mode): m inputs, their columns in y'
+        !> (gin, na x m, balanced) and in the channel forces (fin, n_ch x m), the element of
+        !> each; the elements with inputs (nl_elements) and their first input.
+        integer :: m = 0
+        real(dp), allocatable :: gin(:, :), fin(:, :)
+        integer, allocatable :: in_elem(:), nl_elements(:), nl_first(:)
+        !> The augmented dynamics of a nonlinear mode (y' = b y + gin w_0, w_k' = w_{k+1}: a
+        !> polynomial input of degree s - 1), its dyadic ladder for the dense output, and the
+        !> exponentials of the step lengths delta 2^-k (level(k), built on first use).
+        real(dp), allocatable :: aug(:, :), aug_ladder(:, :, :)
+        integer :: aug_nl = 0
+        type(level_t), allocatable :: level(:)
     end type mode_t
 
     !> The piecewise-linear dynamics of one model. Holds a cache of the modes met so far:
@@ -77,6 +101,9 @@ module stickslip_flow_modes
         real(dp) :: omega = 0.0_dp, period = 0.0_dp, delta = 0.0_dp
         !> Bracketing steps per period.
         integer :: steps = 0
+        !> Tolerance of the numerical integration of nonlinear phases (a 2D slip): the error
+        !> estimate of each step relative to the state's size (stickslip_flow_nonlinear).
+        real(dp) :: ode_tol = 1.0e-12_dp
         !> Viscous damping C (energy integrals).
         real(dp), allocatable :: damping(:, :)
         !> f - C v - K x as a function of y (no contact force), N x na.
@@ -280,6 +307,7 @@ contains
         ! the elements' places
         do j = 1, self%nc
             associate (g => self%geom(j), e => self%cs%elements(j)%e)
+                g%index = j
                 g%n = n
                 g%na = na
                 g%ns = self%ns
@@ -351,23 +379,36 @@ contains
         type(mode_t), intent(inout) :: md
         !> Set when the exponential is not finite.
         type(error_type), allocatable, intent(inout) :: error
+        call ladder_of(md%b, self%delta, md%ladder, md%nl, error)
+    end subroutine build_ladder
+
+    !> The dyadic ladder of exponentials of a matrix b: exp(b delta 2^-k), k = 0..nl, with
+    !> ||b delta 2^-nl|| <= 1/16. Error (stat numerical): not finite.
+    subroutine ladder_of(b, delta, ladder, nl, error)
+        !> The matrix and the step [s].
+        real(dp), intent(in) :: b(:, :), delta
+        !> The ladder.
+        real(dp), allocatable, intent(inout) :: ladder(:, :, :)
+        integer, intent(out) :: nl
+        !> Set when the exponential is not finite.
+        type(error_type), allocatable, intent(inout) :: error
         real(dp) :: bnorm
         integer :: k, stat, na
-        na = size(md%b, 1)
-        bnorm = maxval(sum(abs(md%b), 2))*self%delta
-        md%nl = 0
-        if (bnorm > 1.0_dp/16.0_dp) md%nl = exponent(bnorm) + 4
-        if (allocated(md%ladder)) deallocate (md%ladder)
-        allocate (md%ladder(na, na, 0:md%nl))
-        call expm(md%b*(self%delta*0.5_dp**md%nl), md%ladder(:, :, md%nl), stat)
-        do k = md%nl, 1, -1
-            md%ladder(:, :, k - 1) = matmul(md%ladder(:, :, k), md%ladder(:, :, k))
+        na = size(b, 1)
+        bnorm = maxval(sum(abs(b), 2))*delta
+        nl = 0
+        if (bnorm > 1.0_dp/16.0_dp) nl = exponent(bnorm) + 4
+        if (allocated(ladder)) deallocate (ladder)
+        allocate (ladder(na, na, 0:nl))
+        call expm(b*(delta*0.5_dp**nl), ladder(:, :, nl), stat)
+        do k = nl, 1, -1
+            ladder(:, :, k - 1) = matmul(ladder(:, :, k), ladder(:, :, k))
         end do
-        if (stat /= 0 .or. .not. all(ieee_is_finite(md%ladder(:, :, 0)))) then
+        if (stat /= 0 .or. .not. all(ieee_is_finite(ladder(:, :, 0)))) then
             call fatal_error(error, "reference: the matrix exponential of a contact mode "// &
                              "is not finite", stickslip_stat%numerical)
         end if
-    end subroutine build_ladder
+    end subroutine ladder_of
 
     !> The n x n identity matrix.
     pure function identity_matrix(n) result(e)
@@ -393,31 +434,44 @@ contains
         real(dp), intent(in) :: delta, tau, y0(:)
         !> The balanced augmented state tau later.
         real(dp), intent(out) :: y1(:)
+        call propagate_matrix(md%b, md%ladder, md%nl, delta, tau, y0, y1)
+    end subroutine propagate
+
+    !> y1 = exp(b tau) y0 for a matrix b with its dyadic ladder (ladder_of): propagate for
+    !> any linear dynamics (a mode's, a nonlinear mode's augmented one).
+    subroutine propagate_matrix(b, ladder, nl, delta, tau, y0, y1)
+        !> The matrix and its ladder.
+        real(dp), intent(in) :: b(:, :), ladder(:, :, 0:)
+        integer, intent(in) :: nl
+        !> The ladder's step [s], the time [s], the start.
+        real(dp), intent(in) :: delta, tau, y0(:)
+        !> The state tau later.
+        real(dp), intent(out) :: y1(:)
         real(dp) :: r, h, term(size(y0))
         integer :: k, nsteps
         y1 = y0
         r = max(tau, 0.0_dp)
         nsteps = int(r/delta)
         do k = 1, nsteps
-            y1 = matmul(md%ladder(:, :, 0), y1)
+            y1 = matmul(ladder(:, :, 0), y1)
         end do
         r = r - nsteps*delta
         h = delta
-        do k = 1, md%nl
+        do k = 1, nl
             h = 0.5_dp*h
             if (r >= h) then
-                y1 = matmul(md%ladder(:, :, k), y1)
+                y1 = matmul(ladder(:, :, k), y1)
                 r = r - h
             end if
         end do
         if (r <= 0.0_dp) return
         term = y1
         do k = 1, 30
-            term = matmul(md%b, term)*(r/k)
+            term = matmul(b, term)*(r/k)
             y1 = y1 + term
             if (maxval(abs(term)) <= epsilon(1.0_dp)*maxval(abs(y1))) exit
         end do
-    end subroutine propagate
+    end subroutine propagate_matrix
 
     !> The exponentials at the Gauss points of a whole step, md%gauss, built on first use
     !> (only the recording pass integrates energies).

@@ -32,6 +32,13 @@ module stickslip_flow_orbit
         !> then work_forcing = diss_friction + diss_damping + impact_loss).
         real(dp), allocatable :: open_time(:)
         real(dp) :: impact_loss = 0.0_dp
+        !> A phase of a nonlinear mode is recorded step by step: the Taylor coefficients of
+        !> each step's input polynomial followed by the elements' slip memories (phase_b(:,
+        !> p), stickslip_flow_nonlinear; unused for a linear phase), and the sum of the
+        !> steps' error estimates over the period (relative to the state's size; 0 without
+        !> nonlinear phases).
+        real(dp), allocatable :: phase_b(:, :)
+        real(dp) :: integration_error = 0.0_dp
     contains
         procedure :: start => orbit_start
         procedure :: add_phase => orbit_add_phase
@@ -55,37 +62,54 @@ contains
         allocate (self%phase_t(16), self%phase_y(na, 16), self%phase_mode(16))
         allocate (self%event_t(16), self%event_force(16), self%event_velocity(16), &
                   self%event_contact(16), self%event_kind(16), self%event_direction(16))
-        allocate (self%stick_time(nc), self%open_time(nc))
+        allocate (self%stick_time(nc), self%open_time(nc), self%phase_b(0, 16))
         self%stick_time = 0.0_dp
         self%open_time = 0.0_dp
         self%impact_loss = 0.0_dp
+        self%integration_error = 0.0_dp
     end subroutine orbit_start
 
     !> A phase starting at ts [s] in state ys (augmented, model coordinates) and mode imode.
-    subroutine orbit_add_phase(self, ts, ys, imode)
+    subroutine orbit_add_phase(self, ts, ys, imode, b)
         !> The orbit.
         class(orbit_t), intent(inout) :: self
         !> Start time [s] and state of the phase.
         real(dp), intent(in) :: ts, ys(:)
         !> Its mode (index in the flow's cache).
         integer, intent(in) :: imode
-        real(dp), allocatable :: rt(:), ry(:, :)
+        !> A nonlinear step: the Taylor coefficients of its input polynomial and the slip
+        !> memories.
+        real(dp), intent(in), optional :: b(:)
+        real(dp), allocatable :: rt(:), ry(:, :), rb(:, :)
         integer, allocatable :: im2(:)
-        integer :: m
+        integer :: m, nb
         m = self%nphase
+        nb = 0
+        if (present(b)) nb = size(b)
+        if (.not. allocated(self%phase_b)) allocate (self%phase_b(0, size(self%phase_t)))
+        if (nb > size(self%phase_b, 1)) then
+            allocate (rb(nb, size(self%phase_t)))
+            rb = 0.0_dp
+            rb(1:size(self%phase_b, 1), 1:m) = self%phase_b(:, 1:m)
+            call move_alloc(rb, self%phase_b)
+        end if
         if (m == size(self%phase_t)) then
-            allocate (rt(2*m), ry(size(ys), 2*m), im2(2*m))
+            allocate (rt(2*m), ry(size(ys), 2*m), im2(2*m), rb(size(self%phase_b, 1), 2*m))
             rt(1:m) = self%phase_t
             ry(:, 1:m) = self%phase_y
             im2(1:m) = self%phase_mode
+            rb(:, 1:m) = self%phase_b(:, 1:m)
             call move_alloc(rt, self%phase_t)
             call move_alloc(ry, self%phase_y)
             call move_alloc(im2, self%phase_mode)
+            call move_alloc(rb, self%phase_b)
         end if
         self%nphase = m + 1
         self%phase_t(m + 1) = ts
         self%phase_y(:, m + 1) = ys
         self%phase_mode(m + 1) = imode
+        self%phase_b(:, m + 1) = 0.0_dp
+        if (nb > 0) self%phase_b(1:nb, m + 1) = b
     end subroutine orbit_add_phase
 
     !> An event at ts [s] of `contact`: its kind, the slip direction after it, the friction

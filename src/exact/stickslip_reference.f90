@@ -51,6 +51,10 @@ module stickslip_reference
         real(dp) :: tol = 1.0e-11_dp
         !> Period-map evaluations allowed per shooting attempt.
         integer :: maxfev = 200
+        !> Tolerance of the numerical integration of the slip phases whose direction turns
+        !> (2D friction): each collocation step's error estimate, relative to the state's
+        !> size (stickslip_flow_nonlinear).
+        real(dp) :: ode_tol = 1.0e-12_dp
     end type reference_options_t
 
     !> The reference solution: its report, its events, its energy balance and samples.
@@ -99,6 +103,9 @@ module stickslip_reference
         !> Kinetic energy lost in the plastic impacts of rigid unilateral contacts over one
         !> period [J] (part of the energy balance).
         real(dp) :: impact_loss = 0.0_dp
+        !> Sum over one period of the error estimates of the numerically integrated slip
+        !> steps, relative to the state's size (0: every phase solved exactly).
+        real(dp) :: integration_error = 0.0_dp
         !> The internal states of the elements at the samples (slider positions [m]),
         !> samples x n_s (n_s = 0 without).
         real(dp), allocatable :: s(:, :)
@@ -181,6 +188,9 @@ contains
             write (buf, '(a,g0.6,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
         else if (opts%maxfev < 1) then
             write (buf, '(a,i0,a)') "opts%maxfev = ", opts%maxfev, ": must be >= 1"
+        else if (.not. (opts%ode_tol >= 1.0e-15_dp .and. opts%ode_tol <= 1.0e-3_dp)) then
+            write (buf, '(a,g0.6,a)') "opts%ode_tol = ", opts%ode_tol, &
+                ": must be in [1e-15, 1e-3]"
         else
             return
         end if
@@ -386,7 +396,7 @@ contains
         if (all(speed == huge(1.0_dp))) ksec = 1
         res%t_section = period*real(ksec - 1, dp)/real(ns, dp)
 
-        call new_flow(shooting%flow, model, opts%bracket_steps, vref, error)
+        call new_flow(shooting%flow, model, opts%bracket_steps, vref, error, opts%ode_tol)
         if (allocated(error)) return
         nz = shooting%flow%nz
         nstate = shooting%flow%ns
@@ -474,6 +484,7 @@ contains
         res%diss_damping = res%orbit%diss_damping
         res%stick_fraction = res%orbit%stick_time/period
         res%impact_loss = res%orbit%impact_loss
+        res%integration_error = res%orbit%integration_error
         res%open_fraction = res%orbit%open_time/period
         res%stick_phases = count_stick_phases(res, nc)
         if (res%converged) then

@@ -712,6 +712,7 @@ contains
             call put(unit, "  bracket_steps = "//itoa(case%reference%bracket_steps), stat, msg)
             call put(unit, "  tol = "//rtoa(case%reference%tol), stat, msg)
             call put(unit, "  maxfev = "//itoa(case%reference%maxfev), stat, msg)
+            call put(unit, "  ode_tol = "//rtoa(case%reference%ode_tol), stat, msg)
             call put(unit, "  start = '"//trim(case%reference%start)//"'", stat, msg)
             call put(unit, "/", stat, msg)
             ! only the groups of the method: read_case rejects a study group beside another

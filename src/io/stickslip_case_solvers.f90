@@ -115,7 +115,8 @@ contains
         if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['euler'])
     end subroutine read_euler_group
 
-    !> Read &reference (optional): samples, bracket_steps, tol, maxfev, start; validate.
+    !> Read &reference (optional): samples, bracket_steps, tol, maxfev, ode_tol, start;
+    !> validate.
     subroutine read_reference_group(nml, opts, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
@@ -126,7 +127,7 @@ contains
         character(len=:), allocatable :: start
         character(len=*), parameter :: g = "reference"
         call check_names(nml, g, [character(len=13) :: "samples", "bracket_steps", "tol", &
-                                 "maxfev", "start"], error)
+                                 "maxfev", "ode_tol", "start"], error)
         if (allocated(error)) return
         call get_integer(nml, g, "samples", opts%samples, error)
         if (allocated(error)) return
@@ -135,6 +136,8 @@ contains
         call get_real(nml, g, "tol", opts%tol, error)
         if (allocated(error)) return
         call get_integer(nml, g, "maxfev", opts%maxfev, error)
+        if (allocated(error)) return
+        call get_real(nml, g, "ode_tol", opts%ode_tol, error)
         if (allocated(error)) return
         start = trim(opts%start)
         call get_string(nml, g, "start", start, error)

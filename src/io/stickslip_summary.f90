@@ -272,6 +272,7 @@ contains
                                                     ref%stick_fraction), stat, msg)
         end if
         call put(u, "  energy_balance_error = "//rtoa(reference_balance_error(ref)), stat, msg)
+        call put(u, "  integration_error = "//rtoa(ref%integration_error), stat, msg)
         call put(u, "  diagnosis = '"//quote(ref%diagnosis)//"'", stat, msg)
     end subroutine put_reference_keys
 

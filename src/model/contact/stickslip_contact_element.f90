@@ -141,6 +141,21 @@ module stickslip_contact_element
         procedure :: rigid_closed => element_rigid_closed
         !> A rigid normal at a zero or negative gap at the start (projected onto the gap).
         procedure :: start_gap => element_start_gap
+        !> The internal states of a start put on the set its codes allow (a slipping
+        !> slider's spring on its limit).
+        procedure :: start_states => element_start_states
+        !> The values of the element's nonlinear inputs in a mode (a 2D slip) and their
+        !> Jacobian.
+        procedure :: inputs => element_inputs
+        !> Event rows of a nonlinear mode that depend on the slip direction of the step.
+        procedure :: step_rows => element_step_rows
+        !> The slip direction on entering a 2D slip.
+        procedure :: slip_direction => element_slip_direction
+        !> Decides its codes at rest from its forces at acceleration level (with
+        !> accel_code).
+        procedure :: accel_decision => element_accel_decision
+        !> Its codes from its forces and accelerations at rest.
+        procedure :: accel_code => element_accel_code
     end type contact_element_t
 
     !> A slot holding one element (arrays of polymorphic elements).
@@ -648,6 +663,92 @@ contains
         active = .false.
         gap = 0.0_dp
     end subroutine element_start_gap
+
+    !> No internal state to correct at the start.
+    subroutine element_start_states(self, code, geom, y, pj)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes at the start.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The start state (balanced), corrected in place.
+        real(dp), intent(inout) :: y(:)
+        !> The Jacobian of the start's corrections (nz x nz, balanced), composed with this
+        !> one's: pj <- P pj.
+        real(dp), intent(inout) :: pj(:, :)
+    end subroutine element_start_states
+
+    !> No nonlinear input.
+    subroutine element_inputs(self, code, geom, y, dir, q, dq, yd0, dyd0, gj)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The state (balanced).
+        real(dp), intent(in) :: y(:)
+        !> Its slip memory (3: a direction and a regime flag).
+        real(dp), intent(in) :: dir(:)
+        !> The inputs' values and Jacobian (inputs x na).
+        real(dp), intent(out) :: q(:), dq(:, :)
+        !> With the mode's dynamics: y' at y without the element's own inputs (na), its
+        !> Jacobian (na x na) and y' per unit of each of its inputs (na x inputs); a slip
+        !> starting from rest takes its direction from them.
+        real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
+        q = 0.0_dp
+        dq = 0.0_dp
+    end subroutine element_inputs
+
+    !> No event row depending on the step's slip direction.
+    subroutine element_step_rows(self, code, geom, dir, events)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> Its slip memory (3: a direction and a regime flag).
+        real(dp), intent(in) :: dir(:)
+        !> The events, added to.
+        type(event_list_t), intent(inout) :: events
+    end subroutine element_step_rows
+
+    !> The slip direction is kept.
+    subroutine element_slip_direction(self, code, geom, fb, y, dir)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its new codes.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> Its channel forces as rows of y in the mode it leaves (m x na).
+        real(dp), intent(in) :: fb(:, :)
+        !> The state (balanced).
+        real(dp), intent(in) :: y(:)
+        !> Its slip memory (3: a direction and a regime flag), updated.
+        real(dp), intent(inout) :: dir(:)
+    end subroutine element_slip_direction
+
+    !> Not decided at acceleration level (the enumeration of candidates decides).
+    pure logical function element_accel_decision(self) result(yes)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        yes = .false.
+    end function element_accel_decision
+
+    !> No codes from forces (not an acceleration-level element).
+    subroutine element_accel_code(self, r, u, code, dir)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its channel forces [N] and accelerations at the solution.
+        real(dp), intent(in) :: r(:), u(:)
+        !> Its codes.
+        integer, intent(inout) :: code(:)
+        !> Its slip memory (3: a direction and a regime flag).
+        real(dp), intent(inout) :: dir(:)
+    end subroutine element_accel_code
 
     !> Solve the small system a x = b (m <= a few) by Gaussian elimination with partial
     !> pivoting; info = 1 when a pivot vanishes.

@@ -24,21 +24,24 @@ module stickslip_contact_modes
     implicit none
     private
     public :: element_geometry_t, mode_terms_t, event_list_t
-    public :: action_decide, action_close, action_none
+    public :: action_decide, action_close, action_none, action_memory
 
     !> What happens at the zero of an event row besides a code switch: the codes of the
     !> contacts there are decided anew (action_decide), or an open contact closes (its
     !> codes decided, with an impact when it is rigid and closes with a velocity:
-    !> action_close). A value >= -1 and <= 2 switches the slot to that code.
-    integer, parameter :: action_decide = 100, action_close = 101, action_none = 102
+    !> action_close), or the element's slip memory is updated at that state, its codes kept
+    !> (action_memory: a 2D slip started from rest begins to follow its velocity). A value
+    !> >= -1 and <= 2 switches the slot to that code.
+    integer, parameter :: action_decide = 100, action_close = 101, action_none = 102, &
+                          action_memory = 103
 
     !> An element's place in the flow's coordinates.
     type :: element_geometry_t
         !> DOFs n, augmented size na, internal states of all elements n_s.
         integer :: n = 0, na = 0, ns = 0
-        !> The element's internal states are y(2n + s0 + 1 : 2n + s0 + nstate); its first
-        !> force channel is first; its first code slot slot0 + 1.
-        integer :: s0 = 0, first = 0, slot0 = 0
+        !> The element's index among the contacts; its internal states are y(2n + s0 + 1 :
+        !> 2n + s0 + nstate); its first force channel is first; its first code slot slot0 + 1.
+        integer :: index = 0, s0 = 0, first = 0, slot0 = 0
         !> Index of the exosystem's constant in y (2n + n_s + 1) and its value there (se).
         integer :: ic = 0
         real(dp) :: se = 1.0_dp
@@ -79,28 +82,42 @@ module stickslip_contact_modes
         real(dp), allocatable :: ctm(:, :), ftm(:, :)
         integer, allocatable :: chan(:), slip_ch(:)
         real(dp), allocatable :: slip_factor(:)
-        !> Some element's force in this mode is not linear in y (a 2D slip): the flow
-        !> integrates it numerically.
-        logical :: nonlinear = .false.
+        !> Nonlinear inputs (some element's force or slider rate in this mode is not linear
+        !> in y: a 2D slip): input k (its value q_k(y) given by its element's `inputs`) adds
+        !> gu(:, k) q_k to u', gs(:, k) q_k to sigma' and gf(:, k) q_k to the channel
+        !> forces; in_elem(k) its element. The flow integrates such a mode numerically.
+        real(dp), allocatable :: gu(:, :), gs(:, :), gf(:, :)
+        integer, allocatable :: in_elem(:)
     contains
         !> A force along a modal direction, linear in y.
         procedure :: add_force
         !> A velocity constraint and the force that holds it.
         procedure :: constrain
+        !> A nonlinear input.
+        procedure :: add_input
         !> Reset for a new mode.
         procedure :: reset
+        !> Whether the mode has nonlinear inputs.
+        procedure :: nonlinear
     end type mode_terms_t
 
     !> The event functions of one element in one mode: rows of y (positive while the mode
-    !> lasts), the scale of their values, the code slot they concern and the action.
+    !> lasts), the scale of their values, the code slot they concern and the action; and
+    !> quadratic ones, g(y) = y^T Q y + c (a force reaching a circle, a 2D slider stopping).
     type :: event_list_t
         integer :: count = 0
         real(dp), allocatable :: rows(:, :)
         real(dp), allocatable :: scale(:)
         integer, allocatable :: slot(:), action(:)
+        !> Quadratic events: Q (na x na x nq), c, scale, slot, action.
+        integer :: nq = 0
+        real(dp), allocatable :: qmat(:, :, :), qc(:), qscale(:)
+        integer, allocatable :: qslot(:), qaction(:)
     contains
         !> Add an event row.
         procedure :: add => event_add
+        !> Add a quadratic event.
+        procedure :: add_quadratic => event_add_quadratic
         !> Empty the list (rows of length na).
         procedure :: clear => event_clear
     end type event_list_t
@@ -184,6 +201,31 @@ contains
         self%slip_factor = [self%slip_factor, slip_factor]
     end subroutine constrain
 
+    !> A nonlinear input of element j: its columns in u' (ucol, n), in sigma' (scol, n_s) and
+    !> in the channel forces (fcol, n_ch).
+    pure subroutine add_input(self, j, ucol, scol, fcol)
+        !> The terms.
+        class(mode_terms_t), intent(inout) :: self
+        !> The element.
+        integer, intent(in) :: j
+        !> Its columns.
+        real(dp), intent(in) :: ucol(:), scol(:), fcol(:)
+        integer :: k
+        k = size(self%in_elem)
+        self%gu = reshape([self%gu, ucol], [size(ucol), k + 1])
+        self%gs = reshape([self%gs, scol], [size(scol), k + 1])
+        self%gf = reshape([self%gf, fcol], [size(fcol), k + 1])
+        self%in_elem = [self%in_elem, j]
+    end subroutine add_input
+
+    !> The mode has nonlinear inputs.
+    pure logical function nonlinear(self)
+        !> The terms.
+        class(mode_terms_t), intent(in) :: self
+        nonlinear = .false.
+        if (allocated(self%in_elem)) nonlinear = size(self%in_elem) > 0
+    end function nonlinear
+
     !> Empty terms for n DOFs, na augmented entries, ns internal states, nch channels.
     pure subroutine reset(self, n, na, ns, nch)
         !> The terms.
@@ -201,7 +243,8 @@ contains
                                              self%slip_factor)
         allocate (self%ctm(n, 0), self%ftm(n, 0), self%chan(0), self%slip_ch(0), &
                   self%slip_factor(0))
-        self%nonlinear = .false.
+        if (allocated(self%gu)) deallocate (self%gu, self%gs, self%gf, self%in_elem)
+        allocate (self%gu(n, 0), self%gs(ns, 0), self%gf(nch, 0), self%in_elem(0))
     end subroutine reset
 
     !> Add an event row of y (positive while the mode lasts), the scale of its values, the
@@ -239,6 +282,32 @@ contains
         self%action(m + 1) = action
     end subroutine event_add
 
+    !> Add a quadratic event g(y) = y^T Q y + c (positive while the mode lasts).
+    pure subroutine event_add_quadratic(self, q, c, scale, slot, action)
+        !> The list.
+        class(event_list_t), intent(inout) :: self
+        !> Q (na x na, symmetric) and c.
+        real(dp), intent(in) :: q(:, :), c
+        !> Scale of its values (> 0).
+        real(dp), intent(in) :: scale
+        !> Code slot and action.
+        integer, intent(in) :: slot, action
+        real(dp), allocatable :: grown(:, :, :)
+        integer :: m
+        m = self%nq
+        if (m == size(self%qmat, 3)) then
+            allocate (grown(size(q, 1), size(q, 2), m + 2))
+            grown(:, :, 1:m) = self%qmat(:, :, 1:m)
+            call move_alloc(grown, self%qmat)
+        end if
+        self%nq = m + 1
+        self%qmat(:, :, m + 1) = q
+        self%qc = [self%qc(1:m), c]
+        self%qscale = [self%qscale(1:m), scale]
+        self%qslot = [self%qslot(1:m), slot]
+        self%qaction = [self%qaction(1:m), action]
+    end subroutine event_add_quadratic
+
     !> Empty the list for rows of length na.
     pure subroutine event_clear(self, na)
         !> The list.
@@ -246,6 +315,11 @@ contains
         !> Row length.
         integer, intent(in) :: na
         self%count = 0
+        self%nq = 0
+        if (allocated(self%qmat)) deallocate (self%qmat, self%qc, self%qscale, self%qslot, &
+                                              self%qaction)
+        allocate (self%qmat(na, na, 0), self%qc(0), self%qscale(0), self%qslot(0), &
+                  self%qaction(0))
         if (allocated(self%rows)) then
             if (size(self%rows, 1) == na) return
             deallocate (self%rows, self%scale, self%slot, self%action)

@@ -11,14 +11,13 @@ module stickslip_coulomb_element
     use stickslip_kinds, only: dp
     use stickslip_basis, only: basis_t
     use stickslip_friction, only: psi, psi_stick
-    use stickslip_contact_element, only: contact_element_t, element_box_t, channel_t, &
-        hb_work_t, state_stick, state_slip
+    use stickslip_contact_element, only: contact_element_t, channel_t, hb_work_t, &
+        state_stick, state_slip
     use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
         action_decide
-    use stickslip_contact_solve, only: contact_forces
     implicit none
     private
-    public :: coulomb_element_t, new_coulomb_element, coulomb_decision
+    public :: coulomb_element_t, new_coulomb_element
 
     !> Rigid 1D Coulomb friction with a constant normal load.
     type, extends(contact_element_t) :: coulomb_element_t
@@ -48,6 +47,8 @@ module stickslip_coulomb_element
         procedure :: holds_constraint => coulomb_holds_constraint
         procedure :: candidates => coulomb_candidates
         procedure :: consistent => coulomb_consistent
+        procedure :: accel_decision => coulomb_accel_decision
+        procedure :: accel_code => coulomb_accel_code
     end type coulomb_element_t
 
 contains
@@ -337,46 +338,23 @@ contains
         end if
     end function coulomb_consistent
 
-    !> The joint decision of Coulomb contacts at zero slip velocity in one step (the fast
-    !> path of the exact flow): Coulomb's law at acceleration level, the box-constrained QP
-    !> min 1/2 r^T D r + b^T r, |r_k| <= limit_k (D = W_Z^T M^-1 W_Z, b = W_Z^T M^-1 f the
-    !> free accelerations, in modal coordinates), unique for independent directions: stuck
-    !> where the force is inside the limit, else slipping against it. ok = .false. when the
-    !> elements `idx` are not all Coulomb contacts (the caller then enumerates) or the forces
-    !> are not finite.
-    subroutine coulomb_decision(boxes, idx, d, b, codes, ok)
-        !> The elements.
-        type(element_box_t), intent(in) :: boxes(:)
-        !> The elements to decide.
-        integer, intent(in) :: idx(:)
-        !> D (k x k) and b (k).
-        real(dp), intent(in) :: d(:, :), b(:)
-        !> Their codes.
-        integer, intent(out) :: codes(:)
-        !> Whether the QP applied.
-        logical, intent(out) :: ok
-        real(dp) :: lim(size(idx)), r(size(idx))
-        integer :: k, sweeps
-        ok = .false.
-        codes = 0
-        do k = 1, size(idx)
-            select type (e => boxes(idx(k))%e)
-            type is (coulomb_element_t)
-                lim(k) = e%limit
-            class default
-                return
-            end select
-        end do
-        r = 0.0_dp
-        call contact_forces(d, b, lim, r, 1.0e-15_dp, 1000000, sweeps)
-        if (.not. all(abs(r) <= huge(1.0_dp))) return
-        do k = 1, size(idx)
-            if (abs(r(k)) < lim(k)*(1.0_dp - 1.0e-12_dp)) then
-                codes(k) = 0
-            else
-                codes(k) = -nint(sign(1.0_dp, r(k)))
-            end if
-        end do
-        ok = .true.
-    end subroutine coulomb_decision
+    !> Decided at acceleration level (Coulomb's law between the friction force and the slip
+    !> acceleration).
+    pure logical function coulomb_accel_decision(self) result(yes)
+        class(coulomb_element_t), intent(in) :: self
+        yes = self%limit > 0.0_dp
+    end function coulomb_accel_decision
+
+    !> Stuck where the force is inside the limit (1e-12), else slipping against it.
+    subroutine coulomb_accel_code(self, r, u, code, dir)
+        class(coulomb_element_t), intent(in) :: self
+        real(dp), intent(in) :: r(:), u(:)
+        integer, intent(inout) :: code(:)
+        real(dp), intent(inout) :: dir(:)
+        if (abs(r(1)) < self%limit*(1.0_dp - 1.0e-12_dp)) then
+            code(1) = 0
+        else
+            code(1) = -nint(sign(1.0_dp, r(1)))
+        end if
+    end subroutine coulomb_accel_code
 end module stickslip_coulomb_element

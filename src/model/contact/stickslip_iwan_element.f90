@@ -34,7 +34,7 @@ module stickslip_iwan_element
         state_stick, state_slip, element_step_forces
     use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t
     use stickslip_jenkins_element, only: slider_terms, slider_events, slider_start, &
-        slider_decide
+        slider_project, slider_decide
     implicit none
     private
     public :: iwan_element_t, new_iwan_element, new_iwan_element_4p, iwan_discretize
@@ -77,6 +77,7 @@ module stickslip_iwan_element
         procedure :: mode_terms => iwan_mode_terms
         procedure :: event_rows => iwan_event_rows
         procedure :: start_code => iwan_start_code
+        procedure :: start_states => iwan_start_states
         procedure :: local_decide => iwan_local_decide
     end type iwan_element_t
 
@@ -575,6 +576,20 @@ contains
         end do
         decide = .false.
     end subroutine iwan_start_code
+
+    !> Every slipping slider's spring on its limit, and a stuck one's beyond it
+    !> (slider_project).
+    subroutine iwan_start_states(self, code, geom, y, pj)
+        class(iwan_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(inout) :: y(:)
+        real(dp), intent(inout) :: pj(:, :)
+        integer :: i
+        do i = 1, self%n
+            call slider_project(self%k(i), self%f(i), code(i), i, geom, y, pj)
+        end do
+    end subroutine iwan_start_states
 
     !> The slipping sliders whose slip velocity reached zero (all at once: they share w^T
     !> v) stick, unless the structure accelerates on in their direction.

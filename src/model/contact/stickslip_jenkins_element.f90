@@ -10,6 +10,12 @@
 !> the limit: it slips against the force); slipping, c w^T v (the slider stops: it sticks
 !> unless the structure goes on accelerating the same way, a graze), decided alone: the force
 !> is continuous at the event, so the structure's acceleration does not depend on it.
+!> In 2D the slider s (2) and the force r = -k_t (P x - s) (P = [w^T; t2^T]) are linear in
+!> the state in both modes; slipping (code 1), |r| = mu N and the slider moves along -r:
+!> s' = r (r . P v) / (mu N)^2, not linear (nonlinear inputs of the slider rates: the flow
+!> integrates the phase numerically). Events, quadratic in the state: stuck, (mu N)^2 - |r|^2
+!> (it slips); slipping, -r . P v (the slider's speed reaches zero: it sticks unless the
+!> speed turns up again).
 module stickslip_jenkins_element
     use stickslip_kinds, only: dp
     use stickslip_friction_contact, only: friction_contact_t, init_friction_contact
@@ -18,7 +24,7 @@ module stickslip_jenkins_element
     implicit none
     private
     public :: jenkins_element_t, new_jenkins_element
-    public :: slider_terms, slider_events, slider_start, slider_decide
+    public :: slider_terms, slider_events, slider_start, slider_project, slider_decide
 
     !> A spring k_t in series with a Coulomb slider, 1D or 2D, constant normal load.
     type, extends(friction_contact_t) :: jenkins_element_t
@@ -31,7 +37,9 @@ module stickslip_jenkins_element
         procedure :: mode_terms => jenkins_mode_terms
         procedure :: event_rows => jenkins_event_rows
         procedure :: start_code => jenkins_start_code
+        procedure :: start_states => jenkins_start_states
         procedure :: local_decide => jenkins_local_decide
+        procedure :: inputs => jenkins_inputs
     end type jenkins_element_t
 
 contains
@@ -54,14 +62,31 @@ contains
         name = "jenkins"
     end function jenkins_name
 
-    !> 1D: handled.
+    !> Handled, in 1D and 2D.
     function jenkins_exact_support(self) result(why)
         class(jenkins_element_t), intent(in) :: self
         character(len=:), allocatable :: why
         why = ""
-        if (self%law%ntangent == 2) why = "the exact reference does not handle the 2D "// &
-                                          "Jenkins element yet"
     end function jenkins_exact_support
+
+    !> The rows of the 2D spring force r_a = -k_t (d_a^T x - s_a) (a = 1, 2).
+    pure function force_rows(self, geom) result(f)
+        class(jenkins_element_t), intent(in) :: self
+        type(element_geometry_t), intent(in) :: geom
+        real(dp) :: f(2, geom%na)
+        integer :: a
+        do a = 1, 2
+            f(a, :) = -self%kt*geom%disp_row(a) + self%kt*geom%state_row(a)
+        end do
+    end function force_rows
+
+    !> The rows of P v = (w^T v, t2^T v).
+    pure function velocity_rows(geom) result(v)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp) :: v(2, geom%na)
+        v(1, :) = geom%vel_row(1)
+        v(2, :) = geom%vel_row(2)
+    end function velocity_rows
 
     !> One slider position per tangential direction.
     pure integer function jenkins_nstate(self) result(k)
@@ -87,41 +112,171 @@ contains
         end do
     end subroutine jenkins_initial_states
 
+    !> 1D: the slider's terms (slider_terms). 2D: the spring force along w and t2 in both
+    !> modes; slipping, the slider rates as nonlinear inputs.
     subroutine jenkins_mode_terms(self, code, geom, terms)
         class(jenkins_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
         type(mode_terms_t), intent(inout) :: terms
-        call slider_terms(code(1), self%kt, self%law%mu*self%law%normal_load, 1, 1, &
-                          geom%first, geom, terms)
+        real(dp) :: f(2, geom%na), ucol(geom%n), scol(geom%ns), fcol(size(terms%fb, 1))
+        integer :: a
+        if (self%law%ntangent == 1) then
+            call slider_terms(code(1), self%kt, self%law%mu*self%law%normal_load, 1, 1, &
+                              geom%first, geom, terms)
+            return
+        end if
+        f = force_rows(self, geom)
+        do a = 1, 2
+            call terms%add_force(geom%dt(:, a), f(a, :))
+            terms%fb(geom%first + a - 1, :) = f(a, :)
+        end do
+        if (code(1) /= 1) return
+        ucol = 0.0_dp
+        fcol = 0.0_dp
+        do a = 1, 2
+            scol = 0.0_dp
+            scol(geom%s0 + a) = geom%cs(a)
+            call terms%add_input(geom%index, ucol, scol, fcol)
+        end do
     end subroutine jenkins_mode_terms
 
+    !> 2D slipping: the slider rates s' = r (r . P v) / g^2 and their Jacobian.
+    subroutine jenkins_inputs(self, code, geom, y, dir, q, dq, yd0, dyd0, gj)
+        class(jenkins_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:), dir(:)
+        real(dp), intent(out) :: q(:), dq(:, :)
+        real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
+        real(dp) :: f(2, geom%na), v(2, geom%na), r(2), pv(2), g2, rv
+        integer :: a
+        f = force_rows(self, geom)
+        v = velocity_rows(geom)
+        r = matmul(f, y)
+        pv = matmul(v, y)
+        g2 = (self%law%mu*self%law%normal_load)**2
+        rv = dot_product(r, pv)
+        q = r*rv/g2
+        do a = 1, 2
+            dq(a, :) = (rv*f(a, :) + r(a)*(matmul(pv, f) + matmul(r, v)))/g2
+        end do
+    end subroutine jenkins_inputs
+
+    !> 1D: the slider's events. 2D: stuck, g^2 - |r|^2 (it slips); slipping, -r . P v (the
+    !> slider stops: decided alone).
     subroutine jenkins_event_rows(self, code, geom, fb, events)
         class(jenkins_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(in) :: fb(:, :)
         type(event_list_t), intent(inout) :: events
-        call slider_events(code(1), self%law%mu*self%law%normal_load, 1, fb(1, :), geom, &
-                           events)
+        real(dp) :: f(2, geom%na), v(2, geom%na), g
+        g = self%law%mu*self%law%normal_load
+        if (self%law%ntangent == 1) then
+            call slider_events(code(1), g, 1, fb(1, :), geom, events)
+            return
+        end if
+        if (.not. (g > 0.0_dp)) return
+        f = force_rows(self, geom)
+        if (code(1) == 0) then
+            call events%add_quadratic(-matmul(transpose(f), f), g*g, g*g, 1, 1)
+        else
+            v = velocity_rows(geom)
+            call events%add_quadratic(-0.5_dp*(matmul(transpose(f), v) + &
+                                               matmul(transpose(v), f)), 0.0_dp, &
+                                      g*geom%vref, 1, action_decide)
+        end if
     end subroutine jenkins_event_rows
 
+    !> 1D: slider_start. 2D: stuck inside the circle (1e-9), else slipping when the
+    !> structure moves the spring outward (-r . P v above 1e-12 of its scale), else stuck.
     subroutine jenkins_start_code(self, geom, y, code, decide)
         class(jenkins_element_t), intent(in) :: self
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(in) :: y(:)
         integer, intent(out) :: code(:)
         logical, intent(out) :: decide
-        code(1) = slider_start(self%kt, self%law%mu*self%law%normal_load, 1, geom, y)
+        real(dp) :: r(2), g
         decide = .false.
+        g = self%law%mu*self%law%normal_load
+        if (self%law%ntangent == 1) then
+            code(1) = slider_start(self%kt, g, 1, geom, y)
+            return
+        end if
+        code(1) = 0
+        if (.not. (g > 0.0_dp)) then
+            code(1) = 1
+            return
+        end if
+        r = matmul(force_rows(self, geom), y)
+        if (norm2(r) < g*(1.0_dp - 1.0e-9_dp)) return
+        if (-dot_product(r, matmul(velocity_rows(geom), y)) > 1.0e-12_dp*g*geom%vref) &
+            code(1) = 1
     end subroutine jenkins_start_code
 
+    !> 1D: slider_project. 2D: a slipping slider's spring, or a stuck one's beyond the
+    !> limit, put radially on the circle |r| = mu N: s = P x + g r / (k_t |r|).
+    subroutine jenkins_start_states(self, code, geom, y, pj)
+        class(jenkins_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(inout) :: y(:)
+        real(dp), intent(inout) :: pj(:, :)
+        real(dp) :: f(2, geom%na), r(2), rn, g, rh(2), dr(2, size(pj, 1)), &
+                    d(2, size(pj, 1)), drow(geom%na)
+        integer :: a, b, nz, idx
+        g = self%law%mu*self%law%normal_load
+        if (self%law%ntangent == 1) then
+            call slider_project(self%kt, g, code(1), 1, geom, y, pj)
+            return
+        end if
+        if (.not. (g > 0.0_dp)) return
+        f = force_rows(self, geom)
+        r = matmul(f, y)
+        rn = norm2(r)
+        if (.not. (rn > 0.0_dp) .or. (code(1) == 0 .and. rn <= g)) return
+        nz = size(pj, 1)
+        rh = r/rn
+        ! ds_new = P dx + (g / |r|) (I - rh rh^T) dr / k_t, dr = k_t (ds - P dx)
+        do a = 1, 2
+            drow = geom%disp_row(a)
+            d(a, :) = matmul(drow(1:nz), pj)
+            dr(a, :) = matmul(f(a, 1:nz), pj)
+        end do
+        do a = 1, 2
+            idx = 2*geom%n + geom%s0 + a
+            y(idx) = geom%cs(a)*(dot_product(geom%disp_row(a), y) + g*rh(a)/self%kt)
+            pj(idx, :) = d(a, :)
+            do b = 1, 2
+                pj(idx, :) = pj(idx, :) + g/rn*(merge(1.0_dp, 0.0_dp, a == b) - &
+                                                rh(a)*rh(b))*dr(b, :)/self%kt
+            end do
+            pj(idx, :) = geom%cs(a)*pj(idx, :)
+        end do
+    end subroutine jenkins_start_states
+
+    !> 1D: slider_decide. 2D: a slipping slider whose speed -r . P v reached zero sticks,
+    !> unless the speed turns up again (its rate above 1e-9 of the scale).
     subroutine jenkins_local_decide(self, code, geom, y, ydot)
         class(jenkins_element_t), intent(in) :: self
         integer, intent(inout) :: code(:)
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(in) :: y(:), ydot(:)
-        call slider_decide(code(1), geom, y, ydot)
+        real(dp) :: f(2, geom%na), v(2, geom%na), g, speed, rate
+        if (self%law%ntangent == 1) then
+            call slider_decide(code(1), geom, y, ydot)
+            return
+        end if
+        if (code(1) /= 1) return
+        g = self%law%mu*self%law%normal_load
+        f = force_rows(self, geom)
+        v = velocity_rows(geom)
+        speed = -dot_product(matmul(f, y), matmul(v, y))
+        if (speed > 1.0e-9_dp*g*geom%vref) return
+        rate = -dot_product(matmul(f, ydot), matmul(v, y)) - &
+               dot_product(matmul(f, y), matmul(v, ydot))
+        if (.not. (rate > 1.0e-9_dp*g*geom%vref*geom%omega)) code(1) = 0
     end subroutine jenkins_local_decide
 
     ! --- one slider (k, limit g) along w with internal state k_state: shared by the Jenkins
@@ -196,6 +351,38 @@ contains
         v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
         if (-sign(1.0_dp, r)*v > 1.0e-12_dp*geom%vref) code = -nint(sign(1.0_dp, r))
     end function slider_start
+
+    !> A slider's spring put on its limit at a start when it slips (r = -c g, c its code) or
+    !> is beyond the limit stuck (r = g sign r): s = w^T x + r / k in y (balanced), and
+    !> the Jacobian of the correction composed into pj (nz x nz): pj <- P pj.
+    subroutine slider_project(k, g, code, state, geom, y, pj)
+        !> Stiffness [N/m], limit [N].
+        real(dp), intent(in) :: k, g
+        !> The slider's code and internal state.
+        integer, intent(in) :: code, state
+        !> The element's geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The start (balanced), corrected in place.
+        real(dp), intent(inout) :: y(:)
+        !> The Jacobian of the start's corrections.
+        real(dp), intent(inout) :: pj(:, :)
+        real(dp) :: r, target, drow(geom%na)
+        integer :: idx, nz
+        if (.not. (g > 0.0_dp)) return
+        drow = geom%disp_row(1)
+        r = dot_product(-k*drow + k*geom%state_row(state), y)
+        if (code /= 0) then
+            target = -code*g
+        else if (abs(r) > g) then
+            target = sign(g, r)
+        else
+            return
+        end if
+        nz = size(pj, 1)
+        idx = 2*geom%n + geom%s0 + state
+        y(idx) = geom%cs(state)*(dot_product(drow, y) + target/k)
+        pj(idx, :) = geom%cs(state)*matmul(drow(1:nz), pj)
+    end subroutine slider_project
 
     !> A slipping slider whose slip velocity w^T v reached zero: it sticks, unless the
     !> structure accelerates on in its direction (a graze, above 1e-9 of the scale).

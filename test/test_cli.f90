@@ -90,6 +90,19 @@ contains
                    index(file_text(dir//"/reference.csv"), "t,x1,x2,v1,v2,r1,r1_2") == 1, &
                    "cli planar_ellipse, reference: exit 0, reference.csv and the "// &
                    "integration error in the summary", err)
+        path = scratch_copy("microslip_joint")
+        dir = scratch//"/out_microslip_joint"
+        call replace_in_file(trim(path), "steps_per_period = 10000", "steps_per_period = 2000")
+        call cli([path], code, out, err)
+        text = file_text(dir//"/events.csv")
+        call check(t, code == 0 .and. index(out, "euler vs reference") > 0 .and. &
+                   index(text, ",slip,") > 0 .and. &
+                   index(file_text(dir//"/hbm.csv"), "t,x1,x2,v1,v2,r1"//new_line('a')) == 1 &
+                   .and. index(file_text(dir//"/reference.csv"), "t,x1,x2,v1,v2,r1"// &
+                               new_line('a')) == 1, "cli microslip_joint: exit 0, the three "// &
+                   "methods, one force column (the joint's), slip events", err)
+        call check(t, index(file_text(dir//"/summary.nml"), "&microslip") > 0, &
+                   "cli microslip_joint: the joint echoed in the summary's case")
     end subroutine test_contact_examples
 
     !> Replace the first occurrence of `old` by `new` in the text file `path`.

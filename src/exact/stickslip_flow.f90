@@ -34,7 +34,8 @@ module stickslip_flow
         event_open, event_close, event_impact, event_kind, event_name, find_event, grid_step, &
         event_guard, add_saltation, end_monodromy, event_hit_t
     use stickslip_flow_nonlinear, only: nodes, node, gauss_weight, max_level, nl_step_t, &
-        nl_prepare, nl_step, nl_checked_step, nl_state_at, nl_dense, nl_dense_jacobian, nl_input_at
+        nl_prepare, nl_step, nl_checked_step, nl_state_at, nl_exponentials, nl_dense, &
+        nl_dense_jacobian, nl_input_at
     use stickslip_flow_orbit, only: orbit_t
     use stickslip_contact_modes, only: action_decide, action_close, action_memory, event_list_t
     use stickslip_contact_element, only: along_tangent, state_stick, state_open
@@ -760,8 +761,9 @@ contains
         integer, intent(out), optional :: state(:, :)
         !> Internal states at the samples, ng x n_s [m].
         real(dp), intent(out), optional :: s(:, :)
-        real(dp) :: y(self%na), yb(self%na), tk, dt
-        real(dp), allocatable :: step(:, :, :)
+        real(dp) :: y(self%na), yb(self%na), tk, dt, nl_t, nl_y(self%na)
+        real(dp), allocatable :: step(:, :, :), edt(:, :, :)
+        integer :: nl_p, nl_mode
         logical, allocatable :: have_step(:)
         integer :: k, kk, p, kfirst, last_p, n, stat, im, j
         n = self%n
@@ -773,6 +775,9 @@ contains
         ! exp(b dt) of each mode met, built on first use
         allocate (step(self%na, self%na, self%nmodes), have_step(self%nmodes))
         have_step = .false.
+        nl_p = 0
+        nl_mode = 0
+        nl_t = 0.0_dp
         do kk = 0, ng - 1
             k = modulo(kfirst + kk, ng)
             tk = k*dt
@@ -824,9 +829,10 @@ contains
     contains
 
         !> Sample k of phase p, a step of a nonlinear mode: the end of a collocation step
-        !> from its start to the sample (nl_state_at; the dense output [exp(sigma A) (y_p,
-        !> b_p)]_y, A the mode's augmented dynamics, if it fails), channel forces with the
-        !> law's inputs at that state (the slip memories of the step recorded after b_p).
+        !> from its start to the sample, or from the previous sample of the phase
+        !> (nl_state_at; the dense output [exp(sigma A) (y_p, b_p)]_y, A the mode's augmented
+        !> dynamics, if it fails), channel forces with the law's inputs at that state (the
+        !> slip memories of the step recorded after b_p).
         subroutine nonlinear_sample()
             real(dp), allocatable :: z(:), z1(:), mem(:, :), dq(:, :)
             real(dp) :: sg, qv(self%modes(im)%m)
@@ -839,10 +845,24 @@ contains
                 z(self%na + 1:) = orbit%phase_b(1:nb, p)
                 mem = reshape(orbit%phase_b(nb + 1:nb + 3*self%nc, p), [3, self%nc])
                 sg = tk - orbit%phase_t(p)
-                ! the end of a step of length sg (the dense output if that step fails)
-                call nl_state_at(self, md, md%code, mem, z(1:self%na), sg, z1(1:self%na), ok)
+                ! the end of a step of length sg from the phase's start, or of one sample
+                ! step dt from the previous sample in the same phase (its exponentials kept);
+                ! the dense output if that step fails
+                if (p == nl_p .and. abs(tk - nl_t - dt) <= 1.0e-9_dp*dt) then
+                    if (nl_mode /= im) then
+                        call nl_exponentials(md, dt, edt)
+                        nl_mode = im
+                    end if
+                    call nl_state_at(self, md, md%code, mem, nl_y, dt, z1(1:self%na), ok, edt)
+                else
+                    call nl_state_at(self, md, md%code, mem, z(1:self%na), sg, &
+                                     z1(1:self%na), ok)
+                end if
                 if (.not. ok) call propagate_matrix(md%aug, md%aug_ladder, md%aug_nl, &
                                                     self%delta, sg, z, z1)
+                nl_p = p
+                nl_t = tk
+                nl_y = z1(1:self%na)
                 y = matmul(self%tbi, z1(1:self%na))
                 if (.not. all(ieee_is_finite(y))) then
                     call fatal_error(error, "reference: the state is not finite while "// &

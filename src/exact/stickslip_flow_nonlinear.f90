@@ -28,7 +28,7 @@ module stickslip_flow_nonlinear
     implicit none
     private
     public :: nodes, node, gauss_weight, max_level, nl_step_t, nl_prepare, nl_step, &
-        nl_checked_step, nl_state_at, nl_dense, nl_dense_jacobian, nl_input_at
+        nl_checked_step, nl_state_at, nl_exponentials, nl_dense, nl_dense_jacobian, nl_input_at
 
     !> Collocation nodes per step (Gauss-Legendre on [0, 1]) and their quadrature weights.
     integer, parameter :: nodes = 3
@@ -305,8 +305,9 @@ contains
 
     !> The state at sigma [s] after y0 (balanced) in the nonlinear mode md, as the end of a
     !> collocation step of that length (of the step's order, where the dense output inside
-    !> a step is of a lower one); ok = .false. when its Newton iteration fails.
-    subroutine nl_state_at(self, md, code, dirs, y0, sigma, y, ok)
+    !> a step is of a lower one); ok = .false. when its Newton iteration fails. `e`: the
+    !> exponentials of that step length (nl_exponentials), when the caller keeps them.
+    subroutine nl_state_at(self, md, code, dirs, y0, sigma, y, ok, e)
         !> The dynamics.
         class(flow_modes_t), intent(in) :: self
         !> The nonlinear mode.
@@ -321,17 +322,35 @@ contains
         real(dp), intent(out) :: y(:)
         !> The step converged.
         logical, intent(out) :: ok
-        real(dp), allocatable :: e(:, :, :)
+        !> Exponentials of the step length sigma.
+        real(dp), intent(in), optional :: e(:, :, :)
+        real(dp), allocatable :: ew(:, :, :)
         type(nl_step_t) :: st
         y = y0
         ok = .true.
         if (.not. (sigma > 0.0_dp)) return
-        allocate (e(size(md%aug, 1), size(md%aug, 1), nodes + 1))
-        call exponentials(md, sigma, e)
-        call collocate(self, md, code, dirs, y0, sigma, e, .false., st)
+        if (present(e)) then
+            call collocate(self, md, code, dirs, y0, sigma, e, .false., st)
+        else
+            call nl_exponentials(md, sigma, ew)
+            call collocate(self, md, code, dirs, y0, sigma, ew, .false., st)
+        end if
         ok = st%ok
         if (ok) y = st%y1
     end subroutine nl_state_at
+
+    !> The exponentials of a collocation step of length h [s] of the nonlinear mode md
+    !> (its augmented dynamics at the nodes and the end).
+    subroutine nl_exponentials(md, h, e)
+        !> The nonlinear mode (nl_prepare'd).
+        type(mode_t), intent(in) :: md
+        !> Step length [s].
+        real(dp), intent(in) :: h
+        !> exp(c_i h A), i = 1..s, and exp(h A).
+        real(dp), allocatable, intent(out) :: e(:, :, :)
+        allocate (e(size(md%aug, 1), size(md%aug, 1), nodes + 1))
+        call exponentials(md, h, e)
+    end subroutine nl_exponentials
 
     !> The dense output of step st at sigma in [0, h] (balanced): the exact solution driven
     !> by the step's input polynomial (the augmented dynamics' ladder).

@@ -70,7 +70,7 @@ contains
         type(hbm_options_t) :: ho
         type(comparison_t) :: cmp
         real(dp), allocatable :: xh(:, :), vh(:, :), rh(:, :), xr(:, :), vr(:, :), rr(:, :), &
-            xe(:, :), ve(:, :)
+            xe(:, :), ve(:, :), re(:, :)
         real(dp) :: c0, c1
         logical :: hbm_ok, euler_ok, ref_ok, applicable
         character(len=:), allocatable :: why
@@ -138,19 +138,22 @@ contains
             ve = res%euler%v
             call observed(xe, ve)
         end if
+        ! the forces per contact and direction (a joint's sliders summed, as in the files)
+        if (hbm_ok) rh = res%hbm%contacts%direction_forces(rh)
+        if (ref_ok) rr = res%hbm%contacts%direction_forces(rr)
+        if (euler_ok) re = res%hbm%contacts%direction_forces(res%euler%r)
         if (hbm_ok .and. ref_ok) then
             call compare_samples('hbm', xh, vh, rh, 'reference', xr, vr, rr, cmp, error)
             if (allocated(error)) return
             res%comparisons = [res%comparisons, cmp]
         end if
         if (euler_ok .and. ref_ok) then
-            call compare_samples('euler', xe, ve, res%euler%r, 'reference', xr, vr, rr, cmp, &
-                                 error)
+            call compare_samples('euler', xe, ve, re, 'reference', xr, vr, rr, cmp, error)
             if (allocated(error)) return
             res%comparisons = [res%comparisons, cmp]
         end if
         if (hbm_ok .and. euler_ok) then
-            call compare_samples('hbm', xh, vh, rh, 'euler', xe, ve, res%euler%r, cmp, error)
+            call compare_samples('hbm', xh, vh, rh, 'euler', xe, ve, re, cmp, error)
             if (allocated(error)) return
             res%comparisons = [res%comparisons, cmp]
         end if

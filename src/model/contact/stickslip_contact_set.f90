@@ -57,6 +57,8 @@ module stickslip_contact_set
         procedure :: step_forces => set_step_forces
         !> The friction force components and the normal force of contact j at samples.
         procedure :: contact_forces => set_contact_forces
+        !> Channel forces summed per contact and direction (the sliders of a joint add up).
+        procedure :: direction_forces => set_direction_forces
     end type contact_set_t
 
 contains
@@ -323,6 +325,41 @@ contains
             end select
         end do
     end subroutine set_contact_forces
+
+    !> The channel forces rs (nt x n_ch) [N] summed per contact and direction: one column
+    !> per (contact, direction) in channel order, at the first channel along it (rs itself
+    !> when every channel of a contact acts along its own direction; a microslip joint's
+    !> sliders add up to one column). rs is returned unchanged when it is not n_ch wide.
+    function set_direction_forces(self, rs) result(f)
+        !> The contact set.
+        class(contact_set_t), intent(in) :: self
+        !> Channel forces at the samples [N].
+        real(dp), intent(in) :: rs(:, :)
+        real(dp), allocatable :: f(:, :)
+        logical :: first(size(rs, 2))
+        integer :: c, c2, k
+        if (size(rs, 2) /= self%nchannel .or. self%coulomb_only) then
+            f = rs
+            return
+        end if
+        do c = 1, self%nchannel
+            first(c) = .true.
+            do c2 = self%first(self%contact_of(c)), c - 1
+                if (self%along(c2) == self%along(c)) first(c) = .false.
+            end do
+        end do
+        allocate (f(size(rs, 1), count(first)))
+        f = 0.0_dp
+        k = 0
+        do c = 1, self%nchannel
+            if (.not. first(c)) cycle
+            k = k + 1
+            do c2 = self%first(self%contact_of(c)), self%first(self%contact_of(c)) + &
+                self%width(self%contact_of(c)) - 1
+                if (self%along(c2) == self%along(c)) f(:, k) = f(:, k) + rs(:, c2)
+            end do
+        end do
+    end function set_direction_forces
 
     !> The channel directions of a validated `model`, N x n_channel (contact_set_t order):
     !> w_j, t2_j or n_j as each channel acts along. For a Coulomb-only set the columns are

@@ -116,8 +116,9 @@ contains
     !> at 1e-9 of the scale, 1e-6 vref (near rest the slip direction turns without limit;
     !> what is left of the slip would carry the contact (1e-6 vref)^2 / 2a further, a
     !> roundoff-sized distance). A slip started from rest (the memory's regime 1) also:
-    !> 3e-9 vref - d . u (scale vref), at whose zero (2e-9 vref) the memory is updated (it
-    !> follows the slip velocity from then on).
+    !> 3e-6 vref - d . u (the same scale), at whose zero (2e-6 vref) the memory is updated
+    !> (it follows the slip velocity from then on: slower, the roundoff of u / |u| would be
+    !> above 1e-9).
     subroutine planar_step_rows(self, code, geom, dir, events)
         class(planar_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
@@ -128,8 +129,9 @@ contains
         if (code(1) /= 1 .or. .not. (limit(self) > 0.0_dp)) return
         row = dir(1)*geom%vel_row(1) + dir(2)*geom%vel_row(2)
         call events%add(row, rest_speed/1.0e-9_dp*geom%vref, 1, action_decide)
-        if (dir(3) >= 0.5_dp) call events%add(geom%const_row(3.0e-9_dp*geom%vref) - row, &
-                                              geom%vref, 1, action_memory)
+        if (dir(3) >= 0.5_dp) call events%add(geom%const_row(3.0_dp*rest_speed*geom%vref) - &
+                                              row, rest_speed/1.0e-9_dp*geom%vref, 1, &
+                                              action_memory)
     end subroutine planar_step_rows
 
     !> Slipping when the slip speed exceeds rest_speed of its scale; at rest the joint
@@ -292,29 +294,37 @@ contains
     end subroutine start_direction
 
     !> Slipping, the memory: a direction (1:2) and a regime (3: 1 while a slip that started
-    !> from rest is below eps, its direction from the dynamics; 0 once it follows the slip
-    !> velocity). Along the slip velocity when it is above eps = 1e-9 of its scale (the
-    !> regime 0 from then on); else, entering a slip from stuck (fb the stuck forces' rows),
-    !> against the stuck force in the regime 1.
+    !> from rest is slower than 1.5 rest_speed of its scale, its direction from the
+    !> dynamics; 0 once it follows the slip velocity). Entering a slip from stuck (fb the
+    !> stuck forces' rows): against the stuck force in the regime 1, unless it already moves
+    !> faster than rest_speed (then along its velocity, regime 0). Otherwise (after a step,
+    !> at a start or at the memory's event): in the regime 0, or once faster than 1.5
+    !> rest_speed, along the slip velocity in the regime 0; else kept.
     subroutine planar_slip_direction(self, code, geom, fb, y, dir)
         class(planar_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(in) :: fb(:, :), y(:)
         real(dp), intent(inout) :: dir(:)
-        real(dp) :: r(2), u(2)
+        real(dp) :: r(2), u(2), un
         if (code(1) /= 1) return
         u = [dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n)), &
              dot_product(geom%dt(:, 2), y(geom%n + 1:2*geom%n))]
-        if (norm2(u) > 1.0e-9_dp*geom%vref) then
-            dir(1:2) = u/norm2(u)
+        un = norm2(u)
+        if (size(fb, 1) >= 2) then
+            if (un > rest_speed*geom%vref) then
+                dir(1:2) = u/un
+                dir(3) = 0.0_dp
+            else
+                r = matmul(fb(1:2, :), y)
+                if (norm2(r) > 0.0_dp) dir(1:2) = -r/norm2(r)
+                dir(3) = 1.0_dp
+            end if
+        else if ((dir(3) < 0.5_dp .or. un >= 1.5_dp*rest_speed*geom%vref) .and. &
+                 un > 0.0_dp) then
+            dir(1:2) = u/un
             dir(3) = 0.0_dp
-            return
         end if
-        if (size(fb, 1) < 2) return
-        r = matmul(fb(1:2, :), y)
-        if (norm2(r) > 0.0_dp) dir(1:2) = -r/norm2(r)
-        dir(3) = 1.0_dp
     end subroutine planar_slip_direction
 
     pure logical function planar_accel_decision(self) result(yes)

@@ -9,7 +9,7 @@
 !> a tangential stiffness on a unilateral contact is refused with a message.
 module test_contact_reference
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type
+    use stickslip_error, only: error_type, real_text
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -18,7 +18,7 @@ module test_contact_reference
         reference_energy_error
     use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
     use stickslip_flow, only: flow_t
-    use stickslip_contact_law, only: state_open
+    use stickslip_contact_law, only: state_open, state_stick, state_slip
     use stickslip_diagnostics, only: level_warning
     use fixtures, only: seed_model, unilateral_seed, liftoff_model, planar_model
     use testing, only: test_counter_t, check, check_error
@@ -45,8 +45,115 @@ contains
             call test_monodromy(t, rigid, "rigid lift-off")
             call test_euler_first_order(t, rigid)
         end if
+        call test_jenkins_liftoff(t)
         call test_support(t)
     end subroutine run_contact_reference_tests
+
+    !> A tangential stiffness on the elastic lift-off (k_n = 2, k_t = 5: a Jenkins element
+    !> that lifts off, its slider a state of the flow; at k_n = 10 the orbit is flip-unstable,
+    !> multiplier -4.0, and Euler from rest never settles): converged with the energy balance;
+    !> at every sample the spring's law where stuck (r = -k_t (x_1 - s)), the force on the
+    !> limit mu lambda where slipping and zero where open; the monodromy of [x; v; s]
+    !> against central differences at the most open instant (there the slider is unloaded:
+    !> the period map is smooth); implicit Euler converging to it at first order (from
+    !> rest, 1000, 4000, 16000 steps: the error falls by more than 2.5 per step); the weighted
+    !> residual converging as H grows (10, 20, 40).
+    subroutine test_jenkins_liftoff(t)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t) :: res
+        type(flow_t) :: flow
+        type(error_type), allocatable :: error
+        type(euler_options_t) :: eo
+        type(euler_result_t) :: e
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        real(dp), allocatable :: z0(:), zp(:), z1(:), fd(:, :), mono(:, :), xr(:, :), vr(:, :), &
+                                 rr(:, :)
+        real(dp) :: h, worst, err(3), eh(3)
+        integer :: k, nz
+        character(len=120) :: buf
+        call solved(t, liftoff_model(2.0_dp, 5.0_dp), res, "Jenkins lift-off", 'hbm')
+        if (.not. res%converged) return
+        worst = 0.0_dp
+        do k = 1, size(res%t)
+            select case (res%state(k, 1))
+            case (state_open)
+                worst = max(worst, abs(res%r(k, 1)), abs(res%normal(k, 1)))
+            case (state_stick)
+                worst = max(worst, abs(res%r(k, 1) + 5.0_dp*(res%x(k, 1) - res%s(k, 1))))
+            case default
+                worst = max(worst, abs(abs(res%r(k, 1)) - 0.5_dp*res%normal(k, 1)))
+            end select
+        end do
+        call check(t, worst <= 1.0e-9_dp .and. any(res%state(:, 1) == state_stick) .and. &
+                   any(res%state(:, 1) == state_slip), "contact_reference: Jenkins "// &
+                   "lift-off: the spring where stuck, the limit where slipping, 0 where open", &
+                   real_text(worst))
+        ! the monodromy at the most open instant
+        flow = res%flow
+        nz = flow%nz
+        call check(t, nz == 5, "contact_reference: Jenkins lift-off: the slider in the state")
+        k = maxloc(res%gap(:, 1), 1)
+        z0 = [res%x(k, :), res%v(k, :), res%s(k, :)]
+        allocate (z1(nz), fd(nz, nz), mono(nz, nz))
+        call flow%period_map(res%t(k), z0, z1, error, mono=mono)
+        do k = 1, nz
+            if (allocated(error)) exit
+            h = 1.0e-6_dp*max(abs(z0(k)), 1.0e-2_dp)
+            zp = z0
+            zp(k) = zp(k) + h
+            call flow%period_map(res%t(maxloc(res%gap(:, 1), 1)), zp, z1, error)
+            if (allocated(error)) exit
+            fd(:, k) = z1
+            zp(k) = z0(k) - h
+            call flow%period_map(res%t(maxloc(res%gap(:, 1), 1)), zp, z1, error)
+            if (allocated(error)) exit
+            fd(:, k) = (fd(:, k) - z1)/(2.0_dp*h)
+        end do
+        call check_error(t, error, "contact_reference: Jenkins lift-off: period maps", .false.)
+        if (allocated(error)) return
+        worst = maxval(abs(fd - mono))/maxval(abs(mono))
+        call check(t, worst <= 1.0e-5_dp, "contact_reference: Jenkins lift-off: monodromy "// &
+                   "= central differences of the period map", real_text(worst))
+        ! implicit Euler, from rest
+        do k = 1, 3
+            eo%steps_per_period = 1000*4**(k - 1)
+            call integrate_euler(liftoff_model(2.0_dp, 5.0_dp), eo, e, error)
+            if (allocated(error)) then
+                call check_error(t, error, "contact_reference: Jenkins lift-off: Euler", .false.)
+                return
+            end if
+            if (.not. e%periodic) then
+                call check(t, .false., "contact_reference: Jenkins lift-off: Euler periodic", &
+                           e%diagnosis)
+                return
+            end if
+            call sample_reference(res, eo%steps_per_period, xr, vr, rr, error)
+            if (allocated(error)) return
+            err(k) = maxval(abs(e%x - xr))/maxval(abs(xr))
+        end do
+        write (buf, '(3es10.2)') err
+        call check(t, err(2) < err(1)/2.5_dp .and. err(3) < err(2)/2.5_dp, &
+                   "contact_reference: Jenkins lift-off: implicit Euler converges to the "// &
+                   "reference at first order", buf)
+        ! the weighted residual
+        call sample_reference(res, 512, xr, vr, rr, error)
+        if (allocated(error)) return
+        do k = 1, 3
+            ho%harmonics = 10*2**(k - 1)
+            ho%samples = 512
+            call solve_periodic(liftoff_model(2.0_dp, 5.0_dp), ho, sol, error)
+            if (allocated(error) .or. .not. sol%converged) then
+                call check(t, .false., "contact_reference: Jenkins lift-off: weighted "// &
+                           "residual converged")
+                return
+            end if
+            eh(k) = maxval(abs(sol%x - xr))/maxval(abs(xr))
+        end do
+        write (buf, '(3es10.2)') eh
+        call check(t, eh(2) < eh(1) .and. eh(3) < eh(2), "contact_reference: Jenkins "// &
+                   "lift-off: the weighted residual converges to the reference", buf)
+    end subroutine test_jenkins_liftoff
 
     !> Solve the reference of `m`: converged, the energy balance (impact losses included),
     !> no finding above a warning (the normal law, Coulomb's law with the varying limit),
@@ -219,8 +326,9 @@ contains
     end subroutine test_euler_first_order
 
     !> What the exact reference handles: 2D friction (its slip phases integrated
-    !> numerically, test_reference_2d) and 1D unilateral contacts; a tangential contact
-    !> stiffness on a unilateral contact is not handled, said so.
+    !> numerically, test_reference_2d), 1D unilateral contacts, a tangential stiffness on an
+    !> elastic one; a tangential stiffness on a rigid unilateral contact is not handled,
+    !> said so.
     subroutine test_support(t)
         type(test_counter_t), intent(inout) :: t
         character(len=:), allocatable :: why
@@ -229,9 +337,13 @@ contains
                    len(why) == 0, "contact_reference: 2D friction is handled", why)
         call check(t, reference_handles(planar_model(1.0_dp, 0.5_dp, 2.0_dp), why) .and. &
                    len(why) == 0, "contact_reference: a 2D Jenkins element is handled", why)
-        ok = reference_handles(liftoff_model(10.0_dp, 5.0_dp), why)
-        call check(t, .not. ok .and. index(why, "tangential stiffness") > 0, &
-                   "contact_reference: a tangential stiffness is not handled", why)
+        call check(t, reference_handles(liftoff_model(10.0_dp, 5.0_dp), why) .and. &
+                   len(why) == 0, "contact_reference: a tangential stiffness on an elastic "// &
+                   "unilateral contact is handled", why)
+        ok = reference_handles(liftoff_model(0.0_dp, 5.0_dp), why)
+        call check(t, .not. ok .and. index(why, "tangential stiffness") > 0 .and. &
+                   index(why, "rigid") > 0, "contact_reference: a tangential stiffness on a "// &
+                   "rigid unilateral contact is not handled, said so", why)
         call check(t, reference_handles(liftoff_model(10.0_dp, 0.0_dp), why) .and. &
                    len(why) == 0, "contact_reference: 1D unilateral contacts are handled")
     end subroutine test_support

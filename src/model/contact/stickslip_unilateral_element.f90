@@ -4,8 +4,8 @@
 !> varying limit mu lambda(t), rigid or behind a tangential stiffness k_t; a static preload
 !> -P n pressing it closed.
 !>
-!> In the exact flow (1D friction, rigid tangentially; doc/contacts.md, section 5) its code
-!> is 0 (stuck), +1 / -1 (slipping) or 2 (open). Closed, an elastic normal carries lambda =
+!> In the exact flow (1D friction; doc/contacts.md, section 5) its code is 0 (stuck), +1 /
+!> -1 (slipping) or 2 (open). Closed, an elastic normal carries lambda =
 !> -k_n (gap + n^T x) (an added stiffness and a constant); a rigid normal is the constraint
 !> n^T v = 0 whose force lambda comes from the flow's projection, as a stuck friction force
 !> does. A slipping contact's force is -s mu lambda: for a rigid normal the constraint's force
@@ -14,6 +14,12 @@
 !> and mu lambda + r (the limit); slipping, s w^T v; closed, lambda (opening); open, the gap
 !> (closing: for a rigid normal with a closing velocity an impact, plastic, with Coulomb's
 !> impulse law, solved by the flow with this element's law at velocity level).
+!> With a tangential stiffness k_t (an elastic normal only) the friction is a Jenkins
+!> element whose slider s is an internal state: stuck, r = -k_t (w^T x - s), s' = 0;
+!> slipping, r = -s mu lambda, s = w^T x + r / k_t, so s' = w^T v + s mu k_n n^T v / k_t;
+!> open, r = 0 and the slider follows (s' = w^T v). No constraint: its codes are decided
+!> alone (the slider stops: it sticks unless it accelerates on; the gap closes: stuck with
+!> the spring unloaded).
 module stickslip_unilateral_element
     use stickslip_kinds, only: dp
     use stickslip_friction_contact, only: friction_contact_t, init_friction_contact
@@ -41,6 +47,11 @@ module stickslip_unilateral_element
         procedure :: impacts => unilateral_impacts
         procedure :: rigid_closed => unilateral_rigid_closed
         procedure :: start_gap => unilateral_start_gap
+        procedure :: nstate => unilateral_nstate
+        procedure :: state_scales => unilateral_state_scales
+        procedure :: initial_states => unilateral_initial_states
+        procedure :: start_states => unilateral_start_states
+        procedure :: local_decide => unilateral_local_decide
     end type unilateral_element_t
 
 contains
@@ -63,18 +74,110 @@ contains
         name = "unilateral"
     end function unilateral_name
 
-    !> 1D friction, rigid tangentially: handled.
+    !> Handled: 1D friction, rigid tangentially or with a tangential stiffness on an elastic
+    !> normal.
     function unilateral_exact_support(self) result(why)
         class(unilateral_element_t), intent(in) :: self
         character(len=:), allocatable :: why
         why = ""
         if (self%law%ntangent == 2) then
             why = "the exact reference does not handle 2D friction on a unilateral contact yet"
-        else if (self%kt > 0.0_dp) then
-            why = "the exact reference does not handle a tangential stiffness on a "// &
-                  "unilateral contact yet"
+        else if (self%kt > 0.0_dp .and. .not. self%kn > 0.0_dp) then
+            why = "the exact reference does not handle a tangential stiffness on a rigid "// &
+                  "unilateral contact yet (an elastic one, normal_stiffness > 0, it does)"
         end if
     end function unilateral_exact_support
+
+    !> The slider of a Jenkins friction (k_t > 0): one state.
+    pure integer function unilateral_nstate(self) result(k)
+        class(unilateral_element_t), intent(in) :: self
+        k = merge(1, 0, self%kt > 0.0_dp .and. self%law%ntangent == 1)
+    end function unilateral_nstate
+
+    !> sqrt(k_t): the slider scaled like the modal coordinates.
+    pure subroutine unilateral_state_scales(self, c)
+        class(unilateral_element_t), intent(in) :: self
+        real(dp), intent(out) :: c(:)
+        c = sqrt(max(self%kt, tiny(1.0_dp)))
+    end subroutine unilateral_state_scales
+
+    !> s = w^T x + r / k_t (the spring's force r = -k_t (w^T x - s)).
+    pure subroutine unilateral_initial_states(self, dx, r, s)
+        class(unilateral_element_t), intent(in) :: self
+        real(dp), intent(in) :: dx(:), r(:)
+        real(dp), intent(out) :: s(:)
+        if (size(s) > 0) s(1) = dx(1) + r(1)/self%kt
+    end subroutine unilateral_initial_states
+
+    !> The rows of the spring's force -k_t (w^T x - s) and of the normal force lambda =
+    !> -k_n (gap + n^T x) (Jenkins friction on an elastic normal).
+    pure subroutine spring_rows(self, geom, fr, lrow)
+        class(unilateral_element_t), intent(in) :: self
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(out) :: fr(:), lrow(:)
+        fr = -self%kt*geom%disp_row(1) + self%kt*geom%state_row(1)
+        lrow = -self%kn*gap_row(self, geom)
+    end subroutine spring_rows
+
+    !> A Jenkins friction's slider at the start: open, unloaded (s = w^T x); slipping with
+    !> code c, on its limit (r = -c mu lambda); stuck beyond the limit, on it (r = mu lambda
+    !> sign r). y (balanced) corrected in place, pj <- P pj.
+    subroutine unilateral_start_states(self, code, geom, y, pj)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(inout) :: y(:)
+        real(dp), intent(inout) :: pj(:, :)
+        real(dp) :: fr(geom%na), lrow(geom%na), target(geom%na), r, lam
+        integer :: idx, nz
+        if (self%nstate() == 0) return
+        call spring_rows(self, geom, fr, lrow)
+        r = dot_product(fr, y)
+        lam = max(dot_product(lrow, y), 0.0_dp)
+        ! the spring's target force as a row of y
+        select case (code(1))
+        case (2)
+            target = 0.0_dp
+        case (0)
+            if (abs(r) <= self%law%mu*lam) return
+            target = sign(1.0_dp, r)*self%law%mu*lrow
+        case default
+            target = -code(1)*self%law%mu*lrow
+        end select
+        ! s = w^T x + target / k_t
+        nz = size(pj, 1)
+        idx = 2*geom%n + geom%s0 + 1
+        y(idx) = geom%cs(1)*dot_product(geom%disp_row(1) + target/self%kt, y)
+        pj(idx, :) = geom%cs(1)*matmul(geom%disp_row(1) + target/self%kt, pj_full(pj))
+    contains
+        !> pj extended by zero rows to the na rows of y (the constant and the exosystem do
+        !> not move with the start).
+        function pj_full(p) result(pf)
+            real(dp), intent(in) :: p(:, :)
+            real(dp) :: pf(geom%na, size(p, 2))
+            pf = 0.0_dp
+            pf(1:size(p, 1), :) = p
+        end function pj_full
+    end subroutine unilateral_start_states
+
+    !> A Jenkins friction, decided alone: a slipping slider whose velocity reached zero
+    !> sticks unless it accelerates on (1e-9 of the scale); an open contact that closes
+    !> sticks (its spring unloaded).
+    subroutine unilateral_local_decide(self, code, geom, y, ydot)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(inout) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:), ydot(:)
+        real(dp) :: row(geom%na)
+        select case (code(1))
+        case (2)
+            code(1) = 0
+        case (1, -1)
+            row = code(1)*geom%vel_row(1) + self%law%mu*self%kn/self%kt*geom%vel_row(3)
+            if (dot_product(row, y) > 1.0e-9_dp*geom%vref) return
+            if (.not. (dot_product(row, ydot) > 1.0e-9_dp*geom%vref*geom%omega)) code(1) = 0
+        end select
+    end subroutine unilateral_local_decide
 
     !> The gap gap + n^T x as a row of y [m].
     pure function gap_row(self, geom) result(row)
@@ -97,6 +200,10 @@ contains
         c = geom%first
         cn = geom%first + 1
         associate (mu => self%law%mu, wt => geom%dt(:, 1), nt => geom%dt(:, 3))
+            if (self%nstate() > 0) then
+                call jenkins_terms()
+                return
+            end if
             if (code(1) == 2) return
             if (self%kn > 0.0_dp) then
                 lrow = -self%kn*gap_row(self, geom)
@@ -115,6 +222,30 @@ contains
                 call terms%constrain(nt, nt - code(1)*mu*wt, cn, c, -code(1)*mu)
             end if
         end associate
+    contains
+        !> Jenkins friction on an elastic normal: open, the slider follows; closed, the
+        !> normal force, and stuck the spring, slipping the force on the limit with the
+        !> slider's rate.
+        subroutine jenkins_terms()
+            real(dp) :: fr(geom%na), lrow2(geom%na)
+            integer :: is
+            is = geom%s0 + 1
+            call spring_rows(self, geom, fr, lrow2)
+            if (code(1) == 2) then
+                terms%sb(is, :) = geom%cs(1)*geom%vel_row(1)
+                return
+            end if
+            terms%fb(cn, :) = lrow2
+            call terms%add_force(geom%dt(:, 3), lrow2)
+            if (code(1) == 0) then
+                terms%fb(c, :) = fr
+            else
+                terms%fb(c, :) = -code(1)*self%law%mu*lrow2
+                terms%sb(is, :) = geom%cs(1)*(geom%vel_row(1) + code(1)*self%law%mu*self%kn/ &
+                                              self%kt*geom%vel_row(3))
+            end if
+            call terms%add_force(geom%dt(:, 1), terms%fb(c, :))
+        end subroutine jenkins_terms
     end subroutine unilateral_mode_terms
 
     !> Stuck: mu lambda -/+ r (slip against the force), lambda (open); slipping: s w^T v
@@ -134,7 +265,13 @@ contains
             case (2)
                 call events%add(gap_row(self, geom), geom%gref*geom%omega, 1, action_close)
             case default
-                call events%add(code(1)*geom%vel_row(1), geom%vref, 1, action_decide)
+                if (self%nstate() > 0) then
+                    ! the slider's velocity
+                    call events%add(code(1)*geom%vel_row(1) + mu*self%kn/self%kt* &
+                                    geom%vel_row(3), geom%vref, 1, action_decide)
+                else
+                    call events%add(code(1)*geom%vel_row(1), geom%vref, 1, action_decide)
+                end if
                 call events%add(fb(2, :), geom%fref, 1, 2)
             end select
         end associate
@@ -149,10 +286,22 @@ contains
         real(dp), intent(in) :: y(:)
         integer, intent(out) :: code(:)
         logical, intent(out) :: decide
-        real(dp) :: v
+        real(dp) :: v, fr(geom%na), lrow(geom%na), r, lam
         decide = .false.
         if (dot_product(gap_row(self, geom), y) > 1.0e-9_dp*geom%gref) then
             code(1) = 2
+            return
+        end if
+        if (self%nstate() > 0) then
+            ! Jenkins friction: stuck inside the limit (1e-9), else slipping against the
+            ! force if the structure moves that way, else stuck (it unloads)
+            call spring_rows(self, geom, fr, lrow)
+            r = dot_product(fr, y)
+            lam = max(dot_product(lrow, y), 0.0_dp)
+            code(1) = 0
+            if (abs(r) < self%law%mu*lam*(1.0_dp - 1.0e-9_dp)) return
+            v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
+            if (-sign(1.0_dp, r)*v > 1.0e-12_dp*geom%vref) code(1) = -nint(sign(1.0_dp, r))
             return
         end if
         v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
@@ -161,17 +310,18 @@ contains
         decide = .true.
     end subroutine unilateral_start_code
 
-    !> Takes part in joint decisions.
+    !> Takes part in joint decisions (not a Jenkins friction on an elastic normal: no
+    !> constraint).
     pure logical function unilateral_coupled(self) result(c)
         class(unilateral_element_t), intent(in) :: self
-        c = .true.
+        c = .not. (self%kt > 0.0_dp .and. self%kn > 0.0_dp)
     end function unilateral_coupled
 
-    !> Stuck: a constraint (with the normal when rigid).
+    !> Stuck: a constraint (with the normal when rigid; none for a Jenkins friction).
     pure logical function unilateral_holds_constraint(self, code) result(h)
         class(unilateral_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
-        h = code(1) == 0
+        h = code(1) == 0 .and. self%coupled()
     end function unilateral_holds_constraint
 
     !> Moving: its slip direction or open; at rest: stuck, slipping either way, open.

@@ -13,7 +13,7 @@ module fixtures
     implicit none
     private
     public :: seed_model, damped_seed, chain_model, one_dof_model
-    public :: unilateral_seed, liftoff_model, planar_model
+    public :: unilateral_seed, liftoff_model, planar_model, liftoff_2d_model
     public :: scratch_dir, project_path, project_root, enter_project_root
     public :: scratch, write_lines, first_line, good_system, good_forcing, good_friction, sweep_case
     public :: msg, rt, file_text
@@ -158,6 +158,36 @@ contains
         m%tangent2_direction = reshape([0.0_dp, 1.0_dp], [2, 1])
         m%tangential_stiffness = [kt]
     end function planar_model
+
+    !> 2D friction on a contact that lifts off: a point mass 1 (x = DOF 1, y = DOF 2 in the
+    !> plane, z = DOF 3 normal) on grounded springs 1, 1, 1.5, damping 0.1 M, forced by (fx
+    !> cos(omega t), fy sin(omega t), fz cos(omega t + 0.4)) at omega = 1.7, pressed by the
+    !> preload 1 on a ground contact (w = e_1, t2 = e_2, n = e_3, gap 0, normal stiffness
+    !> 10, mu = 0.3): fz = 1 opens it about 15 % of the period.
+    function liftoff_2d_model(fx, fy, fz) result(m)
+        real(dp), intent(in) :: fx, fy, fz
+        type(model_t) :: m
+        m%ndof = 3
+        m%mass = reshape([1, 0, 0, 0, 1, 0, 0, 0, 1]*1.0_dp, [3, 3])
+        m%stiffness = m%mass
+        m%stiffness(3, 3) = 1.5_dp
+        m%damping = 0.1_dp*m%mass
+        m%omega = 1.7_dp
+        m%force_dof = [1, 2, 3]
+        m%force_harmonic = [1, 1, 1]
+        m%force_amplitude = [fx, fy, fz]
+        m%force_phase = [0.0_dp, -2.0_dp*atan(1.0_dp), 0.4_dp]
+        m%contact_dof = [1]
+        m%contact_dof2 = [0]
+        m%mu = [0.3_dp]
+        m%normal_load = [0.0_dp]
+        allocate (m%normal_direction(3, 1), m%tangent2_direction(3, 1))
+        m%normal_direction = reshape([0.0_dp, 0.0_dp, 1.0_dp], [3, 1])
+        m%tangent2_direction = reshape([0.0_dp, 1.0_dp, 0.0_dp], [3, 1])
+        m%preload = [1.0_dp]
+        m%normal_stiffness = [10.0_dp]
+        m%tangential_stiffness = [0.0_dp]
+    end function liftoff_2d_model
 
     !> The seed system with light Rayleigh damping C = 0.02 M + 0.02 K.
     function damped_seed() result(m)

@@ -6,7 +6,8 @@
 !> monodromy matrix is the central difference of the period map; the weighted residual
 !> converges to it as harmonics are added (elastic contact) and implicit Euler at first
 !> order (rigid contact, impacts). What it handles is said (2D friction: test_reference_2d);
-!> a tangential stiffness on a unilateral contact is refused with a message.
+!> a tangential stiffness on a rigid unilateral contact and 2D friction on a rigid one or
+!> behind a tangential stiffness are refused with a message.
 module test_contact_reference
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, real_text
@@ -20,7 +21,8 @@ module test_contact_reference
     use stickslip_flow, only: flow_t
     use stickslip_contact_law, only: state_open, state_stick, state_slip
     use stickslip_diagnostics, only: level_warning
-    use fixtures, only: seed_model, unilateral_seed, liftoff_model, planar_model
+    use fixtures, only: seed_model, unilateral_seed, liftoff_model, planar_model, &
+        liftoff_2d_model
     use testing, only: test_counter_t, check, check_error
     implicit none
     private
@@ -333,6 +335,7 @@ contains
         type(test_counter_t), intent(inout) :: t
         character(len=:), allocatable :: why
         logical :: ok
+        type(model_t) :: m
         call check(t, reference_handles(planar_model(1.0_dp, 0.5_dp, 0.0_dp), why) .and. &
                    len(why) == 0, "contact_reference: 2D friction is handled", why)
         call check(t, reference_handles(planar_model(1.0_dp, 0.5_dp, 2.0_dp), why) .and. &
@@ -346,5 +349,20 @@ contains
                    "rigid unilateral contact is not handled, said so", why)
         call check(t, reference_handles(liftoff_model(10.0_dp, 0.0_dp), why) .and. &
                    len(why) == 0, "contact_reference: 1D unilateral contacts are handled")
+        m = liftoff_2d_model(0.3_dp, 0.15_dp, 1.0_dp)
+        call check(t, reference_handles(m, why) .and. len(why) == 0, "contact_reference: "// &
+                   "2D friction on an elastic unilateral contact is handled", why)
+        m%normal_stiffness = [0.0_dp]
+        ok = reference_handles(m, why)
+        call check(t, .not. ok .and. index(why, "2D friction") > 0 .and. &
+                   index(why, "rigid") > 0, "contact_reference: 2D friction on a rigid "// &
+                   "unilateral contact is not handled, said so", why)
+        m = liftoff_2d_model(0.3_dp, 0.15_dp, 1.0_dp)
+        m%tangential_stiffness = [5.0_dp]
+        ok = reference_handles(m, why)
+        call check(t, .not. ok .and. index(why, "2D friction") > 0 .and. &
+                   index(why, "tangential stiffness") > 0, "contact_reference: 2D friction "// &
+                   "behind a tangential stiffness on a unilateral contact is not handled, "// &
+                   "said so", why)
     end subroutine test_support
 end module test_contact_reference

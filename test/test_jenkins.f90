@@ -138,9 +138,11 @@ contains
     !> |k_t (x_2 - s)| = mu N, and the period map has a kink across that surface: a
     !> perturbation that unloads the spring starts stuck and slips again once the spring is
     !> reloaded (the perturbation is forgotten, to second order), one that loads it beyond the
-    !> limit slips on with the excess, which the spring keeps until it sticks. res%monodromy is
-    !> the derivative from the loading side (central differences give the mean of both sides
-    !> in the columns of x_2 and s: measured 0.34 of the largest entry off). It is checked
+    !> limit is projected back onto it at the start (the slider yields at once: the flow's
+    !> start_states), so that along s from the loading side the map does not move (its
+    !> column of s is 0 there). res%monodromy is the derivative from the loading side
+    !> (central differences give the mean of both sides in the columns of x_2 and s:
+    !> measured 0.34 of the largest entry off). It is checked
     !> along a basis where that derivative is defined: central differences along x_1, v_1, v_2
     !> and x_2 + s (the spring's force unchanged) and a one-sided second-order difference
     !> along s towards the loading side.

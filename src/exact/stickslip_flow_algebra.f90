@@ -223,9 +223,9 @@ contains
 
     !> The values of the nonlinear inputs `in_elem` (their elements, grouped) of the mode
     !> `code` at yb (balanced), q (m), and their Jacobian dq (m x na); dirs the elements'
-    !> slip memories (3 x n_c: a direction and a regime). With the mode's dynamics (y' = bmat y + gmat q)
-    !> each element also gets y' without its own inputs, its Jacobian and its input
-    !> columns (the direction of a slip starting from rest).
+    !> slip memories (3 x n_c: a direction and a regime). With the mode's dynamics (y' =
+    !> bmat y + gmat q) each element also gets y' without its own inputs, its Jacobian and
+    !> its input columns (the direction of a slip starting from rest).
     subroutine eval_inputs(self, code, in_elem, yb, dirs, q, dq, bmat, gmat)
         !> The dynamics.
         class(flow_modes_t), intent(in) :: self
@@ -437,19 +437,25 @@ contains
         end subroutine at_acceleration_level
 
         !> Every combination of the rigid elements' candidates, in order; the first
-        !> consistent one is kept.
+        !> consistent one is kept. An element that slips in it gets its slip memory from the
+        !> forces it carried in the last combination tried where it held a constraint (a
+        !> slip from rest starts against the force it could not hold), else from its forces
+        !> in the mode kept.
         subroutine enumerate(ok)
             logical, intent(out) :: ok
-            integer :: nz, q, total, combo, rem, mslot
+            integer :: nz, q, total, combo, rem, mslot, wmax
             integer, allocatable :: ncand(:), trial(:)
             integer, allocatable :: cand(:, :, :)
-            logical, allocatable :: moving(:)
-            real(dp), allocatable :: yd(:)
+            logical, allocatable :: moving(:), held(:)
+            real(dp), allocatable :: yd(:), heldfb(:, :, :)
             logical :: good
             ok = .false.
             nz = size(rigid)
             mslot = maxval(self%nslots(rigid))
-            allocate (ncand(nz), cand(mslot, 4, nz), moving(nz))
+            wmax = maxval(self%cs%width(rigid))
+            allocate (ncand(nz), cand(mslot, 4, nz), moving(nz), held(nz), &
+                      heldfb(wmax, self%na, nz))
+            held = .false.
             cand = 0
             do q = 1, nz
                 j = rigid(q)
@@ -472,6 +478,15 @@ contains
                 end do
                 call assemble(self, trial, terms, good)
                 if (.not. good) cycle
+                do q = 1, nz
+                    j = rigid(q)
+                    if (.not. self%cs%elements(j)%e%holds_constraint( &
+                        trial(self%slot0(j) + 1:self%slot_hi(j)))) cycle
+                    associate (c0 => self%cs%first(j), w => self%cs%width(j))
+                        heldfb(1:w, :, q) = terms%fb(c0:c0 + w - 1, :)
+                    end associate
+                    held(q) = .true.
+                end do
                 yd = rate_of(self, trial, terms, yb, dirs)
                 do q = 1, nz
                     j = rigid(q)
@@ -488,9 +503,15 @@ contains
                     do q = 1, nz
                         j = rigid(q)
                         associate (c0 => self%cs%first(j), w => self%cs%width(j))
-                            call self%cs%elements(j)%e%slip_direction( &
-                                trial(self%slot0(j) + 1:self%slot_hi(j)), self%geom(j), &
-                                terms%fb(c0:c0 + w - 1, :), yb, dirs(:, j))
+                            if (held(q)) then
+                                call self%cs%elements(j)%e%slip_direction( &
+                                    trial(self%slot0(j) + 1:self%slot_hi(j)), self%geom(j), &
+                                    heldfb(1:w, :, q), yb, dirs(:, j))
+                            else
+                                call self%cs%elements(j)%e%slip_direction( &
+                                    trial(self%slot0(j) + 1:self%slot_hi(j)), self%geom(j), &
+                                    terms%fb(c0:c0 + w - 1, :), yb, dirs(:, j))
+                            end if
                         end associate
                     end do
                     code = trial

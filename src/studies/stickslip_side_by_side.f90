@@ -89,8 +89,9 @@ contains
         res%euler_seconds = c1 - c0
         if (allocated(error)) return
 
-        ! contacts the exact reference does not handle (2D friction, a tangential contact
-        ! stiffness): implicit Euler is the yardstick, the reference is not run
+        ! contacts the exact reference does not handle (exact_support of their elements:
+        ! 2D friction or a tangential stiffness on a rigid unilateral contact): implicit
+        ! Euler is the yardstick, the reference is not run
         applicable = reference_handles(model, why)
         if (applicable) then
             call solve_reference_from_starts(model, ref, res%reference, error, hbm_opts=ho, &

@@ -4,7 +4,7 @@
 !> varying limit mu lambda(t), rigid or behind a tangential stiffness k_t; a static preload
 !> -P n pressing it closed.
 !>
-!> In the exact flow (1D friction; doc/contacts.md, section 5) its code is 0 (stuck), +1 /
+!> In the exact flow (doc/contacts.md, section 5), with 1D friction its code is 0 (stuck), +1 /
 !> -1 (slipping) or 2 (open). Closed, an elastic normal carries lambda =
 !> -k_n (gap + n^T x) (an added stiffness and a constant); a rigid normal is the constraint
 !> n^T v = 0 whose force lambda comes from the flow's projection, as a stuck friction force
@@ -20,11 +20,18 @@
 !> open, r = 0 and the slider follows (s' = w^T v). No constraint: its codes are decided
 !> alone (the slider stops: it sticks unless it accelerates on; the gap closes: stuck with
 !> the spring unloaded).
+!> With 2D friction (an elastic normal, no tangential stiffness) its code is 0 (stuck: w^T v
+!> = t2^T v = 0), 1 (slipping: the friction force -mu lambda u/|u| against the disk of
+!> radius mu lambda, a nonlinear input integrated numerically, stickslip_disk_slip) or 2
+!> (open); stuck, the event (mu lambda)^2 - |r|^2 (quadratic in the state) starts the slip
+!> against the stuck force.
 module stickslip_unilateral_element
     use stickslip_kinds, only: dp
     use stickslip_friction_contact, only: friction_contact_t, init_friction_contact
     use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
         action_decide, action_close
+    use stickslip_disk_slip, only: rest_speed, slip_speed, disk_step_rows, disk_inputs, &
+        disk_slip_direction
     implicit none
     private
     public :: unilateral_element_t, new_unilateral_element
@@ -52,6 +59,9 @@ module stickslip_unilateral_element
         procedure :: initial_states => unilateral_initial_states
         procedure :: start_states => unilateral_start_states
         procedure :: local_decide => unilateral_local_decide
+        procedure :: step_rows => unilateral_step_rows
+        procedure :: inputs => unilateral_inputs
+        procedure :: slip_direction => unilateral_slip_direction
     end type unilateral_element_t
 
 contains
@@ -75,13 +85,17 @@ contains
     end function unilateral_name
 
     !> Handled: 1D friction, rigid tangentially or with a tangential stiffness on an elastic
-    !> normal.
+    !> normal; 2D friction, rigid tangentially, on an elastic normal.
     function unilateral_exact_support(self) result(why)
         class(unilateral_element_t), intent(in) :: self
         character(len=:), allocatable :: why
         why = ""
-        if (self%law%ntangent == 2) then
-            why = "the exact reference does not handle 2D friction on a unilateral contact yet"
+        if (self%law%ntangent == 2 .and. .not. self%kn > 0.0_dp) then
+            why = "the exact reference does not handle 2D friction on a rigid unilateral "// &
+                  "contact yet (on an elastic one, normal_stiffness > 0, it does)"
+        else if (self%law%ntangent == 2 .and. self%kt > 0.0_dp) then
+            why = "the exact reference does not handle 2D friction behind a tangential "// &
+                  "stiffness on a unilateral contact yet"
         else if (self%kt > 0.0_dp .and. .not. self%kn > 0.0_dp) then
             why = "the exact reference does not handle a tangential stiffness on a rigid "// &
                   "unilateral contact yet (an elastic one, normal_stiffness > 0, it does)"
@@ -205,6 +219,10 @@ contains
                 return
             end if
             if (code(1) == 2) return
+            if (self%law%ntangent == 2) then
+                call disk_terms()
+                return
+            end if
             if (self%kn > 0.0_dp) then
                 lrow = -self%kn*gap_row(self, geom)
                 terms%fb(cn, :) = lrow
@@ -246,6 +264,27 @@ contains
             end if
             call terms%add_force(geom%dt(:, 1), terms%fb(c, :))
         end subroutine jenkins_terms
+
+        !> 2D friction on an elastic normal (closed): the normal force, and stuck the two
+        !> tangential constraints, slipping the friction force as two nonlinear inputs.
+        subroutine disk_terms()
+            real(dp) :: scol(geom%ns), fcol(size(terms%fb, 1)), lrow2(geom%na)
+            integer :: a
+            lrow2 = -self%kn*gap_row(self, geom)
+            terms%fb(c + 2, :) = lrow2
+            call terms%add_force(geom%dt(:, 3), lrow2)
+            if (code(1) == 0) then
+                call terms%constrain(geom%dt(:, 1), geom%dt(:, 1), c, 0, 0.0_dp)
+                call terms%constrain(geom%dt(:, 2), geom%dt(:, 2), c + 1, 0, 0.0_dp)
+                return
+            end if
+            scol = 0.0_dp
+            do a = 1, 2
+                fcol = 0.0_dp
+                fcol(c + a - 1) = 1.0_dp
+                call terms%add_input(geom%index, geom%dt(:, a), scol, fcol)
+            end do
+        end subroutine disk_terms
     end subroutine unilateral_mode_terms
 
     !> Stuck: mu lambda -/+ r (slip against the force), lambda (open); slipping: s w^T v
@@ -256,7 +295,25 @@ contains
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(in) :: fb(:, :)
         type(event_list_t), intent(inout) :: events
+        real(dp) :: lrow(geom%na)
         associate (mu => self%law%mu)
+            if (self%law%ntangent == 2) then
+                ! 2D friction: stuck, (mu lambda)^2 - |r|^2 (slips); closed, lambda (opens)
+                select case (code(1))
+                case (0)
+                    lrow = mu*fb(3, :)
+                    call events%add_quadratic(spread(lrow, 2, geom%na)* &
+                                              spread(lrow, 1, geom%na) - &
+                                              matmul(transpose(fb(1:2, :)), fb(1:2, :)), 0.0_dp, &
+                                              (geom%fref*max(mu, 1.0e-3_dp))**2, 1, 1)
+                    call events%add(fb(3, :), geom%fref, 1, 2)
+                case (2)
+                    call events%add(gap_row(self, geom), geom%gref*geom%omega, 1, action_close)
+                case default
+                    call events%add(fb(3, :), geom%fref, 1, 2)
+                end select
+                return
+            end if
             select case (code(1))
             case (0)
                 call events%add(mu*fb(2, :) - fb(1, :), geom%fref*max(mu, 1.0e-3_dp), 1, -1)
@@ -304,10 +361,16 @@ contains
             if (-sign(1.0_dp, r)*v > 1.0e-12_dp*geom%vref) code(1) = -nint(sign(1.0_dp, r))
             return
         end if
+        decide = .true.
+        if (self%law%ntangent == 2) then
+            ! 2D friction: slipping above 1.5 rest_speed of the scale (a slip that stopped
+            ! is at rest_speed), else stuck (decided)
+            code(1) = merge(1, 0, slip_speed(geom, y) > 1.5_dp*rest_speed*geom%vref)
+            return
+        end if
         v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
         code(1) = 0
         if (abs(v) > 1.0e-12_dp*geom%vref) code(1) = nint(sign(1.0_dp, v))
-        decide = .true.
     end subroutine unilateral_start_code
 
     !> Takes part in joint decisions (not a Jenkins friction on an elastic normal: no
@@ -333,6 +396,19 @@ contains
         integer, intent(out) :: cand(:, :)
         integer, intent(out) :: ncand
         real(dp) :: v
+        if (self%law%ntangent == 2) then
+            ! 2D friction: moving (above 1.5 rest_speed: a slip that stopped is at
+            ! rest_speed), slipping or open; at rest, stuck, slipping (against the force it
+            ! cannot hold) or open
+            if (slip_speed(geom, y) > 1.5_dp*rest_speed*geom%vref) then
+                ncand = 2
+                cand(1, 1:2) = [1, 2]
+            else
+                ncand = 3
+                cand(1, 1:3) = [0, 1, 2]
+            end if
+            return
+        end if
         v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
         if (abs(v) > 1.0e-12_dp*geom%vref) then
             ncand = 2
@@ -353,17 +429,18 @@ contains
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(in) :: fb(:, :), y(:), ydot(:)
         real(dp) :: lam, r, gvel, gacc, acc
-        integer :: n
+        integer :: n, nt
         n = geom%n
+        nt = self%law%ntangent
         ok = .true.
         lam = 0.0_dp
         if (code(1) /= 2) then
-            lam = dot_product(fb(2, :), y)
+            lam = dot_product(fb(nt + 1, :), y)
             if (lam < -tol*geom%fref) ok = .false.
         end if
         select case (code(1))
         case (0)
-            r = dot_product(fb(1, :), y)
+            r = norm2(matmul(fb(1:nt, :), y))
             if (abs(r) > self%law%mu*max(lam, 0.0_dp) + tol*geom%fref) ok = .false.
         case (2)
             gvel = dot_product(geom%dt(:, 3), y(n + 1:2*n))
@@ -374,7 +451,8 @@ contains
                 if (gacc < -tol*geom%gref*geom%omega**2) ok = .false.
             end if
         case default
-            if (.not. moving) then
+            ! a 2D slip from rest takes the direction the dynamics give it
+            if (.not. moving .and. nt == 1) then
                 acc = code(1)*dot_product(geom%dt(:, 1), ydot(n + 1:2*n))
                 if (acc < -tol*geom%vref*geom%omega) ok = .false.
             end if
@@ -408,4 +486,37 @@ contains
         gap = dot_product(gap_row(self, geom), y)
         active = self%kn == 0.0_dp .and. .not. gap > 1.0e-9_dp*geom%gref
     end subroutine unilateral_start_gap
+
+    !> 2D friction, slipping: the rows of a slip's step (stickslip_disk_slip).
+    subroutine unilateral_step_rows(self, code, geom, dir, events)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: dir(:)
+        type(event_list_t), intent(inout) :: events
+        if (self%law%ntangent == 2 .and. code(1) == 1) call disk_step_rows(geom, dir, events)
+    end subroutine unilateral_step_rows
+
+    !> 2D friction, slipping: the friction force against the disk of radius mu lambda,
+    !> lambda = -k_n (gap + n^T x) (stickslip_disk_slip).
+    subroutine unilateral_inputs(self, code, geom, y, dir, q, dq, yd0, dyd0, gj)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:), dir(:)
+        real(dp), intent(out) :: q(:), dq(:, :)
+        real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
+        call disk_inputs(geom, -self%law%mu*self%kn*gap_row(self, geom), y, dir, q, dq, yd0, &
+                         dyd0, gj)
+    end subroutine unilateral_inputs
+
+    !> 2D friction, slipping: the memory of the slip (stickslip_disk_slip).
+    subroutine unilateral_slip_direction(self, code, geom, fb, y, dir)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :), y(:)
+        real(dp), intent(inout) :: dir(:)
+        if (self%law%ntangent == 2 .and. code(1) == 1) call disk_slip_direction(geom, fb, y, dir)
+    end subroutine unilateral_slip_direction
 end module stickslip_unilateral_element

@@ -1,11 +1,12 @@
-!> Explicit interfaces to the few LAPACK routines stickslip calls (system liblapack).
+!> Explicit interfaces to the few LAPACK routines stickslip calls (system liblapack), and
+!> BLAS's dgemm (system libblas).
 !> Only interfaces: no state, no wrappers that hide `info`.
 module stickslip_lapack
     use stickslip_kinds, only: dp, sp
     implicit none
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
-        zgesv, dsygv, sgetrf, sgetrs
+        zgesv, dsygv, sgetrf, sgetrs, dgemm
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -35,6 +36,16 @@ module stickslip_lapack
             integer, intent(out) :: ipiv(*)
             integer, intent(out) :: info
         end subroutine dgetrf
+
+        !> C <- alpha op(A) op(B) + beta C (BLAS).
+        subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
+            import :: dp
+            character(len=1), intent(in) :: transa, transb
+            integer, intent(in) :: m, n, k, lda, ldb, ldc
+            real(dp), intent(in) :: alpha, beta
+            real(dp), intent(in) :: a(lda, *), b(ldb, *)
+            real(dp), intent(inout) :: c(ldc, *)
+        end subroutine dgemm
 
         !> Solve with the LU factors from dgetrf.
         subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)

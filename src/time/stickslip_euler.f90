@@ -39,7 +39,7 @@ module stickslip_euler
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: channel_t, kinematics_gap, kinematics_velocity
     use stickslip_contact_measures, only: contact_measures_t, measure_contacts
-    use stickslip_lapack, only: dgetrf, dgetrs
+    use stickslip_lapack, only: dgetrf, dgetrs, dgemm
     use stickslip_contact_solve, only: contact_forces
     implicit none
     private
@@ -630,21 +630,30 @@ contains
         res%diss_coulomb = cm%diss_coulomb
         res%max_force_ratio = cm%force_ratio
         res%u = us
-        ! the forcing at the samples (the force of the step ending there)
-        allocate (f(ns, model%ndof), pw(ns))
-        f = 0.0_dp
+        ! the forcing's power at the samples (the force of the step ending there): each
+        ! force's time function times its direction's velocity
+        allocate (f(model%ndof, model%nforce()), pw(ns))
+        do i = 1, model%nforce()
+            f(:, i) = force_direction(model, i)
+        end do
+        d = matmul(res%v, f)
+        pw = 0.0_dp
         do i = 1, model%nforce()
             do k = 1, ns
-                f(k, :) = f(k, :) + model%force_amplitude(i)*cos(model%force_harmonic(i)* &
-                          model%omega*res%t(k) + model%force_phase(i))*force_direction(model, i)
+                pw(k) = pw(k) + model%force_amplitude(i)*cos(model%force_harmonic(i)* &
+                        model%omega*res%t(k) + model%force_phase(i))*d(k, i)
             end do
         end do
-        pw = sum(f*res%v, dim=2)
         res%work_forcing = h*sum(pw)
         res%work_gross = h*sum(abs(pw))
         d = channel_directions(model, res%contacts)
         res%diss_friction = -h*sum(res%r*matmul(res%v, d))
-        res%diss_damping = h*sum(res%v*matmul(res%v, model%damping))
+        ! v_k^T C v_k summed over the samples: V C by BLAS (O(ns N^2), once per call)
+        deallocate (d)
+        allocate (d(ns, model%ndof))
+        call dgemm('N', 'N', ns, model%ndof, model%ndof, 1.0_dp, res%v, ns, model%damping, &
+                   model%ndof, 0.0_dp, d, ns)
+        res%diss_damping = h*sum(res%v*d)
     end subroutine last_period_measures
 
     !> Steps first..last of a period with contact elements (the kernel of integrate_euler

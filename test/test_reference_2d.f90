@@ -11,6 +11,7 @@
 !> - 2D friction on a contact that lifts off (the limit mu lambda varies, opens and sticks
 !>   once a period): the normal law and Coulomb's law with the varying disk at every
 !>   sample, the energy balance, implicit Euler and the weighted residual converging to it;
+!> - a contact stuck all period (roundoff slip velocities at the start count as rest);
 !> - ode_tol: the samples at 1e-6, 1e-8, 1e-10 against those at 1e-12, each within the
 !>   error estimate the reference states, the estimate falling with the tolerance;
 !> - the monodromy matrix against central differences of the period map, in a 2D slip
@@ -66,6 +67,7 @@ contains
                                     "lift-off")
             call test_monodromy_stick_slip(t, res, "lift-off")
         end if
+        call test_stuck_all_period(t)
         call test_ode_tol(t)
         call test_jenkins_2d(t)
         call test_sweep_stability(t)
@@ -354,6 +356,19 @@ contains
             fd(:, k) = (fd(:, k) - z1)/(2.0_dp*h)
         end do
     end subroutine central_differences
+
+    !> A 2D contact stuck all period (the point mass under a force below mu N: it does not
+    !> move, the start's slip velocities are roundoff): the reference converges, stuck the
+    !> whole period with the force inside the disk.
+    subroutine test_stuck_all_period(t)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t) :: res
+        call reference(t, planar_model(0.1_dp, 0.05_dp, 0.0_dp), res, "stuck all period")
+        if (.not. res%converged) return
+        call check(t, all(res%state(:, 1) == state_stick) .and. &
+                   maxval(hypot(res%r(:, 1), res%r(:, 2))) <= mun, "reference_2d: stuck "// &
+                   "all period: stuck at every sample inside the disk")
+    end subroutine test_stuck_all_period
 
     !> ode_tol on the stick-slip orbit (periodicity defect 1e-13): the samples of x and v at
     !> 1e-6, 1e-8 and 1e-10 against those at 1e-12, relative to the largest state, each

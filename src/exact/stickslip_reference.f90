@@ -357,7 +357,7 @@ contains
         type(hybrj_report_t) :: report
         real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:), ss(:), &
                                  rk(:)
-        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3)
+        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3), vfloor
         integer :: n, nc, ns, j, k, ksec, nsamp, nz, nstate, s0
         type(channel_t) :: ch
         character(len=400) :: buf
@@ -376,10 +376,17 @@ contains
         allocate (vref(nc), speed(ns))
         speed = huge(1.0_dp)
         call new_contact_set(res%contacts, model)
+        ! a contact's velocity scale: its slip velocity's amplitude, at least 1e-3 of the
+        ! structure's or of the forcing's static velocity omega |f| / max K_ii (a contact
+        ! stuck all period slips at roundoff speeds in the start, which must count as rest)
+        vfloor = 1.0e-3_dp*max(maxval(abs(vs)), maxval(abs(xs))*model%omega, &
+                               model%omega*sum(abs(model%force_amplitude))/ &
+                               max(maxval([(abs(model%stiffness(k, k)), k=1, n)]), &
+                                   tiny(1.0_dp)))
+        if (.not. (vfloor > 0.0_dp .and. vfloor <= huge(1.0_dp))) vfloor = 1.0_dp
         do j = 1, nc
             w = contact_velocity_direction(model, j)
-            vref(j) = maxval(abs(matmul(vs, w)))
-            if (.not. (vref(j) > 0.0_dp)) vref(j) = vscale
+            vref(j) = max(maxval(abs(matmul(vs, w))), vfloor)
             if (res%contacts%normal(j) > 0) then
                 ! a unilateral contact is away from its switching surfaces where it is
                 ! clearly open or slips fast

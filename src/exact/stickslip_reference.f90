@@ -379,10 +379,10 @@ contains
         ! a contact's velocity scale: its slip velocity's amplitude, at least 1e-3 of the
         ! structure's or of the forcing's static velocity omega |f| / max K_ii (a contact
         ! stuck all period slips at roundoff speeds in the start, which must count as rest)
-        vfloor = 1.0e-3_dp*max(maxval(abs(vs)), maxval(abs(xs))*model%omega, &
-                               model%omega*sum(abs(model%force_amplitude))/ &
-                               max(maxval([(abs(model%stiffness(k, k)), k=1, n)]), &
-                                   tiny(1.0_dp)))
+        vfloor = 1.0e-3_dp*max(maxval(abs(vs)), maxval(abs(xs))*model%omega)
+        if (allocated(model%force_amplitude) .and. allocated(model%stiffness)) &
+            vfloor = max(vfloor, 1.0e-3_dp*model%omega*sum(abs(model%force_amplitude))/ &
+                         max(maxval([(abs(model%stiffness(k, k)), k=1, n)]), tiny(1.0_dp)))
         if (.not. (vfloor > 0.0_dp .and. vfloor <= huge(1.0_dp))) vfloor = 1.0_dp
         do j = 1, nc
             w = contact_velocity_direction(model, j)

@@ -24,6 +24,7 @@ module test_contact_reference
     use fixtures, only: seed_model, unilateral_seed, liftoff_model, planar_model, &
         liftoff_2d_model
     use testing, only: test_counter_t, check, check_error
+    use test_jenkins, only: central_differences
     implicit none
     private
     public :: run_contact_reference_tests
@@ -69,9 +70,9 @@ contains
         type(euler_result_t) :: e
         type(hbm_options_t) :: ho
         type(hbm_solution_t) :: sol
-        real(dp), allocatable :: z0(:), zp(:), z1(:), fd(:, :), mono(:, :), xr(:, :), vr(:, :), &
+        real(dp), allocatable :: z0(:), z1(:), fd(:, :), mono(:, :), xr(:, :), vr(:, :), &
                                  rr(:, :)
-        real(dp) :: h, worst, err(3), eh(3)
+        real(dp) :: worst, err(3), eh(3)
         integer :: k, nz
         character(len=120) :: buf
         call solved(t, liftoff_model(2.0_dp, 5.0_dp), res, "Jenkins lift-off", 'hbm')
@@ -97,21 +98,9 @@ contains
         call check(t, nz == 5, "contact_reference: Jenkins lift-off: the slider in the state")
         k = maxloc(res%gap(:, 1), 1)
         z0 = [res%x(k, :), res%v(k, :), res%s(k, :)]
-        allocate (z1(nz), fd(nz, nz), mono(nz, nz))
+        allocate (z1(nz), mono(nz, nz))
         call flow%period_map(res%t(k), z0, z1, error, mono=mono)
-        do k = 1, nz
-            if (allocated(error)) exit
-            h = 1.0e-6_dp*max(abs(z0(k)), 1.0e-2_dp)
-            zp = z0
-            zp(k) = zp(k) + h
-            call flow%period_map(res%t(maxloc(res%gap(:, 1), 1)), zp, z1, error)
-            if (allocated(error)) exit
-            fd(:, k) = z1
-            zp(k) = z0(k) - h
-            call flow%period_map(res%t(maxloc(res%gap(:, 1), 1)), zp, z1, error)
-            if (allocated(error)) exit
-            fd(:, k) = (fd(:, k) - z1)/(2.0_dp*h)
-        end do
+        if (.not. allocated(error)) call central_differences(flow, res%t(k), z0, fd, error)
         call check_error(t, error, "contact_reference: Jenkins lift-off: period maps", .false.)
         if (allocated(error)) return
         worst = maxval(abs(fd - mono))/maxval(abs(mono))
@@ -239,25 +228,12 @@ contains
         character(len=*), intent(in) :: name
         type(flow_t) :: flow
         type(error_type), allocatable :: error
-        real(dp), allocatable :: z0(:), zp(:), z1(:), fd(:, :)
-        real(dp) :: h
-        integer :: k, nz
+        real(dp), allocatable :: z0(:), fd(:, :)
+        integer :: nz
         flow = res%flow
         nz = 2*flow%n
         z0 = res%orbit%phase_y(1:nz, 1)
-        allocate (z1(nz), fd(nz, nz))
-        do k = 1, nz
-            h = 1.0e-6_dp*max(abs(z0(k)), 1.0e-2_dp)
-            zp = z0
-            zp(k) = zp(k) + h
-            call flow%period_map(res%t_section, zp, z1, error)
-            if (allocated(error)) exit
-            fd(:, k) = z1
-            zp(k) = z0(k) - h
-            call flow%period_map(res%t_section, zp, z1, error)
-            if (allocated(error)) exit
-            fd(:, k) = (fd(:, k) - z1)/(2.0_dp*h)
-        end do
+        call central_differences(flow, res%t_section, z0, fd, error)
         call check_error(t, error, "contact_reference: "//name//": perturbed period maps", &
                          .false.)
         if (allocated(error)) return

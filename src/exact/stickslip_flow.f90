@@ -765,7 +765,7 @@ contains
         real(dp), allocatable :: step(:, :, :), edt(:, :, :)
         integer :: nl_p, nl_mode
         logical, allocatable :: have_step(:)
-        integer :: k, kk, p, kfirst, last_p, n, stat, im, j
+        integer :: k, kk, p, kfirst, last_p, n, stat, im
         n = self%n
         dt = self%period/ng
         ! the first sample at or after t0; samples before t0 belong to the end of the period
@@ -814,15 +814,7 @@ contains
                     return
                 end if
                 y(self%nz + 1:) = self%exo(tk)
-                x(k + 1, :) = y(1:n)
-                v(k + 1, :) = y(n + 1:2*n)
-                r(k + 1, :) = matmul(md%force, y)
-                if (present(s)) s(k + 1, :) = y(2*n + 1:self%nz)
-                if (present(state)) then
-                    do j = 1, self%nc
-                        state(k + 1, j) = self%state_of(im, j)
-                    end do
-                end if
+                call store(matmul(md%force, y))
             end associate
         end do
 
@@ -872,17 +864,24 @@ contains
                 y(2*n + self%ns + 1:) = self%exo(tk)
                 call eval_inputs(self, md%code, md%in_elem, z1(1:self%na), mem, qv, dq, md%b, &
                                  md%gin)
-                x(k + 1, :) = y(1:n)
-                v(k + 1, :) = y(n + 1:2*n)
-                r(k + 1, :) = matmul(md%force, y) + matmul(md%fin, qv)
-                if (present(s)) s(k + 1, :) = y(2*n + 1:self%nz)
-                if (present(state)) then
-                    do j = 1, self%nc
-                        state(k + 1, j) = self%state_of(im, j)
-                    end do
-                end if
+                call store(matmul(md%force, y) + matmul(md%fin, qv))
             end associate
             last_p = 0
         end subroutine nonlinear_sample
+
+        !> Sample k + 1: the state y of mode im, its channel forces rk.
+        subroutine store(rk)
+            real(dp), intent(in) :: rk(:)
+            integer :: j
+            x(k + 1, :) = y(1:n)
+            v(k + 1, :) = y(n + 1:2*n)
+            r(k + 1, :) = rk
+            if (present(s)) s(k + 1, :) = y(2*n + 1:self%nz)
+            if (present(state)) then
+                do j = 1, self%nc
+                    state(k + 1, j) = self%state_of(im, j)
+                end do
+            end if
+        end subroutine store
     end subroutine sample
 end module stickslip_flow

@@ -158,10 +158,13 @@ contains
             md%force = matmul(terms%fb, self%tb)
             md%ctm = terms%ctm
             if (allocated(md%gauss)) deallocate (md%gauss)
-            ! the event rows of every element, with the forces of its channels
+            ! the event rows and quadratic events of every element, with the forces of its
+            ! channels
             m = 0
             allocate (md%rows(self%na, 0), md%row_scale(0), md%row_element(0), md%row_slot(0), &
                       md%row_action(0))
+            allocate (md%qmat(self%na, self%na, 0), md%qc(0), md%q_scale(0), md%q_element(0), &
+                      md%q_slot(0), md%q_action(0))
             do j = 1, self%nc
                 c0 = self%cs%first(j)
                 w = self%cs%width(j)
@@ -177,18 +180,6 @@ contains
                     md%row_slot = [md%row_slot, self%slot0(j) + events%slot(k)]
                     md%row_action = [md%row_action, events%action(k)]
                 end do
-            end do
-            md%drows = matmul(transpose(md%b), md%rows)
-            ! the quadratic events
-            allocate (md%qmat(self%na, self%na, 0), md%qc(0), md%q_scale(0), md%q_element(0), &
-                      md%q_slot(0), md%q_action(0))
-            do j = 1, self%nc
-                c0 = self%cs%first(j)
-                w = self%cs%width(j)
-                call events%clear(self%na)
-                call self%cs%elements(j)%e%event_rows(code(self%slot0(j) + 1:self%slot_hi(j)), &
-                                                      self%geom(j), &
-                                                      terms%fb(c0:c0 + w - 1, :), events)
                 do k = 1, events%nq
                     md%qmat = reshape([md%qmat, events%qmat(:, :, k)], &
                                       [self%na, self%na, size(md%qc) + 1])
@@ -199,6 +190,7 @@ contains
                     md%q_action = [md%q_action, events%qaction(k)]
                 end do
             end do
+            md%drows = matmul(transpose(md%b), md%rows)
             ! the nonlinear inputs (a 2D slip): their columns in y' and the channel forces
             md%m = size(terms%in_elem)
             allocate (md%gin(self%na, md%m), md%fin(self%cs%nchannel, md%m))

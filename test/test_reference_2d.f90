@@ -40,7 +40,7 @@ module test_reference_2d
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
-    public :: run_reference_2d_tests
+    public :: run_reference_2d_tests, test_euler_first_order, compare_monodromy
 
     !> The planar model's friction limit mu N and angular frequency.
     real(dp), parameter :: mun = 0.3_dp, omega = 1.7_dp

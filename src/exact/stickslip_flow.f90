@@ -333,8 +333,8 @@ contains
             real(dp) :: yd(na), q(self%modes(m)%m), dq(self%modes(m)%m, na)
             yd = matmul(self%modes(m)%b, ya)
             if (self%modes(m)%m == 0) return
-            call eval_inputs(self, code, self%modes(m)%in_elem, ya, dirs, q, dq, &
-                             self%modes(m)%b, self%modes(m)%gin)
+            call eval_inputs(self, code, self%modes(m)%in_elem, ya, dirs, self%modes(m)%fbal, &
+                             self%modes(m)%fin, q, dq, self%modes(m)%b, self%modes(m)%gin)
             yd = yd + matmul(self%modes(m)%gin, q)
         end function rate
 
@@ -769,7 +769,7 @@ contains
         n = self%n
         dt = self%period/ng
         ! the first sample at or after t0; samples before t0 belong to the end of the period
-        kfirst = modulo(ceiling(orbit%t0/dt - 1.0e-12_dp), ng)
+        kfirst = ceiling(orbit%t0/dt - 1.0e-12_dp)
         p = 1
         last_p = 0
         ! exp(b dt) of each mode met, built on first use
@@ -779,9 +779,10 @@ contains
         nl_mode = 0
         nl_t = 0.0_dp
         do kk = 0, ng - 1
+            ! the samples from the first at or after t0 on, by index (a time test cannot
+            ! tell t0 from a sample within roundoff of it)
             k = modulo(kfirst + kk, ng)
-            tk = k*dt
-            if (tk < orbit%t0 - 1.0e-12_dp*dt) tk = tk + self%period
+            tk = (kfirst + kk)*dt
             do while (p < orbit%nphase)
                 if (orbit%phase_t(p + 1) > tk) exit
                 p = p + 1
@@ -862,8 +863,8 @@ contains
                     return
                 end if
                 y(2*n + self%ns + 1:) = self%exo(tk)
-                call eval_inputs(self, md%code, md%in_elem, z1(1:self%na), mem, qv, dq, md%b, &
-                                 md%gin)
+                call eval_inputs(self, md%code, md%in_elem, z1(1:self%na), mem, md%fbal, md%fin, &
+                                 qv, dq, md%b, md%gin)
                 call store(matmul(md%force, y) + matmul(md%fin, qv))
             end associate
             last_p = 0

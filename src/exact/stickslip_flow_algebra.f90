@@ -24,7 +24,7 @@ module stickslip_flow_algebra
     use stickslip_flow_modes, only: mode_t, flow_modes_t, build_ladder, identity_matrix
     use stickslip_contact_modes, only: mode_terms_t, event_list_t
     use stickslip_contact_set, only: contact_set_t, new_element_set
-    use stickslip_contact_element, only: element_box_t, state_stick
+    use stickslip_contact_element, only: element_box_t, state_stick, along_normal
     implicit none
     private
     public :: mode_index, assemble, start_codes, decide_codes, impact_jump, &
@@ -156,6 +156,7 @@ contains
             md%code = code
             md%b = dynamics_of(self, terms)
             md%force = matmul(terms%fb, self%tb)
+            md%fbal = terms%fb
             md%ctm = terms%ctm
             if (allocated(md%gauss)) deallocate (md%gauss)
             ! the event rows and quadratic events of every element, with the forces of its
@@ -215,16 +216,20 @@ contains
 
     !> The values of the nonlinear inputs `in_elem` (their elements, grouped) of the mode
     !> `code` at yb (balanced), q (m), and their Jacobian dq (m x na); dirs the elements'
-    !> slip memories (3 x n_c: a direction and a regime). With the mode's dynamics (y' =
-    !> bmat y + gmat q) each element also gets y' without its own inputs, its Jacobian and
-    !> its input columns (the direction of a slip starting from rest).
-    subroutine eval_inputs(self, code, in_elem, yb, dirs, q, dq, bmat, gmat)
+    !> slip memories (3 x n_c: a direction and a regime); fb and fin the mode's channel
+    !> forces, linear part and per unit input (each element gets its channels' rows). With
+    !> the mode's dynamics (y' = bmat y + gmat q) each element also gets y' without its own
+    !> inputs, its Jacobian and its input columns (the direction of a slip starting from
+    !> rest).
+    subroutine eval_inputs(self, code, in_elem, yb, dirs, fb, fin, q, dq, bmat, gmat)
         !> The dynamics.
         class(flow_modes_t), intent(in) :: self
         !> Codes of every slot, the element of each input.
         integer, intent(in) :: code(:), in_elem(:)
         !> State, slip directions.
         real(dp), intent(in) :: yb(:), dirs(:, :)
+        !> Channel forces: fb y (n_ch x na, balanced) + fin q (n_ch x m).
+        real(dp), intent(in) :: fb(:, :), fin(:, :)
         !> Values and Jacobian.
         real(dp), intent(out) :: q(:), dq(:, :)
         !> The mode's linear dynamics (na x na) and input columns (na x m).
@@ -244,15 +249,17 @@ contains
                     if (in_elem(k1 + 1) /= j) exit
                     k1 = k1 + 1
                 end do
-                associate (c => code(self%slot0(j) + 1:self%slot_hi(j)))
+                associate (c => code(self%slot0(j) + 1:self%slot_hi(j)), &
+                           c0 => self%cs%first(j), c1 => self%cs%first(j) + self%cs%width(j) - 1)
                     if (pass == 1) then
                         call self%cs%elements(j)%e%inputs(c, self%geom(j), yb, dirs(:, j), &
+                                                          fb(c0:c1, :), fin(c0:c1, k:k1), &
                                                           q(k:k1), dq(k:k1, :))
                     else
                         ! without this element's own inputs (those of the first pass)
                         call self%cs%elements(j)%e%inputs( &
-                            c, self%geom(j), yb, dirs(:, j), q(k:k1), dq(k:k1, :), &
-                            yd0 - matmul(gmat(:, k:k1), q(k:k1)), &
+                            c, self%geom(j), yb, dirs(:, j), fb(c0:c1, :), fin(c0:c1, k:k1), &
+                            q(k:k1), dq(k:k1, :), yd0 - matmul(gmat(:, k:k1), q(k:k1)), &
                             dyd0 - matmul(gmat(:, k:k1), dq(k:k1, :)), gmat(:, k:k1))
                     end if
                 end associate
@@ -276,7 +283,8 @@ contains
         gmat = 0.0_dp
         gmat(self%n + 1:2*self%n, :) = terms%gu
         if (self%ns > 0) gmat(2*self%n + 1:self%nz, :) = terms%gs
-        call eval_inputs(self, code, terms%in_elem, yb, dirs, q, dq, bmat, gmat)
+        call eval_inputs(self, code, terms%in_elem, yb, dirs, terms%fb, terms%gf, q, dq, bmat, &
+                         gmat)
         ydot = ydot + matmul(gmat, q)
     end function rate_of
 
@@ -518,9 +526,12 @@ contains
     !> the plastic impact with the laws of the element `jimp` and of the rigid normals
     !> already closed (code), at velocity level, solved as one step of zero length by their
     !> own local solves (contact_set_t%step_forces: u+ = u- + A P, A the modal Delassus
-    !> matrix of their channels). yb's velocities are replaced by the ones after the impact;
-    !> `jump` (nz x nz) is the Jacobian of the jump map of the state for the active
-    !> impulses (stuck: both directions held; sliding: the normal held by n + mu sign w);
+    !> matrix of their channels, every channel of each: 1D or 2D friction and the normal).
+    !> yb's velocities are replaced by the ones after the impact; `jump` (nz x nz) is the
+    !> Jacobian of the jump map of the state for the active impulses: stuck, every
+    !> direction held; sliding, the normal held by F = n + T P_t / P_n, and in 2D the
+    !> impulse's direction turning with the slip after it (P_t = -mu P_n e, e = T^T u+ /
+    !> |T^T u+|): (I + L) du+ = du- + F dP_n, L = mu P_n T (I - e e^T) T^T / |T^T u+|;
     !> `loss` the kinetic energy lost [J] (>= 0).
     subroutine impact_jump(self, yb, jimp, code, jump, loss)
         !> The dynamics.
@@ -535,14 +546,13 @@ contains
         real(dp), intent(out) :: jump(:, :)
         !> Kinetic energy lost.
         real(dp), intent(out) :: loss
-        integer, allocatable :: involved(:), ipiv(:)
+        integer, allocatable :: involved(:), ipiv(:), first(:), state(:)
         real(dp), allocatable :: dirs(:, :), a(:, :), q(:), p(:), ctm(:, :), ftm(:, :), &
-                                 g(:, :), l(:, :), u(:)
-        integer :: state(1)
+                                 g(:, :), l(:, :), u(:), xl(:, :), tdir(:, :), ut(:), e(:)
         type(element_box_t), allocatable :: boxes(:)
         type(contact_set_t) :: impacts
-        integer :: n, j, k, m, sweeps, info
-        real(dp) :: ke0, resid, scale, pn, pt
+        integer :: n, j, k, m, sweeps, info, c, w, nch, inorm, nt, b
+        real(dp) :: ke0, resid, scale, pn, pt, rho, un
         n = self%n
         allocate (involved(0))
         do j = 1, self%nc
@@ -551,17 +561,26 @@ contains
                 involved = [involved, j]
         end do
         m = size(involved)
-        allocate (dirs(n, 2*m), boxes(m))
+        allocate (boxes(m), first(m + 1))
+        nch = 0
+        do k = 1, m
+            first(k) = nch + 1
+            nch = nch + self%cs%width(involved(k))
+            allocate (boxes(k)%e, source=self%cs%elements(involved(k))%e)
+        end do
+        first(m + 1) = nch + 1
+        allocate (dirs(n, nch))
         do k = 1, m
             j = involved(k)
-            dirs(:, 2*k - 1) = self%geom(j)%dt(:, 1)
-            dirs(:, 2*k) = self%geom(j)%dt(:, 3)
-            allocate (boxes(k)%e, source=self%cs%elements(j)%e)
+            do c = 1, self%cs%width(j)
+                dirs(:, first(k) + c - 1) = &
+                    self%geom(j)%dt(:, self%cs%along(self%cs%first(j) + c - 1))
+            end do
         end do
         call new_element_set(impacts, boxes)
         a = matmul(transpose(dirs), dirs)
         q = matmul(yb(n + 1:2*n), dirs)
-        allocate (p(2*m))
+        allocate (p(nch))
         p = 0.0_dp
         scale = max(maxval(abs(q))/max(maxval(abs(a)), tiny(1.0_dp)), tiny(1.0_dp))
         call impacts%step_forces(a, q, p, scale, 1.0e-14_dp, 1000, sweeps, resid)
@@ -569,35 +588,79 @@ contains
         ke0 = 0.5_dp*dot_product(yb(n + 1:2*n), yb(n + 1:2*n))
         yb(n + 1:2*n) = yb(n + 1:2*n) + matmul(dirs, p)
         loss = ke0 - 0.5_dp*dot_product(yb(n + 1:2*n), yb(n + 1:2*n))
-        ! the jump map of the active impulses: u+ = (I - Ft (Ct^T Ft)^-1 Ct^T) u-
-        allocate (ctm(n, 0), ftm(n, 0))
+        ! the jump map of the active impulses: (I + L) du+ = du- + Ft dLambda, Ct^T du+ = 0
+        allocate (ctm(n, 0), ftm(n, 0), xl(n, n))
+        xl = identity_matrix(n)
         do k = 1, m
-            pt = p(2*k - 1)
-            pn = p(2*k)
+            j = involved(k)
+            w = self%cs%width(j)
+            inorm = 0
+            do c = 1, w
+                if (self%cs%along(self%cs%first(j) + c - 1) == along_normal) inorm = c
+            end do
+            if (inorm == 0) cycle
+            pn = p(first(k) + inorm - 1)
             if (pn <= 0.0_dp) cycle
-            ! the element's state at the impulse: stuck (both directions held) or sliding
-            ! (the normal held by n + (P_t / P_n) w, |P_t| = mu P_n)
-            call impacts%elements(k)%e%states(0.5_dp*(a(2*k - 1, 2*k - 1) + a(2*k, 2*k)), &
-                                   reshape(p(2*k - 1:2*k), [1, 2]), &
-                                   reshape(u(2*k - 1:2*k), [1, 2]), state)
+            ! the element's state at the impulse
+            allocate (state(1))
+            rho = 0.0_dp
+            do c = first(k), first(k + 1) - 1
+                rho = rho + a(c, c)/w
+            end do
+            call impacts%elements(k)%e%states(rho, reshape(p(first(k):first(k + 1) - 1), [1, w]), &
+                                              reshape(u(first(k):first(k + 1) - 1), [1, w]), &
+                                              state)
             if (state(1) == state_stick) then
-                ctm = reshape([ctm, dirs(:, 2*k - 1), dirs(:, 2*k)], [n, size(ctm, 2) + 2])
-                ftm = reshape([ftm, dirs(:, 2*k - 1), dirs(:, 2*k)], [n, size(ftm, 2) + 2])
+                ctm = reshape([ctm, dirs(:, first(k):first(k + 1) - 1)], [n, size(ctm, 2) + w])
+                ftm = reshape([ftm, dirs(:, first(k):first(k + 1) - 1)], [n, size(ftm, 2) + w])
             else
-                ctm = reshape([ctm, dirs(:, 2*k)], [n, size(ctm, 2) + 1])
-                ftm = reshape([ftm, dirs(:, 2*k) + (pt/pn)*dirs(:, 2*k - 1)], &
-                              [n, size(ftm, 2) + 1])
+                ! sliding: the normal held by n + T P_t / P_n
+                ctm = reshape([ctm, dirs(:, first(k) + inorm - 1)], [n, size(ctm, 2) + 1])
+                e = dirs(:, first(k) + inorm - 1)
+                nt = 0
+                do c = 1, w
+                    if (c == inorm) cycle
+                    e = e + (p(first(k) + c - 1)/pn)*dirs(:, first(k) + c - 1)
+                    nt = nt + 1
+                end do
+                ftm = reshape([ftm, e], [n, size(ftm, 2) + 1])
+                if (nt == 2) then
+                    ! the 2D impulse turns with the slip after it
+                    tdir = reshape([(dirs(:, first(k) + c - 1), c=1, w)], [n, w])
+                    tdir = tdir(:, pack([(c, c=1, w)], [(c /= inorm, c=1, w)]))
+                    ut = matmul(yb(n + 1:2*n), tdir)
+                    un = norm2(ut)
+                    ! mu P_n = |P_t| on the limit
+                    pt = norm2(pack(p(first(k):first(k + 1) - 1), [(c /= inorm, c=1, w)]))
+                    if (un > 0.0_dp) then
+                        e = ut/un
+                        do b = 1, 2
+                            do c = 1, 2
+                                xl = xl + pt/un*(merge(1.0_dp, 0.0_dp, b == c) - e(b)*e(c))* &
+                                     spread(tdir(:, b), 2, n)*spread(tdir(:, c), 1, n)
+                            end do
+                        end do
+                    end if
+                end if
             end if
+            deallocate (state)
         end do
         jump = identity_matrix(size(jump, 1))
         if (size(ctm, 2) == 0) return
-        g = matmul(transpose(ctm), ftm)
-        l = transpose(ctm)
+        ! X = (I + L)^-1; du+ = (X - X Ft (Ct^T X Ft)^-1 Ct^T X) du-
+        allocate (ipiv(n))
+        l = identity_matrix(n)
+        g = xl
+        call dgesv(n, n, g, n, ipiv, l, n, info)
+        if (info /= 0) return
+        xl = l
+        g = matmul(transpose(ctm), matmul(xl, ftm))
+        l = matmul(transpose(ctm), xl)
+        deallocate (ipiv)
         allocate (ipiv(size(g, 1)))
         call dgesv(size(g, 1), n, g, size(g, 1), ipiv, l, size(g, 1), info)
         if (info /= 0) return
-        jump(n + 1:2*n, n + 1:2*n) = jump(n + 1:2*n, n + 1:2*n) - matmul(ftm, l)
-
+        jump(n + 1:2*n, n + 1:2*n) = xl - matmul(matmul(xl, ftm), l)
     end subroutine impact_jump
 
     !> Put every rigid normal at a zero or negative gap (contact_element_t%start_gap) at zero

@@ -52,6 +52,8 @@ module stickslip_flow_modes
         integer, allocatable :: code(:)
         !> Channel forces r = force y (model coordinates), n_ch x na.
         real(dp), allocatable :: force(:, :)
+        !> The same in balanced coordinates: r = fbal yb (n_ch x na).
+        real(dp), allocatable :: fbal(:, :)
         !> The dynamics in the balanced coordinates of the flow: yb' = b yb.
         real(dp), allocatable :: b(:, :)
         !> The velocity constraint directions of the mode in modal coordinates (n x k).

@@ -198,7 +198,8 @@ contains
         allocate (st%q(m, nodes), st%ynode(na, nodes), qy(m), dqy(m, na), dq(m, na, nodes), &
                   f(ms), jmat(ms, ms), ipiv(ms))
         st%y0 = y0
-        call eval_inputs(self, code, md%in_elem, y0, dirs, qy, dqy, md%b, md%gin)
+        call eval_inputs(self, code, md%in_elem, y0, dirs, md%fbal, md%fin, qy, dqy, md%b, &
+                         md%gin)
         do i = 1, nodes
             st%q(:, i) = qy
         end do
@@ -209,8 +210,8 @@ contains
             st%b = matmul(tk, reshape(st%q, [ms]))
             do i = 1, nodes
                 st%ynode(:, i) = matmul(e(1:na, 1:na, i), y0) + matmul(e(1:na, na + 1:, i), st%b)
-                call eval_inputs(self, code, md%in_elem, st%ynode(:, i), dirs, qy, dq(:, :, i), &
-                                 md%b, md%gin)
+                call eval_inputs(self, code, md%in_elem, st%ynode(:, i), dirs, md%fbal, md%fin, &
+                                 qy, dq(:, :, i), md%b, md%gin)
                 f((i - 1)*m + 1:i*m) = st%q(:, i) - qy
             end do
             fn = maxval(abs(f))

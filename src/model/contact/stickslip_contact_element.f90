@@ -680,7 +680,7 @@ contains
     end subroutine element_start_states
 
     !> No nonlinear input.
-    subroutine element_inputs(self, code, geom, y, dir, q, dq, yd0, dyd0, gj)
+    subroutine element_inputs(self, code, geom, y, dir, fb, fq, q, dq, yd0, dyd0, gj)
         !> The element.
         class(contact_element_t), intent(in) :: self
         !> Its codes.
@@ -691,6 +691,10 @@ contains
         real(dp), intent(in) :: y(:)
         !> Its slip memory (3: a direction and a regime flag).
         real(dp), intent(in) :: dir(:)
+        !> Its channel forces in the mode: the part linear in y (channels x na, balanced)
+        !> and per unit of each of its inputs (channels x inputs; the constraint forces of
+        !> a rigid normal respond to them).
+        real(dp), intent(in) :: fb(:, :), fq(:, :)
         !> The inputs' values and Jacobian (inputs x na).
         real(dp), intent(out) :: q(:), dq(:, :)
         !> With the mode's dynamics: y' at y without the element's own inputs (na), its

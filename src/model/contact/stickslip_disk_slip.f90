@@ -54,12 +54,13 @@ contains
     end subroutine disk_step_rows
 
     !> The friction force q = -g d [N] of a slip and its Jacobian dq (2 x na) for the limit g
-    !> = glim . y (an affine row of y, > 0). Regime 0: d = u/|u|, dd = (I - d d^T)/|u| du.
-    !> Regime 1 (with the mode's dynamics yd0, dyd0 without this input and its columns gj):
-    !> the direction d the slip takes, (lambda I + g W) d = a, |d| = 1, lambda >= 0 (a the
-    !> slip acceleration without the force, W = its compliance); without them, the memory's
-    !> direction.
-    subroutine disk_inputs(geom, glim, y, dir, q, dq, yd0, dyd0, gj)
+    !> = glim . y + kappa . q (glim an affine row of y, > 0; kappa the limit's response to
+    !> the force itself, a rigid normal's constraint force: then g = glim . y / (1 + kappa .
+    !> d); default 0). Regime 0: d = u/|u|, dd = (I - d d^T)/|u| du. Regime 1 (with the
+    !> mode's dynamics yd0, dyd0 without this input and its columns gj): the direction d the
+    !> slip takes, (lambda I + g W) d = a, |d| = 1, lambda >= 0 (a the slip acceleration
+    !> without the force, W = its compliance); without them, the memory's direction.
+    subroutine disk_inputs(geom, glim, y, dir, q, dq, yd0, dyd0, gj, kappa)
         !> The element's geometry.
         type(element_geometry_t), intent(in) :: geom
         !> The limit as a row of y [N].
@@ -70,14 +71,20 @@ contains
         real(dp), intent(out) :: q(:), dq(:, :)
         !> The mode's rate without this input, its Jacobian, this input's columns.
         real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
-        real(dp) :: u(2), un, d(2), g, vr(2, geom%na), dd(2, geom%na)
-        integer :: a, b
-        g = dot_product(glim, y)
+        !> The limit per unit of the force (2).
+        real(dp), intent(in), optional :: kappa(:)
+        real(dp) :: u(2), un, d(2), g, g0, gnew, kap(2), den, vr(2, geom%na), dd(2, geom%na), &
+                    dg(geom%na), ddg(2), m(2, 2), rhs(2, geom%na), det
+        integer :: a, b, it
+        kap = 0.0_dp
+        if (present(kappa)) kap = kappa
+        g0 = dot_product(glim, y)
         vr(1, :) = geom%vel_row(1)
         vr(2, :) = geom%vel_row(2)
         u = matmul(vr, y)
         un = norm2(u)
         dd = 0.0_dp
+        ddg = 0.0_dp
         if (dir(3) < 0.5_dp .and. un > 0.0_dp) then
             d = u/un
             do a = 1, 2
@@ -86,28 +93,57 @@ contains
                                vr(b, :)
                 end do
             end do
+            g = g0/(1.0_dp + dot_product(kap, d))
         else if (dir(3) >= 0.5_dp .and. present(yd0) .and. present(dyd0) .and. &
                  present(gj)) then
-            call start_direction(g, matmul(vr, yd0), matmul(vr, dyd0), matmul(vr, gj), &
-                                 dir(1:2), d, dd)
+            ! the direction at the limit g(d) = g0 / (1 + kappa . d): a fixed point
+            g = g0
+            do it = 1, 50
+                call start_direction(g, matmul(vr, yd0), matmul(vr, dyd0), matmul(vr, gj), &
+                                     dir(1:2), d, dd, ddg)
+                gnew = g0/(1.0_dp + dot_product(kap, d))
+                if (abs(gnew - g) <= 4.0_dp*epsilon(1.0_dp)*abs(g0)) exit
+                g = gnew
+            end do
+            g = g0/(1.0_dp + dot_product(kap, d))
         else
             d = dir(1:2)
+            g = g0/(1.0_dp + dot_product(kap, d))
+        end if
+        den = 1.0_dp + dot_product(kap, d)
+        if (any(kap /= 0.0_dp)) then
+            ! dd_total = dd + ddg dg, dg = (glim - g kappa^T dd_total) / den
+            m = reshape([1.0_dp, 0.0_dp, 0.0_dp, 1.0_dp], [2, 2])
+            do a = 1, 2
+                m(a, :) = m(a, :) + g*ddg(a)*kap/den
+            end do
+            do a = 1, 2
+                rhs(a, :) = dd(a, :) + ddg(a)*glim/den
+            end do
+            det = m(1, 1)*m(2, 2) - m(1, 2)*m(2, 1)
+            dd(1, :) = (m(2, 2)*rhs(1, :) - m(1, 2)*rhs(2, :))/det
+            dd(2, :) = (m(1, 1)*rhs(2, :) - m(2, 1)*rhs(1, :))/det
+            dg = (glim - g*matmul(kap, dd))/den
+        else
+            dd = dd + spread(ddg, 2, geom%na)*spread(glim, 1, 2)
+            dg = glim
         end if
         q = -g*d
-        dq(1, :) = -g*dd(1, :) - d(1)*glim
-        dq(2, :) = -g*dd(2, :) - d(2)*glim
+        dq(1, :) = -g*dd(1, :) - d(1)*dg
+        dq(2, :) = -g*dd(2, :) - d(2)*dg
     end subroutine disk_inputs
 
     !> The direction d of a slip starting from rest: (lambda I + g W) d = a, |d| = 1,
     !> lambda >= 0 (lambda = 0 and d = (g W)^-1 a normalized when |(g W)^-1 a| <= 1: the
-    !> onset itself), and its Jacobian dd = d(d)/dy from da (2 x na). d0 the direction
-    !> memory when a = 0.
-    pure subroutine start_direction(g, acc, dacc, w, d0, d, dd)
+    !> onset itself), its Jacobian dd = d(d)/dy from da (2 x na) at fixed g and its
+    !> derivative ddg = d(d)/dg. d0 the direction memory when a = 0.
+    pure subroutine start_direction(g, acc, dacc, w, d0, d, dd, ddg)
         real(dp), intent(in) :: g, acc(2), dacc(:, :), w(2, 2), d0(2)
-        real(dp), intent(out) :: d(2), dd(:, :)
-        real(dp) :: k(2, 2), ki(2, 2), v(2), lam, phi, dphi, kd(2), det, vn
+        real(dp), intent(out) :: d(2), dd(:, :), ddg(2)
+        real(dp) :: k(2, 2), ki(2, 2), v(2), lam, phi, dphi, kd(2), det, vn, kwd(2)
         integer :: it, a
         dd = 0.0_dp
+        ddg = 0.0_dp
         lam = 0.0_dp
         do it = 1, 60
             k = g*w
@@ -134,13 +170,16 @@ contains
         end if
         d = v/vn
         if (lam > 0.0_dp) then
-            ! dd = K^-1 (da - d dlambda), dlambda = d . K^-1 da / d . K^-1 d
+            ! dd = K^-1 (da - d dlambda - W d dg), dlambda from d . dd = 0
             kd = matmul(ki, d)
             do a = 1, size(dd, 2)
                 v = matmul(ki, dacc(:, a))
                 dd(:, a) = v - kd*dot_product(d, v)/dot_product(d, kd)
             end do
+            kwd = matmul(ki, matmul(w, d))
+            ddg = -kwd + kd*dot_product(d, kwd)/dot_product(d, kd)
         else
+            ! d = (g W)^-1 a normalized does not depend on g
             do a = 1, size(dd, 2)
                 v = matmul(ki, dacc(:, a))
                 dd(:, a) = (v - d*dot_product(d, v))/vn

@@ -142,11 +142,11 @@ contains
     end subroutine jenkins_mode_terms
 
     !> 2D slipping: the slider rates s' = r (r . P v) / g^2 and their Jacobian.
-    subroutine jenkins_inputs(self, code, geom, y, dir, q, dq, yd0, dyd0, gj)
+    subroutine jenkins_inputs(self, code, geom, y, dir, fb, fq, q, dq, yd0, dyd0, gj)
         class(jenkins_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
-        real(dp), intent(in) :: y(:), dir(:)
+        real(dp), intent(in) :: y(:), dir(:), fb(:, :), fq(:, :)
         real(dp), intent(out) :: q(:), dq(:, :)
         real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
         real(dp) :: f(2, geom%na), v(2, geom%na), r(2), pv(2), g2, rv

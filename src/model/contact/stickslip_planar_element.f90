@@ -178,11 +178,11 @@ contains
 
     !> Slipping: the friction force of the slip against the disk of radius mu N
     !> (stickslip_disk_slip).
-    subroutine planar_inputs(self, code, geom, y, dir, q, dq, yd0, dyd0, gj)
+    subroutine planar_inputs(self, code, geom, y, dir, fb, fq, q, dq, yd0, dyd0, gj)
         class(planar_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
-        real(dp), intent(in) :: y(:), dir(:)
+        real(dp), intent(in) :: y(:), dir(:), fb(:, :), fq(:, :)
         real(dp), intent(out) :: q(:), dq(:, :)
         real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
         call disk_inputs(geom, geom%const_row(limit(self)), y, dir, q, dq, yd0, dyd0, gj)

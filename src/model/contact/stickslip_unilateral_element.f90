@@ -85,15 +85,12 @@ contains
     end function unilateral_name
 
     !> Handled: 1D friction, rigid tangentially or with a tangential stiffness on an elastic
-    !> normal; 2D friction, rigid tangentially, on an elastic normal.
+    !> normal; 2D friction, rigid tangentially, on an elastic or a rigid normal.
     function unilateral_exact_support(self) result(why)
         class(unilateral_element_t), intent(in) :: self
         character(len=:), allocatable :: why
         why = ""
-        if (self%law%ntangent == 2 .and. .not. self%kn > 0.0_dp) then
-            why = "the exact reference does not handle 2D friction on a rigid unilateral "// &
-                  "contact yet (on an elastic one, normal_stiffness > 0, it does)"
-        else if (self%law%ntangent == 2 .and. self%kt > 0.0_dp) then
+        if (self%law%ntangent == 2 .and. self%kt > 0.0_dp) then
             why = "the exact reference does not handle 2D friction behind a tangential "// &
                   "stiffness on a unilateral contact yet"
         else if (self%kt > 0.0_dp .and. .not. self%kn > 0.0_dp) then
@@ -265,14 +262,20 @@ contains
             call terms%add_force(geom%dt(:, 1), terms%fb(c, :))
         end subroutine jenkins_terms
 
-        !> 2D friction on an elastic normal (closed): the normal force, and stuck the two
-        !> tangential constraints, slipping the friction force as two nonlinear inputs.
+        !> 2D friction (closed): on an elastic normal the normal force, on a rigid one the
+        !> normal constraint; stuck the two tangential constraints, slipping the friction
+        !> force as two nonlinear inputs (on a rigid normal the constraint force responds to
+        !> them: unilateral_inputs).
         subroutine disk_terms()
             real(dp) :: scol(geom%ns), fcol(size(terms%fb, 1)), lrow2(geom%na)
             integer :: a
-            lrow2 = -self%kn*gap_row(self, geom)
-            terms%fb(c + 2, :) = lrow2
-            call terms%add_force(geom%dt(:, 3), lrow2)
+            if (self%kn > 0.0_dp) then
+                lrow2 = -self%kn*gap_row(self, geom)
+                terms%fb(c + 2, :) = lrow2
+                call terms%add_force(geom%dt(:, 3), lrow2)
+            else
+                call terms%constrain(geom%dt(:, 3), geom%dt(:, 3), c + 2, 0, 0.0_dp)
+            end if
             if (code(1) == 0) then
                 call terms%constrain(geom%dt(:, 1), geom%dt(:, 1), c, 0, 0.0_dp)
                 call terms%constrain(geom%dt(:, 2), geom%dt(:, 2), c + 1, 0, 0.0_dp)
@@ -497,17 +500,24 @@ contains
         if (self%law%ntangent == 2 .and. code(1) == 1) call disk_step_rows(geom, dir, events)
     end subroutine unilateral_step_rows
 
-    !> 2D friction, slipping: the friction force against the disk of radius mu lambda,
-    !> lambda = -k_n (gap + n^T x) (stickslip_disk_slip).
-    subroutine unilateral_inputs(self, code, geom, y, dir, q, dq, yd0, dyd0, gj)
+    !> 2D friction, slipping: the friction force against the disk of radius mu lambda
+    !> (stickslip_disk_slip): lambda = -k_n (gap + n^T x) on an elastic normal; on a rigid
+    !> one the constraint force, lambda = fb_n y + fq_n q (it responds to the friction force
+    !> q through the structure: the limit mu lambda = mu fb_n y / (1 + mu fq_n . d)).
+    subroutine unilateral_inputs(self, code, geom, y, dir, fb, fq, q, dq, yd0, dyd0, gj)
         class(unilateral_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
-        real(dp), intent(in) :: y(:), dir(:)
+        real(dp), intent(in) :: y(:), dir(:), fb(:, :), fq(:, :)
         real(dp), intent(out) :: q(:), dq(:, :)
         real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
-        call disk_inputs(geom, -self%law%mu*self%kn*gap_row(self, geom), y, dir, q, dq, yd0, &
-                         dyd0, gj)
+        if (self%kn > 0.0_dp) then
+            call disk_inputs(geom, -self%law%mu*self%kn*gap_row(self, geom), y, dir, q, dq, &
+                             yd0, dyd0, gj)
+        else
+            call disk_inputs(geom, self%law%mu*fb(3, :), y, dir, q, dq, yd0, dyd0, gj, &
+                             self%law%mu*fq(3, 1:2))
+        end if
     end subroutine unilateral_inputs
 
     !> 2D friction, slipping: the memory of the slip (stickslip_disk_slip).

@@ -1,0 +1,172 @@
+!> 2D friction on a rigid unilateral contact (impacts with 2D friction) in the exact
+!> reference against independent truth. Slipping, the normal force is the constraint force
+!> of the closed normal, and it responds to the friction force through the structure (the
+!> mass couples the normal and the plane here: lambda = lambda_0 / (1 + mu kappa . d));
+!> closing with a velocity, the contact takes a plastic impact whose impulse obeys the disk
+!> (stuck or sliding in the direction of the slip after it). Two orbits of a point mass
+!> pressed by a preload on a rigid ground contact and forced in its three directions (M
+!> coupling the normal with the plane): one that opens, impacts and sticks, then slips; one
+!> that impacts sliding and slips the whole closed time. For each: at every sample no
+!> force when open, zero gap and lambda >= 0 when closed, stuck inside the disk of radius
+!> mu lambda at rest, slipping on its edge against the slip; the energy balance with the
+!> impact losses; the monodromy against central differences of the period map (through the
+!> impacts, the slips and the sticking); implicit Euler converging to it at first order
+!> (the sliding impacts: without the mass coupling, test_sliding's note).
+module test_impacts_2d
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, real_text
+    use stickslip_model, only: model_t
+    use stickslip_reference, only: reference_result_t
+    use stickslip_reference_start, only: solve_reference_from_starts, reference_start_options_t
+    use stickslip_flow, only: flow_t
+    use stickslip_contact_law, only: state_open, state_stick, state_slip
+    use fixtures, only: liftoff_2d_model
+    use test_reference_2d, only: test_euler_first_order, compare_monodromy
+    use testing, only: test_counter_t, check, check_error
+    implicit none
+    private
+    public :: run_impacts_2d_tests
+
+    !> The contact's friction coefficient (liftoff_2d_model).
+    real(dp), parameter :: mu = 0.3_dp
+
+contains
+
+    subroutine run_impacts_2d_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t) :: res
+        type(flow_t) :: flow
+        call solved(t, rigid_model(0.3_dp, 0.15_dp, 1.5_dp), res, "stick-slip")
+        if (res%converged) then
+            call check(t, res%stick_phases(1) == 1 .and. res%stick_fraction(1) > 0.2_dp .and. &
+                       1.0_dp - res%stick_fraction(1) - res%open_fraction(1) > 0.05_dp .and. &
+                       res%open_fraction(1) > 0.3_dp, &
+                       "impacts_2d: stick-slip: opens, sticks once and slips", &
+                       real_text(res%open_fraction(1))//" open, "// &
+                       real_text(res%stick_fraction(1))//" stuck")
+            call test_law(t, res, "stick-slip")
+            ! at the section (open): through the impact, the sticking and the slip (a
+            ! closed rigid contact is not differentiable off its constraints: a
+            ! perturbation that opens it flies and impacts, one that closes it is projected)
+            flow = res%flow
+            call compare_monodromy(t, flow, res%t_section, res%orbit%phase_y(1:flow%nz, 1), &
+                                   "rigid 2D stick-slip, at the section", res%monodromy)
+            call test_euler_first_order(t, res, rigid_model(0.3_dp, 0.15_dp, 1.5_dp), &
+                                        "rigid 2D stick-slip")
+        end if
+        call solved(t, rigid_model(1.0_dp, 0.5_dp, 1.5_dp), res, "sliding impacts")
+        if (res%converged) call test_sliding(t, res, "sliding impacts")
+        ! implicit Euler holds the gap at the end of each step: it splits an impact between
+        ! two steps, and where the mass couples the normal with the plane the slip turns
+        ! between them, so it converges to the one-shot impact only without that coupling
+        call solved(t, rigid_model(1.0_dp, 0.5_dp, 1.5_dp, coupled=.false.), res, &
+                    "sliding impacts, uncoupled")
+        if (res%converged) then
+            call test_sliding(t, res, "sliding impacts, uncoupled")
+            call test_euler_first_order(t, res, rigid_model(1.0_dp, 0.5_dp, 1.5_dp, &
+                                                            coupled=.false.), &
+                                        "rigid 2D sliding impacts, uncoupled")
+        end if
+    end subroutine run_impacts_2d_tests
+
+    !> liftoff_2d_model(fx, fy, fz) on a rigid normal (normal_stiffness 0), its mass
+    !> coupling the normal with the plane (M_13 = 0.2, M_23 = 0.1) unless `coupled` is false.
+    function rigid_model(fx, fy, fz, coupled) result(m)
+        real(dp), intent(in) :: fx, fy, fz
+        logical, intent(in), optional :: coupled
+        type(model_t) :: m
+        m = liftoff_2d_model(fx, fy, fz)
+        m%normal_stiffness = [0.0_dp]
+        if (present(coupled)) then
+            if (.not. coupled) return
+        end if
+        m%mass(1, 3) = 0.2_dp
+        m%mass(3, 1) = 0.2_dp
+        m%mass(2, 3) = 0.1_dp
+        m%mass(3, 2) = 0.1_dp
+    end function rigid_model
+
+    !> An orbit whose impacts slide: it never sticks; the law at every sample; the
+    !> monodromy at the section against central differences (through the sliding impact,
+    !> whose impulse turns with the slip after it).
+    subroutine test_sliding(t, res, name)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t), intent(in) :: res
+        character(len=*), intent(in) :: name
+        type(flow_t) :: flow
+        call check(t, res%stick_fraction(1) == 0.0_dp .and. res%open_fraction(1) < 0.7_dp, &
+                   "impacts_2d: "//name//": slips the whole closed time", &
+                   real_text(1.0_dp - res%open_fraction(1))//" slipping")
+        call test_law(t, res, name)
+        flow = res%flow
+        call compare_monodromy(t, flow, res%t_section, res%orbit%phase_y(1:flow%nz, 1), &
+                               "rigid 2D "//name//", at the section", res%monodromy)
+    end subroutine test_sliding
+
+    !> The reference from the implicit Euler start (the weighted residual does not resolve
+    !> impacts), periodic, with an impact and its loss.
+    subroutine solved(t, m, res, name)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t), intent(in) :: m
+        type(reference_result_t), intent(out) :: res
+        character(len=*), intent(in) :: name
+        type(reference_start_options_t) :: o
+        type(error_type), allocatable :: error
+        o%start = 'euler'
+        call solve_reference_from_starts(m, o, res, error)
+        call check_error(t, error, "impacts_2d: "//name//": solved", .false.)
+        if (allocated(error)) return
+        call check(t, res%converged .and. res%impact_loss > 0.01_dp*res%work_forcing, &
+                   "impacts_2d: "//name//": periodic, with an impact and its loss", &
+                   res%diagnosis)
+    end subroutine solved
+
+    !> At every sample: open, no force; closed, zero gap (1e-12 of the displacement) and
+    !> lambda >= 0; stuck, inside the disk of radius mu lambda (1e-9) at rest; slipping, on
+    !> its edge (1e-12 of mu lambda_max) against the slip velocity (1e-8). The energy
+    !> balance with the impact losses to 1e-10.
+    subroutine test_law(t, res, name)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t), intent(in) :: res
+        character(len=*), intent(in) :: name
+        real(dp) :: worst_open, worst_gap, worst_stuck, worst_edge, worst_dir, sp, rn, lmax, &
+                    vmax, xmax, bal
+        integer :: k
+        worst_open = 0.0_dp
+        worst_gap = 0.0_dp
+        worst_stuck = 0.0_dp
+        worst_edge = 0.0_dp
+        worst_dir = 0.0_dp
+        lmax = maxval(res%normal(:, 1))
+        vmax = maxval(abs(res%v(:, 1:2)))
+        xmax = maxval(abs(res%x))
+        do k = 1, size(res%t)
+            sp = hypot(res%v(k, 1), res%v(k, 2))
+            rn = hypot(res%r(k, 1), res%r(k, 2))
+            if (res%state(k, 1) /= state_open) worst_gap = max(worst_gap, &
+                abs(res%gap(k, 1))/xmax, -res%normal(k, 1)/lmax)
+            select case (res%state(k, 1))
+            case (state_open)
+                worst_open = max(worst_open, rn, abs(res%normal(k, 1)))
+            case (state_stick)
+                worst_stuck = max(worst_stuck, (rn - mu*res%normal(k, 1))/(mu*lmax), sp/vmax)
+            case (state_slip)
+                worst_edge = max(worst_edge, abs(rn - mu*res%normal(k, 1))/(mu*lmax))
+                if (sp > 1.0e-6_dp*vmax) worst_dir = max(worst_dir, &
+                    abs((res%r(k, 1)*res%v(k, 1) + res%r(k, 2)*res%v(k, 2))/sp + rn)/(mu*lmax))
+            end select
+        end do
+        call check(t, worst_open == 0.0_dp .and. worst_gap <= 1.0e-12_dp, "impacts_2d: "// &
+                   name//": no force when open, zero gap and lambda >= 0 when closed", &
+                   real_text(worst_open)//", "//real_text(worst_gap))
+        call check(t, worst_stuck <= 1.0e-9_dp, "impacts_2d: "//name//": stuck inside the "// &
+                   "disk of radius mu lambda, at rest", real_text(worst_stuck))
+        call check(t, worst_edge <= 1.0e-12_dp .and. worst_dir <= 1.0e-8_dp, &
+                   "impacts_2d: "//name//": slipping on the edge of the disk against the "// &
+                   "slip", real_text(worst_edge)//", "//real_text(worst_dir))
+        bal = abs(res%work_forcing - res%diss_friction - res%diss_damping - res%impact_loss)/ &
+              res%work_forcing
+        call check(t, bal <= 1.0e-10_dp, "impacts_2d: "//name//": energy balance with the "// &
+                   "impact losses", real_text(bal))
+    end subroutine test_law
+end module test_impacts_2d

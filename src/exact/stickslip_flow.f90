@@ -153,13 +153,16 @@ contains
         call close_rigid_gaps(self, yb, pj)
         call start_codes(self, yb, code, dirs, error)
         if (allocated(error)) return
-        do j = 1, self%nc
-            call self%cs%elements(j)%e%start_states(code(self%slot0(j) + 1:self%slot_hi(j)), &
-                                                    self%geom(j), yb, pj)
-        end do
         im = mode_index(self, code, error)
         if (allocated(error)) return
         call project_velocities(self, self%modes(im), yb, pj)
+        do j = 1, self%nc
+            associate (c0 => self%cs%first(j), c1 => self%cs%first(j) + self%cs%width(j) - 1)
+                call self%cs%elements(j)%e%start_states( &
+                    code(self%slot0(j) + 1:self%slot_hi(j)), self%geom(j), &
+                    self%modes(im)%fbal(c0:c1, :), yb, pj)
+            end associate
+        end do
         if (want_mono) jac = pj
         y = matmul(self%tbi, yb)
         y(nz + 1:) = self%exo(t0)

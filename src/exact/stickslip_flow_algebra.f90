@@ -71,7 +71,10 @@ contains
                                                   self%geom(j), terms)
         end do
         k = size(terms%chan)
-        if (k == 0) return
+        if (k == 0) then
+            call force_rates()
+            return
+        end if
         ! Lambda = -(Ct^T Ft)^-1 Ct^T [hb, gu] (the nonlinear inputs' part too)
         m = size(terms%in_elem)
         g = matmul(transpose(terms%ctm), terms%ftm)
@@ -94,6 +97,22 @@ contains
                                                            terms%slip_factor(j)*l(j, na + 1:)
             end if
         end do
+        call force_rates()
+
+    contains
+
+        !> The internal-state rates from the rates of channel forces: lambda' = fb(ch) . b y
+        !> (a linear mode; the state itself does not enter the force).
+        subroutine force_rates()
+            real(dp), allocatable :: b(:, :)
+            integer :: q
+            if (size(terms%rate_state) == 0) return
+            b = dynamics_of(self, terms)
+            do q = 1, size(terms%rate_state)
+                terms%sb(terms%rate_state(q), :) = terms%sb(terms%rate_state(q), :) + &
+                    terms%rate_factor(q)*matmul(terms%fb(terms%rate_chan(q), :), b)
+            end do
+        end subroutine force_rates
     end subroutine assemble
 
     !> The balanced dynamics b (na x na) of assembled terms: p' = S u, u' = hb y, sigma' =
@@ -190,6 +209,17 @@ contains
                     md%q_slot = [md%q_slot, self%slot0(j) + events%qslot(k)]
                     md%q_action = [md%q_action, events%qaction(k)]
                 end do
+            end do
+            ! the rows on internal-state rates (known once the constraints are solved)
+            do k = 1, size(terms%rev_state)
+                m = m + 1
+                j = terms%rev_elem(k)
+                md%rows = reshape([md%rows, terms%rev_factor(k)*terms%sb(terms%rev_state(k), :)], &
+                                  [self%na, m])
+                md%row_scale = [md%row_scale, terms%rev_scale(k)]
+                md%row_element = [md%row_element, j]
+                md%row_slot = [md%row_slot, self%slot0(j) + terms%rev_slot(k)]
+                md%row_action = [md%row_action, terms%rev_action(k)]
             end do
             md%drows = matmul(transpose(md%b), md%rows)
             ! the nonlinear inputs (a 2D slip): their columns in y' and the channel forces
@@ -566,7 +596,7 @@ contains
         do k = 1, m
             first(k) = nch + 1
             nch = nch + self%cs%width(involved(k))
-            allocate (boxes(k)%e, source=self%cs%elements(involved(k))%e)
+            call self%cs%elements(involved(k))%e%impact_law(boxes(k)%e)
         end do
         first(m + 1) = nch + 1
         allocate (dirs(n, nch))

@@ -137,6 +137,8 @@ module stickslip_contact_element
         procedure :: code_state => element_code_state
         !> A rigid normal closing with a velocity at an event: an impact.
         procedure :: impacts => element_impacts
+        !> The element whose law its impacts obey (default: itself).
+        procedure :: impact_law => element_impact_law
         !> A rigid normal, closed in the mode (part of an impact).
         procedure :: rigid_closed => element_rigid_closed
         !> A rigid normal at a zero or negative gap at the start (projected onto the gap).
@@ -665,19 +667,30 @@ contains
     end subroutine element_start_gap
 
     !> No internal state to correct at the start.
-    subroutine element_start_states(self, code, geom, y, pj)
+    subroutine element_start_states(self, code, geom, fb, y, pj)
         !> The element.
         class(contact_element_t), intent(in) :: self
         !> Its codes at the start.
         integer, intent(in) :: code(:)
         !> Its geometry.
         type(element_geometry_t), intent(in) :: geom
+        !> Its channel forces in the start mode (channels x na, balanced).
+        real(dp), intent(in) :: fb(:, :)
         !> The start state (balanced), corrected in place.
         real(dp), intent(inout) :: y(:)
         !> The Jacobian of the start's corrections (nz x nz, balanced), composed with this
         !> one's: pj <- P pj.
         real(dp), intent(inout) :: pj(:, :)
     end subroutine element_start_states
+
+    !> Its impacts obey its own law: e is a copy of it.
+    subroutine element_impact_law(self, e)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> The law of its impacts.
+        class(contact_element_t), allocatable, intent(out) :: e
+        allocate (e, source=self)
+    end subroutine element_impact_law
 
     !> No nonlinear input.
     subroutine element_inputs(self, code, geom, y, dir, fb, fq, q, dq, yd0, dyd0, gj)

@@ -88,6 +88,17 @@ module stickslip_contact_modes
         !> forces; in_elem(k) its element. The flow integrates such a mode numerically.
         real(dp), allocatable :: gu(:, :), gs(:, :), gf(:, :)
         integer, allocatable :: in_elem(:)
+        !> Internal-state rates from the rate of a channel force (a slider behind a spring
+        !> whose force is a constraint force: s' = w^T v + factor lambda'): sigma'(rate_state)
+        !> += rate_factor lambda', lambda the force of channel rate_chan, added once the
+        !> constraints are solved (lambda' = fb(rate_chan) . y').
+        integer, allocatable :: rate_state(:), rate_chan(:)
+        real(dp), allocatable :: rate_factor(:)
+        !> Event rows on an internal state's rate (its row known once the constraints are
+        !> solved): rev_factor sigma'(rev_state), of element rev_elem, with the scale, code
+        !> slot (of the element) and action of event_list_t.
+        integer, allocatable :: rev_state(:), rev_elem(:), rev_slot(:), rev_action(:)
+        real(dp), allocatable :: rev_factor(:), rev_scale(:)
     contains
         !> A force along a modal direction, linear in y.
         procedure :: add_force
@@ -95,6 +106,10 @@ module stickslip_contact_modes
         procedure :: constrain
         !> A nonlinear input.
         procedure :: add_input
+        !> An internal state's rate from the rate of a channel force.
+        procedure :: add_force_rate
+        !> An event row on an internal state's rate.
+        procedure :: add_rate_event
         !> Reset for a new mode.
         procedure :: reset
         !> Whether the mode has nonlinear inputs.
@@ -218,6 +233,39 @@ contains
         self%in_elem = [self%in_elem, j]
     end subroutine add_input
 
+    !> sigma'(is) += factor lambda', lambda the force of channel ch (resolved once the mode's
+    !> constraints are solved).
+    pure subroutine add_force_rate(self, is, ch, factor)
+        !> The terms.
+        class(mode_terms_t), intent(inout) :: self
+        !> Internal state (1..n_s) and channel.
+        integer, intent(in) :: is, ch
+        !> The factor [(model state unit) c_k / N].
+        real(dp), intent(in) :: factor
+        self%rate_state = [self%rate_state, is]
+        self%rate_chan = [self%rate_chan, ch]
+        self%rate_factor = [self%rate_factor, factor]
+    end subroutine add_force_rate
+
+    !> An event row factor sigma'(is) of element j (positive while the mode lasts), the
+    !> scale of its values, the code slot (of the element) and the action at its zero.
+    pure subroutine add_rate_event(self, j, is, factor, scale, slot, action)
+        !> The terms.
+        class(mode_terms_t), intent(inout) :: self
+        !> Element, internal state (1..n_s).
+        integer, intent(in) :: j, is
+        !> Factor and scale of the values.
+        real(dp), intent(in) :: factor, scale
+        !> Code slot and action.
+        integer, intent(in) :: slot, action
+        self%rev_elem = [self%rev_elem, j]
+        self%rev_state = [self%rev_state, is]
+        self%rev_factor = [self%rev_factor, factor]
+        self%rev_scale = [self%rev_scale, scale]
+        self%rev_slot = [self%rev_slot, slot]
+        self%rev_action = [self%rev_action, action]
+    end subroutine add_rate_event
+
     !> The mode has nonlinear inputs.
     pure logical function nonlinear(self)
         !> The terms.
@@ -245,6 +293,15 @@ contains
                   self%slip_factor(0))
         if (allocated(self%gu)) deallocate (self%gu, self%gs, self%gf, self%in_elem)
         allocate (self%gu(n, 0), self%gs(ns, 0), self%gf(nch, 0), self%in_elem(0))
+        self%rate_state = [integer ::]
+        self%rate_chan = [integer ::]
+        self%rate_factor = [real(dp) ::]
+        self%rev_state = [integer ::]
+        self%rev_elem = [integer ::]
+        self%rev_slot = [integer ::]
+        self%rev_action = [integer ::]
+        self%rev_factor = [real(dp) ::]
+        self%rev_scale = [real(dp) ::]
     end subroutine reset
 
     !> Add an event row of y (positive while the mode lasts), the scale of its values, the

@@ -579,10 +579,11 @@ contains
 
     !> Every slipping slider's spring on its limit, and a stuck one's beyond it
     !> (slider_project).
-    subroutine iwan_start_states(self, code, geom, y, pj)
+    subroutine iwan_start_states(self, code, geom, fb, y, pj)
         class(iwan_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :)
         real(dp), intent(inout) :: y(:)
         real(dp), intent(inout) :: pj(:, :)
         integer :: i

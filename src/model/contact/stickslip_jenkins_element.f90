@@ -217,10 +217,11 @@ contains
 
     !> 1D: slider_project. 2D: a slipping slider's spring, or a stuck one's beyond the
     !> limit, put radially on the circle |r| = mu N: s = P x + g r / (k_t |r|).
-    subroutine jenkins_start_states(self, code, geom, y, pj)
+    subroutine jenkins_start_states(self, code, geom, fb, y, pj)
         class(jenkins_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :)
         real(dp), intent(inout) :: y(:)
         real(dp), intent(inout) :: pj(:, :)
         real(dp) :: f(2, geom%na), r(2), rn, g, rh(2), dr(2, size(pj, 1)), &

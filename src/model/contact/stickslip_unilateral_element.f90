@@ -14,19 +14,24 @@
 !> and mu lambda + r (the limit); slipping, s w^T v; closed, lambda (opening); open, the gap
 !> (closing: for a rigid normal with a closing velocity an impact, plastic, with Coulomb's
 !> impulse law, solved by the flow with this element's law at velocity level).
-!> With a tangential stiffness k_t (an elastic normal only) the friction is a Jenkins
-!> element whose slider s is an internal state: stuck, r = -k_t (w^T x - s), s' = 0;
-!> slipping, r = -s mu lambda, s = w^T x + r / k_t, so s' = w^T v + s mu k_n n^T v / k_t;
-!> open, r = 0 and the slider follows (s' = w^T v). No constraint: its codes are decided
-!> alone (the slider stops: it sticks unless it accelerates on; the gap closes: stuck with
-!> the spring unloaded).
-!> With 2D friction (an elastic normal, no tangential stiffness) its code is 0 (stuck: w^T v
-!> = t2^T v = 0), 1 (slipping: the friction force -mu lambda u/|u| against the disk of
-!> radius mu lambda, a nonlinear input integrated numerically, stickslip_disk_slip) or 2
-!> (open); stuck, the event (mu lambda)^2 - |r|^2 (quadratic in the state) starts the slip
-!> against the stuck force.
+!> With a tangential stiffness k_t (1D friction) the friction is a Jenkins element whose
+!> slider s is an internal state: stuck, r = -k_t (w^T x - s), s' = 0; slipping, r = -s mu
+!> lambda, s = w^T x + r / k_t, so s' = w^T v - s mu lambda' / k_t; open, r = 0 and the
+!> slider follows (s' = w^T v). On an elastic normal lambda' = -k_n n^T v and there is no
+!> constraint: its codes are decided alone (the slider stops: it sticks unless it
+!> accelerates on; the gap closes: stuck with the spring unloaded). On a rigid normal lambda
+!> is the constraint force, lambda' its rate in the mode (resolved by the flow once the
+!> constraints are solved); the codes are decided jointly (the slider stops: stuck if the
+!> spring's force stays within the limit); its impacts are frictionless.
+!> With 2D friction (no tangential stiffness) its code is 0 (stuck: w^T v = t2^T v = 0), 1
+!> (slipping: the friction force -mu lambda u/|u| against the disk of radius mu lambda, a
+!> nonlinear input integrated numerically, stickslip_disk_slip; on a rigid normal lambda is
+!> the constraint force, which responds to the friction force) or 2 (open); stuck, the event
+!> (mu lambda)^2 - |r|^2 (quadratic in the state) starts the slip against the stuck force;
+!> its impacts take the 2D impulse law.
 module stickslip_unilateral_element
     use stickslip_kinds, only: dp
+    use stickslip_contact_element, only: contact_element_t
     use stickslip_friction_contact, only: friction_contact_t, init_friction_contact
     use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
         action_decide, action_close
@@ -52,6 +57,7 @@ module stickslip_unilateral_element
         procedure :: candidates => unilateral_candidates
         procedure :: consistent => unilateral_consistent
         procedure :: impacts => unilateral_impacts
+        procedure :: impact_law => unilateral_impact_law
         procedure :: rigid_closed => unilateral_rigid_closed
         procedure :: start_gap => unilateral_start_gap
         procedure :: nstate => unilateral_nstate
@@ -84,8 +90,8 @@ contains
         name = "unilateral"
     end function unilateral_name
 
-    !> Handled: 1D friction, rigid tangentially or with a tangential stiffness on an elastic
-    !> normal; 2D friction, rigid tangentially, on an elastic or a rigid normal.
+    !> Handled: 1D friction, rigid tangentially or with a tangential stiffness, on an
+    !> elastic or a rigid normal; 2D friction, rigid tangentially, on either.
     function unilateral_exact_support(self) result(why)
         class(unilateral_element_t), intent(in) :: self
         character(len=:), allocatable :: why
@@ -93,9 +99,6 @@ contains
         if (self%law%ntangent == 2 .and. self%kt > 0.0_dp) then
             why = "the exact reference does not handle 2D friction behind a tangential "// &
                   "stiffness on a unilateral contact yet"
-        else if (self%kt > 0.0_dp .and. .not. self%kn > 0.0_dp) then
-            why = "the exact reference does not handle a tangential stiffness on a rigid "// &
-                  "unilateral contact yet (an elastic one, normal_stiffness > 0, it does)"
         end if
     end function unilateral_exact_support
 
@@ -132,17 +135,21 @@ contains
 
     !> A Jenkins friction's slider at the start: open, unloaded (s = w^T x); slipping with
     !> code c, on its limit (r = -c mu lambda); stuck beyond the limit, on it (r = mu lambda
-    !> sign r). y (balanced) corrected in place, pj <- P pj.
-    subroutine unilateral_start_states(self, code, geom, y, pj)
+    !> sign r); lambda = -k_n g, or on a rigid normal the start mode's constraint force (fb).
+    !> y (balanced) corrected in place, pj <- P pj.
+    subroutine unilateral_start_states(self, code, geom, fb, y, pj)
         class(unilateral_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :)
         real(dp), intent(inout) :: y(:)
         real(dp), intent(inout) :: pj(:, :)
         real(dp) :: fr(geom%na), lrow(geom%na), target(geom%na), r, lam
         integer :: idx, nz
         if (self%nstate() == 0) return
         call spring_rows(self, geom, fr, lrow)
+        ! a rigid normal: lambda is the constraint force of the start mode
+        if (.not. self%kn > 0.0_dp) lrow = fb(2, :)
         r = dot_product(fr, y)
         lam = max(dot_product(lrow, y), 0.0_dp)
         ! the spring's target force as a row of y
@@ -250,6 +257,10 @@ contains
                 terms%sb(is, :) = geom%cs(1)*geom%vel_row(1)
                 return
             end if
+            if (.not. self%kn > 0.0_dp) then
+                call rigid_jenkins_terms(fr)
+                return
+            end if
             terms%fb(cn, :) = lrow2
             call terms%add_force(geom%dt(:, 3), lrow2)
             if (code(1) == 0) then
@@ -261,6 +272,29 @@ contains
             end if
             call terms%add_force(geom%dt(:, 1), terms%fb(c, :))
         end subroutine jenkins_terms
+
+        !> Jenkins friction on a rigid normal (closed): the normal constraint; stuck, the
+        !> spring's force fr; slipping, the force on the limit -c mu lambda held with the
+        !> normal (n - c mu w) and the slider's rate s' = w^T v - c mu lambda' / k_t (the
+        !> spring follows the constraint force: its rate once the constraints are solved),
+        !> whose zero is the slider's stop (decided jointly).
+        subroutine rigid_jenkins_terms(fr)
+            real(dp), intent(in) :: fr(:)
+            integer :: is
+            is = geom%s0 + 1
+            if (code(1) == 0) then
+                call terms%constrain(geom%dt(:, 3), geom%dt(:, 3), cn, 0, 0.0_dp)
+                terms%fb(c, :) = fr
+                call terms%add_force(geom%dt(:, 1), fr)
+                return
+            end if
+            call terms%constrain(geom%dt(:, 3), geom%dt(:, 3) - code(1)*self%law%mu*geom%dt(:, 1), &
+                                 cn, c, -code(1)*self%law%mu)
+            terms%sb(is, :) = geom%cs(1)*geom%vel_row(1)
+            call terms%add_force_rate(is, cn, -code(1)*self%law%mu*geom%cs(1)/self%kt)
+            call terms%add_rate_event(geom%index, is, real(code(1), dp), geom%cs(1)*geom%vref, &
+                                      1, action_decide)
+        end subroutine rigid_jenkins_terms
 
         !> 2D friction (closed): on an elastic normal the normal force, on a rigid one the
         !> normal constraint; stuck the two tangential constraints, slipping the friction
@@ -326,9 +360,11 @@ contains
                 call events%add(gap_row(self, geom), geom%gref*geom%omega, 1, action_close)
             case default
                 if (self%nstate() > 0) then
-                    ! the slider's velocity
-                    call events%add(code(1)*geom%vel_row(1) + mu*self%kn/self%kt* &
-                                    geom%vel_row(3), geom%vref, 1, action_decide)
+                    ! the slider's velocity (on a rigid normal: a row on its rate,
+                    ! rigid_jenkins_terms)
+                    if (self%kn > 0.0_dp) call events%add(code(1)*geom%vel_row(1) + mu*self%kn/ &
+                                                          self%kt*geom%vel_row(3), geom%vref, 1, &
+                                                          action_decide)
                 else
                     call events%add(code(1)*geom%vel_row(1), geom%vref, 1, action_decide)
                 end if
@@ -350,6 +386,12 @@ contains
         decide = .false.
         if (dot_product(gap_row(self, geom), y) > 1.0e-9_dp*geom%gref) then
             code(1) = 2
+            return
+        end if
+        if (self%nstate() > 0 .and. .not. self%kn > 0.0_dp) then
+            ! Jenkins friction on a rigid normal: decided jointly
+            code(1) = 0
+            decide = .true.
             return
         end if
         if (self%nstate() > 0) then
@@ -399,6 +441,12 @@ contains
         integer, intent(out) :: cand(:, :)
         integer, intent(out) :: ncand
         real(dp) :: v
+        if (self%nstate() > 0) then
+            ! Jenkins friction on a rigid normal: its slider decides (consistent)
+            ncand = 4
+            cand(1, 1:4) = [0, 1, -1, 2]
+            return
+        end if
         if (self%law%ntangent == 2) then
             ! 2D friction: moving (above 1.5 rest_speed: a slip that stopped is at
             ! rest_speed), slipping or open; at rest, stuck, slipping (against the force it
@@ -441,6 +489,10 @@ contains
             lam = dot_product(fb(nt + 1, :), y)
             if (lam < -tol*geom%fref) ok = .false.
         end if
+        if (self%nstate() > 0 .and. code(1) /= 2) then
+            ok = ok .and. jenkins_consistent()
+            return
+        end if
         select case (code(1))
         case (0)
             r = norm2(matmul(fb(1:nt, :), y))
@@ -460,6 +512,26 @@ contains
                 if (acc < -tol*geom%vref*geom%omega) ok = .false.
             end if
         end select
+    contains
+        !> A Jenkins slider on a rigid normal: stuck, the spring's force within the limit, and
+        !> not leaving it (on the limit, |r| - mu lambda not increasing); slipping, the
+        !> spring's force on the limit against the slip.
+        logical function jenkins_consistent() result(good)
+            real(dp) :: fr(geom%na), lrow(geom%na), rs, slope
+            call spring_rows(self, geom, fr, lrow)
+            rs = dot_product(fr, y)
+            good = .true.
+            if (code(1) == 0) then
+                if (abs(rs) > self%law%mu*max(lam, 0.0_dp) + tol*geom%fref) good = .false.
+                if (good .and. abs(rs) >= self%law%mu*lam - tol*geom%fref) then
+                    slope = self%law%mu*dot_product(fb(2, :), ydot) - &
+                            sign(1.0_dp, rs)*dot_product(fb(1, :), ydot)
+                    if (slope < -tol*geom%fref*geom%omega) good = .false.
+                end if
+            else
+                if (-code(1)*rs < self%law%mu*max(lam, 0.0_dp) - tol*geom%fref) good = .false.
+            end if
+        end function jenkins_consistent
     end function unilateral_consistent
 
     !> A rigid normal closing with a normal velocity: a plastic impact.
@@ -471,6 +543,19 @@ contains
         imp = self%kn == 0.0_dp .and. &
               dot_product(geom%dt(:, 3), y(geom%n + 1:2*geom%n)) < 0.0_dp
     end function unilateral_impacts
+
+    !> The law of its impacts: itself; behind a tangential stiffness, frictionless (the
+    !> spring carries no impulse).
+    subroutine unilateral_impact_law(self, e)
+        class(unilateral_element_t), intent(in) :: self
+        class(contact_element_t), allocatable, intent(out) :: e
+        if (self%kt > 0.0_dp) then
+            allocate (e, source=new_unilateral_element(self%law%ntangent, 0.0_dp, self%gap, &
+                                                       self%preload_force, 0.0_dp, 0.0_dp))
+        else
+            allocate (e, source=self)
+        end if
+    end subroutine unilateral_impact_law
 
     !> A rigid normal, closed.
     pure logical function unilateral_rigid_closed(self, code) result(c)

@@ -25,6 +25,8 @@ module test_contact_reference
         liftoff_2d_model
     use testing, only: test_counter_t, check, check_error
     use test_jenkins, only: central_differences
+    use test_reference_2d, only: test_euler_first_order_2d => test_euler_first_order, &
+        compare_monodromy
     implicit none
     private
     public :: run_contact_reference_tests
@@ -78,17 +80,7 @@ contains
         character(len=120) :: buf
         call solved(t, liftoff_model(2.0_dp, 5.0_dp), res, "Jenkins lift-off", 'hbm')
         if (.not. res%converged) return
-        worst = 0.0_dp
-        do k = 1, size(res%t)
-            select case (res%state(k, 1))
-            case (state_open)
-                worst = max(worst, abs(res%r(k, 1)), abs(res%normal(k, 1)))
-            case (state_stick)
-                worst = max(worst, abs(res%r(k, 1) + 5.0_dp*(res%x(k, 1) - res%s(k, 1))))
-            case default
-                worst = max(worst, abs(abs(res%r(k, 1)) - 0.5_dp*res%normal(k, 1)))
-            end select
-        end do
+        worst = jenkins_law_error(res, .false.)
         call check(t, worst <= 1.0e-9_dp .and. any(res%state(:, 1) == state_stick) .and. &
                    any(res%state(:, 1) == state_slip), "contact_reference: Jenkins "// &
                    "lift-off: the spring where stuck, the limit where slipping, 0 where open", &
@@ -159,29 +151,10 @@ contains
         type(test_counter_t), intent(inout) :: t
         type(reference_result_t) :: res
         type(flow_t) :: flow
-        type(error_type), allocatable :: error
-        type(euler_options_t) :: eo
-        type(euler_result_t) :: e
-        real(dp), allocatable :: z0(:), fd(:, :), xr(:, :), vr(:, :), rr(:, :)
-        real(dp) :: worst, err(3)
-        integer :: k
-        character(len=120) :: buf
+        real(dp) :: worst
         call solved(t, liftoff_model(0.0_dp, 5.0_dp), res, "Jenkins rigid lift-off", 'euler')
         if (.not. res%converged) return
-        worst = 0.0_dp
-        do k = 1, size(res%t)
-            select case (res%state(k, 1))
-            case (state_open)
-                worst = max(worst, abs(res%r(k, 1)), abs(res%normal(k, 1)))
-            case (state_stick)
-                worst = max(worst, abs(res%r(k, 1) + 5.0_dp*(res%x(k, 1) - res%s(k, 1))), &
-                            abs(res%gap(k, 1)))
-            case default
-                worst = max(worst, abs(abs(res%r(k, 1)) - 0.5_dp*res%normal(k, 1)), &
-                            abs(res%r(k, 1) + 5.0_dp*(res%x(k, 1) - res%s(k, 1))), &
-                            abs(res%gap(k, 1)))
-            end select
-        end do
+        worst = jenkins_law_error(res, .true.)
         call check(t, worst <= 1.0e-9_dp .and. any(res%state(:, 1) == state_stick) .and. &
                    any(res%state(:, 1) == state_slip) .and. res%impact_loss > 0.0_dp, &
                    "contact_reference: Jenkins rigid lift-off: impacts; the spring where "// &
@@ -189,38 +162,40 @@ contains
         flow = res%flow
         call check(t, flow%nz == 5, "contact_reference: Jenkins rigid lift-off: the slider "// &
                    "in the state")
-        z0 = res%orbit%phase_y(1:flow%nz, 1)
-        call central_differences(flow, res%t_section, z0, fd, error)
-        call check_error(t, error, "contact_reference: Jenkins rigid lift-off: period maps", &
-                         .false.)
-        if (allocated(error)) return
-        worst = maxval(abs(fd - res%monodromy))/maxval(abs(res%monodromy))
-        call check(t, worst <= 1.0e-5_dp, "contact_reference: Jenkins rigid lift-off: "// &
-                   "monodromy = central differences of the period map", real_text(worst))
+        call compare_monodromy(t, flow, res%t_section, res%orbit%phase_y(1:flow%nz, 1), &
+                               "Jenkins rigid lift-off, at the section", res%monodromy)
         ! implicit Euler started on the orbit at t = 0, where the contact is open (the
         ! spring unloaded, as Euler starts it), over two periods
         call check(t, res%state(1, 1) == state_open, "contact_reference: Jenkins rigid "// &
                    "lift-off: open at t = 0")
-        do k = 1, 3
-            eo%steps_per_period = 1000*10**(k - 1)
-            eo%max_periods = 2
-            call integrate_euler(liftoff_model(0.0_dp, 5.0_dp), eo, e, error, x0=res%x(1, :), &
-                                 v0=res%v(1, :))
-            if (allocated(error)) then
-                call check_error(t, error, "contact_reference: Jenkins rigid lift-off: Euler", &
-                                 .false.)
-                return
-            end if
-            call sample_reference(res, eo%steps_per_period, xr, vr, rr, error)
-            if (allocated(error)) return
-            err(k) = maxval(abs(e%x - xr))/maxval(abs(xr))
-        end do
-        write (buf, '(3es10.2)') err
-        call check(t, err(1)/err(2) > 5.0_dp .and. err(1)/err(2) < 20.0_dp .and. &
-                   err(2)/err(3) > 5.0_dp .and. err(2)/err(3) < 20.0_dp, &
-                   "contact_reference: Jenkins rigid lift-off: implicit Euler converges to "// &
-                   "the reference at first order", buf)
+        call test_euler_first_order_2d(t, res, liftoff_model(0.0_dp, 5.0_dp), &
+                                       "Jenkins rigid lift-off")
     end subroutine test_jenkins_rigid
+
+    !> The worst violation of the Jenkins element's law (k_t = 5, mu = 0.5) at the samples
+    !> of a lift-off reference: open, no force; stuck, the spring r = -k_t (x_1 - s);
+    !> slipping, the spring on the limit mu lambda; on a rigid normal the gap zero when
+    !> closed [N or m].
+    real(dp) function jenkins_law_error(res, rigid) result(worst)
+        type(reference_result_t), intent(in) :: res
+        logical, intent(in) :: rigid
+        real(dp) :: spring
+        integer :: k
+        worst = 0.0_dp
+        do k = 1, size(res%t)
+            spring = abs(res%r(k, 1) + 5.0_dp*(res%x(k, 1) - res%s(k, 1)))
+            select case (res%state(k, 1))
+            case (state_open)
+                worst = max(worst, abs(res%r(k, 1)), abs(res%normal(k, 1)))
+                cycle
+            case (state_stick)
+                worst = max(worst, spring)
+            case default
+                worst = max(worst, abs(abs(res%r(k, 1)) - 0.5_dp*res%normal(k, 1)), spring)
+            end select
+            if (rigid) worst = max(worst, abs(res%gap(k, 1)))
+        end do
+    end function jenkins_law_error
 
     !> Solve the reference of `m`: converged, the energy balance (impact losses included),
     !> no finding above a warning (the normal law, Coulomb's law with the varying limit),

@@ -40,7 +40,8 @@ module test_reference_2d
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
-    public :: run_reference_2d_tests, test_euler_first_order, compare_monodromy
+    public :: run_reference_2d_tests, test_euler_first_order, compare_monodromy, test_disk_law, &
+        reference
 
     !> The planar model's friction limit mu N and angular frequency.
     real(dp), parameter :: mun = 0.3_dp, omega = 1.7_dp
@@ -75,17 +76,19 @@ contains
         call test_sweep_stability(t)
     end subroutine run_reference_2d_tests
 
-    !> The reference of model m from the weighted-residual start (ode_tol given or the
-    !> default), checked converged.
-    subroutine reference(t, m, res, name, ode_tol, tol)
+    !> The reference of model m from the weighted-residual start (or `start`; ode_tol given
+    !> or the default), checked converged.
+    subroutine reference(t, m, res, name, ode_tol, tol, start)
         type(test_counter_t), intent(inout) :: t
         type(model_t), intent(in) :: m
         type(reference_result_t), intent(out) :: res
         character(len=*), intent(in) :: name
         real(dp), intent(in), optional :: ode_tol, tol
+        character(len=*), intent(in), optional :: start
         type(reference_start_options_t) :: o
         type(error_type), allocatable :: error
         o%start = 'hbm'
+        if (present(start)) o%start = start
         if (present(ode_tol)) o%ode_tol = ode_tol
         if (present(tol)) o%tol = tol
         call solve_reference_from_starts(m, o, res, error)
@@ -257,15 +260,31 @@ contains
     end subroutine test_monodromy_stick_slip
 
     !> 2D friction on a contact that lifts off (liftoff_2d_model(0.3, 0.15, 1): the limit mu
-    !> lambda varies, the contact opens once and sticks once per period): at every sample,
-    !> open with no force; closed, lambda = -k_n g >= 0 and stuck inside the disk of radius
-    !> mu lambda (1e-9) at rest, or slipping on its edge (1e-12 of mu lambda_max) against the
-    !> slip velocity (1e-8); the energy balance to 1e-10.
+    !> lambda varies, the contact opens once and sticks once per period): the law at every
+    !> sample (test_disk_law, k_n = 10).
     subroutine test_liftoff_law(t, res)
         type(test_counter_t), intent(inout) :: t
         type(reference_result_t), intent(in) :: res
+        call check(t, res%open_fraction(1) > 0.1_dp .and. res%open_fraction(1) < 0.3_dp .and. &
+                   res%stick_fraction(1) > 0.1_dp .and. res%stick_phases(1) == 1, &
+                   "reference_2d: lift-off: opens and sticks once a period", &
+                   real_text(res%open_fraction(1))//" open, "//real_text(res%stick_fraction(1))// &
+                   " stuck")
+        call test_disk_law(t, res, "lift-off", 10.0_dp)
+    end subroutine test_liftoff_law
+
+    !> 2D friction with mu = 0.3 on a unilateral contact (normal stiffness kn, 0: rigid) at
+    !> every sample: open, no force; closed, lambda = -k_n g (1e-12 of lambda_max; rigid:
+    !> the gap zero to 1e-12 of the displacement and lambda >= 0), stuck inside the disk of
+    !> radius mu lambda (1e-9) at rest, or slipping on its edge (1e-12 of mu lambda_max)
+    !> against the slip velocity (1e-8); the energy balance with the impact losses to 1e-10.
+    subroutine test_disk_law(t, res, name, kn)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t), intent(in) :: res
+        character(len=*), intent(in) :: name
+        real(dp), intent(in) :: kn
         real(dp) :: worst_open, worst_normal, worst_stuck, worst_edge, worst_dir, sp, rn, &
-                    lmax, vmax
+                    lmax, vmax, xmax, bal
         integer :: k
         worst_open = 0.0_dp
         worst_normal = 0.0_dp
@@ -274,38 +293,40 @@ contains
         worst_dir = 0.0_dp
         lmax = maxval(res%normal(:, 1))
         vmax = maxval(abs(res%v(:, 1:2)))
+        xmax = maxval(abs(res%x))
         do k = 1, size(res%t)
             sp = hypot(res%v(k, 1), res%v(k, 2))
             rn = hypot(res%r(k, 1), res%r(k, 2))
-            select case (res%state(k, 1))
-            case (state_open)
+            if (res%state(k, 1) == state_open) then
                 worst_open = max(worst_open, rn, abs(res%normal(k, 1)))
-            case (state_stick)
-                worst_normal = max(worst_normal, abs(res%normal(k, 1) + 10.0_dp*res%gap(k, 1)))
+                cycle
+            end if
+            if (kn > 0.0_dp) then
+                worst_normal = max(worst_normal, abs(res%normal(k, 1) + kn*res%gap(k, 1))/lmax)
+            else
+                worst_normal = max(worst_normal, abs(res%gap(k, 1))/xmax, -res%normal(k, 1)/lmax)
+            end if
+            if (res%state(k, 1) == state_stick) then
                 worst_stuck = max(worst_stuck, (rn - mun*res%normal(k, 1))/(mun*lmax), sp/vmax)
-            case default
-                worst_normal = max(worst_normal, abs(res%normal(k, 1) + 10.0_dp*res%gap(k, 1)))
+            else
                 worst_edge = max(worst_edge, abs(rn - mun*res%normal(k, 1))/(mun*lmax))
                 if (sp > 1.0e-6_dp*vmax) worst_dir = max(worst_dir, &
                     abs((res%r(k, 1)*res%v(k, 1) + res%r(k, 2)*res%v(k, 2))/sp + rn)/(mun*lmax))
-            end select
+            end if
         end do
-        call check(t, res%open_fraction(1) > 0.1_dp .and. res%open_fraction(1) < 0.3_dp .and. &
-                   res%stick_fraction(1) > 0.1_dp .and. res%stick_phases(1) == 1, &
-                   "reference_2d: lift-off: opens and sticks once a period", &
-                   real_text(res%open_fraction(1))//" open, "//real_text(res%stick_fraction(1))// &
-                   " stuck")
-        call check(t, worst_open == 0.0_dp .and. worst_normal <= 1.0e-12_dp*lmax, &
-                   "reference_2d: lift-off: no force when open, lambda = -k_n g when closed", &
+        call check(t, worst_open == 0.0_dp .and. worst_normal <= 1.0e-12_dp, "reference_2d: "// &
+                   name//": no force when open, the normal law when closed", &
                    real_text(worst_open)//", "//real_text(worst_normal))
-        call check(t, worst_stuck <= 1.0e-9_dp, "reference_2d: lift-off: stuck inside the "// &
+        call check(t, worst_stuck <= 1.0e-9_dp, "reference_2d: "//name//": stuck inside the "// &
                    "disk of radius mu lambda, at rest", real_text(worst_stuck))
         call check(t, worst_edge <= 1.0e-12_dp .and. worst_dir <= 1.0e-8_dp, &
-                   "reference_2d: lift-off: slipping on the edge of the varying disk "// &
+                   "reference_2d: "//name//": slipping on the edge of the varying disk "// &
                    "against the slip", real_text(worst_edge)//", "//real_text(worst_dir))
-        call check(t, balance(res) <= 1.0e-10_dp, "reference_2d: lift-off: energy balance", &
-                   real_text(balance(res)))
-    end subroutine test_liftoff_law
+        bal = abs(res%work_forcing - res%diss_friction - res%diss_damping - res%impact_loss)/ &
+              res%work_forcing
+        call check(t, bal <= 1.0e-10_dp, "reference_2d: "//name//": energy balance (with the "// &
+                   "impact losses)", real_text(bal))
+    end subroutine test_disk_law
 
     !> flow%period_map's monodromy from z0 at t0 (or `given`, the reference's) against its
     !> central differences (steps 1e-6 of max(|z0_k|, 1e-2)), relative to its largest entry:

@@ -1,4 +1,6 @@
-!> A tiny test harness: a counter of passed and failed checks; failures go to stderr.
+!> A tiny test harness: a counter of passed and failed checks; failures go to stderr (and,
+!> with STICKSLIP_TEST_VERBOSE=1 in the environment, the figures of the passing checks that
+!> measure something: doc/layout.md).
 module testing
     use, intrinsic :: iso_fortran_env, only: error_unit
     use stickslip_kinds, only: dp
@@ -27,6 +29,10 @@ contains
         character(len=*), intent(in), optional :: detail
         if (cond) then
             t%passed = t%passed + 1
+            if (present(detail)) then
+                if (verbose() .and. len_trim(detail) > 0) &
+                    write (error_unit, '(a)') "PASS "//name//": "//trim(detail)
+            end if
         else
             t%failed = t%failed + 1
             if (present(detail)) then
@@ -36,6 +42,14 @@ contains
             end if
         end if
     end subroutine check
+
+    !> STICKSLIP_TEST_VERBOSE is set to 1: passing checks print their figures.
+    logical function verbose()
+        character(len=8) :: value
+        integer :: stat
+        call get_environment_variable("STICKSLIP_TEST_VERBOSE", value, status=stat)
+        verbose = stat == 0 .and. trim(value) == "1"
+    end function verbose
 
     !> Check |actual - expected| <= max(atol, rtol |expected|).
     subroutine check_close_scalar(t, actual, expected, name, rtol, atol)

@@ -576,7 +576,8 @@ contains
         real(dp), intent(out) :: jump(:, :)
         !> Kinetic energy lost.
         real(dp), intent(out) :: loss
-        integer, allocatable :: involved(:), ipiv(:), first(:), state(:)
+        integer, allocatable :: involved(:), ipiv(:), first(:)
+        integer :: state(1)
         real(dp), allocatable :: dirs(:, :), a(:, :), q(:), p(:), ctm(:, :), ftm(:, :), &
                                  g(:, :), l(:, :), u(:), xl(:, :), tdir(:, :), ut(:), e(:)
         type(element_box_t), allocatable :: boxes(:)
@@ -632,7 +633,6 @@ contains
             pn = p(first(k) + inorm - 1)
             if (pn <= 0.0_dp) cycle
             ! the element's state at the impulse
-            allocate (state(1))
             rho = 0.0_dp
             do c = first(k), first(k + 1) - 1
                 rho = rho + a(c, c)/w
@@ -673,7 +673,6 @@ contains
                     end if
                 end if
             end if
-            deallocate (state)
         end do
         jump = identity_matrix(size(jump, 1))
         if (size(ctm, 2) == 0) return

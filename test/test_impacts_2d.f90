@@ -6,12 +6,13 @@
 !> (stuck or sliding in the direction of the slip after it). Two orbits of a point mass
 !> pressed by a preload on a rigid ground contact and forced in its three directions (M
 !> coupling the normal with the plane): one that opens, impacts and sticks, then slips; one
-!> that impacts sliding and slips the whole closed time. For each: at every sample no
-!> force when open, zero gap and lambda >= 0 when closed, stuck inside the disk of radius
-!> mu lambda at rest, slipping on its edge against the slip; the energy balance with the
-!> impact losses; the monodromy against central differences of the period map (through the
-!> impacts, the slips and the sticking); implicit Euler converging to it at first order
-!> (the sliding impacts: without the mass coupling, test_sliding's note).
+!> that impacts sliding and slips the whole closed time (also without the coupling). For
+!> each: at every sample no force when open, zero gap and lambda >= 0 when closed, stuck
+!> inside the disk of radius mu lambda at rest, slipping on its edge against the slip; the
+!> energy balance with the impact losses; the monodromy against central differences of the
+!> period map at the section (through the impacts, the slips and the sticking); implicit
+!> Euler started on the orbit converging to it at first order (the sliding impacts without
+!> the coupling only: run_impacts_2d_tests says why).
 module test_impacts_2d
     use stickslip_kinds, only: dp
     use stickslip_error, only: real_text

@@ -576,14 +576,14 @@ contains
         real(dp), intent(out) :: jump(:, :)
         !> Kinetic energy lost.
         real(dp), intent(out) :: loss
-        integer, allocatable :: involved(:), ipiv(:), first(:)
+        integer, allocatable :: involved(:), ipiv(:), first(:), it(:)
         integer :: state(1)
         real(dp), allocatable :: dirs(:, :), a(:, :), q(:), p(:), ctm(:, :), ftm(:, :), &
-                                 g(:, :), l(:, :), u(:), xl(:, :), tdir(:, :), ut(:), e(:)
+                                 g(:, :), l(:, :), u(:), xl(:, :), ut(:), e(:), proj(:, :)
         type(element_box_t), allocatable :: boxes(:)
         type(contact_set_t) :: impacts
-        integer :: n, j, k, m, sweeps, info, c, w, nch, inorm, nt, b
-        real(dp) :: ke0, resid, scale, pn, pt, rho, un
+        integer :: n, j, k, m, sweeps, info, c, w, nch, inorm
+        real(dp) :: ke0, resid, scale, pn, rho, un
         n = self%n
         allocate (involved(0))
         do j = 1, self%nc
@@ -644,33 +644,23 @@ contains
                 ctm = reshape([ctm, dirs(:, first(k):first(k + 1) - 1)], [n, size(ctm, 2) + w])
                 ftm = reshape([ftm, dirs(:, first(k):first(k + 1) - 1)], [n, size(ftm, 2) + w])
             else
-                ! sliding: the normal held by n + T P_t / P_n
+                ! sliding: the normal held by n + T P_t / P_n; the impulse turns with the slip
+                ! after it, e = T^T u+ / |T^T u+| (L = |P_t| T (I - e e^T) T^T / |T^T u+|,
+                ! mu P_n = |P_t| on the limit; zero in 1D, where e e^T = 1)
+                it = pack([(first(k) + c - 1, c=1, w)], [(c /= inorm, c=1, w)])
                 ctm = reshape([ctm, dirs(:, first(k) + inorm - 1)], [n, size(ctm, 2) + 1])
-                e = dirs(:, first(k) + inorm - 1)
-                nt = 0
-                do c = 1, w
-                    if (c == inorm) cycle
-                    e = e + (p(first(k) + c - 1)/pn)*dirs(:, first(k) + c - 1)
-                    nt = nt + 1
-                end do
-                ftm = reshape([ftm, e], [n, size(ftm, 2) + 1])
-                if (nt == 2) then
-                    ! the 2D impulse turns with the slip after it
-                    tdir = reshape([(dirs(:, first(k) + c - 1), c=1, w)], [n, w])
-                    tdir = tdir(:, pack([(c, c=1, w)], [(c /= inorm, c=1, w)]))
-                    ut = matmul(yb(n + 1:2*n), tdir)
-                    un = norm2(ut)
-                    ! mu P_n = |P_t| on the limit
-                    pt = norm2(pack(p(first(k):first(k + 1) - 1), [(c /= inorm, c=1, w)]))
-                    if (un > 0.0_dp) then
-                        e = ut/un
-                        do b = 1, 2
-                            do c = 1, 2
-                                xl = xl + pt/un*(merge(1.0_dp, 0.0_dp, b == c) - e(b)*e(c))* &
-                                     spread(tdir(:, b), 2, n)*spread(tdir(:, c), 1, n)
-                            end do
-                        end do
-                    end if
+                ftm = reshape([ftm, dirs(:, first(k) + inorm - 1) + &
+                               matmul(dirs(:, it), p(it))/pn], [n, size(ftm, 2) + 1])
+                ut = matmul(yb(n + 1:2*n), dirs(:, it))
+                un = norm2(ut)
+                if (un > 0.0_dp) then
+                    e = ut/un
+                    proj = -spread(e, 2, size(e))*spread(e, 1, size(e))
+                    do c = 1, size(e)
+                        proj(c, c) = proj(c, c) + 1.0_dp
+                    end do
+                    xl = xl + norm2(p(it))/un*matmul(dirs(:, it), &
+                                                     matmul(proj, transpose(dirs(:, it))))
                 end if
             end if
         end do

@@ -74,7 +74,8 @@ contains
         !> The limit per unit of the force (2).
         real(dp), intent(in), optional :: kappa(:)
         real(dp) :: u(2), un, d(2), g, g0, gnew, kap(2), den, vr(2, geom%na), dd(2, geom%na), &
-                    dg(geom%na), ddg(2), m(2, 2), rhs(2, geom%na), det
+                    dg(geom%na), ddg(2), m(2, 2), rhs(2, geom%na), det, acc(2), &
+                    dacc(2, geom%na), wmat(2, 2)
         integer :: a, b, it
         kap = 0.0_dp
         if (present(kappa)) kap = kappa
@@ -97,10 +98,12 @@ contains
         else if (dir(3) >= 0.5_dp .and. present(yd0) .and. present(dyd0) .and. &
                  present(gj)) then
             ! the direction at the limit g(d) = g0 / (1 + kappa . d): a fixed point
+            acc = matmul(vr, yd0)
+            dacc = matmul(vr, dyd0)
+            wmat = matmul(vr, gj)
             g = g0
             do it = 1, 50
-                call start_direction(g, matmul(vr, yd0), matmul(vr, dyd0), matmul(vr, gj), &
-                                     dir(1:2), d, dd, ddg)
+                call start_direction(g, acc, dacc, wmat, dir(1:2), d, dd, ddg)
                 gnew = g0/(1.0_dp + dot_product(kap, d))
                 if (abs(gnew - g) <= 4.0_dp*epsilon(1.0_dp)*abs(g0)) exit
                 g = gnew

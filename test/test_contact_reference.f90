@@ -6,8 +6,9 @@
 !> monodromy matrix is the central difference of the period map; the weighted residual
 !> converges to it as harmonics are added (elastic contact) and implicit Euler at first
 !> order (rigid contact, impacts; a Jenkins element on it). What it handles is said (2D
-!> friction: test_reference_2d, on a rigid unilateral contact: test_impacts_2d); 2D friction
-!> behind a tangential stiffness on a unilateral contact is refused with a message.
+!> friction: test_reference_2d, on a rigid unilateral contact: test_impacts_2d, behind a
+!> tangential stiffness on an elastic one: test_reference_2d); 2D friction behind a
+!> tangential stiffness on a rigid unilateral contact is refused with a message.
 module test_contact_reference
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, real_text
@@ -356,8 +357,8 @@ contains
 
     !> What the exact reference handles: 2D friction (its slip phases integrated
     !> numerically, test_reference_2d), on a unilateral contact too, 1D unilateral contacts,
-    !> a tangential stiffness on an elastic or a rigid one; 2D friction behind a tangential
-    !> stiffness on a unilateral contact is not handled, said so.
+    !> a tangential stiffness on an elastic or a rigid one, 2D friction behind a tangential
+    !> stiffness on an elastic one; on a rigid one it is not handled, said so.
     subroutine test_support(t)
         type(test_counter_t), intent(inout) :: t
         character(len=:), allocatable :: why
@@ -383,10 +384,14 @@ contains
                    "2D friction on a rigid unilateral contact (impacts) is handled", why)
         m = liftoff_2d_model(0.3_dp, 0.15_dp, 1.0_dp)
         m%tangential_stiffness = [5.0_dp]
+        call check(t, reference_handles(m, why) .and. len(why) == 0, "contact_reference: "// &
+                   "2D friction behind a tangential stiffness on an elastic unilateral "// &
+                   "contact is handled", why)
+        m%normal_stiffness = [0.0_dp]
         ok = reference_handles(m, why)
         call check(t, .not. ok .and. index(why, "2D friction") > 0 .and. &
-                   index(why, "tangential stiffness") > 0, "contact_reference: 2D friction "// &
-                   "behind a tangential stiffness on a unilateral contact is not handled, "// &
-                   "said so", why)
+                   index(why, "tangential stiffness") > 0 .and. index(why, "rigid") > 0, &
+                   "contact_reference: 2D friction behind a tangential stiffness on a rigid "// &
+                   "unilateral contact is not handled, said so", why)
     end subroutine test_support
 end module test_contact_reference

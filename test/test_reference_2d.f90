@@ -14,11 +14,15 @@
 !> - a contact stuck all period (roundoff slip velocities at the start count as rest);
 !> - ode_tol: the samples at 1e-6, 1e-8, 1e-10 against those at 1e-12, each within the
 !>   error estimate the reference states, the estimate falling with the tolerance;
+!> - a 2D Jenkins element on a contact that lifts off (sliders in the state, unloaded while
+!>   open): the normal law, the spring's law, the disk and the slider's motion at every
+!>   sample, the energy balance, the monodromy, implicit Euler and the weighted residual
+!>   converging to it;
 !> - the monodromy matrix against central differences of the period map, in a 2D slip
 !>   (circle, the stick-slip orbit's section), at a 2D stuck instant and for a 2D Jenkins
 !>   element (slider states in the state);
-!> - the sweep's Floquet stability with 2D friction (also lifting off) and with a Jenkins
-!>   element: the largest multiplier of points of the curve against the eigenvalues of
+!> - the sweep's Floquet stability with 2D friction (also lifting off, also behind a
+!>   tangential stiffness) and with a Jenkins element: the largest multiplier of points of the curve against the eigenvalues of
 !>   central differences of the period map of the orbit shot from the point.
 module test_reference_2d
     use stickslip_kinds, only: dp
@@ -73,6 +77,7 @@ contains
         call test_stuck_all_period(t)
         call test_ode_tol(t)
         call test_jenkins_2d(t)
+        call test_jenkins_2d_liftoff(t)
         call test_sweep_stability(t)
     end subroutine run_reference_2d_tests
 
@@ -425,6 +430,88 @@ contains
         call compare_monodromy(t, flow, res%t(k), z0, "2D Jenkins, at a stuck instant")
     end subroutine test_jenkins_2d
 
+    !> A 2D Jenkins element on a contact that lifts off (the 2D lift-off with k_t = 20: the
+    !> limit mu lambda varies, the contact opens once a period and the slider sticks in two
+    !> phases): converged, the energy balance to 1e-10; at every sample no force when open,
+    !> the normal law, the spring's force r = -k_t (P x - s) (1e-9 of mu lambda_max) inside
+    !> the disk when stuck, on its edge when slipping (1e-9) and against the slider's motion
+    !> (the central difference of the slider samples: cosine below -0.999); the monodromy of
+    !> [x; v; s] (8 x 8) against central differences at the most open, a stuck and a slipping
+    !> instant; implicit Euler started on the orbit converging to it at first order; the
+    !> weighted residual converging to it as H grows.
+    subroutine test_jenkins_2d_liftoff(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: name = "2D Jenkins lift-off"
+        real(dp), parameter :: kn = 10.0_dp, kt = 20.0_dp
+        character(len=*), parameter :: instant(3) = [character(len=21) :: &
+                                                     "the most open instant", "a stuck instant", &
+                                                     "a slipping instant"]
+        type(reference_result_t) :: res
+        type(model_t) :: m
+        type(flow_t) :: flow
+        real(dp) :: lmax, worst_open, worst_law, worst_dir, rn, ds(2), ns
+        integer :: k, nk, kind
+        m = liftoff_2d_model(0.3_dp, 0.15_dp, 1.0_dp)
+        m%tangential_stiffness = [kt]
+        call reference(t, m, res, name)
+        if (.not. res%converged) return
+        call check(t, balance(res) <= 1.0e-10_dp, "reference_2d: "//name//": energy balance", &
+                   real_text(balance(res)))
+        call check(t, res%open_fraction(1) > 0.1_dp .and. res%stick_phases(1) == 2, &
+                   "reference_2d: "//name//": opens once and sticks twice a period", &
+                   real_text(res%open_fraction(1))//" open, "//real_text(res%stick_fraction(1))// &
+                   " stuck in "//real_text(real(res%stick_phases(1), dp))//" phases")
+        lmax = maxval(res%normal(:, 1))
+        nk = size(res%t)
+        worst_open = 0.0_dp
+        worst_law = 0.0_dp
+        worst_dir = -1.0_dp
+        do k = 1, nk
+            rn = hypot(res%r(k, 1), res%r(k, 2))
+            if (res%state(k, 1) == state_open) then
+                worst_open = max(worst_open, rn, abs(res%normal(k, 1)))
+                cycle
+            end if
+            worst_law = max(worst_law, abs(res%normal(k, 1) + kn*res%gap(k, 1))/lmax, &
+                            maxval(abs(res%r(k, 1:2) + kt*(res%x(k, 1:2) - res%s(k, 1:2))))/ &
+                            (mun*lmax))
+            if (res%state(k, 1) == state_stick) then
+                worst_law = max(worst_law, (rn - mun*res%normal(k, 1))/(mun*lmax))
+                cycle
+            end if
+            worst_law = max(worst_law, abs(rn - mun*res%normal(k, 1))/(mun*lmax))
+            if (k == 1 .or. k == nk) cycle
+            if (any(res%state(k - 1:k + 1:2, 1) /= state_slip)) cycle
+            ds = res%s(k + 1, 1:2) - res%s(k - 1, 1:2)
+            ns = norm2(ds)
+            if (ns > 1.0e-3_dp*maxval(abs(res%s)) .and. rn > 1.0e-3_dp*mun*lmax) &
+                worst_dir = max(worst_dir, dot_product(res%r(k, 1:2), ds)/(rn*ns))
+        end do
+        call check(t, worst_open == 0.0_dp .and. worst_law <= 1.0e-9_dp .and. &
+                   worst_dir < -0.999_dp, "reference_2d: "//name//": no force when open; "// &
+                   "the normal law and the spring's force, inside the disk when stuck, on its "// &
+                   "edge against the slider's motion when slipping", real_text(worst_open)// &
+                   ", "//real_text(worst_law)//", cosine "//real_text(worst_dir))
+        flow = res%flow
+        call check(t, flow%nz == 8, "reference_2d: "//name//": two slider states in the flow")
+        if (flow%nz /= 8) return
+        do kind = 1, 3
+            select case (kind)
+            case (1)
+                k = maxloc(res%gap(:, 1), 1)
+            case (2)
+                k = minloc(hypot(res%r(:, 1), res%r(:, 2)), 1, &
+                           mask=res%state(:, 1) == state_stick)
+            case default
+                k = maxloc(res%normal(:, 1), 1, mask=res%state(:, 1) == state_slip)
+            end select
+            call compare_monodromy(t, flow, res%t(k), [res%x(k, :), res%v(k, :), res%s(k, :)], &
+                                   name//", at "//trim(instant(kind)))
+        end do
+        call test_euler_first_order(t, res, m, name)
+        call test_hbm_converges(t, res, m, name, .false.)
+    end subroutine test_jenkins_2d_liftoff
+
     !> The sweep's Floquet stability with 2D friction (the stick-slip point mass over omega
     !> in [1.6, 1.8], and lifting off over the same range) and with a 1D Jenkins element
     !> (the seed with k_t = 5 over [4.2, 4.8]):
@@ -443,6 +530,9 @@ contains
         call sweep_and_check(t, m, 4.2_dp, 4.8_dp, "Jenkins")
         call sweep_and_check(t, liftoff_2d_model(0.3_dp, 0.15_dp, 1.0_dp), 1.6_dp, 1.8_dp, &
                              "2D friction that lifts off")
+        m = liftoff_2d_model(0.3_dp, 0.15_dp, 1.0_dp)
+        m%tangential_stiffness = [20.0_dp]
+        call sweep_and_check(t, m, 1.6_dp, 1.8_dp, "2D Jenkins that lifts off")
     end subroutine test_sweep_stability
 
     subroutine sweep_and_check(t, m, lo, hi, name)

@@ -16,10 +16,10 @@
 !> The period map z(t0) -> z(t0 + T) of z = [x; v; s] also returns its Jacobian (the
 !> monodromy matrix): the product of the phase flows exp(A_zz tau) (of the collocation
 !> steps in a nonlinear phase), of the saltation matrices P J + (f+ - P J f-) c^T / (c . f-)
-!> at the events (J the Jacobian of an impact's jump, else the identity; P the projection of
-!> the velocities onto the new mode's constraints) and of the projections of the start onto
-!> its mode's constraints and its elements' admissible states. Knows nothing of files or of
-!> the other methods.
+!> at the events (J the Jacobian of a jump: an impact's, or of an element's internal states
+!> at a switch, else the identity; P the projection of the velocities onto the new mode's
+!> constraints) and of the projections of the start onto its mode's constraints and its
+!> elements' admissible states. Knows nothing of files or of the other methods.
 module stickslip_flow
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
@@ -260,6 +260,15 @@ contains
                         dirs(:, j))
                 end associate
             end select
+            ! the internal states of the elements whose codes switched (a slider unloaded as
+            ! its contact opens: part of the event's jump)
+            do j = 1, self%nc
+                associate (s0 => self%slot0(j) + 1, s1 => self%slot_hi(j))
+                    if (all(code(s0:s1) == oldcode(s0:s1))) cycle
+                    call self%cs%elements(j)%e%event_states(oldcode(s0:s1), code(s0:s1), &
+                                                            self%geom(j), yeb, jump)
+                end associate
+            end do
             imnew = mode_index(self, code, error)
             if (allocated(error)) return
             ! constrained directions: clear the roundoff left in their velocities (in the

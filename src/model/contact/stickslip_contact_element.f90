@@ -146,6 +146,9 @@ module stickslip_contact_element
         !> The internal states of a start put on the set its codes allow (a slipping
         !> slider's spring on its limit).
         procedure :: start_states => element_start_states
+        !> The internal states after an event switched its codes (a slider unloaded as
+        !> its contact opens; default: kept).
+        procedure :: event_states => element_event_states
         !> The values of the element's nonlinear inputs in a mode (a 2D slip) and their
         !> Jacobian.
         procedure :: inputs => element_inputs
@@ -682,6 +685,21 @@ contains
         !> one's: pj <- P pj.
         real(dp), intent(inout) :: pj(:, :)
     end subroutine element_start_states
+
+    !> The internal states are kept at an event.
+    subroutine element_event_states(self, old, code, geom, y, jump)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes before and after the event.
+        integer, intent(in) :: old(:), code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The state at the event (balanced), corrected in place.
+        real(dp), intent(inout) :: y(:)
+        !> The Jacobian of the event's jump (nz x nz, balanced), composed with this one's:
+        !> jump <- P jump.
+        real(dp), intent(inout) :: jump(:, :)
+    end subroutine element_event_states
 
     !> Its impacts obey its own law: e is a copy of it.
     subroutine element_impact_law(self, e)

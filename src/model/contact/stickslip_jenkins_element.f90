@@ -24,7 +24,8 @@ module stickslip_jenkins_element
     implicit none
     private
     public :: jenkins_element_t, new_jenkins_element
-    public :: slider_terms, slider_events, slider_start, slider_project, slider_decide
+    public :: slider_terms, slider_events, slider_start, slider_project, slider_decide, &
+        disk_slider_terms, disk_slider_on_edge
 
     !> A spring k_t in series with a Coulomb slider, 1D or 2D, constant normal load.
     type, extends(friction_contact_t) :: jenkins_element_t
@@ -119,19 +120,33 @@ contains
         integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
         type(mode_terms_t), intent(inout) :: terms
-        real(dp) :: f(2, geom%na), ucol(geom%n), scol(geom%ns), fcol(size(terms%fb, 1))
-        integer :: a
         if (self%law%ntangent == 1) then
             call slider_terms(code(1), self%kt, self%law%mu*self%law%normal_load, 1, 1, &
                               geom%first, geom, terms)
             return
         end if
-        f = force_rows(self, geom)
+        call disk_slider_terms(force_rows(self, geom), code(1) == 1, geom, terms)
+    end subroutine jenkins_mode_terms
+
+    !> A 2D slider's terms: the spring's force (rows f, 2 x na) along w and t2 on the first
+    !> two channels; slipping, the two slider rates as nonlinear inputs (the element's
+    !> `inputs`).
+    subroutine disk_slider_terms(f, slipping, geom, terms)
+        !> The spring's force as rows of y.
+        real(dp), intent(in) :: f(:, :)
+        !> Whether the slider slips.
+        logical, intent(in) :: slipping
+        !> The element's geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The mode's terms.
+        type(mode_terms_t), intent(inout) :: terms
+        real(dp) :: ucol(geom%n), scol(geom%ns), fcol(size(terms%fb, 1))
+        integer :: a
         do a = 1, 2
             call terms%add_force(geom%dt(:, a), f(a, :))
             terms%fb(geom%first + a - 1, :) = f(a, :)
         end do
-        if (code(1) /= 1) return
+        if (.not. slipping) return
         ucol = 0.0_dp
         fcol = 0.0_dp
         do a = 1, 2
@@ -139,7 +154,7 @@ contains
             scol(geom%s0 + a) = geom%cs(a)
             call terms%add_input(geom%index, ucol, scol, fcol)
         end do
-    end subroutine jenkins_mode_terms
+    end subroutine disk_slider_terms
 
     !> 2D slipping: the slider rates s' = r (r . P v) / g^2 and their Jacobian.
     subroutine jenkins_inputs(self, code, geom, y, dir, fb, fq, q, dq, yd0, dyd0, gj)
@@ -216,7 +231,7 @@ contains
     end subroutine jenkins_start_code
 
     !> 1D: slider_project. 2D: a slipping slider's spring, or a stuck one's beyond the
-    !> limit, put radially on the circle |r| = mu N: s = P x + g r / (k_t |r|).
+    !> limit, put radially on the circle |r| = mu N (disk_slider_on_edge).
     subroutine jenkins_start_states(self, code, geom, fb, y, pj)
         class(jenkins_element_t), intent(in) :: self
         integer, intent(in) :: code(:)
@@ -224,9 +239,7 @@ contains
         real(dp), intent(in) :: fb(:, :)
         real(dp), intent(inout) :: y(:)
         real(dp), intent(inout) :: pj(:, :)
-        real(dp) :: f(2, geom%na), r(2), rn, g, rh(2), dr(2, size(pj, 1)), &
-                    d(2, size(pj, 1)), drow(geom%na)
-        integer :: a, b, nz, idx
+        real(dp) :: f(2, geom%na), g
         g = self%law%mu*self%law%normal_load
         if (self%law%ntangent == 1) then
             call slider_project(self%kt, g, code(1), 1, geom, y, pj)
@@ -234,27 +247,8 @@ contains
         end if
         if (.not. (g > 0.0_dp)) return
         f = force_rows(self, geom)
-        r = matmul(f, y)
-        rn = norm2(r)
-        if (.not. (rn > 0.0_dp) .or. (code(1) == 0 .and. rn <= g)) return
-        nz = size(pj, 1)
-        rh = r/rn
-        ! ds_new = P dx + (g / |r|) (I - rh rh^T) dr / k_t, dr = k_t (ds - P dx)
-        do a = 1, 2
-            drow = geom%disp_row(a)
-            d(a, :) = matmul(drow(1:nz), pj)
-            dr(a, :) = matmul(f(a, 1:nz), pj)
-        end do
-        do a = 1, 2
-            idx = 2*geom%n + geom%s0 + a
-            y(idx) = geom%cs(a)*(dot_product(geom%disp_row(a), y) + g*rh(a)/self%kt)
-            pj(idx, :) = d(a, :)
-            do b = 1, 2
-                pj(idx, :) = pj(idx, :) + g/rn*(merge(1.0_dp, 0.0_dp, a == b) - &
-                                                rh(a)*rh(b))*dr(b, :)/self%kt
-            end do
-            pj(idx, :) = geom%cs(a)*pj(idx, :)
-        end do
+        if (code(1) == 0 .and. norm2(matmul(f, y)) <= g) return
+        call disk_slider_on_edge(self%kt, geom, f, geom%const_row(g), y, pj)
     end subroutine jenkins_start_states
 
     !> 1D: slider_decide. 2D: a slipping slider whose speed -r . P v reached zero sticks,
@@ -279,6 +273,47 @@ contains
                dot_product(matmul(f, y), matmul(v, ydot))
         if (.not. (rate > 1.0e-9_dp*g*geom%vref*geom%omega)) code(1) = 0
     end subroutine jenkins_local_decide
+
+    !> A 2D slider's spring put on the edge |r| = g of its disk along the direction of u =
+    !> urows y: s = P x + g u / (k_t |u|), and the Jacobian ds = P dx + (u^ dg + (g / |u|) (I
+    !> - u^ u^T) du) / k_t (u^ = u / |u|). Nothing when u = 0.
+    subroutine disk_slider_on_edge(kt, geom, urows, g, y, pj)
+        !> The spring's stiffness [N/m].
+        real(dp), intent(in) :: kt
+        !> The element's geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The rows of u (2 x na) and of the limit g [N] (na).
+        real(dp), intent(in) :: urows(:, :), g(:)
+        !> The state (balanced), corrected in place.
+        real(dp), intent(inout) :: y(:)
+        !> The Jacobian of the corrections (nz x nz), composed: pj <- P pj.
+        real(dp), intent(inout) :: pj(:, :)
+        real(dp) :: u(2), un, gv, uh(2), du(2, size(pj, 1)), d(2, size(pj, 1)), &
+                    dg(size(pj, 1)), drow(geom%na), prow(size(pj, 1))
+        integer :: a, b, nz, idx
+        u = matmul(urows, y)
+        un = norm2(u)
+        if (.not. un > 0.0_dp) return
+        gv = dot_product(g, y)
+        uh = u/un
+        nz = size(pj, 1)
+        do a = 1, 2
+            drow = geom%disp_row(a)
+            d(a, :) = matmul(drow(1:nz), pj)
+            du(a, :) = matmul(urows(a, 1:nz), pj)
+        end do
+        dg = matmul(g(1:nz), pj)
+        do a = 1, 2
+            idx = 2*geom%n + geom%s0 + a
+            y(idx) = geom%cs(a)*(dot_product(geom%disp_row(a), y) + gv*uh(a)/kt)
+            prow = d(a, :) + uh(a)*dg/kt
+            do b = 1, 2
+                prow = prow + gv/un*(merge(1.0_dp, 0.0_dp, a == b) - uh(a)*uh(b))*du(b, :)/ &
+                       kt
+            end do
+            pj(idx, :) = geom%cs(a)*prow
+        end do
+    end subroutine disk_slider_on_edge
 
     ! --- one slider (k, limit g) along w with internal state k_state: shared by the Jenkins
     ! and the microslip elements ---

@@ -12,7 +12,9 @@
 !> energy balance with the impact losses; the monodromy against central differences of the
 !> period map at the section (through the impacts, the slips and the sticking); implicit
 !> Euler started on the orbit converging to it at first order (the sliding impacts without
-!> the coupling only: run_impacts_2d_tests says why).
+!> the coupling only: run_impacts_2d_tests says why). A 2D Jenkins element on the same
+!> contact (sliders in the state, frictionless impacts): the law, the balance, the monodromy
+!> and Euler at first order.
 module test_impacts_2d
     use stickslip_kinds, only: dp
     use stickslip_error, only: real_text
@@ -21,7 +23,7 @@ module test_impacts_2d
     use stickslip_flow, only: flow_t
     use fixtures, only: liftoff_2d_model
     use test_reference_2d, only: test_euler_first_order, compare_monodromy, test_disk_law, &
-        reference
+        reference, test_jenkins_disk_law
     use testing, only: test_counter_t, check
     implicit none
     private
@@ -64,7 +66,40 @@ contains
                                                             coupled=.false.), &
                                         "rigid 2D sliding impacts, uncoupled")
         end if
+        call test_jenkins(t)
     end subroutine run_impacts_2d_tests
+
+    !> A 2D Jenkins element on the rigid contact (the stick-slip orbit's case with k_t = 5:
+    !> impact, stick, slip, open each period; its impacts frictionless, the spring carrying
+    !> no impulse): the law at every sample (test_jenkins_disk_law), the energy balance with
+    !> the impact loss to 1e-10, the monodromy of [x; v; s] at the section against central
+    !> differences, implicit Euler started on the orbit converging to it at first order.
+    subroutine test_jenkins(t)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t) :: res
+        type(flow_t) :: flow
+        type(model_t) :: m
+        real(dp) :: bal
+        m = rigid_model(0.3_dp, 0.15_dp, 1.5_dp)
+        m%tangential_stiffness = [5.0_dp]
+        call solved(t, m, res, "Jenkins")
+        if (.not. res%converged) return
+        call check(t, res%stick_phases(1) == 1 .and. res%open_fraction(1) > 0.3_dp .and. &
+                   1.0_dp - res%stick_fraction(1) - res%open_fraction(1) > 0.1_dp, &
+                   "impacts_2d: Jenkins: impacts, sticks once, slips and opens", &
+                   real_text(res%open_fraction(1))//" open, "// &
+                   real_text(res%stick_fraction(1))//" stuck")
+        call test_jenkins_disk_law(t, res, "rigid 2D Jenkins", 0.0_dp, 5.0_dp)
+        bal = abs(res%work_forcing - res%diss_friction - res%diss_damping - res%impact_loss)/ &
+              res%work_forcing
+        call check(t, bal <= 1.0e-10_dp, "impacts_2d: Jenkins: energy balance with the "// &
+                   "impact loss", real_text(bal))
+        flow = res%flow
+        call check(t, flow%nz == 8, "impacts_2d: Jenkins: two slider states in the flow")
+        call compare_monodromy(t, flow, res%t_section, res%orbit%phase_y(1:flow%nz, 1), &
+                               "rigid 2D Jenkins, at the section", res%monodromy)
+        call test_euler_first_order(t, res, m, "rigid 2D Jenkins")
+    end subroutine test_jenkins
 
     !> liftoff_2d_model(fx, fy, fz) on a rigid normal (normal_stiffness 0), its mass
     !> coupling the normal with the plane (M_13 = 0.2, M_23 = 0.1) unless `coupled` is false.

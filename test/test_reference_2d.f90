@@ -45,7 +45,7 @@ module test_reference_2d
     implicit none
     private
     public :: run_reference_2d_tests, test_euler_first_order, compare_monodromy, test_disk_law, &
-        reference
+        reference, test_jenkins_disk_law
 
     !> The planar model's friction limit mu N and angular frequency.
     real(dp), parameter :: mun = 0.3_dp, omega = 1.7_dp
@@ -449,8 +449,7 @@ contains
         type(reference_result_t) :: res
         type(model_t) :: m
         type(flow_t) :: flow
-        real(dp) :: lmax, worst_open, worst_law, worst_dir, rn, ds(2), ns
-        integer :: k, nk, kind
+        integer :: k, kind
         m = liftoff_2d_model(0.3_dp, 0.15_dp, 1.0_dp)
         m%tangential_stiffness = [kt]
         call reference(t, m, res, name)
@@ -461,37 +460,7 @@ contains
                    "reference_2d: "//name//": opens once and sticks twice a period", &
                    real_text(res%open_fraction(1))//" open, "//real_text(res%stick_fraction(1))// &
                    " stuck in "//real_text(real(res%stick_phases(1), dp))//" phases")
-        lmax = maxval(res%normal(:, 1))
-        nk = size(res%t)
-        worst_open = 0.0_dp
-        worst_law = 0.0_dp
-        worst_dir = -1.0_dp
-        do k = 1, nk
-            rn = hypot(res%r(k, 1), res%r(k, 2))
-            if (res%state(k, 1) == state_open) then
-                worst_open = max(worst_open, rn, abs(res%normal(k, 1)))
-                cycle
-            end if
-            worst_law = max(worst_law, abs(res%normal(k, 1) + kn*res%gap(k, 1))/lmax, &
-                            maxval(abs(res%r(k, 1:2) + kt*(res%x(k, 1:2) - res%s(k, 1:2))))/ &
-                            (mun*lmax))
-            if (res%state(k, 1) == state_stick) then
-                worst_law = max(worst_law, (rn - mun*res%normal(k, 1))/(mun*lmax))
-                cycle
-            end if
-            worst_law = max(worst_law, abs(rn - mun*res%normal(k, 1))/(mun*lmax))
-            if (k == 1 .or. k == nk) cycle
-            if (any(res%state(k - 1:k + 1:2, 1) /= state_slip)) cycle
-            ds = res%s(k + 1, 1:2) - res%s(k - 1, 1:2)
-            ns = norm2(ds)
-            if (ns > 1.0e-3_dp*maxval(abs(res%s)) .and. rn > 1.0e-3_dp*mun*lmax) &
-                worst_dir = max(worst_dir, dot_product(res%r(k, 1:2), ds)/(rn*ns))
-        end do
-        call check(t, worst_open == 0.0_dp .and. worst_law <= 1.0e-9_dp .and. &
-                   worst_dir < -0.999_dp, "reference_2d: "//name//": no force when open; "// &
-                   "the normal law and the spring's force, inside the disk when stuck, on its "// &
-                   "edge against the slider's motion when slipping", real_text(worst_open)// &
-                   ", "//real_text(worst_law)//", cosine "//real_text(worst_dir))
+        call test_jenkins_disk_law(t, res, name, kn, kt)
         flow = res%flow
         call check(t, flow%nz == 8, "reference_2d: "//name//": two slider states in the flow")
         if (flow%nz /= 8) return
@@ -511,6 +480,63 @@ contains
         call test_euler_first_order(t, res, m, name)
         call test_hbm_converges(t, res, m, name, .false.)
     end subroutine test_jenkins_2d_liftoff
+
+    !> A 2D Jenkins element with mu = 0.3 on a unilateral contact (normal stiffness kn, 0:
+    !> rigid; tangential stiffness kt) at every sample: open, no friction force and a normal
+    !> force below 1e-6 of its largest (a closed contact below the element's force floor
+    !> counts as open); closed, lambda = -k_n g (1e-12 of lambda_max; rigid: the gap zero to
+    !> 1e-12 of the displacement and lambda >= 0), the spring's force r = -k_t (P x - s)
+    !> (1e-9 of mu lambda_max), inside the disk when stuck, on its edge when slipping (1e-9)
+    !> and against the slider's motion (the central difference of the slider samples: cosine
+    !> below -0.999).
+    subroutine test_jenkins_disk_law(t, res, name, kn, kt)
+        type(test_counter_t), intent(inout) :: t
+        type(reference_result_t), intent(in) :: res
+        character(len=*), intent(in) :: name
+        real(dp), intent(in) :: kn, kt
+        real(dp) :: lmax, xmax, worst_open, worst_floor, worst_law, worst_dir, rn, ds(2), ns
+        integer :: k, nk
+        lmax = maxval(res%normal(:, 1))
+        xmax = maxval(abs(res%x))
+        nk = size(res%t)
+        worst_open = 0.0_dp
+        worst_floor = 0.0_dp
+        worst_law = 0.0_dp
+        worst_dir = -1.0_dp
+        do k = 1, nk
+            rn = hypot(res%r(k, 1), res%r(k, 2))
+            if (res%state(k, 1) == state_open) then
+                worst_open = max(worst_open, rn)
+                worst_floor = max(worst_floor, abs(res%normal(k, 1))/lmax)
+                cycle
+            end if
+            if (kn > 0.0_dp) then
+                worst_law = max(worst_law, abs(res%normal(k, 1) + kn*res%gap(k, 1))/lmax)
+            else
+                worst_law = max(worst_law, abs(res%gap(k, 1))/xmax, -res%normal(k, 1)/lmax)
+            end if
+            worst_law = max(worst_law, maxval(abs(res%r(k, 1:2) + &
+                                                  kt*(res%x(k, 1:2) - res%s(k, 1:2))))/ &
+                            (mun*lmax))
+            if (res%state(k, 1) == state_stick) then
+                worst_law = max(worst_law, (rn - mun*res%normal(k, 1))/(mun*lmax))
+                cycle
+            end if
+            worst_law = max(worst_law, abs(rn - mun*res%normal(k, 1))/(mun*lmax))
+            if (k == 1 .or. k == nk) cycle
+            if (any(res%state(k - 1:k + 1:2, 1) /= state_slip)) cycle
+            ds = res%s(k + 1, 1:2) - res%s(k - 1, 1:2)
+            ns = norm2(ds)
+            if (ns > 1.0e-3_dp*maxval(abs(res%s)) .and. rn > 1.0e-3_dp*mun*lmax) &
+                worst_dir = max(worst_dir, dot_product(res%r(k, 1:2), ds)/(rn*ns))
+        end do
+        call check(t, worst_open == 0.0_dp .and. worst_floor <= 1.0e-6_dp .and. &
+                   worst_law <= 1.0e-9_dp .and. worst_dir < -0.999_dp, "reference_2d: "// &
+                   name//": no force when open; the normal law and the spring's force, "// &
+                   "inside the disk when stuck, on its edge against the slider's motion when "// &
+                   "slipping", real_text(worst_open)//", "//real_text(worst_floor)//", "// &
+                   real_text(worst_law)//", cosine "//real_text(worst_dir))
+    end subroutine test_jenkins_disk_law
 
     !> The sweep's Floquet stability with 2D friction (the stick-slip point mass over omega
     !> in [1.6, 1.8], and lifting off over the same range) and with a 1D Jenkins element

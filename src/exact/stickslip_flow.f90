@@ -37,7 +37,8 @@ module stickslip_flow
         nl_prepare, nl_step, nl_checked_step, nl_state_at, nl_exponentials, nl_dense, &
         nl_dense_jacobian, nl_input_at
     use stickslip_flow_orbit, only: orbit_t
-    use stickslip_contact_modes, only: action_decide, action_close, action_memory, event_list_t
+    use stickslip_contact_modes, only: action_decide, action_close, action_memory, event_list_t, &
+        code_unloaded
     use stickslip_contact_element, only: along_tangent, state_stick, state_open
     implicit none
     private
@@ -260,17 +261,19 @@ contains
                         dirs(:, j))
                 end associate
             end select
+            imnew = mode_index(self, code, error)
+            if (allocated(error)) return
             ! the internal states of the elements whose codes switched (a slider unloaded as
             ! its contact opens: part of the event's jump)
             do j = 1, self%nc
-                associate (s0 => self%slot0(j) + 1, s1 => self%slot_hi(j))
+                associate (s0 => self%slot0(j) + 1, s1 => self%slot_hi(j), &
+                           c0 => self%cs%first(j), w => self%cs%width(j))
                     if (all(code(s0:s1) == oldcode(s0:s1))) cycle
-                    call self%cs%elements(j)%e%event_states(oldcode(s0:s1), code(s0:s1), &
-                                                            self%geom(j), yeb, jump)
+                    call self%cs%elements(j)%e%event_states( &
+                        oldcode(s0:s1), code(s0:s1), self%geom(j), &
+                        self%modes(imnew)%fbal(c0:c0 + w - 1, :), yeb, jump)
                 end associate
             end do
-            imnew = mode_index(self, code, error)
-            if (allocated(error)) return
             ! constrained directions: clear the roundoff left in their velocities (in the
             ! balanced state: a round trip through [x; v] would cost the stiff components
             ! accuracy)
@@ -295,14 +298,17 @@ contains
             if (want_orbit) then
                 do j = 1, self%nc
                     do k = 1, self%nslots(j)
-                        associate (slot => self%slot0(j) + k)
-                            if (code(slot) == oldcode(slot) .and. &
+                        associate (slot => self%slot0(j) + k, &
+                                   newc => reported(code(self%slot0(j) + k)), &
+                                   oldc => reported(oldcode(self%slot0(j) + k)))
+                            if (newc == oldc .and. &
                                 (hit%action == action_memory .or. &
                                  .not. (j == hit%element .and. slot == hit%slot))) cycle
-                            call orbit%add_event(te, j, event_kind(oldcode(slot), code(slot), &
+                            if (newc == oldc .and. newc == 2) cycle
+                            call orbit%add_event(te, j, event_kind(oldc, newc, &
                                                                    j == hit%element .and. &
                                                                    impact), &
-                                                 merge(0, code(slot), code(slot) == 2), &
+                                                 merge(0, newc, newc == 2), &
                                                  tangential_force(imnew, j, ye), &
                                                  dot_product(self%w(:, j), ye(n + 1:2*n)))
                         end associate
@@ -337,6 +343,12 @@ contains
             character(len=*), intent(in) :: message
             call fatal_error(error, "reference: "//message, stickslip_stat%numerical)
         end subroutine fail
+
+        !> A code as events report it: closed below an element's force floor is open.
+        pure integer function reported(c)
+            integer, intent(in) :: c
+            reported = merge(2, c, c == code_unloaded)
+        end function reported
 
         !> y' of mode m at yb: its linear dynamics and its nonlinear inputs.
         function rate(m, ya) result(yd)

@@ -192,6 +192,9 @@ contains
                 call self%cs%elements(j)%e%event_rows(code(self%slot0(j) + 1:self%slot_hi(j)), &
                                                       self%geom(j), &
                                                       terms%fb(c0:c0 + w - 1, :), events)
+                call self%cs%elements(j)%e%dynamics_events( &
+                    code(self%slot0(j) + 1:self%slot_hi(j)), self%geom(j), &
+                    terms%fb(c0:c0 + w - 1, :), md%b, events)
                 do k = 1, events%count
                     m = m + 1
                     md%rows = reshape([md%rows, events%rows(:, k)], [self%na, m])

@@ -27,7 +27,8 @@ module stickslip_contact_element
     use stickslip_error, only: error_type
     use stickslip_basis, only: basis_t
     use stickslip_contact_law, only: state_open, state_stick, state_slip
-    use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t
+    use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
+        code_unloaded
     implicit none
     private
     public :: contact_element_t, element_box_t, channel_t, hb_work_t
@@ -121,6 +122,9 @@ module stickslip_contact_element
         procedure :: mode_terms => element_mode_terms
         !> The event rows of a mode.
         procedure :: event_rows => element_event_rows
+        !> Events of a mode that need its linear dynamics (a slider's rate that follows a
+        !> constraint force's rate in a nonlinear phase; default none).
+        procedure :: dynamics_events => element_dynamics_events
         !> The codes at a start state.
         procedure :: start_code => element_start_code
         !> Takes part in the joint decisions of rigid contacts (a rigid constraint).
@@ -539,6 +543,23 @@ contains
         type(event_list_t), intent(inout) :: events
     end subroutine element_event_rows
 
+    !> No events that need the mode's dynamics.
+    subroutine element_dynamics_events(self, code, geom, fb, b, events)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> The element's codes in the mode.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> Its channel forces as rows of y (m x na) in the mode, constraint forces included.
+        real(dp), intent(in) :: fb(:, :)
+        !> The mode's linear dynamics y' = b y (na x na, balanced; without its nonlinear
+        !> inputs).
+        real(dp), intent(in) :: b(:, :)
+        !> The events, added to.
+        type(event_list_t), intent(inout) :: events
+    end subroutine element_dynamics_events
+
     !> Codes 1 (slipping) at the start, nothing to decide.
     subroutine element_start_code(self, geom, y, code, decide)
         !> The element.
@@ -617,13 +638,14 @@ contains
         real(dp), intent(in) :: y(:), ydot(:)
     end subroutine element_local_decide
 
-    !> Stick when every slot sticks, open when a slot is open, slip otherwise.
+    !> Stick when every slot sticks, open when a slot is open (code 2, or code_unloaded: closed
+    !> below the element's force floor), slip otherwise.
     pure integer function element_code_state(self, code) result(state)
         !> The element.
         class(contact_element_t), intent(in) :: self
         !> Its codes.
         integer, intent(in) :: code(:)
-        if (any(code == 2)) then
+        if (any(code == 2 .or. code == code_unloaded)) then
             state = state_open
         else if (all(code == 0)) then
             state = state_stick
@@ -687,13 +709,15 @@ contains
     end subroutine element_start_states
 
     !> The internal states are kept at an event.
-    subroutine element_event_states(self, old, code, geom, y, jump)
+    subroutine element_event_states(self, old, code, geom, fb, y, jump)
         !> The element.
         class(contact_element_t), intent(in) :: self
         !> Its codes before and after the event.
         integer, intent(in) :: old(:), code(:)
         !> Its geometry.
         type(element_geometry_t), intent(in) :: geom
+        !> Its channel forces as rows of y in the new mode (m x na, balanced).
+        real(dp), intent(in) :: fb(:, :)
         !> The state at the event (balanced), corrected in place.
         real(dp), intent(inout) :: y(:)
         !> The Jacobian of the event's jump (nz x nz, balanced), composed with this one's:

@@ -24,14 +24,18 @@ module stickslip_contact_modes
     implicit none
     private
     public :: element_geometry_t, mode_terms_t, event_list_t
-    public :: action_decide, action_close, action_none, action_memory
+    public :: action_decide, action_close, action_none, action_memory, code_unloaded
+
+    !> A code of a contact closed but carrying less than its element's force floor (the
+    !> friction unloaded; reported as open: events, states).
+    integer, parameter :: code_unloaded = 3
 
     !> What happens at the zero of an event row besides a code switch: the codes of the
     !> contacts there are decided anew (action_decide), or an open contact closes (its
     !> codes decided, with an impact when it is rigid and closes with a velocity:
     !> action_close), or the element's slip memory is updated at that state, its codes kept
     !> (action_memory: a 2D slip started from rest begins to follow its velocity). A value
-    !> >= -1 and <= 2 switches the slot to that code.
+    !> >= -1 and <= code_unloaded switches the slot to that code.
     integer, parameter :: action_decide = 100, action_close = 101, action_none = 102, &
                           action_memory = 103
 

@@ -23,6 +23,7 @@ module stickslip_contact_set
     use stickslip_jenkins_element, only: new_jenkins_element
     use stickslip_unilateral_element, only: new_unilateral_element
     use stickslip_lifting_jenkins_element, only: new_lifting_jenkins_element
+    use stickslip_rigid_jenkins_element, only: new_rigid_jenkins_element
     use stickslip_contact_solve, only: contact_forces
     implicit none
     private
@@ -135,10 +136,16 @@ contains
         end if
         ntan = merge(2, 1, is_planar(model, j))
         if (is_unilateral(model, j) .and. ntan == 2 .and. &
-            tangential_stiffness_of(model, j) > 0.0_dp) then
+            tangential_stiffness_of(model, j) > 0.0_dp .and. &
+            normal_stiffness_of(model, j) > 0.0_dp) then
             allocate (box%e, source=new_lifting_jenkins_element(model%mu(j), &
                       contact_gap(model, j), contact_preload(model, j), &
                       normal_stiffness_of(model, j), tangential_stiffness_of(model, j)))
+        else if (is_unilateral(model, j) .and. ntan == 2 .and. &
+                 tangential_stiffness_of(model, j) > 0.0_dp) then
+            allocate (box%e, source=new_rigid_jenkins_element(model%mu(j), &
+                      contact_gap(model, j), contact_preload(model, j), &
+                      tangential_stiffness_of(model, j)))
         else if (is_unilateral(model, j)) then
             allocate (box%e, source=new_unilateral_element(ntan, model%mu(j), &
                       contact_gap(model, j), contact_preload(model, j), &

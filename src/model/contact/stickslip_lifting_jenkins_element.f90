@@ -258,10 +258,11 @@ contains
     !> On opening (from a closed code to 2) the sliders are put on the structure, s = P x:
     !> the spring, on the edge of the disk of radius mu lambda_min, unloads. Closing into a
     !> slip, the spring is put on that edge against the slip (along -P v).
-    subroutine lj_event_states(self, old, code, geom, y, jump)
+    subroutine lj_event_states(self, old, code, geom, fb, y, jump)
         class(lifting_jenkins_element_t), intent(in) :: self
         integer, intent(in) :: old(:), code(:)
         type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :)
         real(dp), intent(inout) :: y(:)
         real(dp), intent(inout) :: jump(:, :)
         real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), gd(geom%na)

@@ -91,14 +91,17 @@ contains
     end function unilateral_name
 
     !> Handled: 1D friction, rigid tangentially or with a tangential stiffness, on an
-    !> elastic or a rigid normal; 2D friction, rigid tangentially, on either.
+    !> elastic or a rigid normal; 2D friction, rigid tangentially, on either. 2D friction
+    !> behind a tangential stiffness is the lifting or the rigid Jenkins element's (the
+    !> model builds those: stickslip_contact_set).
     function unilateral_exact_support(self) result(why)
         class(unilateral_element_t), intent(in) :: self
         character(len=:), allocatable :: why
         why = ""
         if (self%law%ntangent == 2 .and. self%kt > 0.0_dp) then
-            why = "the exact reference does not handle 2D friction behind a tangential "// &
-                  "stiffness on a unilateral contact yet"
+            why = "the exact reference takes 2D friction behind a tangential stiffness on a "// &
+                  "unilateral contact as new_lifting_jenkins_element (elastic normal) or "// &
+                  "new_rigid_jenkins_element (rigid normal), not as new_unilateral_element"
         end if
     end function unilateral_exact_support
 

@@ -49,9 +49,10 @@ contains
 
     !> The contact-law examples from the command line: the damper that lifts off (weighted
     !> residual: the normal force and gap columns, the open share on stdout and in the
-    !> summary; the exact reference: open and close events), and the 2D elliptical slip
-    !> (method 'all' without the reference, noted; method 'reference' refused, naming the
-    !> yardstick, exit 1).
+    !> summary; the exact reference: open and close events), the 2D elliptical slip (the
+    !> three methods; the reference alone with its integration error), the microslip joint
+    !> and the 2D damper with contact stiffnesses that lifts off (the reference: its events
+    !> and columns).
     subroutine test_contact_examples(t)
         type(test_counter_t), intent(inout) :: t
         character(len=:), allocatable :: out, err, dir, text
@@ -103,6 +104,17 @@ contains
                    "methods, one force column (the joint's), slip events", err)
         call check(t, index(file_text(dir//"/summary.nml"), "&microslip") > 0, &
                    "cli microslip_joint: the joint echoed in the summary's case")
+        path = scratch_copy("damper_2d_liftoff")
+        dir = scratch//"/out_damper_2d_liftoff"
+        call replace_in_file(trim(path), "method = 'all'", "method = 'reference'")
+        call cli([path], code, out, err)
+        text = file_text(dir//"/events.csv")
+        call check(t, code == 0 .and. index(text, ",open,") > 0 .and. &
+                   index(text, ",close,") > 0 .and. index(text, ",stick,") > 0 .and. &
+                   index(file_text(dir//"/reference.csv"), &
+                         "t,x1,x2,x3,v1,v2,v3,r1,r1_2,normal1,gap1"//new_line('a')) == 1, &
+                   "cli damper_2d_liftoff, reference: exit 0, open, close and stick events, "// &
+                   "both tangential forces and the normal's columns", err)
     end subroutine test_contact_examples
 
     !> Replace the first occurrence of `old` by `new` in the text file `path`.

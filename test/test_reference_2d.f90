@@ -306,11 +306,7 @@ contains
                 worst_open = max(worst_open, rn, abs(res%normal(k, 1)))
                 cycle
             end if
-            if (kn > 0.0_dp) then
-                worst_normal = max(worst_normal, abs(res%normal(k, 1) + kn*res%gap(k, 1))/lmax)
-            else
-                worst_normal = max(worst_normal, abs(res%gap(k, 1))/xmax, -res%normal(k, 1)/lmax)
-            end if
+            worst_normal = max(worst_normal, normal_law_error(res, k, kn, lmax, xmax))
             if (res%state(k, 1) == state_stick) then
                 worst_stuck = max(worst_stuck, (rn - mun*res%normal(k, 1))/(mun*lmax), sp/vmax)
             else
@@ -332,6 +328,20 @@ contains
         call check(t, bal <= 1.0e-10_dp, "reference_2d: "//name//": energy balance (with the "// &
                    "impact losses)", real_text(bal))
     end subroutine test_disk_law
+
+    !> The normal law's error at closed sample k: lambda + k_n g relative to lambda_max
+    !> (elastic); rigid, the gap relative to the largest displacement and a negative lambda
+    !> relative to lambda_max.
+    real(dp) function normal_law_error(res, k, kn, lmax, xmax) result(e)
+        type(reference_result_t), intent(in) :: res
+        integer, intent(in) :: k
+        real(dp), intent(in) :: kn, lmax, xmax
+        if (kn > 0.0_dp) then
+            e = abs(res%normal(k, 1) + kn*res%gap(k, 1))/lmax
+        else
+            e = max(abs(res%gap(k, 1))/xmax, -res%normal(k, 1)/lmax)
+        end if
+    end function normal_law_error
 
     !> flow%period_map's monodromy from z0 at t0 (or `given`, the reference's) against its
     !> central differences (steps 1e-6 of max(|z0_k|, 1e-2)), relative to its largest entry:
@@ -510,13 +520,8 @@ contains
                 worst_floor = max(worst_floor, abs(res%normal(k, 1))/lmax)
                 cycle
             end if
-            if (kn > 0.0_dp) then
-                worst_law = max(worst_law, abs(res%normal(k, 1) + kn*res%gap(k, 1))/lmax)
-            else
-                worst_law = max(worst_law, abs(res%gap(k, 1))/xmax, -res%normal(k, 1)/lmax)
-            end if
-            worst_law = max(worst_law, maxval(abs(res%r(k, 1:2) + &
-                                                  kt*(res%x(k, 1:2) - res%s(k, 1:2))))/ &
+            worst_law = max(worst_law, normal_law_error(res, k, kn, lmax, xmax), &
+                            maxval(abs(res%r(k, 1:2) + kt*(res%x(k, 1:2) - res%s(k, 1:2))))/ &
                             (mun*lmax))
             if (res%state(k, 1) == state_stick) then
                 worst_law = max(worst_law, (rn - mun*res%normal(k, 1))/(mun*lmax))

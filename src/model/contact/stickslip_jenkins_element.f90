@@ -25,7 +25,7 @@ module stickslip_jenkins_element
     private
     public :: jenkins_element_t, new_jenkins_element
     public :: slider_terms, slider_events, slider_start, slider_project, slider_decide, &
-        disk_slider_terms, disk_slider_on_edge
+        disk_slider_terms, disk_slider_on_edge, slider_force_rows, slider_velocity_rows
 
     !> A spring k_t in series with a Coulomb slider, 1D or 2D, constant normal load.
     type, extends(friction_contact_t) :: jenkins_element_t
@@ -70,24 +70,27 @@ contains
         why = ""
     end function jenkins_exact_support
 
-    !> The rows of the 2D spring force r_a = -k_t (d_a^T x - s_a) (a = 1, 2).
-    pure function force_rows(self, geom) result(f)
-        class(jenkins_element_t), intent(in) :: self
+    !> The rows of y of a 2D slider's spring force r_a = -k_t (d_a^T x - s_a) (a = 1, 2).
+    pure function slider_force_rows(kt, geom) result(f)
+        !> The spring's stiffness [N/m].
+        real(dp), intent(in) :: kt
+        !> The element's geometry.
         type(element_geometry_t), intent(in) :: geom
         real(dp) :: f(2, geom%na)
         integer :: a
         do a = 1, 2
-            f(a, :) = -self%kt*geom%disp_row(a) + self%kt*geom%state_row(a)
+            f(a, :) = -kt*geom%disp_row(a) + kt*geom%state_row(a)
         end do
-    end function force_rows
+    end function slider_force_rows
 
-    !> The rows of P v = (w^T v, t2^T v).
-    pure function velocity_rows(geom) result(v)
+    !> The rows of y of P v = (w^T v, t2^T v).
+    pure function slider_velocity_rows(geom) result(v)
+        !> The element's geometry.
         type(element_geometry_t), intent(in) :: geom
         real(dp) :: v(2, geom%na)
         v(1, :) = geom%vel_row(1)
         v(2, :) = geom%vel_row(2)
-    end function velocity_rows
+    end function slider_velocity_rows
 
     !> One slider position per tangential direction.
     pure integer function jenkins_nstate(self) result(k)
@@ -125,7 +128,7 @@ contains
                               geom%first, geom, terms)
             return
         end if
-        call disk_slider_terms(force_rows(self, geom), code(1) == 1, geom, terms)
+        call disk_slider_terms(slider_force_rows(self%kt, geom), code(1) == 1, geom, terms)
     end subroutine jenkins_mode_terms
 
     !> A 2D slider's terms: the spring's force (rows f, 2 x na) along w and t2 on the first
@@ -166,8 +169,8 @@ contains
         real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
         real(dp) :: f(2, geom%na), v(2, geom%na), r(2), pv(2), g2, rv
         integer :: a
-        f = force_rows(self, geom)
-        v = velocity_rows(geom)
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
         r = matmul(f, y)
         pv = matmul(v, y)
         g2 = (self%law%mu*self%law%normal_load)**2
@@ -193,11 +196,11 @@ contains
             return
         end if
         if (.not. (g > 0.0_dp)) return
-        f = force_rows(self, geom)
+        f = slider_force_rows(self%kt, geom)
         if (code(1) == 0) then
             call events%add_quadratic(-matmul(transpose(f), f), g*g, g*g, 1, 1)
         else
-            v = velocity_rows(geom)
+            v = slider_velocity_rows(geom)
             call events%add_quadratic(-0.5_dp*(matmul(transpose(f), v) + &
                                                matmul(transpose(v), f)), 0.0_dp, &
                                       g*geom%vref, 1, action_decide)
@@ -224,9 +227,9 @@ contains
             code(1) = 1
             return
         end if
-        r = matmul(force_rows(self, geom), y)
+        r = matmul(slider_force_rows(self%kt, geom), y)
         if (norm2(r) < g*(1.0_dp - 1.0e-9_dp)) return
-        if (-dot_product(r, matmul(velocity_rows(geom), y)) > 1.0e-12_dp*g*geom%vref) &
+        if (-dot_product(r, matmul(slider_velocity_rows(geom), y)) > 1.0e-12_dp*g*geom%vref) &
             code(1) = 1
     end subroutine jenkins_start_code
 
@@ -246,7 +249,7 @@ contains
             return
         end if
         if (.not. (g > 0.0_dp)) return
-        f = force_rows(self, geom)
+        f = slider_force_rows(self%kt, geom)
         if (code(1) == 0 .and. norm2(matmul(f, y)) <= g) return
         call disk_slider_on_edge(self%kt, geom, f, geom%const_row(g), y, pj)
     end subroutine jenkins_start_states
@@ -265,8 +268,8 @@ contains
         end if
         if (code(1) /= 1) return
         g = self%law%mu*self%law%normal_load
-        f = force_rows(self, geom)
-        v = velocity_rows(geom)
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
         speed = -dot_product(matmul(f, y), matmul(v, y))
         if (speed > 1.0e-9_dp*g*geom%vref) return
         rate = -dot_product(matmul(f, ydot), matmul(v, y)) - &

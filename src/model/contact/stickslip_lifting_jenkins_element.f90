@@ -26,12 +26,14 @@
 module stickslip_lifting_jenkins_element
     use stickslip_kinds, only: dp
     use stickslip_unilateral_element, only: unilateral_element_t, new_unilateral_element
-    use stickslip_jenkins_element, only: disk_slider_terms, disk_slider_on_edge
+    use stickslip_jenkins_element, only: disk_slider_terms, disk_slider_on_edge, &
+        slider_force_rows, slider_velocity_rows
     use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
         action_decide, action_close
     implicit none
     private
     public :: lifting_jenkins_element_t, new_lifting_jenkins_element, floor_fraction
+    public :: lambda_min, edge_rates, unload_sliders
 
     !> lambda_min as a fraction of the element's force scale.
     real(dp), parameter :: floor_fraction = 1.0e-7_dp
@@ -48,6 +50,10 @@ module stickslip_lifting_jenkins_element
         procedure :: start_code => lj_start_code
         procedure :: start_states => lj_start_states
         procedure :: event_states => lj_event_states
+        !> The friction is loaded in a code (stuck or slipping, with friction).
+        procedure :: loaded => lj_loaded
+        !> The friction limit mu lambda as a row of y, from the mode's channel forces.
+        procedure :: limit_row => lj_limit_row
         procedure :: local_decide => lj_local_decide
         procedure :: coupled => lj_coupled
         procedure :: step_rows => lj_step_rows
@@ -105,20 +111,47 @@ contains
         class(lifting_jenkins_element_t), intent(in) :: self
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(out) :: f(2, geom%na), v(2, geom%na), g(geom%na), gd(geom%na)
-        integer :: a
-        do a = 1, 2
-            f(a, :) = -self%kt*geom%disp_row(a) + self%kt*geom%state_row(a)
-            v(a, :) = geom%vel_row(a)
-        end do
-        g = -self%law%mu*self%kn*(geom%disp_row(3) + geom%const_row(self%gap))
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
+        g = lj_limit_row(self, geom, reshape([real(dp) ::], [0, geom%na]))
         gd = -self%law%mu*self%kn*geom%vel_row(3)
     end subroutine rows_of
 
-    !> lambda_min [N].
+    !> The force floor lambda_min [N] of an element's geometry.
     pure real(dp) function lambda_min(geom)
+        !> The element's geometry.
         type(element_geometry_t), intent(in) :: geom
         lambda_min = floor_fraction*geom%fref
     end function lambda_min
+
+    !> A 2D slider on the edge of its varying disk: the rates a = r (r . P v) / g^2 + r g' /
+    !> (k_t g) at y and their Jacobian da (2 x na), from the rows f and v
+    !> (slider_force_rows, slider_velocity_rows), the limit's row g, the value of g' and its
+    !> gradient dgd (na).
+    pure subroutine edge_rates(kt, f, v, g, gdv, dgd, y, a, da)
+        !> The spring's stiffness [N/m].
+        real(dp), intent(in) :: kt
+        !> Rows of the spring force and of P v (2 x na), of the limit (na).
+        real(dp), intent(in) :: f(:, :), v(:, :), g(:)
+        !> g' at y and its gradient.
+        real(dp), intent(in) :: gdv, dgd(:)
+        !> The state (balanced).
+        real(dp), intent(in) :: y(:)
+        !> The rates and their Jacobian.
+        real(dp), intent(out) :: a(2), da(:, :)
+        real(dp) :: r(2), pv(2), gv, rv, drv(size(y))
+        integer :: k
+        r = matmul(f, y)
+        pv = matmul(v, y)
+        gv = dot_product(g, y)
+        rv = dot_product(r, pv)
+        drv = matmul(pv, f) + matmul(r, v)
+        do k = 1, 2
+            a(k) = r(k)*rv/gv**2 + r(k)*gdv/(kt*gv)
+            da(k, :) = (f(k, :)*rv + r(k)*drv)/gv**2 - 2.0_dp*r(k)*rv/gv**3*g + &
+                       (f(k, :)*gdv + r(k)*dgd)/(kt*gv) - r(k)*gdv/(kt*gv**2)*g
+        end do
+    end subroutine edge_rates
 
     !> Open: the sliders follow (s' = P v). Closed: the normal force and the spring's force;
     !> slipping, the slider rates as nonlinear inputs.
@@ -152,21 +185,9 @@ contains
         real(dp), intent(in) :: y(:), dir(:), fb(:, :), fq(:, :)
         real(dp), intent(out) :: q(:), dq(:, :)
         real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
-        real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), gd(geom%na), r(2), pv(2), gv, &
-                    gdv, rv, drv(geom%na)
-        integer :: a
+        real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), gd(geom%na)
         call rows_of(self, geom, f, v, g, gd)
-        r = matmul(f, y)
-        pv = matmul(v, y)
-        gv = dot_product(g, y)
-        gdv = dot_product(gd, y)
-        rv = dot_product(r, pv)
-        drv = matmul(pv, f) + matmul(r, v)
-        do a = 1, 2
-            q(a) = r(a)*rv/gv**2 + r(a)*gdv/(self%kt*gv)
-            dq(a, :) = (f(a, :)*rv + r(a)*drv)/gv**2 - 2.0_dp*r(a)*rv/gv**3*g + &
-                       (f(a, :)*gdv + r(a)*gd)/(self%kt*gv) - r(a)*gdv/(self%kt*gv**2)*g
-        end do
+        call edge_rates(self%kt, f, v, g, dot_product(gd, y), gd, y, q, dq)
     end subroutine lj_inputs
 
     !> Stuck: g^2 - |r|^2 (slips), lambda - lambda_min (opens); slipping: the slider's speed
@@ -244,20 +265,21 @@ contains
         real(dp), intent(in) :: fb(:, :)
         real(dp), intent(inout) :: y(:)
         real(dp), intent(inout) :: pj(:, :)
-        real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), gd(geom%na), rn
-        if (code(1) == 2 .or. .not. self%law%mu > 0.0_dp) then
-            call unload(geom, y, pj)
+        real(dp) :: f(2, geom%na), g(geom%na)
+        if (.not. self%loaded(code(1))) then
+            call unload_sliders(geom, y, pj)
             return
         end if
-        call rows_of(self, geom, f, v, g, gd)
-        rn = norm2(matmul(f, y))
-        if (code(1) == 0 .and. rn <= dot_product(g, y)) return
+        f = slider_force_rows(self%kt, geom)
+        g = self%limit_row(geom, fb)
+        if (code(1) == 0 .and. norm2(matmul(f, y)) <= dot_product(g, y)) return
         call disk_slider_on_edge(self%kt, geom, f, g, y, pj)
     end subroutine lj_start_states
 
-    !> On opening (from a closed code to 2) the sliders are put on the structure, s = P x:
-    !> the spring, on the edge of the disk of radius mu lambda_min, unloads. Closing into a
-    !> slip, the spring is put on that edge against the slip (along -P v).
+    !> Leaving the loaded codes (open, or closed below the force floor), the sliders are put
+    !> on the structure, s = P x: the spring, on the edge of the disk of radius mu
+    !> lambda_min, unloads. Loaded into a slip, the spring is put on that edge against the
+    !> slip (along -P v).
     subroutine lj_event_states(self, old, code, geom, fb, y, jump)
         class(lifting_jenkins_element_t), intent(in) :: self
         integer, intent(in) :: old(:), code(:)
@@ -265,17 +287,38 @@ contains
         real(dp), intent(in) :: fb(:, :)
         real(dp), intent(inout) :: y(:)
         real(dp), intent(inout) :: jump(:, :)
-        real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), gd(geom%na)
-        if (code(1) == 2 .and. old(1) /= 2) call unload(geom, y, jump)
-        if (.not. (old(1) == 2 .and. code(1) == 1 .and. self%law%mu > 0.0_dp)) return
-        call rows_of(self, geom, f, v, g, gd)
-        call disk_slider_on_edge(self%kt, geom, -v, g, y, jump)
+        if (self%loaded(old(1)) .and. .not. self%loaded(code(1))) then
+            call unload_sliders(geom, y, jump)
+        else if (.not. self%loaded(old(1)) .and. self%loaded(code(1)) .and. code(1) == 1) then
+            call disk_slider_on_edge(self%kt, geom, -slider_velocity_rows(geom), &
+                                     self%limit_row(geom, fb), y, jump)
+        end if
     end subroutine lj_event_states
 
-    !> s = P x in y (balanced), pj <- P pj.
-    subroutine unload(geom, y, pj)
+    !> The friction is loaded: stuck or slipping, with friction.
+    pure logical function lj_loaded(self, code) result(yes)
+        class(lifting_jenkins_element_t), intent(in) :: self
+        integer, intent(in) :: code
+        yes = (code == 0 .or. code == 1) .and. self%law%mu > 0.0_dp
+    end function lj_loaded
+
+    !> The friction limit g = mu lambda as a row of y [N] (closed): lambda = -k_n (gap + n^T
+    !> x); fb, the element's channel forces in the mode, unused.
+    pure function lj_limit_row(self, geom, fb) result(g)
+        class(lifting_jenkins_element_t), intent(in) :: self
         type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: fb(:, :)
+        real(dp) :: g(geom%na)
+        g = -self%law%mu*self%kn*(geom%disp_row(3) + geom%const_row(self%gap))
+    end function lj_limit_row
+
+    !> A 2D slider's spring unloaded: s = P x in y (balanced), pj <- P pj.
+    subroutine unload_sliders(geom, y, pj)
+        !> The element's geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The state (balanced), corrected in place.
         real(dp), intent(inout) :: y(:)
+        !> The Jacobian of the corrections (nz x nz), composed.
         real(dp), intent(inout) :: pj(:, :)
         real(dp) :: drow(geom%na)
         integer :: a, nz, idx
@@ -286,7 +329,7 @@ contains
             y(idx) = geom%cs(a)*dot_product(drow, y)
             pj(idx, :) = geom%cs(a)*matmul(drow(1:nz), pj)
         end do
-    end subroutine unload
+    end subroutine unload_sliders
 
     !> Decided alone: closing, stuck or slipping at once (event_states); a slider whose speed reached
     !> zero sticks, unless the speed turns up again (its rate above 1e-9 of the scale).

@@ -30,8 +30,9 @@ module stickslip_rigid_jenkins_element
     use stickslip_kinds, only: dp
     use stickslip_contact_element, only: contact_element_t
     use stickslip_lifting_jenkins_element, only: lifting_jenkins_element_t, &
-        new_lifting_jenkins_element, floor_fraction
-    use stickslip_jenkins_element, only: disk_slider_terms, disk_slider_on_edge
+        new_lifting_jenkins_element, lambda_min, edge_rates
+    use stickslip_jenkins_element, only: disk_slider_terms, &
+        slider_force_rows, slider_velocity_rows
     use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
         action_decide, action_close, code_unloaded
     implicit none
@@ -50,8 +51,7 @@ module stickslip_rigid_jenkins_element
         procedure :: event_rows => rj_event_rows
         procedure :: dynamics_events => rj_dynamics_events
         procedure :: start_code => rj_start_code
-        procedure :: start_states => rj_start_states
-        procedure :: event_states => rj_event_states
+        procedure :: limit_row => rj_limit_row
         procedure :: local_decide => rj_local_decide
         procedure :: coupled => rj_coupled
         procedure :: holds_constraint => rj_holds_constraint
@@ -77,37 +77,12 @@ contains
         why = ""
     end function rj_exact_support
 
-    !> The rows of y of the spring force f (2 x na) and of P v (2 x na).
-    pure subroutine spring_rows(self, geom, f, v)
-        class(rigid_jenkins_element_t), intent(in) :: self
-        type(element_geometry_t), intent(in) :: geom
-        real(dp), intent(out) :: f(2, geom%na), v(2, geom%na)
-        integer :: a
-        do a = 1, 2
-            f(a, :) = -self%kt*geom%disp_row(a) + self%kt*geom%state_row(a)
-            v(a, :) = geom%vel_row(a)
-        end do
-    end subroutine spring_rows
-
-    !> lambda_min [N].
-    pure real(dp) function lambda_min(geom)
-        type(element_geometry_t), intent(in) :: geom
-        lambda_min = floor_fraction*geom%fref
-    end function lambda_min
-
     !> The scale of the friction forces [N].
     pure real(dp) function friction_scale(self, geom)
         class(rigid_jenkins_element_t), intent(in) :: self
         type(element_geometry_t), intent(in) :: geom
         friction_scale = geom%fref*max(self%law%mu, 1.0e-3_dp)
     end function friction_scale
-
-    !> The friction is loaded (stuck or slipping, with friction).
-    pure logical function loaded(self, code)
-        class(rigid_jenkins_element_t), intent(in) :: self
-        integer, intent(in) :: code
-        loaded = (code == 0 .or. code == 1) .and. self%law%mu > 0.0_dp
-    end function loaded
 
     !> Open: the sliders follow. Closed: the normal constraint; unloaded (or without
     !> friction), the sliders follow; stuck or slipping, the springs, slipping the slider
@@ -119,10 +94,11 @@ contains
         type(mode_terms_t), intent(inout) :: terms
         real(dp) :: f(2, geom%na), v(2, geom%na)
         integer :: a
-        call spring_rows(self, geom, f, v)
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
         if (code(1) /= 2) call terms%constrain(geom%dt(:, 3), geom%dt(:, 3), geom%first + 2, 0, &
                                                0.0_dp)
-        if (.not. loaded(self, code(1))) then
+        if (.not. self%loaded(code(1))) then
             do a = 1, 2
                 terms%sb(geom%s0 + a, :) = geom%cs(a)*v(a, :)
             end do
@@ -140,17 +116,15 @@ contains
         real(dp), intent(in) :: y(:), dir(:), fb(:, :), fq(:, :)
         real(dp), intent(out) :: q(:), dq(:, :)
         real(dp), intent(in), optional :: yd0(:), dyd0(:, :), gj(:, :)
-        real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), r(2), pv(2), gv, rv, g0d, &
-                    drv(geom%na), dg0d(geom%na), a(2), da(2, geom%na), c(2), dc(2, geom%na), &
-                    ca, cr, den, s, dca(geom%na), dcr(geom%na), ds(geom%na)
+        real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), r(2), gv, g0d, dg0d(geom%na), &
+                    a(2), da(2, geom%na), c(2), dc(2, geom%na), ca, cr, den, s, dca(geom%na), &
+                    dcr(geom%na), ds(geom%na)
         integer :: k
-        call spring_rows(self, geom, f, v)
-        g = self%law%mu*fb(3, :)
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
+        g = self%limit_row(geom, fb)
         r = matmul(f, y)
-        pv = matmul(v, y)
         gv = dot_product(g, y)
-        rv = dot_product(r, pv)
-        drv = matmul(pv, f) + matmul(r, v)
         g0d = 0.0_dp
         dg0d = 0.0_dp
         c = 0.0_dp
@@ -159,10 +133,8 @@ contains
             dg0d = matmul(g, dyd0)
             c = matmul(g, gj)/(self%kt*gv)
         end if
+        call edge_rates(self%kt, f, v, g, g0d, dg0d, y, a, da)
         do k = 1, 2
-            a(k) = r(k)*rv/gv**2 + r(k)*g0d/(self%kt*gv)
-            da(k, :) = (f(k, :)*rv + r(k)*drv)/gv**2 - 2.0_dp*r(k)*rv/gv**3*g + &
-                       (f(k, :)*g0d + r(k)*dg0d)/(self%kt*gv) - r(k)*g0d/(self%kt*gv**2)*g
             dc(k, :) = -c(k)/gv*g
         end do
         ca = dot_product(c, a)
@@ -201,8 +173,9 @@ contains
         end if
         call events%add(fb(3, :) - geom%const_row(lambda_min(geom)), geom%fref, 1, code_unloaded)
         if (code(1) /= 0) return
-        call spring_rows(self, geom, f, v)
-        g = self%law%mu*fb(3, :)
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
+        g = self%limit_row(geom, fb)
         call events%add_quadratic(spread(g, 2, geom%na)*spread(g, 1, geom%na) - &
                                   matmul(transpose(f), f), 0.0_dp, friction_scale(self, geom)**2, &
                                   1, 1)
@@ -218,8 +191,9 @@ contains
         type(event_list_t), intent(inout) :: events
         real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na), gd(geom%na)
         if (.not. (code(1) == 1 .and. self%law%mu > 0.0_dp)) return
-        call spring_rows(self, geom, f, v)
-        g = self%law%mu*fb(3, :)
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
+        g = self%limit_row(geom, fb)
         gd = matmul(g, b)
         call events%add_quadratic(-0.5_dp*(matmul(transpose(f), v) + matmul(transpose(v), f)) - &
                                   0.5_dp*(spread(g, 2, geom%na)*spread(gd, 1, geom%na) + &
@@ -242,60 +216,14 @@ contains
         decide = .true.
     end subroutine rj_start_code
 
-    !> Open or unloaded: the sliders on the structure (s = P x). Slipping, or stuck beyond
-    !> the limit: the spring put radially on the edge |r| = mu lambda (lambda the start
-    !> mode's constraint force).
-    subroutine rj_start_states(self, code, geom, fb, y, pj)
+    !> The friction limit mu lambda, lambda the constraint force of the mode (fb).
+    pure function rj_limit_row(self, geom, fb) result(g)
         class(rigid_jenkins_element_t), intent(in) :: self
-        integer, intent(in) :: code(:)
         type(element_geometry_t), intent(in) :: geom
         real(dp), intent(in) :: fb(:, :)
-        real(dp), intent(inout) :: y(:)
-        real(dp), intent(inout) :: pj(:, :)
-        real(dp) :: f(2, geom%na), v(2, geom%na), g(geom%na)
-        if (.not. loaded(self, code(1))) then
-            call unload_sliders(geom, y, pj)
-            return
-        end if
-        call spring_rows(self, geom, f, v)
+        real(dp) :: g(geom%na)
         g = self%law%mu*fb(3, :)
-        if (code(1) == 0 .and. norm2(matmul(f, y)) <= dot_product(g, y)) return
-        call disk_slider_on_edge(self%kt, geom, f, g, y, pj)
-    end subroutine rj_start_states
-
-    !> Leaving the loaded codes (unloaded or open): the sliders on the structure. Loaded from
-    !> an unloaded or open code into a slip: the spring on the edge against the slip.
-    subroutine rj_event_states(self, old, code, geom, fb, y, jump)
-        class(rigid_jenkins_element_t), intent(in) :: self
-        integer, intent(in) :: old(:), code(:)
-        type(element_geometry_t), intent(in) :: geom
-        real(dp), intent(in) :: fb(:, :)
-        real(dp), intent(inout) :: y(:)
-        real(dp), intent(inout) :: jump(:, :)
-        real(dp) :: f(2, geom%na), v(2, geom%na)
-        if (loaded(self, old(1)) .and. .not. loaded(self, code(1))) then
-            call unload_sliders(geom, y, jump)
-        else if (.not. loaded(self, old(1)) .and. loaded(self, code(1)) .and. code(1) == 1) then
-            call spring_rows(self, geom, f, v)
-            call disk_slider_on_edge(self%kt, geom, -v, self%law%mu*fb(3, :), y, jump)
-        end if
-    end subroutine rj_event_states
-
-    !> s = P x in y (balanced), pj <- P pj.
-    subroutine unload_sliders(geom, y, pj)
-        type(element_geometry_t), intent(in) :: geom
-        real(dp), intent(inout) :: y(:)
-        real(dp), intent(inout) :: pj(:, :)
-        real(dp) :: drow(geom%na)
-        integer :: a, nz, idx
-        nz = size(pj, 1)
-        do a = 1, 2
-            idx = 2*geom%n + geom%s0 + a
-            drow = geom%disp_row(a)
-            y(idx) = geom%cs(a)*dot_product(drow, y)
-            pj(idx, :) = geom%cs(a)*matmul(drow(1:nz), pj)
-        end do
-    end subroutine unload_sliders
+    end function rj_limit_row
 
     !> Nothing decided alone (joint decisions).
     subroutine rj_local_decide(self, code, geom, y, ydot)
@@ -374,7 +302,8 @@ contains
         ok = lam >= lmin - tol*geom%fref
         if (ok .and. lam <= lmin + tol*geom%fref) ok = ldot >= -tol*geom%fref*geom%omega
         if (.not. ok) return
-        call spring_rows(self, geom, f, v)
+        f = slider_force_rows(self%kt, geom)
+        v = slider_velocity_rows(geom)
         fs = friction_scale(self, geom)
         g = self%law%mu*lam
         gd = self%law%mu*ldot

@@ -331,8 +331,9 @@ contains
         end do
     end subroutine unload_sliders
 
-    !> Decided alone: closing, stuck or slipping at once (event_states); a slider whose speed reached
-    !> zero sticks, unless the speed turns up again (its rate above 1e-9 of the scale).
+    !> Decided alone: closing, stuck or slipping at once (event_states); a slider whose speed
+    !> reached zero sticks, unless the speed turns up again (its rate above 1e-9 of the
+    !> scale).
     subroutine lj_local_decide(self, code, geom, y, ydot)
         class(lifting_jenkins_element_t), intent(in) :: self
         integer, intent(inout) :: code(:)

@@ -28,7 +28,6 @@
 !>   rising past it).
 module stickslip_rigid_jenkins_element
     use stickslip_kinds, only: dp
-    use stickslip_contact_element, only: contact_element_t
     use stickslip_lifting_jenkins_element, only: lifting_jenkins_element_t, &
         new_lifting_jenkins_element, lambda_min, edge_rates
     use stickslip_jenkins_element, only: disk_slider_terms, &

@@ -464,8 +464,9 @@ contains
         lines(5) = "&modes amplitude_start = 0.1, amplitude_stop = 10, mode = 7 /"
         call write_lines(dir//".nml", lines)
         call cli([character(len=200) :: dir//".nml"], code, out, err)
-        call check(t, code == 1 .and. index(err, "mode 7 does not exist") > 0, &
-                   "modes cli: a mode the structure does not have", err)
+        call check(t, code == 1 .and. index(err, "&modes mode = 7: no such mode") > 0 .and. &
+                   index(err, dir//".nml") > 0, "modes cli: a mode the structure does not "// &
+                   "have, named with its file, group and variable", err)
         lines(5) = "! no &modes group"
         call write_lines(dir//".nml", lines)
         call cli([character(len=200) :: dir//".nml"], code, out, err)

@@ -189,8 +189,8 @@ contains
             omega_ref = wfv(opts%mode)
             res%omega_slipping = omega_ref
         else
-            call fatal_error(error, "nonlinear modes: mode "//itoa(opts%mode)//" does not "// &
-                             "exist (the structure has "//itoa(max(size(ws), size(wfv)))// &
+            call fatal_error(error, "opts%mode = "//itoa(opts%mode)//": no such mode (the "// &
+                             "structure has "//itoa(max(size(ws), size(wfv)))// &
                              " modes with its contacts stuck or slipping)", stickslip_stat%input)
             return
         end if

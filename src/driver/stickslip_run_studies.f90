@@ -28,6 +28,7 @@ module stickslip_run_studies
     use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script, &
         write_modes_plot_script
     use stickslip_run_findings, only: study_findings
+    use stickslip_case_messages, only: to_case_message
     use stickslip_run_output, only: open_output, close_output, after_method, name_case_file, &
         write_reference_files, sparse_columns, recovers, output_columns, boundary_columns
     implicit none
@@ -252,6 +253,11 @@ contains
         opts = case%modes%modes_options_t
         if (recovers(case)) opts%observe = case%reduction%output_rows
         call run_modes(case%model, case%hbm, opts, res, error, progress)
+        ! a mode the structure does not have: named as the case file's variable
+        if (allocated(error)) then
+            if (error%stat == stickslip_stat%input) call to_case_message(error, "", ['opts'], &
+                                                                         ['modes'])
+        end if
         call after_method(error, wanted)
         if (.not. wanted) return
         cols = output_columns(case)

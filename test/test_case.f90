@@ -112,6 +112,10 @@ contains
         call expect_bad(t, "bad_value", [character(len=120) :: &
             "&system ndof = two, mass = 1,0,0,1, stiffness = 2,-1,-1,1 /", good_forcing], inp, &
             [character(len=60) :: "&system", "two"])
+        call expect_bad(t, "reduction_inline", [character(len=120) :: good_system, good_forcing, &
+            good_friction, "&reduction method = 'craig-bampton' /"], inp, &
+            [character(len=60) :: "&reduction method = 'craig-bampton'", "inline", &
+             "never reduced"])
         call expect_bad(t, "missing_group", [character(len=120) :: good_system, good_friction], &
             inp, [character(len=60) :: "&forcing", "required group not found"])
         call expect_bad(t, "unterminated", [character(len=120) :: good_system, &

@@ -149,6 +149,15 @@ contains
         call read_system_group(nml, case%model, case%system_files, error, &
                                case%reduction%method, sparse)
         if (allocated(error)) return
+        if (.not. sparse%read .and. case%reduction%method == 'craig-bampton') then
+            ! asked for explicitly, a reduction of inline matrices would be ignored silently
+            call group_error(nml, error, "&reduction method = 'craig-bampton': reduces a "// &
+                             "model from &system mass_file / stiffness_file, but this case's "// &
+                             "matrices are inline (&system mass, stiffness) and inline "// &
+                             "matrices are never reduced: remove the &reduction group or give "// &
+                             "the matrices as Matrix Market files")
+            return
+        end if
         call read_forcing_group(nml, case%model, error, case%system_files, &
                                 optional_group=modes_case(nml))
         if (allocated(error)) return

@@ -472,5 +472,50 @@ contains
         call cli([character(len=200) :: dir//".nml"], code, out, err)
         call check(t, code == 1 .and. index(err, "&modes: missing") > 0, &
                    "modes cli: method 'modes' without &modes", err)
+        ! a contact law (a tangential stiffness): its columns, as many fields in every row as
+        ! in the header
+        lines(2) = "&friction contact_dof = 2, mu = 0.45, normal_load = 1.0, "// &
+                   "tangential_stiffness = 50 /"
+        lines(5) = "&modes amplitude_start = 0.1, amplitude_stop = 10, points = 11 /"
+        call write_lines(dir//".nml", lines)
+        call cli([character(len=200) :: dir//".nml"], code, out, err)
+        call check(t, code == 0 .and. index(first_line(dir//"/modes.csv"), &
+                                            ",open_1,slip_1,normal_max_1") > 0 .and. &
+                   fields_agree(dir//"/modes.csv"), "modes cli, a contact law: its columns, "// &
+                   "every row as long as the header", err)
     end subroutine test_cli_modes
+
+    !> Every line of a CSV file has as many comma-separated fields as its header.
+    logical function fields_agree(path) result(ok)
+        character(len=*), intent(in) :: path
+        character(len=4000) :: line
+        integer :: u, stat, nh, nrow
+        ok = .false.
+        open (newunit=u, file=path, status='old', action='read', iostat=stat)
+        if (stat /= 0) return
+        read (u, '(a)', iostat=stat) line
+        if (stat /= 0) return
+        nh = count_commas(line)
+        nrow = 0
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            nrow = nrow + 1
+            if (count_commas(line) /= nh) then
+                close (u)
+                return
+            end if
+        end do
+        close (u)
+        ok = nrow > 0
+    contains
+        integer function count_commas(text) result(c)
+            character(len=*), intent(in) :: text
+            integer :: i
+            c = 0
+            do i = 1, len_trim(text)
+                if (text(i:i) == ',') c = c + 1
+            end do
+        end function count_commas
+    end function fields_agree
 end module test_modes

@@ -562,7 +562,7 @@ contains
                 if (stat == 0) write (u, '(",",i0,",",' // real_fmt // ',",",a,",",i0)', &
                                       iostat=stat, iomsg=msg, advance='no') p%harmonics, &
                     p%residual, trim(p%status), p%nfev
-                if (stat == 0 .and. laws) write (u, '(*(",",' // real_fmt // '))', &
+                if (stat == 0 .and. laws) write (u, '(*(:,",",' // real_fmt // '))', &
                                                  iostat=stat, iomsg=msg, advance='no') &
                     p%open, 1.0_dp - p%open - p%stick, p%normal_max
                 if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) ""

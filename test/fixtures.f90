@@ -16,7 +16,7 @@ module fixtures
     public :: unilateral_seed, liftoff_model, planar_model, liftoff_2d_model
     public :: scratch_dir, project_path, project_root, enter_project_root
     public :: scratch, write_lines, first_line, good_system, good_forcing, good_friction, sweep_case
-    public :: msg, rt, file_text
+    public :: msg, rt, file_text, count_commas
 
     !> Scratch directory of the suites that write files, relative to the project root that
     !> they enter first (enter_project_root). A constant: gfortran 12 corrupts memory on
@@ -447,4 +447,14 @@ contains
         read (u, iostat=stat) text
         close (u)
     end function file_text
+
+    !> The number of commas in s (fields of a CSV line minus one).
+    pure integer function count_commas(s)
+        character(len=*), intent(in) :: s
+        integer :: i
+        count_commas = 0
+        do i = 1, len(s)
+            if (s(i:i) == ',') count_commas = count_commas + 1
+        end do
+    end function count_commas
 end module fixtures

@@ -20,7 +20,7 @@ module test_modes
     use stickslip_reference, only: reference_options_t
     use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
     use test_cli, only: cli
-    use fixtures, only: liftoff_model, planar_model, scratch, write_lines, first_line
+    use fixtures, only: liftoff_model, planar_model, scratch, write_lines, first_line, count_commas
     use testing, only: test_counter_t, check, check_error
     implicit none
     private
@@ -508,14 +508,5 @@ contains
         end do
         close (u)
         ok = nrow > 0
-    contains
-        integer function count_commas(text) result(c)
-            character(len=*), intent(in) :: text
-            integer :: i
-            c = 0
-            do i = 1, len_trim(text)
-                if (text(i:i) == ',') c = c + 1
-            end do
-        end function count_commas
     end function fields_agree
 end module test_modes

@@ -22,7 +22,7 @@ module test_output_selection
     use test_cli, only: cli
     use testing, only: test_counter_t, check, check_error
     use fixtures, only: enter_project_root, first_line, scratch, write_lines, good_system, &
-        good_forcing, good_friction, sweep_case, seed_model
+        good_forcing, good_friction, sweep_case, seed_model, count_commas
     implicit none
     private
     public :: run_output_selection_tests
@@ -729,12 +729,4 @@ contains
         close (u)
     end function read_numbers
 
-    integer function count_commas(s)
-        character(len=*), intent(in) :: s
-        integer :: i
-        count_commas = 0
-        do i = 1, len(s)
-            if (s(i:i) == ',') count_commas = count_commas + 1
-        end do
-    end function count_commas
 end module test_output_selection

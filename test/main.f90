@@ -57,6 +57,7 @@ program tester
     use test_microslip, only: run_microslip_tests
     use test_reference_2d, only: run_reference_2d_tests
     use test_impacts_2d, only: run_impacts_2d_tests
+    use test_fallback, only: run_fallback_tests
     use stickslip_blas_threads, only: limit_blas_threads
     implicit none
 
@@ -132,7 +133,8 @@ program tester
         suite_t("jenkins", run_jenkins_tests),&
         suite_t("microslip", run_microslip_tests),&
         suite_t("reference_2d", run_reference_2d_tests), &
-        suite_t("impacts_2d", run_impacts_2d_tests)]
+        suite_t("impacts_2d", run_impacts_2d_tests), &
+        suite_t("fallback", run_fallback_tests)]
     ! deterministic random points for the finite-difference and basis checks
     call random_seed(size=n)
     call random_seed(put=[(20261122 + 7919*i, i=1, n)])

@@ -3,8 +3,9 @@
 !>
 !> Flow: validate -> condense the linear dynamics on the contacts -> solve the projected
 !> friction equations for the friction-force coefficients with hybrj (exact generalized
-!> Jacobian; a ladder of warm starts from fewer harmonics when a cold start stalls;
-!> convergence judged by convergence_scale) -> settle an undetermined mean force -> recover
+!> Jacobian; a ladder of warm starts from fewer harmonics when a cold start stalls; the
+!> fallbacks of stickslip_hbm_fallback when that fails too; convergence judged by
+!> convergence_scale) -> settle an undetermined mean force -> recover
 !> every DOF -> energy balance and samples -> the checks as diagnostics (check_solution).
 !> The start strategies and ladders live in stickslip_hbm_strategy, the work after the solve
 !> (recovery, energies, checks) in stickslip_hbm_finish, the structure's data in
@@ -21,8 +22,9 @@ module stickslip_hbm
     use stickslip_contact_set, only: new_contact_set
     use stickslip_condensed_structure, only: condensed_structure_t, rho_ratio, &
         rho_out_of_band, rho_ratio_min, rho_ratio_max
-    use stickslip_hbm_strategy, only: newton_min_unknowns, ladder_first, use_newton, &
-        solve_stage, solve_ladder, doubling_rungs, halving_rungs
+    use stickslip_hbm_strategy, only: newton_min_unknowns, solve_primary, &
+        condensed_convergence_scale
+    use stickslip_hbm_fallback, only: solve_fallbacks, rigid_contact_opens
     use stickslip_hbm_finish, only: finish_solution, check_solution, energy_warning, &
         energy_untrusted, dissipation_warning, dissipation_untrusted, force_excess_warning, &
         force_excess_untrusted
@@ -239,7 +241,8 @@ contains
         type(model_t), intent(in), optional :: dense_model
         real(dp), allocatable :: y(:), vzero(:, :)
         integer :: nb, nc, ncopy
-        real(dp) :: target_norm
+        real(dp) :: target_norm, rho_used
+        type(hbm_options_t) :: oe
 
         nb = prob%basis%nb
         nc = prob%nc
@@ -268,45 +271,17 @@ contains
         sol%fscale = condensed_convergence_scale(prob, s%rho_auto)
         target_norm = opts%tol*sol%fscale
 
+        rho_used = o%rho
         if (nc == 0) then
             sol%converged = .true.
             sol%fnorm = 0.0_dp
-        else if (use_newton(opts, prob%n) .and. target_norm > 0.0_dp) then
-            ! Newton only from warm starts: r_start, or the halving ladder H/2^k
-            select case (opts%start)
-            case ('ladder')
-                call solve_ladder(s, o, prob, y, target_norm, sol, error, &
-                                  halving_rungs(s, o), present(r_start))
-            case ('direct')
-                call solve_stage(prob, y, opts, target_norm, sol, error, present(r_start))
-            case default
-                if (present(r_start)) then
-                    call solve_stage(prob, y, opts, target_norm, sol, error, .true.)
-                    if (.not. allocated(error) .and. .not. sol%converged .and. &
-                        opts%harmonics > ladder_first) then
-                        y = reshape(vzero, [prob%n])
-                        call solve_ladder(s, o, prob, y, target_norm, sol, error, &
-                                          halving_rungs(s, o), .true.)
-                    end if
-                else
-                    call solve_ladder(s, o, prob, y, target_norm, sol, error, &
-                                      halving_rungs(s, o), .false.)
-                end if
-            end select
         else
-            select case (opts%start)
-            case ('ladder')
-                call solve_ladder(s, o, prob, y, target_norm, sol, error, doubling_rungs(s, o))
-            case default
-                call solve_stage(prob, y, opts, target_norm, sol, error)
-                if (.not. allocated(error) .and. .not. sol%converged .and. opts%start == 'auto' &
-                    .and. opts%harmonics > ladder_first) then
-                    y = 0.0_dp
-                    if (present(r_start)) y = reshape(vzero, [prob%n])
-                    call solve_ladder(s, o, prob, y, target_norm, sol, error, &
-                                      doubling_rungs(s, o))
-                end if
-            end select
+            call solve_primary(s, opts, o, prob, y, vzero, target_norm, sol, error, &
+                               present(r_start))
+            ! start = 'direct' asks for the first attempt alone
+            if (.not. allocated(error) .and. .not. sol%converged .and. target_norm > 0.0_dp &
+                .and. opts%start /= 'direct') &
+                call solve_fallbacks(s, o, prob, y, target_norm, sol, error, rho_used)
             if (allocated(error)) then
                 if (error%stat == stickslip_stat%numerical .and. rho_out_of_band(s, o%rho)) &
                     error%message = error%message//" (rho = "// &
@@ -319,23 +294,37 @@ contains
             end if
         end if
 
+        ! the options of the answer: its weight may be another one ('rho_kept')
+        oe = o
+        oe%rho = rho_used
+        sol%rho = rho_used
         if (.not. sol%converged) then
-            block
-                character(len=400) :: buf
-                write (buf, '(a,es11.3e3,a,es11.3e3,a,i0,a,i0,a,i0,a)') &
-                    "not converged: residual ||F|| = ", sol%fnorm, " > tol * fscale = ", &
-                    target_norm, " (hybrj info ", sol%info, ", ", sol%nfev, &
-                    " evaluations, ", sol%hybrj_calls, " hybrj calls). Try &hbm start = "// &
-                    "'ladder', rho = 0 (automatic) or a smaller rho, more samples, or a "// &
-                    "start from a nearby solution"
-                sol%diagnosis = trim(buf)
-            end block
+            if (rigid_contact_opens(prob, y)) then
+                sol%diagnosis = "not converged: a rigid unilateral contact opens and closes "// &
+                                "(an impact: its normal velocity jumps when it lands, which "// &
+                                "a truncated Fourier series cannot carry). Give the contact "// &
+                                "its measured normal_stiffness in &friction, or use &run "// &
+                                "method = 'euler' or 'reference', which handle impacts"
+            else
+                block
+                    character(len=500) :: buf
+                    write (buf, '(a,es11.3e3,a,es11.3e3,a,i0,a,i0,a,i0,a,i0,a)') &
+                        "not converged: residual ||F|| = ", sol%fnorm, " > tol * fscale = ", &
+                        target_norm, " (hybrj info ", sol%info, ", ", sol%nfev, &
+                        " evaluations, ", sol%hybrj_calls, " hybrj and ", sol%newton_calls, &
+                        " Newton calls; the ladder, Newton, the load homotopy and rho x "// &
+                        "1/16 .. 16 tried). Try other harmonics (harmonics_tol), more samples, "// &
+                        "a start from a nearby solution (a sweep), or check the case against "// &
+                        "&run method = 'euler'"
+                    sol%diagnosis = trim(buf)
+                end block
+            end if
         else
             sol%diagnosis = ""
         end if
 
         call finish_solution(s, opts, prob, y, sol, dense_model)
-        call check_solution(s, o, prob, sol)
+        call check_solution(s, oe, prob, sol)
         if (present(dyn_out)) dyn_out = prob%dyn
         call prob%destroy()
     end subroutine solve_condensed
@@ -363,26 +352,4 @@ contains
         fscale = condensed_convergence_scale(prob, automatic_rho(model))
     end function convergence_scale
 
-    !> convergence_scale with the automatic rho of the structure given (`rho_auto`).
-    !> With contact laws, V0 holds the free kinematic quantities of every channel (the
-    !> slider velocities, omega times the free gaps with the preload) and the force scale is
-    !> the largest of the constant limits mu N, the preloads and mu times the preloads.
-    function condensed_convergence_scale(prob, rho_auto) result(fscale)
-        !> The projected friction equations.
-        type(hb_problem_t), intent(inout) :: prob
-        !> The automatic rho of the structure [m/(N s)].
-        real(dp), intent(in) :: rho_auto
-        real(dp) :: fscale
-        real(dp) :: rzero(prob%basis%nb, prob%nc), vfree(prob%basis%nb, prob%nc)
-        real(dp) :: vnorm, rstop, rs, fmax
-        fscale = 0.0_dp
-        if (prob%nc == 0) return
-        rzero = 0.0_dp
-        call prob%kinematics(rzero, vfree)
-        fmax = prob%contacts%force_scale()
-        vnorm = norm2(vfree)
-        rstop = vnorm*rho_fraction/rho_auto
-        rs = max(min(fmax, rstop), 1.0e-6_dp*rstop)
-        fscale = min(vnorm, prob%rho*rs)
-    end function condensed_convergence_scale
 end module stickslip_hbm

@@ -13,7 +13,8 @@ module stickslip_hbm_finish
     use stickslip_condensed_structure, only: condensed_structure_t, rho_ratio, &
         rho_out_of_band, rho_ratio_min, rho_ratio_max
     use stickslip_contact_set, only: channel_directions
-    use stickslip_contact_element, only: state_stick, state_open, channel_t
+    use stickslip_contact_element, only: state_stick, state_open, channel_t, kinematics_gap
+    use stickslip_lapack, only: dgesv
     use stickslip_contact_measures, only: contact_measures_t, measure_contacts, coulomb_check, &
         energy_balance_error
     implicit none
@@ -81,22 +82,12 @@ contains
 
         ! A contact stuck over the whole period holds any mean force in an admissible set:
         ! its element chooses the admissible value closest to zero (minimum norm), never an
-        ! arbitrary one.
-        if (prob%basis%has_zero) then
-            do j = 1, ncontact
-                c0 = prob%contacts%first(j)
-                m = prob%contacts%width(j)
-                mean = [(y((c0 + k - 2)*nb + i0), k=1, m)]
-                call prob%contacts%elements(j)%e%settle_offset(prob%rho, rs(:, c0:c0 + m - 1), &
-                                                               vs(:, c0:c0 + m - 1), mean, &
-                                                               settled)
-                if (.not. settled) cycle
-                sol%offset_undetermined(j) = .true.
-                do k = 1, m
-                    y((c0 + k - 2)*nb + i0) = mean(k)
-                end do
-            end do
-        end if
+        ! arbitrary one. A new mean friction force moves the static displacement, hence the
+        ! mean gap of the normal channels closed all period (a static coupling, g_static):
+        ! their mean forces are solved again (the mean gap equations, linear in them) and the
+        ! choice repeated against the new limits until both hold (settle_means).
+        if (prob%basis%has_zero .and. nc > 0) call settle_means(prob, y, rs, vs, state, &
+                                                                sol%offset_undetermined)
 
         sol%rcoef = reshape(y, [nb, nc])
         allocate (sol%xcoef(nb, n), sol%vcoef(nb, n))
@@ -295,6 +286,87 @@ contains
             end do
         end associate
     end subroutine normal_samples
+
+    !> The mean forces of the contacts stuck all period (offset_undetermined set for them):
+    !> each element's admissible value closest to zero (settle_offset); then the mean forces
+    !> of the gap channels closed at every sample solved from their mean gap equations
+    !> (u_0 = omega (gap + u_static + g_static R_0 + c R_0) = 0, linear), which the new
+    !> friction means moved; repeated (at most 20 times) until the mean gaps hold to
+    !> roundoff. y, r, u and state are updated.
+    subroutine settle_means(prob, y, r, u, state, undetermined)
+        !> The projected contact equations (has_zero).
+        type(hb_problem_t), intent(inout) :: prob
+        !> Channel force coefficients [N].
+        real(dp), intent(inout) :: y(:)
+        !> Samples of the channel forces and kinematic quantities, nt x channels.
+        real(dp), intent(inout) :: r(:, :), u(:, :)
+        !> Contact states, nt x contacts.
+        integer, intent(inout) :: state(:, :)
+        !> Set for the contacts stuck all period.
+        logical, intent(inout) :: undetermined(:)
+        real(dp), allocatable :: mean(:), uc(:, :), a(:, :), b(:)
+        integer, allocatable :: closed(:), ipiv(:)
+        integer :: nb, i0, j, k, c0, m, it, nclosed, info, p, q
+        real(dp) :: omega, ushift
+        logical :: settled, any_settled
+        type(channel_t) :: ch
+        nb = prob%basis%nb
+        i0 = prob%basis%i0
+        omega = prob%dyn%omega
+        allocate (uc(nb, prob%nc))
+        do it = 1, 20
+            any_settled = .false.
+            do j = 1, prob%contacts%ncontact
+                c0 = prob%contacts%first(j)
+                m = prob%contacts%width(j)
+                mean = [(y((c0 + k - 2)*nb + i0), k=1, m)]
+                call prob%contacts%elements(j)%e%settle_offset(prob%rho, r(:, c0:c0 + m - 1), &
+                                                               u(:, c0:c0 + m - 1), mean, &
+                                                               settled)
+                if (.not. settled) cycle
+                any_settled = .true.
+                undetermined(j) = .true.
+                do k = 1, m
+                    y((c0 + k - 2)*nb + i0) = mean(k)
+                end do
+            end do
+            if (.not. any_settled) return
+            ! the gap channels of the settled contacts closed at every sample
+            allocate (closed(0))
+            do j = 1, prob%contacts%ncontact
+                if (.not. undetermined(j)) cycle
+                c0 = prob%contacts%first(j)
+                do k = c0, c0 + prob%contacts%width(j) - 1
+                    ch = prob%contacts%channel(k)
+                    if (ch%kinematics == kinematics_gap) closed = [closed, k]
+                end do
+            end do
+            nclosed = size(closed)
+            if (nclosed == 0) return
+            call prob%kinematics(reshape(y, [nb, prob%nc]), uc)
+            b = -uc(i0, closed)
+            ushift = maxval(abs(b))
+            if (.not. (ushift > 1.0e-13_dp*max(maxval(abs(u)), tiny(1.0_dp)))) then
+                deallocate (closed)
+                return
+            end if
+            allocate (a(nclosed, nclosed), ipiv(nclosed))
+            do q = 1, nclosed
+                do p = 1, nclosed
+                    a(p, q) = omega*prob%dyn%g_static(closed(p), closed(q))
+                end do
+                ch = prob%contacts%channel(closed(q))
+                a(q, q) = a(q, q) + omega*ch%compliance
+            end do
+            call dgesv(nclosed, 1, a, nclosed, ipiv, b, nclosed, info)
+            if (info /= 0) return
+            do p = 1, nclosed
+                y((closed(p) - 1)*nb + i0) = y((closed(p) - 1)*nb + i0) + b(p)
+            end do
+            deallocate (closed, a, ipiv)
+            call prob%law_samples(y, r, u, state)
+        end do
+    end subroutine settle_means
 
     !> The checks of a solution as diagnostics items (doc/where-methods-fail.md):
     !> not_converged; rho_out_of_range (rho / contact mobility outside [rho_ratio_min,

@@ -9,6 +9,7 @@
 module stickslip_hbm_strategy
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
+    use stickslip_rho, only: rho_fraction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
     use stickslip_condensed_structure, only: condensed_structure_t
@@ -20,6 +21,7 @@ module stickslip_hbm_strategy
     private
     public :: newton_min_unknowns, ladder_first
     public :: use_newton, solve_stage, solve_ladder, doubling_rungs, halving_rungs
+    public :: solve_primary, condensed_convergence_scale
 
     !> Number of unknowns (basis size x contacts) from which &hbm solver = 'auto' takes the
     !> semismooth Newton path (warm starts, LU) instead of hybrj: where it starts to win
@@ -146,6 +148,72 @@ contains
         end do
     end subroutine solve_stage
 
+    !> The first attempt of a solve (before any fallback, stickslip_hbm_fallback), by
+    !> opts%start and the path (use_newton). Newton path: 'ladder' the halving ladder,
+    !> 'direct' one stage (warm with a start), 'auto' one warm stage then the halving ladder
+    !> from the start with a start, the halving ladder without. hybrj path: 'ladder' the
+    !> doubling ladder; otherwise one cold stage, then with 'auto' the doubling ladder. y:
+    !> the start (0 or `ystart`), then the answer or the last iterate. Errors: as
+    !> solve_stage.
+    subroutine solve_primary(s, opts, o, prob, y, ystart, target_norm, sol, error, have_start)
+        !> The structure (its forcing harmonics).
+        type(condensed_structure_t), intent(in) :: s
+        !> Solver options as given.
+        type(hbm_options_t), intent(in) :: opts
+        !> Solver options in effect (rho > 0).
+        type(hbm_options_t), intent(in) :: o
+        !> The projected contact equations.
+        type(hb_problem_t), intent(inout) :: prob
+        !> Channel force coefficients [N]: the start on entry, the answer or the last iterate.
+        real(dp), intent(inout) :: y(:)
+        !> The start given (nb x channels, zeros without one) [N].
+        real(dp), intent(in) :: ystart(:, :)
+        !> The residual to reach [m/s].
+        real(dp), intent(in) :: target_norm
+        !> Convergence report (sol%fscale set).
+        type(hbm_solution_t), intent(inout) :: sol
+        !> Set on a NaN or misuse.
+        type(error_type), allocatable, intent(out) :: error
+        !> A start was given (ystart).
+        logical, intent(in) :: have_start
+        if (use_newton(opts, prob%n) .and. target_norm > 0.0_dp) then
+            ! Newton only from warm starts: the start, or the halving ladder H/2^k
+            select case (opts%start)
+            case ('ladder')
+                call solve_ladder(s, o, prob, y, target_norm, sol, error, halving_rungs(s, o), &
+                                  have_start)
+            case ('direct')
+                call solve_stage(prob, y, opts, target_norm, sol, error, have_start)
+            case default
+                if (have_start) then
+                    call solve_stage(prob, y, opts, target_norm, sol, error, .true.)
+                    if (.not. allocated(error) .and. .not. sol%converged .and. &
+                        opts%harmonics > ladder_first) then
+                        y = reshape(ystart, [prob%n])
+                        call solve_ladder(s, o, prob, y, target_norm, sol, error, &
+                                          halving_rungs(s, o), .true.)
+                    end if
+                else
+                    call solve_ladder(s, o, prob, y, target_norm, sol, error, &
+                                      halving_rungs(s, o), .false.)
+                end if
+            end select
+        else
+            select case (opts%start)
+            case ('ladder')
+                call solve_ladder(s, o, prob, y, target_norm, sol, error, doubling_rungs(s, o))
+            case default
+                call solve_stage(prob, y, opts, target_norm, sol, error)
+                if (.not. allocated(error) .and. .not. sol%converged .and. opts%start == 'auto' &
+                    .and. opts%harmonics > ladder_first) then
+                    y = reshape(ystart, [prob%n])
+                    call solve_ladder(s, o, prob, y, target_norm, sol, error, &
+                                      doubling_rungs(s, o))
+                end if
+            end select
+        end if
+    end subroutine solve_primary
+
     !> The rungs of hybrj's ladder: from `ladder_first` harmonics (or the highest forcing
     !> harmonic when larger), doubling, below the requested count (3, 6, 12 for H = 15).
     pure function doubling_rungs(s, opts) result(rungs)
@@ -256,4 +324,26 @@ contains
         end do
         nt = max(min(nt, samples), 2*h + 1)
     end function level_samples
+    !> convergence_scale with the automatic rho of the structure given (`rho_auto`).
+    !> With contact laws, V0 holds the free kinematic quantities of every channel (the
+    !> slider velocities, omega times the free gaps with the preload) and the force scale is
+    !> the largest of the constant limits mu N, the preloads and mu times the preloads.
+    function condensed_convergence_scale(prob, rho_auto) result(fscale)
+        !> The projected friction equations.
+        type(hb_problem_t), intent(inout) :: prob
+        !> The automatic rho of the structure [m/(N s)].
+        real(dp), intent(in) :: rho_auto
+        real(dp) :: fscale
+        real(dp) :: rzero(prob%basis%nb, prob%nc), vfree(prob%basis%nb, prob%nc)
+        real(dp) :: vnorm, rstop, rs, fmax
+        fscale = 0.0_dp
+        if (prob%nc == 0) return
+        rzero = 0.0_dp
+        call prob%kinematics(rzero, vfree)
+        fmax = prob%contacts%force_scale()
+        vnorm = norm2(vfree)
+        rstop = vnorm*rho_fraction/rho_auto
+        rs = max(min(fmax, rstop), 1.0e-6_dp*rstop)
+        fscale = min(vnorm, prob%rho*rs)
+    end function condensed_convergence_scale
 end module stickslip_hbm_strategy

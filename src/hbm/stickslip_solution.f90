@@ -64,6 +64,11 @@ module stickslip_solution
         !> Newton calls that ended without meeting the target (singular Jacobian, stall)
         !> and were continued by hybrj.
         integer :: newton_fallbacks = 0
+        !> The fallback that found the answer when the start and ladder did not
+        !> (stickslip_hbm_fallback): 'newton', 'load' (the homotopy in the load), 'rho'
+        !> (another weight, then continued to rho) or 'rho_kept' (the root at another
+        !> weight, kept: sol%rho is that weight); 'none' when none was needed.
+        character(len=8) :: rescue = 'none'
         !> Final residual norm ||F||_2 of the projected friction equations [m/s].
         real(dp) :: fnorm = huge(1.0_dp)
         !> Residual scale: min(||V0||_2, rho Rs), V0 the contact velocities of the structure

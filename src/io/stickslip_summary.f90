@@ -176,6 +176,7 @@ contains
         call put(u, "  nfev = "//itoa(sol%nfev), stat, msg)
         call put(u, "  njev = "//itoa(sol%njev), stat, msg)
         call put(u, "  hybrj_calls = "//itoa(sol%hybrj_calls), stat, msg)
+        call put(u, "  rescue = '"//trim(sol%rescue)//"'", stat, msg)
         call put(u, "  fnorm = "//rtoa(sol%fnorm), stat, msg)
         call put(u, "  fscale = "//rtoa(sol%fscale), stat, msg)
         call put(u, "  solve_seconds = "//rtoa(sol%seconds), stat, msg)

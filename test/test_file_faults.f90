@@ -5,10 +5,16 @@
 !> ignored as the program does): the writer returns an io error naming the file, the
 !> temporary is removed and the old file kept whole.
 module test_file_faults
-    use, intrinsic :: iso_c_binding, only: c_int, c_long, c_funptr, c_intptr_t
+    use, intrinsic :: iso_c_binding, only: c_int, c_long, c_funptr, c_intptr_t, c_char, &
+        c_null_char
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
-    use stickslip_files, only: make_directory
+    use stickslip_files, only: make_directory, directory_lock_t, acquire_lock, release_lock, &
+        lock_name, remove_file
+    use stickslip_matrix_market, only: read_matrix_market
+    use stickslip_sparse, only: sparse_matrix_t
+    use stickslip_case, only: case_t, read_case
+    use stickslip_checkpoint, only: case_fingerprint
     use stickslip_csv, only: write_samples_csv
     use fixtures, only: enter_project_root, scratch, first_line, write_lines, good_system, &
         good_forcing, good_friction, file_text
@@ -41,6 +47,12 @@ module test_file_faults
             type(rlimit_t), intent(in) :: rlim
             integer(c_int) :: stat
         end function c_setrlimit
+        function c_mkfifo(path, mode) bind(c, name='mkfifo') result(stat)
+            import :: c_int, c_char
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int), value :: mode
+            integer(c_int) :: stat
+        end function c_mkfifo
         function c_signal(sig, handler) bind(c, name='signal') result(old)
             import :: c_int, c_funptr
             integer(c_int), value :: sig
@@ -57,7 +69,92 @@ contains
         call test_size_limit(t)
         call test_long_directory(t)
         call test_result_set(t)
+        call test_special_files(t)
     end subroutine run_file_faults_tests
+
+    !> Files that are not what they should be (issue 24): a named pipe as a Matrix Market
+    !> file or as the directory lock would block the open forever (these checks would hang
+    !> without the fix); an empty lock (a full disk) is a damaged one, taken over; a lock
+    !> that cannot be written whole (a file size limit of 0, as a full disk) is an io error
+    !> that leaves no lock; the case's fingerprint under a file size limit is an io error,
+    !> not another fingerprint (a checkpoint refused as "another case").
+    subroutine test_special_files(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/file_faults_special"
+        type(sparse_matrix_t) :: a
+        type(directory_lock_t) :: lock
+        type(case_t) :: c
+        type(rlimit_t) :: saved, small
+        type(c_funptr) :: old_handler, ignore
+        type(error_type), allocatable :: error
+        character(len=16) :: fp
+        integer :: stat
+        logical :: exists
+        call make_directory(dir, error)
+        if (allocated(error)) return
+        ! a pipe as a Matrix Market file
+        call remove_file(dir//"/k.mtx")
+        stat = c_mkfifo(dir//"/k.mtx"//c_null_char, int(o'600', c_int))
+        call check(t, stat == 0, "file_faults: a pipe made")
+        call read_matrix_market(dir//"/k.mtx", a, error)
+        call check(t, allocated(error), "file_faults: a pipe as a Matrix Market file refused")
+        if (allocated(error)) call check(t, index(error%message, dir//"/k.mtx") > 0 .and. &
+                                         index(error%message, "not a regular file") > 0, &
+                                         "file_faults: the pipe named", error%message)
+        ! a pipe as the lock: taken over as damaged
+        call remove_file(dir//"/"//lock_name)
+        stat = c_mkfifo(dir//"/"//lock_name//c_null_char, int(o'600', c_int))
+        call acquire_lock(lock, dir, error)
+        call check(t, .not. allocated(error) .and. lock%held, &
+                   "file_faults: a pipe as the lock taken over")
+        call release_lock(lock)
+        ! an empty lock (left by a full disk): taken over
+        call write_lines(dir//"/"//lock_name, [character(len=1) ::])
+        call acquire_lock(lock, dir, error)
+        call check(t, .not. allocated(error) .and. lock%held, &
+                   "file_faults: an empty lock taken over")
+        if (lock%held) call check(t, first_line(dir//"/"//lock_name) /= "", &
+                                  "file_faults: the lock holds a pid")
+        call release_lock(lock)
+        if (c_getrlimit(rlimit_fsize, saved) /= 0) then
+            call check(t, .false., "file_faults: getrlimit")
+            return
+        end if
+        ! a lock that cannot be written: an io error, no lock and no temporary left
+        small = saved
+        small%cur = 0
+        ignore = transfer(1_c_intptr_t, ignore)
+        old_handler = c_signal(sigxfsz, ignore)
+        stat = c_setrlimit(rlimit_fsize, small)
+        call acquire_lock(lock, dir, error)
+        stat = c_setrlimit(rlimit_fsize, saved)
+        old_handler = c_signal(sigxfsz, old_handler)
+        call check(t, allocated(error) .and. .not. lock%held, &
+                   "file_faults: a lock that cannot be written is an error")
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%io .and. &
+                                         index(error%message, "cannot write the directory "// &
+                                               "lock") > 0, "file_faults: the lock's message", &
+                                         error%message)
+        inquire (file=dir//"/"//lock_name, exist=exists)
+        call check(t, .not. exists, "file_faults: no empty lock left")
+        ! the fingerprint under a file size limit below the case's echo
+        call read_case("examples/seed.nml", c, error)
+        if (allocated(error)) return
+        fp = case_fingerprint(c, error)
+        call check(t, .not. allocated(error) .and. len_trim(fp) == 16, &
+                   "file_faults: a fingerprint")
+        small%cur = 512
+        old_handler = c_signal(sigxfsz, ignore)
+        stat = c_setrlimit(rlimit_fsize, small)
+        fp = case_fingerprint(c, error)
+        stat = c_setrlimit(rlimit_fsize, saved)
+        old_handler = c_signal(sigxfsz, old_handler)
+        call check(t, allocated(error) .and. len_trim(fp) == 0, &
+                   "file_faults: the fingerprint under a size limit is an error")
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%io .and. &
+                                         index(error%message, "size limit") > 0, &
+                                         "file_faults: the fingerprint's message", error%message)
+    end subroutine test_special_files
 
     !> The result files are replaced as a set: a run that cannot write its files (a file
     !> size limit, as a full disk) leaves the old set whole, summary included, and exits 3;
@@ -177,7 +274,7 @@ contains
         if (.not. allocated(error)) return
         call check(t, error%stat == stickslip_stat%io .and. &
                    index(error%message, "samples.csv: write failed") > 0 .and. &
-                   index(error%message, "bytes reached the disk") > 0, &
+                   index(error%message, "the file on disk holds") > 0, &
                    "file_faults: one io error naming the file", error%message)
         ! the old file is kept whole, no temporary is left
         head = first_line(dir//"/samples.csv")

@@ -167,7 +167,11 @@ contains
         type(test_counter_t), intent(inout) :: t
         type(sparse_matrix_t) :: a
         type(error_type), allocatable :: error
-        call bad(t, "empty", [character(len=1) :: ], 1, [character(len=30) :: "empty file"])
+        ! an empty file (as a pipe or a device: size 0) is refused before it is opened
+        call write_lines(dir//"/bad_empty.mtx", [character(len=1) ::])
+        call read_matrix_market(dir//"/bad_empty.mtx", a, error)
+        call check_error(t, error, "mm bad empty", .true., [character(len=60) :: &
+                         dir//"/bad_empty.mtx: empty, or not a regular file"])
         call bad(t, "no_header", [character(len=60) :: "2 2 1", "1 1 1"], 1, &
                  [character(len=30) :: "missing header"])
         call bad(t, "short_header", [character(len=60) :: "%%MatrixMarket matrix coordinate", &

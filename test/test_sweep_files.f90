@@ -281,7 +281,7 @@ contains
         call check_error(t, error, "resume: uninterrupted run", .false.)
         if (allocated(error)) return
         killer%directory = dir
-        killer%fingerprint = case_fingerprint(c)
+        killer%fingerprint = case_fingerprint(c, error)
         killer%stop_after = 4
         ! a checkpoint after every point, so that the kill after point 4 finds 4 saved
         killer%interval = 0.0_dp
@@ -351,16 +351,18 @@ contains
         character(len=4000) :: line
         character(len=24) :: fields(9)
         integer :: u, stat, n, k
-        character(len=*), parameter :: names(13) = [character(len=24) :: "huge unknowns", &
+        character(len=*), parameter :: names(16) = [character(len=24) :: "huge unknowns", &
             "huge points", "negative points", "other ndof", "negative count", "truncated", &
             "garbage counts", "fewer points", "a NaN value", "a link to /dev/zero", &
-            "an empty file", "huge coefficient count", "a NaN coefficient"]
+            "an empty file", "huge coefficient count", "a NaN coefficient", "a bad status", &
+            "huge harmonics", "a bad stability flag"]
+        character(len=24) :: pfields(4)
         call write_lines(dir//".nml", [sweep_case, "&output directory = '"//dir//"' /"])
         call read_case(dir//".nml", c, error)
         if (allocated(error)) return
         call make_directory(dir, error)
         killer%directory = dir
-        killer%fingerprint = case_fingerprint(c)
+        killer%fingerprint = case_fingerprint(c, error)
         killer%stop_after = 3
         killer%interval = 0.0_dp
         call run_sweep(c%model, c%hbm, c%reference%reference_options_t, c%sweep%sweep_options_t, &
@@ -424,6 +426,19 @@ contains
                 line = "NaN "//line(index(adjustl(line), " ") + 1:)
                 call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:10), &
                                  line, saved(12:n)])
+            else if (k >= 14) then
+                ! point 1's status line (line 7: 'status' harmonics nfev stable)
+                read (saved(7), *) pfields
+                select case (k)
+                case (14)
+                    line = "'bogus' "//join(pfields(2:4))
+                case (15)
+                    line = "'"//trim(pfields(1))//"' 99999999 "//join(pfields(3:4))
+                case default
+                    line = "'"//trim(pfields(1))//"' "//join(pfields(2:3))//" 7"
+                end select
+                call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:6), &
+                                 line, saved(8:n)])
             else
                 call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:2), line, saved(4:n)])
             end if

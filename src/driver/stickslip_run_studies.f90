@@ -160,7 +160,8 @@ contains
         end if
         summary_written = .false.
         writer%directory = case%directory
-        writer%fingerprint = case_fingerprint(case)
+        writer%fingerprint = case_fingerprint(case, error)
+        if (allocated(error)) return
         found = .false.
         ! the points hold an amplitude per DOF of the model, or per kept DOF of the exact
         ! sparse condensation (the selection, then the contact and forced DOFs)

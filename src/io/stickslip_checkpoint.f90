@@ -14,6 +14,7 @@ module stickslip_checkpoint
     use stickslip_continuation, only: continuation_state_t
     use stickslip_sweep, only: sweep_result_t, sweep_observer_t, frc_point_t
     use stickslip_files, only: open_temporary, close_and_rename, remove_file
+    use stickslip_hbm, only: hbm_max_harmonics
     use stickslip_csv, only: real_fmt
     implicit none
     private
@@ -53,26 +54,50 @@ contains
     !> hold the amplitudes of the selected DOFs only). A model read from Matrix Market files is
     !> echoed by its file names only, so its M, K and C values are hashed too (a file changed
     !> between a run and its resumption gives another fingerprint).
-    function case_fingerprint(case) result(fp)
+    !> The echo goes through a scratch file, read back and checked byte for byte against
+    !> what was written: a scratch file cut short (a full file system, a file size limit)
+    !> would give another fingerprint, so it is an error (stat io) and fp is blank.
+    function case_fingerprint(case, error) result(fp)
         !> The case.
         type(case_t), intent(in) :: case
+        !> Set when the scratch file cannot be written or read back whole.
+        type(error_type), allocatable, intent(out) :: error
         character(len=16) :: fp
         integer(int64), parameter :: prime = 16777619_int64, modulus = 4294967296_int64
-        integer(int64) :: h(2)
-        integer :: u, stat, i
-        character(len=4096) :: line
+        integer(int64) :: h(2), written, got
+        integer :: u, stat, i, n
+        character(len=4096) :: line, rest
         character(len=512) :: msg
         h = [2166136261_int64, 84696351_int64]
-        open (newunit=u, status='scratch', action='readwrite', iostat=stat)
+        fp = ''
+        open (newunit=u, status='scratch', action='readwrite', iostat=stat, iomsg=msg)
         if (stat /= 0) then
-            fp = '0000000000000000'
+            call fatal_error(error, "the case's fingerprint (for the checkpoint): cannot "// &
+                             "open a scratch file: "//trim(msg), stickslip_stat%io)
             return
         end if
         call write_case(u, case, stat, msg)
+        written = -1
+        if (stat == 0) flush (u, iostat=stat)
+        if (stat == 0) inquire (unit=u, size=written, iostat=stat)
+        if (stat /= 0 .or. written < 0) then
+            close (u, iostat=stat)
+            call fatal_error(error, "the case's fingerprint (for the checkpoint): cannot "// &
+                             "write the case to a scratch file: "//trim(msg), stickslip_stat%io)
+            return
+        end if
         rewind (u)
+        got = 0
         do
-            read (u, '(a)', iostat=stat) line
-            if (stat /= 0) exit
+            ! a record's first 4096 characters are hashed; every byte is counted
+            read (u, '(a)', advance='no', size=n, iostat=stat) line
+            got = got + n
+            do while (stat == 0)
+                read (u, '(a)', advance='no', size=n, iostat=stat) rest
+                got = got + n
+            end do
+            if (.not. is_iostat_eor(stat)) exit
+            got = got + 1
             line = adjustl(line)
             if (index(line, 'directory') == 1 .or. index(line, 'max_points') == 1 .or. &
                 index(line, 'max_failures') == 1 .or. index(line, 'resume') == 1 .or. &
@@ -85,6 +110,13 @@ contains
             end do
         end do
         close (u)
+        if (got /= written) then
+            call fatal_error(error, "the case's fingerprint (for the checkpoint): the "// &
+                             "scratch file holds "//itoa(got)//" bytes of the "// &
+                             itoa(written)//" written (the file system is full, or a file "// &
+                             "size limit was reached)", stickslip_stat%io)
+            return
+        end if
         if (allocated(case%sparse_model)) then
             ! the exact sparse condensation: the sparse values
             call mix(reshape(case%sparse_model%mass%val, [case%sparse_model%mass%nnz(), 1]))
@@ -299,6 +331,22 @@ contains
             if (stat == 0 .and. with_laws) then
                 if (.not. allocated(p%open)) allocate (p%open(nc), p%normal_max(nc))
                 read (u, *, iostat=stat, iomsg=msg) p%open, p%normal_max
+            end if
+            if (stat == 0) then
+                if (all(status /= [character(len=12) :: 'start', 'ok', 'halved', 'recovered', &
+                                   'end'])) then
+                    problem = "point "//itoa(k)//" has the status '"//trim(status)// &
+                              "' (not start, ok, halved, recovered or end)"
+                else if (p%harmonics < 0 .or. p%harmonics > hbm_max_harmonics) then
+                    problem = "point "//itoa(k)//" has "//itoa(p%harmonics)//" harmonics "// &
+                              "(not in 0 .. "//itoa(hbm_max_harmonics)//")"
+                else if (p%stable < -1 .or. p%stable > 1) then
+                    problem = "point "//itoa(k)//" has the stability flag "//itoa(p%stable)// &
+                              " (not -1, 0 or 1)"
+                else if (p%nfev < 0) then
+                    problem = "point "//itoa(k)//" has a negative evaluation count"
+                end if
+                if (len(problem) > 0) exit
             end if
             if (stat == 0) call read_coefficients(p)
             if (len(problem) > 0) exit

@@ -254,10 +254,11 @@ contains
         inquire (file=trim(temporary), size=disk_size, iostat=stat)
         if (logical_size < 0 .or. disk_size /= logical_size) then
             stat = c_unlink(trim(temporary)//c_null_char)
-            call fatal_error(error, dir//'/'//name//": write failed: "//itoa(disk_size)// &
-                             " of "//itoa(logical_size)//" bytes reached the disk (the "// &
-                             "file system is full, or a file size limit was reached); the "// &
-                             "old file, if any, is kept", stickslip_stat%io)
+            call fatal_error(error, dir//'/'//name//": write failed: "// &
+                             itoa(logical_size)//" bytes were written and the file on disk "// &
+                             "holds "//itoa(disk_size)//" (the file system is full, or a file "// &
+                             "size limit was reached); the old file, if any, is kept", &
+                             stickslip_stat%io)
             return
         end if
         if (c_rename(trim(temporary)//c_null_char, dir//'/'//name//c_null_char) /= 0) then
@@ -412,8 +413,8 @@ contains
         character(len=*), intent(in) :: dir
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer :: u, stat, attempt, owner
-        integer(int64) :: started
+        integer :: u, stat, attempt, owner, close_stat
+        integer(int64) :: started, written, on_disk
         character(len=512) :: msg
         character(len=4096) :: temporary
         lock%path = dir//'/'//lock_name
@@ -425,7 +426,23 @@ contains
         write (u, '(i0,1x,i0)', iostat=stat, iomsg=msg) process_id(), &
             process_start_time(process_id())
         inquire (unit=u, name=temporary)
-        close (u, iostat=stat)
+        ! written whole or not taken: an empty lock (a full disk) would hold nobody's pid
+        if (stat == 0) then
+            flush (u, iostat=stat, iomsg=msg)
+            written = -1
+            if (stat == 0) inquire (unit=u, size=written, iostat=stat)
+        end if
+        close (u, iostat=close_stat)
+        on_disk = -2
+        if (stat == 0 .and. close_stat == 0) inquire (file=trim(temporary), size=on_disk, &
+                                                      iostat=stat)
+        if (stat /= 0 .or. close_stat /= 0 .or. written <= 0 .or. on_disk /= written) then
+            stat = c_unlink(trim(temporary)//c_null_char)
+            call fatal_error(error, lock%path//": cannot write the directory lock (the "// &
+                             "file system is full, or a file size limit was reached)", &
+                             stickslip_stat%io)
+            return
+        end if
         do attempt = 1, 3
             if (c_link(trim(temporary)//c_null_char, lock%path//c_null_char) == 0) then
                 lock%held = .true.
@@ -480,7 +497,7 @@ contains
         character(len=*), intent(in) :: path
         integer(int64), intent(out), optional :: started
         integer :: u, stat
-        integer(int64) :: t0
+        integer(int64) :: t0, bytes
         logical :: exists
         character(len=64) :: line
         pid = -2
@@ -488,6 +505,10 @@ contains
         inquire (file=path, exist=exists)
         if (.not. exists) return
         pid = -1
+        ! an empty file or one that is not a regular file (a pipe would block the open, a
+        ! device be read forever; both report size 0) is a damaged lock: never opened
+        inquire (file=path, size=bytes, iostat=stat)
+        if (stat /= 0 .or. bytes <= 0) return
         open (newunit=u, file=path, status='old', action='read', iostat=stat)
         if (stat /= 0) return
         read (u, '(a)', iostat=stat) line

@@ -87,7 +87,7 @@ contains
         integer(int64), intent(out), optional :: entries_out
         integer, intent(out), optional :: size_line_out
         integer :: u, stat, line_no, size_line, k, m, n, i, j, tri_line, tri, nvals, ntok
-        integer(int64) :: announced
+        integer(int64) :: announced, bytes
         character(len=:), allocatable :: line, tok(:)
         character(len=512) :: msg
         character(len=16) :: format, field, symmetry
@@ -101,6 +101,14 @@ contains
         if (is_open) then
             call fatal_error(error, path//": a directory, not a Matrix Market file", &
                              stickslip_stat%input)
+            return
+        end if
+        ! a pipe would block the open, a device be read forever: both report size 0, as
+        ! an empty file does, and none is a Matrix Market file
+        inquire (file=path, exist=is_open, size=bytes)
+        if (is_open .and. bytes <= 0) then
+            call fatal_error(error, path//": empty, or not a regular file (a pipe or a "// &
+                             "device): expected a Matrix Market file", stickslip_stat%input)
             return
         end if
         open (newunit=u, file=path, status='old', action='read', form='formatted', &

@@ -539,7 +539,7 @@ contains
         if (allocated(error)) return
         call check(t, first_line(frc_dir//"/frc.csv") == "parameter,amp_4,amp_2,dissipation,"// &
                    "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
-                   "arclength,diss_friction,diss_damping,nfev", "frc unit: header", &
+                   "arclength,diss_friction,diss_damping,nfev,trusted,check", "frc unit: header", &
                    first_line(frc_dir//"/frc.csv"))
         v = read_numbers(frc_dir//"/frc.csv", 0, 3)
         call check(t, size(v, 1) == 2, "frc unit: two rows")
@@ -578,7 +578,7 @@ contains
         call check(t, code == 0, "seed sweep dofs = 2: exit 0", err)
         call check(t, first_line(sweep_dir//"/frc.csv") == "parameter,amp_2,dissipation,"// &
                    "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
-                   "arclength,diss_friction,diss_damping,nfev", "seed sweep dofs = 2: frc.csv "// &
+                   "arclength,diss_friction,diss_damping,nfev,trusted,check", "seed sweep dofs = 2: frc.csv "// &
                    "header", first_line(sweep_dir//"/frc.csv"))
         script = slurp_file(sweep_dir//"/frc.gp")
         call check(t, index(script, "title 'DOF 2'") > 0 .and. index(script, "DOF 1") == 0, &

@@ -3,8 +3,11 @@
 !> robustness study through the CLI (&robustness, robustness.csv, the maps' script).
 module test_sweep_files
     use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_diagnostics, only: diagnostics_t, level_untrusted
+    use stickslip_sweep_point, only: point_tally_t
     use stickslip_case, only: case_t, read_case
     use stickslip_sweep, only: sweep_result_t, run_sweep
     use stickslip_driver, only: run_sweep_case
@@ -45,7 +48,63 @@ contains
         call test_damaged_checkpoint(t)
         call test_bad_sweep_input(t)
         call test_cli_robustness(t)
+        call test_point_trust(t)
     end subroutine run_sweep_file_tests
+
+    !> Trust point by point (issue 24): the tally gives each point its worst level and check
+    !> and makes the curve untrusted as soon as one point is (before: only when all were);
+    !> a sweep at H = 2 (truncation estimates 0.2 .. 0.3 at every point: warnings) writes
+    !> trusted = 1 and the check 'truncation' in every row, warns and exits 0.
+    subroutine test_point_trust(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/sweep_trust"
+        type(point_tally_t) :: tally
+        type(diagnostics_t) :: bad, curve
+        character(len=:), allocatable :: out, err, header, summary
+        character(len=2000) :: line
+        character(len=32) :: key
+        integer :: level, code, u, stat, untrusted_rows, rows, c
+        real(dp) :: nan
+        nan = ieee_value(1.0_dp, ieee_quiet_nan)
+        call bad%add(level_untrusted, "energy_balance", "x")
+        call tally%add_point(diagnostics_t(), 0.01_dp, 1.0_dp, level, key)
+        call check(t, level == 0 .and. key == "", "point trust: a good point")
+        call tally%add_point(bad, 0.2_dp, 2.0_dp, level, key)
+        call check(t, level == level_untrusted .and. key == "energy_balance", &
+                   "point trust: the worst check named", key)
+        call tally%add_point(diagnostics_t(), nan, 3.0_dp, level, key)
+        call tally%report("omega", curve)
+        call check(t, curve%worst() == level_untrusted .and. curve%has("points_energy_balance") &
+                   .and. curve%has("points_truncation"), &
+                   "point trust: one untrusted point of three makes the curve untrusted")
+        call write_lines(dir//".nml", [sweep_case(1:3), &
+            "&hbm harmonics = 2, rho = 0.2, samples = 64 /", sweep_case(5:6), &
+            "&output directory = '"//dir//"' /" // repeat(' ', 0)])
+        call cli([character(len=200) :: dir//".nml"], code, out, err)
+        open (newunit=u, file=dir//"/frc.csv", status='old', action='read', iostat=stat)
+        call check(t, stat == 0, "point trust: frc.csv written")
+        if (stat /= 0) return
+        read (u, '(a)') line
+        header = trim(line)
+        rows = 0
+        untrusted_rows = 0
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            rows = rows + 1
+            ! the last two fields: trusted, check (every point warns: truncation 0.2 .. 0.3)
+            c = index(line, ",", back=.true.)
+            if (line(c - 1:c - 1) == "0") untrusted_rows = untrusted_rows + 1
+            call check(t, line(c - 2:) == ",1,truncation", "point trust: a row's verdict", &
+                       trim(line))
+        end do
+        close (u)
+        call check(t, rows >= 11 .and. untrusted_rows == 0, "point trust: rows, none untrusted")
+        summary = file_text(dir//"/summary.nml")
+        call check(t, code == 0 .and. index(summary, "warning_points_truncation") > 0 .and. &
+                   index(err, "stickslip: warning:") > 0, &
+                   "point trust: warned points, a trusted curve, exit 0", err)
+    end subroutine test_point_trust
 
     !> method = 'robustness' on a tiny grid: exit 0, robustness.csv with one row per run,
     !> robustness.gp, the summary's counts; a bad &robustness entry names the variable.
@@ -127,7 +186,7 @@ contains
         close (u)
         call check(t, header == "parameter,amp_1,amp_2,dissipation,rmax_1,stick_1,harmonics,"// &
                    "residual,status,floquet_max,stable,truncation,arclength,diss_friction,"// &
-                   "diss_damping,nfev", "sweep cli: frc.csv header", header)
+                   "diss_damping,nfev,trusted,check", "sweep cli: frc.csv header", header)
         call check(t, rows >= 11, "sweep cli: rows")
         inquire (file=dir//"/"//checkpoint_name, exist=exists)
         call check(t, .not. exists, "sweep cli: checkpoint removed when done")
@@ -356,7 +415,7 @@ contains
             "garbage counts", "fewer points", "a NaN value", "a link to /dev/zero", &
             "an empty file", "huge coefficient count", "a NaN coefficient", "a bad status", &
             "huge harmonics", "a bad stability flag"]
-        character(len=24) :: pfields(4)
+        character(len=24) :: pfields(6)
         call write_lines(dir//".nml", [sweep_case, "&output directory = '"//dir//"' /"])
         call read_case(dir//".nml", c, error)
         if (allocated(error)) return
@@ -427,15 +486,17 @@ contains
                 call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:10), &
                                  line, saved(12:n)])
             else if (k >= 14) then
-                ! point 1's status line (line 7: 'status' harmonics nfev stable)
+                ! point 1's status line (line 7: 'status' harmonics nfev stable level 'check')
                 read (saved(7), *) pfields
                 select case (k)
                 case (14)
-                    line = "'bogus' "//join(pfields(2:4))
+                    line = "'bogus' "//join(pfields(2:5))//" '"//trim(pfields(6))//"'"
                 case (15)
-                    line = "'"//trim(pfields(1))//"' 99999999 "//join(pfields(3:4))
+                    line = "'"//trim(pfields(1))//"' 99999999 "//join(pfields(3:5))//" '"// &
+                           trim(pfields(6))//"'"
                 case default
-                    line = "'"//trim(pfields(1))//"' "//join(pfields(2:3))//" 7"
+                    line = "'"//trim(pfields(1))//"' "//join(pfields(2:3))//" 7 "// &
+                           trim(pfields(5))//" '"//trim(pfields(6))//"'"
                 end select
                 call write_lines(dir//"/"//checkpoint_name, [character(len=4000) :: saved(1:6), &
                                  line, saved(8:n)])

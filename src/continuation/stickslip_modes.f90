@@ -402,7 +402,7 @@ contains
             call diag%add(merge(level_untrusted, level_warning, ps%max_force_ratio - 1.0_dp > &
                                 force_excess_untrusted), "coulomb_law", trim(buf))
         end if
-        call tally%add_point(diag, 0.0_dp, mp%p%parameter)
+        call tally%add_point(diag, 0.0_dp, mp%p%parameter, mp%p%check_level, mp%p%check)
     end subroutine evaluate_mode_point
 
     !> (1/T) integral over a period of v^T A v for the solution's velocity coefficients:

@@ -13,6 +13,7 @@
 !> and the points so far; stickslip_checkpoint saves them, and a sweep given that saved
 !> state resumes where it stopped. No file is touched here.
 module stickslip_sweep
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_diagnostics, only: diagnostics_t
@@ -100,6 +101,7 @@ contains
         type(model_t) :: m0
         real(dp), allocatable :: amplitude0(:)
         type(point_tally_t) :: tally
+        type(diagnostics_t) :: held
         integer :: k
 
         c0 = thread_cpu_seconds()
@@ -200,10 +202,14 @@ contains
                 res%folds = resume%folds
                 res%seconds = resume%seconds
                 res%stability_seconds = resume%stability_seconds
-                ! the checks of resumed points: only their truncation estimate was kept
+                ! the checks of resumed points: their verdict as the checkpoint kept it
                 do k = 1, res%npoints
-                    call tally%add_point(diagnostics_t(), res%points(k)%truncation, &
-                                         res%points(k)%parameter)
+                    associate (q => res%points(k))
+                        held = diagnostics_t()
+                        if (q%check_level > 0) call held%add(q%check_level, trim(q%check), "")
+                        call tally%add_point(held, ieee_value(1.0_dp, ieee_quiet_nan), &
+                                             q%parameter)
+                    end associate
                 end do
             end if
         end if

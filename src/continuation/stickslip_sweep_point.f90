@@ -166,7 +166,8 @@ contains
             if (allocated(error)) return
             if (est%available) pt%truncation = est%estimate
         end if
-        call tally%add_point(ps%diagnostics, pt%truncation, pt%parameter)
+        call tally%add_point(ps%diagnostics, pt%truncation, pt%parameter, pt%check_level, &
+                             pt%check)
         if (opts%stability) then
             s0 = thread_cpu_seconds()
             call periodic_stability(m, ps, ref, fl, error)
@@ -211,7 +212,9 @@ contains
     !> Count the failed checks of one point: its solution's diagnostics (warnings and
     !> distrust) and its truncation estimate (stickslip_checks thresholds; NaN: not
     !> computed).
-    subroutine tally_add_point(self, diag, truncation, parameter)
+    !> The point's own verdict: `level` the worst level of its failed checks (0 when none)
+    !> and `key` the first check failed at that level.
+    subroutine tally_add_point(self, diag, truncation, parameter, level, key)
         !> The tally, one point more.
         class(point_tally_t), intent(inout) :: self
         !> The diagnostics of the point's solution.
@@ -219,7 +222,13 @@ contains
         !> The point's relative truncation error estimate (NaN: not computed), and its
         !> parameter value.
         real(dp), intent(in) :: truncation, parameter
-        integer :: k
+        !> The point's worst level and its check.
+        integer, intent(out), optional :: level
+        character(len=*), intent(out), optional :: key
+        integer :: k, worst
+        character(len=48) :: worst_key
+        worst = 0
+        worst_key = ''
         if (.not. allocated(self%key)) allocate (self%key(0), self%count(0), self%level(0), &
                                                  self%first(0))
         self%points = self%points + 1
@@ -236,6 +245,8 @@ contains
                 call count_key("truncation", level_warning)
             end if
         end if
+        if (present(level)) level = worst
+        if (present(key)) key = worst_key
 
     contains
 
@@ -253,12 +264,16 @@ contains
             end if
             self%count(i) = self%count(i) + 1
             self%level(i) = max(self%level(i), level)
+            if (level > worst) then
+                worst = level
+                worst_key = key
+            end if
         end subroutine count_key
     end subroutine tally_add_point
 
-    !> One diagnostics item per failed check, key 'points_<key>': a warning naming how many
-    !> points failed it and where the first one is (the curve is usable elsewhere); untrusted
-    !> when every point of the curve failed a check at level untrusted.
+    !> One diagnostics item per failed check, key 'points_<key>': naming how many points
+    !> failed it and where the first one is; untrusted (exit 2) when a point failed it at
+    !> level untrusted, a warning otherwise (the points' trusted and check columns say which).
     subroutine tally_report(self, parameter, diag)
         !> The tally of the curve.
         class(point_tally_t), intent(in) :: self
@@ -271,11 +286,11 @@ contains
         if (.not. allocated(self%key)) return
         do i = 1, size(self%key)
             level = level_warning
-            if (self%level(i) == level_untrusted .and. self%count(i) == self%points) &
-                level = level_untrusted
+            if (self%level(i) == level_untrusted) level = level_untrusted
             write (buf, '(i0,a,i0,a,es13.5e3,a)') self%count(i), " of ", self%points, &
                 " points failed the check '"//trim(self%key(i))//"' (the first at "// &
-                trim(parameter)//" = ", self%first(i), "): see the points' columns"
+                trim(parameter)//" = ", self%first(i), "): see the points' trusted and "// &
+                "check columns"
             call diag%add(level, "points_"//trim(self%key(i)), trim(buf))
         end do
     end subroutine tally_report

@@ -37,6 +37,11 @@ module stickslip_sweep_result
         character(len=12) :: status = ''
         !> Corrector evaluations spent on the point.
         integer :: nfev = 0
+        !> The worst level of the point's failed checks (0 none, level_warning or
+        !> level_untrusted of stickslip_diagnostics) and the key of the first check failed at
+        !> that level ('' when none): frc.csv's and modes.csv's trusted and check columns.
+        integer :: check_level = 0
+        character(len=32) :: check = ''
         !> Largest Floquet multiplier modulus (NaN when not computed).
         real(dp) :: floquet_max = 0.0_dp
         !> 1 stable, 0 unstable, -1 unknown or not computed.

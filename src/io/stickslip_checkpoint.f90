@@ -15,6 +15,7 @@ module stickslip_checkpoint
     use stickslip_sweep, only: sweep_result_t, sweep_observer_t, frc_point_t
     use stickslip_files, only: open_temporary, close_and_rename, remove_file
     use stickslip_hbm, only: hbm_max_harmonics
+    use stickslip_diagnostics, only: level_warning, level_untrusted
     use stickslip_csv, only: real_fmt
     implicit none
     private
@@ -23,10 +24,12 @@ module stickslip_checkpoint
 
     !> File name of the checkpoint in the output directory.
     character(len=*), parameter :: checkpoint_name = "frc.checkpoint"
-    character(len=*), parameter :: magic = "stickslip sweep checkpoint 2"
-    !> The first line of a checkpoint of stickslip before the points held their Fourier
-    !> coefficients (refused with its own message).
-    character(len=*), parameter :: magic_1 = "stickslip sweep checkpoint 1"
+    character(len=*), parameter :: magic = "stickslip sweep checkpoint 3"
+    !> The first lines of checkpoints of earlier versions of stickslip: before the points
+    !> held their Fourier coefficients (1), before they held their checks' verdict (2);
+    !> refused with their own message.
+    character(len=*), parameter :: magic_1 = "stickslip sweep checkpoint 1", &
+                                   magic_2 = "stickslip sweep checkpoint 2"
 
     !> Writes the checkpoint after a point of a sweep: after the first, then whenever
     !> `interval` seconds of wall time have passed since the last write. The file holds every
@@ -190,8 +193,9 @@ contains
         do k = 1, res%npoints
             if (stat /= 0) exit
             associate (p => res%points(k))
-                write (u, '(a,1x,i0,1x,i0,1x,i0)', iostat=stat, iomsg=msg) "'"//trim(p%status)//"'", &
-                    p%harmonics, p%nfev, p%stable
+                write (u, '(a,1x,i0,1x,i0,1x,i0,1x,i0,1x,a)', iostat=stat, iomsg=msg) &
+                    "'"//trim(p%status)//"'", p%harmonics, p%nfev, p%stable, p%check_level, &
+                    "'"//trim(p%check)//"'"
                 if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) p%parameter, p%arclength, &
                     p%dissipation, p%diss_friction, p%diss_damping, p%residual, p%floquet_max, &
                     p%truncation, p%amplitude, p%rmax, p%stick
@@ -238,6 +242,7 @@ contains
         logical :: with_laws
         character(len=512) :: msg
         character(len=12) :: status
+        character(len=32) :: check
         integer :: u, stat, n, nd, nc, k, npoints
         integer(int64) :: bytes
         type(frc_point_t) :: p
@@ -260,11 +265,11 @@ contains
             return
         end if
         read (u, '(a)', iostat=stat) line
-        if (stat == 0 .and. line == magic_1) then
+        if (stat == 0 .and. (line == magic_1 .or. line == magic_2)) then
             close (u)
             call fatal_error(error, path//": a checkpoint of an earlier version of stickslip "// &
-                             "(without Fourier coefficients): delete it, or set &sweep "// &
-                             "resume = .false.", stickslip_stat%input)
+                             "(without the points' Fourier coefficients or checks): delete "// &
+                             "it, or set &sweep resume = .false.", stickslip_stat%input)
             return
         end if
         if (stat /= 0 .or. line /= magic) then
@@ -324,7 +329,8 @@ contains
         allocate (p%amplitude(nd), p%rmax(nc), p%stick(nc))
         do k = 1, res%npoints
             if (stat /= 0) exit
-            read (u, *, iostat=stat, iomsg=msg) status, p%harmonics, p%nfev, p%stable
+            read (u, *, iostat=stat, iomsg=msg) status, p%harmonics, p%nfev, p%stable, &
+                p%check_level, check
             if (stat == 0) read (u, *, iostat=stat, iomsg=msg) p%parameter, p%arclength, &
                 p%dissipation, p%diss_friction, p%diss_damping, p%residual, p%floquet_max, &
                 p%truncation, p%amplitude, p%rmax, p%stick
@@ -345,7 +351,15 @@ contains
                               " (not -1, 0 or 1)"
                 else if (p%nfev < 0) then
                     problem = "point "//itoa(k)//" has a negative evaluation count"
+                else if (all(p%check_level /= [0, level_warning, level_untrusted])) then
+                    problem = "point "//itoa(k)//" has the check level "// &
+                              itoa(p%check_level)//" (not 0, "//itoa(level_warning)//" or "// &
+                              itoa(level_untrusted)//")"
+                else if (verify(trim(check), "abcdefghijklmnopqrstuvwxyz0123456789_") /= 0) then
+                    problem = "point "//itoa(k)//" names the check '"//trim(check)// &
+                              "' (not a key)"
                 end if
+                p%check = check
                 if (len(problem) > 0) exit
             end if
             if (stat == 0) call read_coefficients(p)

@@ -10,6 +10,7 @@ module stickslip_csv
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
+    use stickslip_diagnostics, only: level_untrusted
     use stickslip_error, only: error_type, itoa
     use stickslip_solution, only: hbm_solution_t
     use stickslip_reference, only: reference_result_t
@@ -367,6 +368,7 @@ contains
         laws = .false.
         if (res%npoints > 0) laws = allocated(res%points(1)%open)
         if (laws) header = header//law_columns(nc)
+        header = header//",trusted,check"
         write (fmt, '(a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // ',","),i0,",",' // &
             real_fmt // ',",",a,",",' // real_fmt // ',",",i0,",",4(' // real_fmt // &
             ',","),i0)'
@@ -380,18 +382,22 @@ contains
             if (stat /= 0) exit
             associate (p => res%points(k))
                 if (laws) then
-                    write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude(sel), &
+                    write (u, fmt, iostat=stat, iomsg=msg, advance='no') p%parameter, &
+                        p%amplitude(sel), &
                         p%dissipation, p%rmax, p%stick, p%harmonics, p%residual, &
                         trim(p%status), p%floquet_max, p%stable, p%truncation, p%arclength, &
                         p%diss_friction, p%diss_damping, p%nfev, p%open, &
                         1.0_dp - p%open - p%stick, p%normal_max
                 else
-                    write (u, fmt, iostat=stat, iomsg=msg) p%parameter, p%amplitude(sel), &
-                        p%dissipation, &
+                    write (u, fmt, iostat=stat, iomsg=msg, advance='no') p%parameter, &
+                        p%amplitude(sel), p%dissipation, &
                         p%rmax, p%stick, p%harmonics, p%residual, trim(p%status), &
                         p%floquet_max, p%stable, p%truncation, p%arclength, p%diss_friction, &
                         p%diss_damping, p%nfev
                 end if
+                ! the point's own verdict: 1 unless a check distrusts it, and that check
+                if (stat == 0) write (u, '(",",i0,",",a)', iostat=stat, iomsg=msg) &
+                    merge(0, 1, p%check_level >= level_untrusted), trim(p%check)
             end associate
         end do
         call close_and_rename(dir, "frc.csv", u, stat, msg, error)
@@ -549,6 +555,7 @@ contains
                  columns("rmax_", [(i, i=1, nc)])//columns("stick_", [(i, i=1, nc)])// &
                  ",harmonics,residual,status,nfev"
         if (laws) header = header//law_columns(nc)
+        header = header//",trusted,check"
         call open_temporary(dir, "modes.csv", u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
@@ -565,7 +572,8 @@ contains
                 if (stat == 0 .and. laws) write (u, '(*(:,",",' // real_fmt // '))', &
                                                  iostat=stat, iomsg=msg, advance='no') &
                     p%open, 1.0_dp - p%open - p%stick, p%normal_max
-                if (stat == 0) write (u, '(a)', iostat=stat, iomsg=msg) ""
+                if (stat == 0) write (u, '(",",i0,",",a)', iostat=stat, iomsg=msg) &
+                    merge(0, 1, p%check_level >= level_untrusted), trim(p%check)
             end associate
         end do
         call close_and_rename(dir, "modes.csv", u, stat, msg, error)

@@ -79,13 +79,19 @@ contains
         call put(u, "set xlabel '"//parameter_label(parameter)//"'", stat, msg)
         call put(u, "set ylabel 'amplitude max_t |x(t)| [m]'", stat, msg)
         call put(u, "set title 'Forced-response curve (red crosses: unstable points, "// &
-                 "Floquet multipliers)'", stat, msg)
-        call put(u, "# the column 'stable' (1, 0 unstable, -1 unknown)", stat, msg)
+                 "Floquet multipliers; orange circles: untrusted points, frc.csv column check)'", &
+                 stat, msg)
+        call put(u, "# the column 'stable' (1, 0 unstable, -1 unknown), the column 'trusted' "// &
+                 "(0: a check distrusts the point)", stat, msg)
         call put(u, "unstable(k) = (column('stable') == 0 ? column(k) : 1/0)", stat, msg)
+        call put(u, "untrusted(k) = (column('trusted') == 0 ? column(k) : 1/0)", stat, msg)
         do k = 1, nsel
             sep = merge("plot ", "     ", k == 1)
             call put(u, sep//"f using 1:"//itoa(1 + k)//" with lines lw 1.5 "// &
                      "title '"//dof_name//itoa(sel(k))//"', \", stat, msg)
+            call put(u, "     f using 1:(untrusted("//itoa(1 + k)//")) with points "// &
+                     "pt 6 ps 1.0 lc rgb 'orange' "//merge("title 'untrusted'", &
+                     "notitle          ", k == nsel)//", \", stat, msg)
             call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points "// &
                      "pt 2 ps 0.8 lc rgb 'red' "//merge("title 'unstable'", "notitle         ", &
                      k == nsel)//trim(merge("   ", ", \", k == nsel)), stat, msg)

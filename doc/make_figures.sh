@@ -21,5 +21,10 @@ cp out/seed_frc/frc.png doc/frc_seed.png
 run examples/seed_robustness.nml
 cp out/seed_robustness/robustness_cold.png doc/robustness_cold.png
 cp out/seed_robustness/robustness_warm.png doc/robustness_warm.png
+# the convergence table of doc/convergence.md ("When the first attempt fails"): 14 cases and
+# the impact case at H = 10..150 (about 1.5 min on 2 cores; iwan.nml is left out, see there)
+fpm run --example bench_convergence --profile release -- \
+    $(ls bench/convergence/*.nml | grep -v iwan) > doc/convergence_table.txt
 echo "wrote doc/figure3.png doc/work_precision_seed.png doc/work_precision_chain4.png" \
-     "doc/frc_seed.png doc/robustness_cold.png doc/robustness_warm.png"
+     "doc/frc_seed.png doc/robustness_cold.png doc/robustness_warm.png" \
+     "doc/convergence_table.txt"

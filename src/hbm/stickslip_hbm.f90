@@ -243,6 +243,7 @@ contains
         integer :: nb, nc, ncopy
         real(dp) :: target_norm, rho_used
         type(hbm_options_t) :: oe
+        type(error_type), allocatable :: first_error
 
         nb = prob%basis%nb
         nc = prob%nc
@@ -278,10 +279,22 @@ contains
         else
             call solve_primary(s, opts, o, prob, y, vzero, target_norm, sol, error, &
                                present(r_start))
-            ! start = 'direct' asks for the first attempt alone
+            ! start = 'direct' asks for the first attempt alone. A NaN met by the first
+            ! attempt (an iterate far out) is an error only when no fallback finds the answer
+            ! from the start
+            if (allocated(error) .and. opts%start /= 'direct') then
+                if (error%stat == stickslip_stat%numerical) then
+                    call move_alloc(error, first_error)
+                    y = reshape(vzero, [prob%n])
+                    sol%converged = .false.
+                    sol%fnorm = huge(1.0_dp)
+                end if
+            end if
             if (.not. allocated(error) .and. .not. sol%converged .and. target_norm > 0.0_dp &
                 .and. opts%start /= 'direct') &
                 call solve_fallbacks(s, o, prob, y, target_norm, sol, error, rho_used)
+            if (allocated(first_error) .and. .not. allocated(error) .and. &
+                .not. sol%converged) call move_alloc(first_error, error)
             if (allocated(error)) then
                 if (error%stat == stickslip_stat%numerical .and. rho_out_of_band(s, o%rho)) &
                     error%message = error%message//" (rho = "// &

@@ -10,12 +10,15 @@
 !>     the same start, ladder and load homotopy; a root there is a warm start at rho; when
 !>     Newton and Powell cannot continue it to rho, it is kept as the answer (the projected
 !>     equalities hold for any rho > 0 and their roots converge to the same orbit as H
-!>     grows; its own rho is reported in hbm_solution_t%rho).
+!>     grows; its own rho is reported in hbm_solution_t%rho);
+!>  4. the load homotopy at rho again, past the turning points of its path (a fold of the
+!>     response in the load: the natural steps stall there) by pseudo-arclength steps
+!>     (arclength_load), with a budget of its own.
 !> Each returns converged (sol%converged) or leaves y at its best point. The stage that
-!> succeeded is named in hbm_solution_t%rescue.
+!> succeeded is named in hbm_solution_t%rescue. A NaN met in a stage fails that stage only.
 module stickslip_hbm_fallback
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type
+    use stickslip_error, only: error_type, stickslip_stat
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
     use stickslip_condensed_structure, only: condensed_structure_t
@@ -24,6 +27,7 @@ module stickslip_hbm_fallback
     use stickslip_hbm_strategy, only: solve_stage, solve_primary, condensed_convergence_scale
     use stickslip_newton, only: newton_options_t, newton_report_t, solve_newton, &
         newton_converged, newton_singular
+    use stickslip_lapack, only: dgetrf, dgetrs
     implicit none
     private
     public :: solve_fallbacks, rescue_newton, rescue_load, rigid_contact_opens
@@ -38,6 +42,9 @@ module stickslip_hbm_fallback
     !> the first attempt's, independent of the machine).
     integer, parameter :: fallback_budget_min = 200
     integer, parameter :: fallback_budget_factor = 10
+    !> Largest number of arclength steps of the load homotopy past a turning point, and the
+    !> Newton iterations of each corrector.
+    integer, parameter :: max_arc_steps = 120, max_arc_newton = 12
     !> The other weights tried, as factors of rho, in this order.
     real(dp), parameter :: rho_factors(4) = [0.25_dp, 4.0_dp, 0.0625_dp, 16.0_dp]
 
@@ -71,23 +78,24 @@ contains
         type(hbm_options_t) :: oa
         real(dp), allocatable :: ybest(:), ya(:), zero(:, :)
         real(dp) :: best, step_target, fscale_alt, target_alt, fnorm_alt
-        integer :: k, last_njev
+        integer :: k, last_njev, njev0
 
         rho_used = o%rho
         if (rigid_contact_opens(prob, y)) return
-        last_njev = sol%njev + max(fallback_budget_min, fallback_budget_factor*sol%njev)
+        njev0 = sol%njev
+        last_njev = sol%njev + max(fallback_budget_min, fallback_budget_factor*njev0)
         step_target = max(target_norm, 1.0e-6_dp*sol%fscale)
         ybest = y
         best = sol%fnorm
         call rescue_newton(prob, y, target_norm, sol, error)
-        if (allocated(error)) return
+        if (stage_failed()) return
         if (sol%converged) then
             sol%rescue = 'newton'
             return
         end if
         call keep_best()
         call rescue_load(prob, o, y, target_norm, step_target, sol, error, last_njev)
-        if (allocated(error)) return
+        if (stage_failed()) return
         if (sol%converged) then
             sol%rescue = 'load'
             return
@@ -108,7 +116,7 @@ contains
             if (.not. allocated(error) .and. .not. sol%converged) &
                 call rescue_load(alt, oa, ya, target_alt, max(target_alt, 1.0e-6_dp*fscale_alt), &
                                  sol, error, last_njev)
-            if (allocated(error)) then
+            if (stage_failed()) then
                 call alt%destroy()
                 return
             end if
@@ -117,7 +125,7 @@ contains
                 ! the root at the other weight as a start at rho
                 y = ya
                 call rescue_newton(prob, y, target_norm, sol, error)
-                if (allocated(error)) then
+                if (stage_failed()) then
                     call alt%destroy()
                     return
                 end if
@@ -140,10 +148,36 @@ contains
             end if
             call alt%destroy()
         end do
+        ! last: the load homotopy at rho again, past the turning points of its path, with a
+        ! budget of its own as large as the one spent
+        y = ybest
+        last_njev = sol%njev + max(fallback_budget_min, fallback_budget_factor*njev0)
+        call rescue_load(prob, o, y, target_norm, step_target, sol, error, last_njev, &
+                         arclength=.true.)
+        if (stage_failed()) return
+        if (sol%converged) then
+            sol%rescue = 'arclength'
+            return
+        end if
         y = ybest
         sol%fnorm = best
 
     contains
+
+        !> An error other than a NaN ends the fallbacks (stat input, lapack: misuse); a NaN
+        !> met on the way (a step of a homotopy or another weight too far) fails the stage
+        !> only: y back to the best point, the error cleared.
+        logical function stage_failed()
+            stage_failed = .false.
+            if (.not. allocated(error)) return
+            if (error%stat == stickslip_stat%numerical) then
+                deallocate (error)
+                sol%converged = .false.
+                y = ybest
+                return
+            end if
+            stage_failed = .true.
+        end function stage_failed
 
         subroutine keep_best()
             if (sol%fnorm < best) then
@@ -225,7 +259,8 @@ contains
     !> lengthened. The intermediate answers are solved to `step_target`, the last to
     !> `target_norm`; it stops short once sol%njev reaches last_njev. y: the answer at s = 1
     !> when converged, else the start. prob%dyn%v0 is restored.
-    subroutine rescue_load(prob, opts, y, target_norm, step_target, sol, error, last_njev)
+    subroutine rescue_load(prob, opts, y, target_norm, step_target, sol, error, last_njev, &
+                           arclength)
         !> The projected contact equations.
         type(hb_problem_t), intent(inout) :: prob
         !> Solver options in effect (rho set).
@@ -242,6 +277,8 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Stop (not converged) once sol%njev reaches this.
         integer, intent(in) :: last_njev
+        !> Where the natural steps stall, follow the path in its arclength (arclength_load).
+        logical, intent(in), optional :: arclength
         complex(dp), allocatable :: v0(:, :)
         real(dp), allocatable :: ya(:), yb(:), yt(:), ystart(:)
         real(dp) :: s, sa, ds, st, tgt
@@ -287,6 +324,15 @@ contains
                 if (ds < min_load_step) exit
             end if
         end do
+        ! stalled short of s = 1 (a turning point of the path in the load: a fold of the
+        ! response): follow the path in its arclength from the last two answers
+        if (present(arclength)) ok = arclength
+        if (.not. present(arclength)) ok = .false.
+        if (ok .and. s < 1.0_dp .and. have_two .and. .not. allocated(error)) then
+            call arclength_load(prob, opts, v0, ya, sa, yb, s, target_norm, step_target, sol, &
+                                error, last_njev, ok)
+            if (ok) s = 1.0_dp
+        end if
         call finish(s >= 1.0_dp)
 
     contains
@@ -323,4 +369,127 @@ contains
             end if
         end subroutine finish
     end subroutine rescue_load
+
+    !> The load homotopy past turning points: pseudo-arclength continuation of F(y, s) = 0
+    !> in the scaled coordinates (y / f_s, s), f_s the contacts' force scale, from the two
+    !> answers (y0, s0), (y1, s1) of the natural steps, their secant the first direction.
+    !> Each step predicts along the secant of the last two points and corrects by Newton on
+    !> the bordered system [dF/dy, dF/ds; t] (dF/ds by a forward difference: F is affine in
+    !> the load within a piece), backtracking on the residual; a step is halved when the
+    !> corrector fails or turns back, lengthened after an easy one. Once s passes 1, the
+    !> answer at s = 1 is corrected from the chord between the last two points (Newton, or
+    !> Powell's method from there). ok: y1 holds the answer at s = 1 (prob%dyn%v0 = v0).
+    subroutine arclength_load(prob, opts, v0, y0, s0, y1, s1, target_norm, step_target, sol, &
+                              error, last_njev, ok)
+        type(hb_problem_t), intent(inout) :: prob
+        type(hbm_options_t), intent(in) :: opts
+        complex(dp), intent(in) :: v0(:, :)
+        real(dp), intent(inout) :: y0(:), y1(:)
+        real(dp), intent(inout) :: s0, s1
+        real(dp), intent(in) :: target_norm, step_target
+        type(hbm_solution_t), intent(inout) :: sol
+        type(error_type), allocatable, intent(out) :: error
+        integer, intent(in) :: last_njev
+        logical, intent(out) :: ok
+        real(dp), allocatable :: t(:), z0(:), z1(:), zp(:), z(:), a(:, :), b(:), f(:), ft(:), &
+                                 jac(:, :), fs(:), yc(:)
+        integer, allocatable :: ipiv(:)
+        integer :: n, k, it, info, stat, ls
+        real(dp) :: fsc, h, tn, fn, fnt, g, lam, st, w
+        logical :: done
+
+        ok = .false.
+        n = size(y1)
+        fsc = max(prob%contacts%force_scale(), tiny(1.0_dp))
+        allocate (a(n + 1, n + 1), b(n + 1), f(n), ft(n), jac(n, n), fs(n), ipiv(n + 1))
+        z0 = [y0/fsc, s0]
+        z1 = [y1/fsc, s1]
+        if (.not. (norm2(z1 - z0) > 0.0_dp)) return
+        h = max(norm2(z1 - z0), 1.0_dp/64.0_dp)
+        do k = 1, max_arc_steps
+            if (sol%njev >= last_njev) return
+            t = (z1 - z0)/norm2(z1 - z0)
+            zp = z1 + h*t
+            z = zp
+            done = .false.
+            do it = 1, max_arc_newton
+                call eval(z, f, stat)
+                if (stat /= 0) exit
+                g = dot_product(t, z - zp)
+                fn = sqrt(sum(f**2) + (fsc*g)**2)
+                if (norm2(f) <= step_target) then
+                    done = .true.
+                    exit
+                end if
+                ! the bordered Jacobian in the scaled unknowns
+                prob%dyn%v0 = z(n + 1)*v0
+                stat = 0
+                call prob%jacobian(z(1:n)*fsc, jac, stat)
+                sol%njev = sol%njev + 1
+                if (stat /= 0) exit
+                w = 1.0e-7_dp
+                prob%dyn%v0 = (z(n + 1) + w)*v0
+                call prob%residual(z(1:n)*fsc, ft, stat)
+                sol%nfev = sol%nfev + 1
+                fs = (ft - f)/w
+                a(1:n, 1:n) = jac*fsc
+                a(1:n, n + 1) = fs
+                a(n + 1, :) = t
+                b(1:n) = -f
+                b(n + 1) = -g
+                call dgetrf(n + 1, n + 1, a, n + 1, ipiv, info)
+                if (info /= 0) exit
+                call dgetrs('N', n + 1, 1, a, n + 1, ipiv, b, n + 1, info)
+                if (info /= 0) exit
+                ! backtracking on the bordered residual
+                lam = 1.0_dp
+                do ls = 1, 10
+                    call eval(z + lam*b, ft, stat)
+                    fnt = sqrt(sum(ft**2) + (fsc*dot_product(t, z + lam*b - zp))**2)
+                    if (stat == 0 .and. fnt < (1.0_dp - 1.0e-4_dp*lam)*fn) exit
+                    lam = 0.5_dp*lam
+                end do
+                if (ls > 10) exit
+                z = z + lam*b
+            end do
+            if (done .and. dot_product(t, z - z1) > 0.0_dp) then
+                z0 = z1
+                z1 = z
+                if (it <= 4) h = min(2.0_dp*h, 0.5_dp)
+                if (z1(n + 1) >= 1.0_dp) exit
+            else
+                h = 0.5_dp*h
+                if (h < min_load_step) return
+            end if
+        end do
+        if (z1(n + 1) < 1.0_dp) return
+        ! the answer at s = 1 from the chord between the last two points
+        st = (1.0_dp - z0(n + 1))/(z1(n + 1) - z0(n + 1))
+        yc = fsc*(z0(1:n) + st*(z1(1:n) - z0(1:n)))
+        prob%dyn%v0 = v0
+        call rescue_newton(prob, yc, target_norm, sol, error)
+        if (allocated(error)) return
+        if (.not. sol%converged) then
+            call solve_stage(prob, yc, opts, target_norm, sol, error)
+            if (allocated(error)) return
+        end if
+        ok = sol%converged
+        if (ok) then
+            y1 = yc
+            s1 = 1.0_dp
+        end if
+
+    contains
+
+        !> F at the scaled point zz (the load z(n+1)).
+        subroutine eval(zz, ff, st)
+            real(dp), intent(in) :: zz(:)
+            real(dp), intent(out) :: ff(:)
+            integer, intent(out) :: st
+            st = 0
+            prob%dyn%v0 = zz(n + 1)*v0
+            call prob%residual(zz(1:n)*fsc, ff, st)
+            sol%nfev = sol%nfev + 1
+        end subroutine eval
+    end subroutine arclength_load
 end module stickslip_hbm_fallback

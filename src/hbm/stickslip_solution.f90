@@ -66,9 +66,10 @@ module stickslip_solution
         integer :: newton_fallbacks = 0
         !> The fallback that found the answer when the start and ladder did not
         !> (stickslip_hbm_fallback): 'newton', 'load' (the homotopy in the load), 'rho'
-        !> (another weight, then continued to rho) or 'rho_kept' (the root at another
-        !> weight, kept: sol%rho is that weight); 'none' when none was needed.
-        character(len=8) :: rescue = 'none'
+        !> (another weight, then continued to rho), 'rho_kept' (the root at another
+        !> weight, kept: sol%rho is that weight) or 'arclength' (the load homotopy past
+        !> turning points); 'none' when none was needed.
+        character(len=9) :: rescue = 'none'
         !> Final residual norm ||F||_2 of the projected friction equations [m/s].
         real(dp) :: fnorm = huge(1.0_dp)
         !> Residual scale: min(||V0||_2, rho Rs), V0 the contact velocities of the structure

@@ -10,7 +10,7 @@
 !> example and bad &modes input.
 module test_modes
     use stickslip_kinds, only: dp, pi
-    use stickslip_error, only: error_type, real_text
+    use stickslip_error, only: error_type, real_text, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -38,7 +38,35 @@ contains
         call test_unilateral(t)
         call test_jenkins_planar(t)
         call test_cli_modes(t)
+        call test_unloaded_mode(t)
     end subroutine run_modes_tests
+
+    !> A mode that leaves the contact unloaded (issue 24): DOF 1 on its own spring (k = 2),
+    !> the contact on DOF 2, uncoupled: the stuck mode 1 (omega = sqrt 2) is also a mode
+    !> without the contact (the stuck and free frequencies coincide). The equations, driven by
+    !> the contact forces, cannot follow it: an input error that says why and what to do
+    !> (before: "no periodic motion found ... try &hbm rho = 0", the default already).
+    subroutine test_unloaded_mode(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m
+        type(hbm_options_t) :: ho
+        type(modes_options_t) :: mo
+        type(modes_result_t) :: res
+        type(error_type), allocatable :: error
+        m = seed(0.01_dp, 0.0_dp)
+        m%stiffness = reshape([2.0_dp, 0.0_dp, 0.0_dp, 1.0_dp], [2, 2])
+        ho%harmonics = 7
+        ho%samples = 128
+        mo%amplitude_start = 0.01_dp
+        mo%amplitude_stop = 10.0_dp
+        mo%points = 10
+        call run_modes(m, ho, mo, res, error)
+        call check_error(t, error, "modes: unloaded mode refused", .true., &
+                         [character(len=40) :: "does not load the contacts", &
+                          "frequencies coincide", "Choose another &modes mode"])
+        if (allocated(error)) call check(t, error%stat == stickslip_stat%input, &
+                                         "modes: unloaded mode: an input error")
+    end subroutine test_unloaded_mode
 
     !> The seed structure (M = I, K = [2 -1; -1 1], DOF 2 on the ground, mu N = 0.45),
     !> damping c_m M + c_k K.

@@ -257,10 +257,27 @@ contains
         if (.not. rep%accepted) then
             call fam%destroy()
             write (buf, '(es12.4e3)') opts%amplitude_start
+            if (unloaded_mode(free, phi, omega_ref)) then
+                ! the contacts neither move nor carry a force in this mode: it is a mode of
+                ! the structure with and without them (its stuck and free frequencies
+                ! coincide), which the equations, driven by the contact forces, cannot reach
+                write (buf, '(g0.6)') omega_ref
+                call fatal_error(error, "nonlinear modes: mode "//itoa(opts%mode)//" (omega "// &
+                                 trim(buf)//" rad/s) does not load the contacts: they "// &
+                                 "neither move nor carry a force in it, so it is also a mode "// &
+                                 "of the structure without them (its stuck and free "// &
+                                 "frequencies coincide) and its backbone is that linear mode "// &
+                                 "at every amplitude (frequency and damping constant); the "// &
+                                 "nonlinear-mode equations, driven by the contact forces, "// &
+                                 "cannot follow it. Choose another &modes mode", &
+                                 stickslip_stat%input)
+                return
+            end if
             call fatal_error(error, "nonlinear modes: no periodic motion found at "// &
-                             "amplitude_start = "//trim(adjustl(buf))//" from the stuck or "// &
-                             "the slipping linear mode (try another amplitude_start, more "// &
-                             "harmonics or &hbm rho = 0)", stickslip_stat%numerical)
+                             "amplitude_start = "//trim(adjustl(buf))//" (modal amplitude, "// &
+                             "in the model's length unit times sqrt of its mass unit) from "// &
+                             "the stuck or the slipping linear mode (try another "// &
+                             "amplitude_start, or more harmonics)", stickslip_stat%numerical)
             return
         end if
         allocate (res%points(64))
@@ -322,6 +339,24 @@ contains
             end if
         end subroutine add_point
     end subroutine run_modes
+
+    !> Whether the linear mode `phi` (frequency `omega` [rad/s]) of `model` leaves every
+    !> contact channel still and unloaded: d^T phi = 0 and d^T (K - omega^2 M) phi = 0 for
+    !> every channel direction d, relative to the mode's own size (1e-8).
+    logical function unloaded_mode(model, phi, omega) result(unloaded)
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: phi(:), omega
+        type(contact_set_t) :: cs
+        real(dp), allocatable :: d(:, :), f(:)
+        real(dp) :: scale
+        call new_contact_set(cs, model)
+        d = channel_directions(model, cs)
+        f = matmul(model%stiffness, phi) - omega**2*matmul(model%mass, phi)
+        scale = maxval(abs(matmul(model%stiffness, phi)))*maxval(abs(d))
+        unloaded = maxval(abs(matmul(transpose(d), f))) <= 1.0e-8_dp*scale .and. &
+                   maxval(abs(matmul(transpose(d), phi))) <= 1.0e-8_dp*maxval(abs(phi))* &
+                   maxval(abs(d))
+    end function unloaded_mode
 
     !> The outputs of the continuation's point `state`: the weighted-residual solution of
     !> the free structure with damping C - xi M at omega (solution_from_forces), the modal

@@ -321,14 +321,17 @@ contains
             else
                 block
                     character(len=500) :: buf
+                    character(len=:), allocatable :: tried
+                    tried = "the ladder, Newton, the load homotopy and rho x 1/16 .. 16 tried"
+                    if (opts%start == 'direct') tried = "start = 'direct': no fallback "// &
+                                                        "tried; start = 'auto' tries them"
                     write (buf, '(a,es11.3e3,a,es11.3e3,a,i0,a,i0,a,i0,a,i0,a)') &
                         "not converged: residual ||F|| = ", sol%fnorm, " > tol * fscale = ", &
                         target_norm, " (hybrj info ", sol%info, ", ", sol%nfev, &
                         " evaluations, ", sol%hybrj_calls, " hybrj and ", sol%newton_calls, &
-                        " Newton calls; the ladder, Newton, the load homotopy and rho x "// &
-                        "1/16 .. 16 tried). Try other harmonics (harmonics_tol), more samples, "// &
-                        "a start from a nearby solution (a sweep), or check the case against "// &
-                        "&run method = 'euler'"
+                        " Newton calls; "//tried//"). Try other harmonics (harmonics_tol), "// &
+                        "more samples, a start from a nearby solution (a sweep), or check "// &
+                        "the case against &run method = 'euler'"
                     sol%diagnosis = trim(buf)
                 end block
             end if

@@ -104,6 +104,14 @@ contains
         call check(t, code == 0 .and. index(summary, "warning_points_truncation") > 0 .and. &
                    index(err, "stickslip: warning:") > 0, &
                    "point trust: warned points, a trusted curve, exit 0", err)
+        ! a sweep that stops says what to change (issue 24): here max_points
+        call write_lines(dir//".nml", [sweep_case(1:5), &
+            "&sweep parameter = 'omega', start = 2.0, stop = 3.0, step = 0.1, max_step = 0.1, "// &
+            "max_points = 3 /", "&output directory = '"//dir//"' /" // repeat(' ', 0)])
+        call cli([character(len=200) :: dir//".nml"], code, out, err)
+        call check(t, code == 2 .and. index(err, "stopped at max_points") > 0 .and. &
+                   index(err, "Raise &sweep max_points") > 0, &
+                   "sweep stop: the message names the remedy", err)
     end subroutine test_point_trust
 
     !> method = 'robustness' on a tiny grid: exit 0, robustness.csv with one row per run,

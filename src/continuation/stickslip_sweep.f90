@@ -27,7 +27,7 @@ module stickslip_sweep
     use stickslip_lapack, only: dgetrf, dgetrs, dgeev
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step, reason_running, &
-        reason_end
+        reason_end, reason_left, reason_failures, reason_max_points
     use stickslip_reference, only: reference_options_t
     use stickslip_progress, only: progress_t
     use stickslip_sweep_options, only: sweep_options_t, validate_sweep_options, &
@@ -274,9 +274,37 @@ contains
             else
                 res%diagnosis = reason_text(res%state%reason)
             end if
+            res%diagnosis = res%diagnosis//remedy(res%state%reason)
         end if
 
     contains
+
+        !> What to change when the curve stops for `reason` (&sweep and &hbm variables).
+        function remedy(reason) result(text)
+            integer, intent(in) :: reason
+            character(len=:), allocatable :: text
+            character(len=40) :: a, b
+            write (a, '(g0.6)') opts%stop
+            write (b, '(g0.6)') opts%start
+            select case (reason)
+            case (reason_left)
+                text = ". The curve folds back there: the answer at the start lies on a "// &
+                       "branch that turns and leaves the range (several answers at the same "// &
+                       trim(opts%parameter)//", a resonance bent by the contacts). Sweep from "// &
+                       "the other end (&sweep start = "//trim(adjustl(a))//", stop = "// &
+                       trim(adjustl(b))//"), or start where the response is unique, further "// &
+                       "from the resonance"
+            case (reason_failures)
+                text = ". Try a smaller &sweep max_step (the corrector failed at the "// &
+                       "smallest step: the curve bends sharply there, e.g. where a contact "// &
+                       "starts to slip or to lift off), more &hbm harmonics (or "// &
+                       "harmonics_tol), or the sweep from the other end"
+            case (reason_max_points)
+                text = ". Raise &sweep max_points, or a larger max_step"
+            case default
+                text = ""
+            end select
+        end function remedy
 
         !> Solve the accepted point for its outputs, add it, tell the observer.
         subroutine add_point(status)

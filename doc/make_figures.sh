@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerate the figures of doc/: Figure 3 of the paper (examples/seed.nml, the three methods
 # side by side), the work-precision diagrams of examples/seed_study.nml and
-# examples/chain4_study.nml, the forced-response curve of examples/seed_frc.nml and the
+# examples/chain4_study.nml, the forced-response curves of examples/seed_frc.nml and
+# examples/designer_damper.nml and the
 # robustness maps of examples/seed_robustness.nml, release build. Writes doc/*.png; the runs'
 # files stay in out/.
 set -euo pipefail
@@ -18,6 +19,8 @@ for c in seed_study chain4_study; do
 done
 run examples/seed_frc.nml
 cp out/seed_frc/frc.png doc/frc_seed.png
+run examples/designer_damper.nml
+cp out/designer_damper/frc.png doc/frc_designer.png
 run examples/seed_robustness.nml
 cp out/seed_robustness/robustness_cold.png doc/robustness_cold.png
 cp out/seed_robustness/robustness_warm.png doc/robustness_warm.png
@@ -26,5 +29,5 @@ cp out/seed_robustness/robustness_warm.png doc/robustness_warm.png
 fpm run --example bench_convergence --profile release -- \
     $(ls bench/convergence/*.nml | grep -v iwan) > doc/convergence_table.txt
 echo "wrote doc/figure3.png doc/work_precision_seed.png doc/work_precision_chain4.png" \
-     "doc/frc_seed.png doc/robustness_cold.png doc/robustness_warm.png" \
+     "doc/frc_seed.png doc/frc_designer.png doc/robustness_cold.png doc/robustness_warm.png" \
      "doc/convergence_table.txt"

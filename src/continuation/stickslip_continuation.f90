@@ -9,7 +9,10 @@
 !> halved after a failed corrector (or a point that jumped: correction longer than the step,
 !> or a tangent that turned back); at the smallest step the system's own recovery is tried
 !> at the predicted parameter (e.g. a harmonic ladder for the friction problem). The point
-!> that would cross the end of the range is computed at the end exactly.
+!> that would cross the end of the range is computed at the end exactly. With opts%yref > 0
+!> the scale of the unknowns follows the size of the solution (yscale max(1, ||y|| / yref)),
+!> so that a part of the curve where the unknowns grow tenfold (the contact forces at a
+!> resonance) is passed in about as many points as one where they do not.
 !>
 !> The state of a continuation (continuation_state_t) is plain data: saving and restoring it
 !> (stickslip_sweep's checkpoint) resumes the same curve.
@@ -39,6 +42,7 @@ module stickslip_continuation
         procedure(par_jacobian_iface), deferred :: jacobian
         procedure :: recover => no_recovery
         procedure :: residual_scale => unit_scale
+        procedure :: anchor => no_anchor
     end type parametric_system_t
 
     abstract interface
@@ -79,6 +83,9 @@ module stickslip_continuation
         !> Scale of the unknowns (one value, or one per unknown; > 0). The parameter's scale
         !> is |stop - start|.
         real(dp), allocatable :: yscale(:)
+        !> > 0: the scale at a point y is yscale * max(1, ||y||_2 / yref) (relative steps
+        !> where the unknowns are larger than yref); 0: yscale throughout.
+        real(dp) :: yref = 0.0_dp
         !> Residual evaluations per corrector call (hybrj maxfev).
         integer :: maxfev = 100
         !> A point that took at most `easy` evaluations grows the step by `grow`; more than
@@ -123,6 +130,8 @@ module stickslip_continuation
         !> .true.: the last equation is lambda = lfix; else the arclength hyperplane.
         logical :: fixed = .false.
         real(dp) :: lfix = 0.0_dp, lp = 0.0_dp, tl = 0.0_dp, ps = 1.0_dp, weight = 1.0_dp
+        !> The size factor in ys (size_factor at the point the step starts from).
+        real(dp) :: g = 1.0_dp
         real(dp), allocatable :: yp(:), ty(:), ys(:)
     contains
         procedure :: residual => bordered_residual
@@ -156,6 +165,8 @@ contains
             write (buf, '(a,i0,a)') "opts%max_failures = ", opts%max_failures, ": must be >= 1"
         else if (.not. (opts%tol > 0.0_dp .and. opts%tol < 1.0_dp)) then
             write (buf, '(a,g0.4,a)') "opts%tol = ", opts%tol, ": must be in (0, 1)"
+        else if (.not. (opts%yref >= 0.0_dp .and. ieee_is_finite(opts%yref))) then
+            write (buf, '(a,g0.4,a)') "opts%yref = ", opts%yref, ": must be >= 0"
         else
             return
         end if
@@ -186,10 +197,11 @@ contains
         call validate_continuation_options(opts, error)
         if (allocated(error)) return
         n = size(y0)
-        call setup_bordered(b, sys, opts, n, error)
+        call setup_bordered(b, sys, opts, y0, error)
         if (allocated(error)) return
         b%fixed = .true.
         b%lfix = opts%start
+        call sys%anchor(y0, opts%start)
         u = [y0, opts%start]
         call correct(b, opts, u, report, ok, error)
         if (allocated(error)) return
@@ -214,6 +226,7 @@ contains
             state%ty = ty0
             state%tl = sign(1.0_dp, opts%stop - opts%start)
         end if
+        call rescale_tangent(b, opts, state%y, state%ty, state%tl)
         state%ds = opts%step
         state%points = 1
         report%accepted = .true.
@@ -247,10 +260,11 @@ contains
             return
         end if
         n = size(state%y)
-        call setup_bordered(b, sys, opts, n, error)
+        call setup_bordered(b, sys, opts, state%y, error)
         if (allocated(error)) return
         dir = sign(1.0_dp, opts%stop - opts%start)
         ds = state%ds
+        call sys%anchor(state%y, state%lambda)
         do
             dsh = ds/b%ps
             lp = state%lambda + dsh*b%ps*state%tl
@@ -321,6 +335,7 @@ contains
 
         state%arclength = state%arclength + b%ps*sqrt(sum(((u(1:n) - state%y)/b%ys)**2) + &
                                                       ((u(n + 1) - state%lambda)/b%ps)**2)
+        call rescale_tangent(b, opts, u(1:n), typ, tlp)
         state%y = u(1:n)
         state%lambda = u(n + 1)
         state%ty = typ
@@ -382,13 +397,15 @@ contains
         tlp = sl
     end subroutine direction
 
-    !> Fill the bordered system's scales.
-    subroutine setup_bordered(b, sys, opts, n, error)
+    !> Fill the bordered system's scales, those of the unknowns at the point y.
+    subroutine setup_bordered(b, sys, opts, y, error)
         type(bordered_t), intent(out) :: b
         class(parametric_system_t), target, intent(inout) :: sys
         type(continuation_options_t), intent(in) :: opts
-        integer, intent(in) :: n
+        real(dp), intent(in) :: y(:)
         type(error_type), allocatable, intent(out) :: error
+        integer :: n
+        n = size(y)
         b%sys => sys
         allocate (b%ys(n), b%yp(n), b%ty(n))
         if (.not. allocated(opts%yscale)) then
@@ -406,9 +423,42 @@ contains
             call fatal_error(error, "opts%yscale: must be > 0", stickslip_stat%input)
             return
         end if
+        b%g = size_factor(opts, y)
+        b%ys = b%ys*b%g
         b%ps = abs(opts%stop - opts%start)
         b%weight = opts%fscale
     end subroutine setup_bordered
+
+    !> The factor max(1, ||y|| / opts%yref) on the scale of the unknowns (1 when yref = 0).
+    pure real(dp) function size_factor(opts, y) result(g)
+        type(continuation_options_t), intent(in) :: opts
+        real(dp), intent(in) :: y(:)
+        g = 1.0_dp
+        if (opts%yref > 0.0_dp) then
+            g = norm2(y)/opts%yref
+            if (.not. (g > 1.0_dp .and. ieee_is_finite(g))) g = 1.0_dp
+        end if
+    end function size_factor
+
+    !> Express the unit tangent (ty, tl), scaled by b%ys, in the scale of the unknowns at the
+    !> point y (the same direction, normalized again).
+    subroutine rescale_tangent(b, opts, y, ty, tl)
+        type(bordered_t), intent(in) :: b
+        type(continuation_options_t), intent(in) :: opts
+        real(dp), intent(in) :: y(:)
+        real(dp), intent(inout) :: ty(:), tl
+        real(dp) :: r, nrm
+        if (.not. (opts%yref > 0.0_dp)) return
+        ! the unknowns' scale goes from base g_old to base g_new: their scaled components
+        ! change by g_old / g_new, the parameter's do not
+        r = b%g/size_factor(opts, y)
+        ty = ty*r
+        nrm = sqrt(sum(ty**2) + tl**2)
+        if (nrm > 0.0_dp) then
+            ty = ty/nrm
+            tl = tl/nrm
+        end if
+    end subroutine rescale_tangent
 
     !> hybrj on the bordered system from u; ok when ||F|| meets the tolerance.
     subroutine correct(b, opts, u, report, ok, error)
@@ -544,6 +594,14 @@ contains
         real(dp), intent(in) :: lambda
         s = 0.0_dp
     end function unit_scale
+
+    !> The default anchor: none (every unknown is determined by the equations).
+    subroutine no_anchor(self, y, lambda)
+        !> The family of systems.
+        class(parametric_system_t), intent(inout) :: self
+        !> The point the next corrections start from (the last accepted one).
+        real(dp), intent(in) :: y(:), lambda
+    end subroutine no_anchor
 
     !> The default recovery: none.
     subroutine no_recovery(self, y, lambda, ok, error)

@@ -10,6 +10,14 @@
 !>
 !> In omega the family keeps the dynamics at the last few omega values met (the corrector,
 !> the tangent and the residual scale come back to them) and counts its factorizations.
+!>
+!> A contact stuck over the whole period holds any mean tangential force within its limits
+!> (the equations leave it free: a family of equally admissible answers at one parameter
+!> value). The continuation keeps the mean the branch arrived with: the rows of the
+!> tangential channels' mean forces get the term pin_weight rho (R_0 - R_0 of the last
+!> accepted point), which pins a free mean and leaves a determined one (a contact with slip
+!> phases) unchanged to about pin_weight times the change of one step. The points the
+!> sweep reports are settled by the single solve's rule (stickslip_hbm_finish).
 module stickslip_friction_family
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
@@ -25,7 +33,7 @@ module stickslip_friction_family
     use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_friction, only: psi_limit_derivative
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_contact_element, only: state_stick
+    use stickslip_contact_element, only: state_stick, along_normal
     use stickslip_model, only: preload_force
     use stickslip_continuation, only: parametric_system_t
     use stickslip_sweep_options, only: set_sweep_parameter
@@ -35,6 +43,9 @@ module stickslip_friction_family
 
     !> Dynamics kept by a friction family in omega (distinct omega values).
     integer, parameter, public :: dynamics_cache_size = 4
+
+    !> Weight of the term that pins the tangential mean forces to the last accepted point's.
+    real(dp), parameter :: pin_weight = 1.0e-8_dp
 
     !> The projected friction equations as a family in the parameter.
     type, extends(parametric_system_t) :: friction_family_t
@@ -74,7 +85,12 @@ module stickslip_friction_family
         !> %model follows `model`), and the DOFs whose rows the dynamics keep.
         type(sparse_model_t), allocatable :: sparse
         integer, allocatable :: kept(:)
+        !> Rows of the tangential channels' mean forces, and the point they are pinned to
+        !> (empty until the continuation anchors the family).
+        integer, allocatable :: mean_rows(:)
+        real(dp), allocatable :: anchor_y(:)
     contains
+        procedure :: anchor => family_anchor
         procedure :: residual => family_residual
         procedure :: jacobian => family_jacobian
         procedure :: recover => family_recover
@@ -113,7 +129,7 @@ contains
         integer, intent(in), optional :: dofs(:)
         !> Build the problem (default .true.).
         logical, intent(in), optional :: build
-        integer :: nb, nc, stat
+        integer :: nb, nc, stat, k
         fam%model = model
         fam%opts = hbm
         fam%opts%rho = rho
@@ -155,6 +171,13 @@ contains
         if (allocated(error)) return
         nb = fam%prob%basis%nb
         nc = fam%prob%nc
+        allocate (fam%mean_rows(0))
+        if (fam%prob%basis%i0 > 0) then
+            do k = 1, nc
+                if (fam%prob%contacts%along(k) /= along_normal) &
+                    fam%mean_rows = [fam%mean_rows, (k - 1)*nb + fam%prob%basis%i0]
+            end do
+        end if
         allocate (fam%states(hbm%samples, fam%prob%contacts%ncontact))
         allocate (fam%rs(hbm%samples, nc), fam%vs(hbm%samples, nc), fam%ss(hbm%samples, nc), &
                   fam%dv(nb, nc), fam%dvs(hbm%samples), fam%cw(hbm%samples/2 + 1))
@@ -341,7 +364,18 @@ contains
             return
         end if
         call self%prob%residual(y, f, stat)
+        if (allocated(self%anchor_y)) f(self%mean_rows) = f(self%mean_rows) + &
+            pin_weight*self%prob%rho*(y(self%mean_rows) - self%anchor_y(self%mean_rows))
     end subroutine family_residual
+
+    !> Pin the tangential mean forces to those of y (the point the continuation goes on from).
+    subroutine family_anchor(self, y, lambda)
+        !> The family.
+        class(friction_family_t), intent(inout) :: self
+        !> Friction-force coefficients R [N] of the point, and its parameter value.
+        real(dp), intent(in) :: y(:), lambda
+        self%anchor_y = y
+    end subroutine family_anchor
 
     !> dF/dy (the exact generalized Jacobian of a single solve) and dF/dlambda.
     subroutine family_jacobian(self, y, lambda, jy, jl, stat)
@@ -361,6 +395,12 @@ contains
             return
         end if
         call self%prob%jacobian(y, jy, stat)
+        if (allocated(self%anchor_y)) then
+            do j = 1, size(self%mean_rows)
+                jy(self%mean_rows(j), self%mean_rows(j)) = &
+                    jy(self%mean_rows(j), self%mean_rows(j)) + pin_weight*self%prob%rho
+            end do
+        end if
         if (.not. self%prob%contacts%coulomb_only) then
             call laws_parameter_derivative(self, y, lambda, jl, stat)
             return

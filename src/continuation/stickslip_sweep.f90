@@ -185,6 +185,11 @@ contains
                 co%yscale = co%yscale*sqrt(real(nb, dp))*weight
             end block
         end if
+        ! where the contact forces grow beyond that scale (a resonance with lift-off, where
+        ! the normal load and so the friction limit rise tenfold, and every sample switch
+        ! with them) the scale grows with the forces: relative steps, not crawling ones
+        co%yref = co%yscale(1)/(sqrt(real(nb, dp))*weight)* &
+                  sqrt(real(max(fam%prob%n/nb, 1), dp))
         allocate (res%points(64))
 
         if (present(resume)) then

@@ -140,7 +140,12 @@ contains
         co%step = opts%step
         co%min_step = opts%min_step
         co%max_step = opts%max_step
-        if (co%step == 0.0_dp) co%step = range/100.0_dp
+        if (co%step == 0.0_dp) then
+            ! automatic: within the bounds the case gives
+            co%step = range/100.0_dp
+            if (co%max_step > 0.0_dp) co%step = min(co%step, co%max_step)
+            if (co%min_step > 0.0_dp) co%step = max(co%step, co%min_step)
+        end if
         if (co%min_step == 0.0_dp) co%min_step = min(range*1.0e-5_dp, co%step)
         if (co%max_step == 0.0_dp) co%max_step = max(range/25.0_dp, co%step)
         co%max_points = opts%max_points

@@ -114,7 +114,9 @@ contains
 
     !> Whether point p lies on the curve of the points `earlier` (in continuation order):
     !> some pair of consecutive earlier points brackets p's parameter and their amplitudes,
-    !> interpolated linearly, agree with p's to retrace_tolerance of the largest.
+    !> interpolated linearly, agree with p's, each to retrace_tolerance of its own size (at
+    !> least 1e-3 of the largest amplitude): the two sides of a fold may agree on the large
+    !> amplitudes and differ on a small one (the normal motion of a contact that lifts off).
     pure logical function retraces(p, earlier)
         !> The point [parameter units, m].
         type(frc_point_t), intent(in) :: p
@@ -122,6 +124,7 @@ contains
         type(frc_point_t), intent(in) :: earlier(:)
         integer :: k
         real(dp) :: w, scale
+        real(dp), allocatable :: q(:)
         retraces = .false.
         do k = 1, size(earlier) - 1
             associate (a => earlier(k), b => earlier(k + 1))
@@ -131,8 +134,9 @@ contains
                     size(b%amplitude) /= size(p%amplitude)) cycle
                 w = (p%parameter - a%parameter)/(b%parameter - a%parameter)
                 scale = max(maxval(abs(a%amplitude)), maxval(abs(b%amplitude)), tiny(1.0_dp))
-                if (maxval(abs(p%amplitude - ((1.0_dp - w)*a%amplitude + w*b%amplitude))) <= &
-                    retrace_tolerance*scale) then
+                q = (1.0_dp - w)*a%amplitude + w*b%amplitude
+                if (all(abs(p%amplitude - q) <= &
+                        retrace_tolerance*max(abs(q), 1.0e-3_dp*scale))) then
                     retraces = .true.
                     return
                 end if

@@ -241,7 +241,8 @@ contains
     !> multipliers of its monodromy matrix (reference_result_t%monodromy) are classified as
     !> in floquet_multipliers with `tol`. Outcomes, not errors: sol not converged, the
     !> shooting not converging, or converging to an orbit farther than max_orbit_distance
-    !> from sol: fl%verdict = 'unknown', fl%stable = F, fl%diagnosis says why (in the last
+    !> from sol (up to a static offset where a contact sticks all period, whose mean force
+    !> is undetermined): fl%verdict = 'unknown', fl%stable = F, fl%diagnosis says why (in the last
     !> case the multipliers of that other orbit are kept). fl%seconds is the CPU time of the
     !> shooting and the eigenvalues. `ref` returns the exact orbit (with its monodromy).
     !> Errors: stat input (invalid model or options, sol without samples); stat numerical
@@ -309,6 +310,18 @@ contains
         ampx = max(maxval(abs(xr)), tiny(1.0_dp))
         ampv = max(maxval(abs(vr)), tiny(1.0_dp))
         distance = max(maxval(abs(sol%x - xr))/ampx, maxval(abs(sol%v - vr))/ampv)
+        if (allocated(sol%offset_undetermined)) then
+            if (any(sol%offset_undetermined)) then
+                ! a contact stuck all period: the orbits of every admissible mean force are
+                ! periodic (the shooting may land on another one than the settled value);
+                ! they differ by a static offset and share their multipliers
+                distance = max(maxval(abs(sol%x - spread(sum(sol%x, 1)/size(sol%x, 1), 1, &
+                                                          size(sol%x, 1)) - &
+                                          (xr - spread(sum(xr, 1)/size(xr, 1), 1, &
+                                                       size(xr, 1)))))/ampx, &
+                               maxval(abs(sol%v - vr))/ampv)
+            end if
+        end if
         fl%distance = distance
         if (distance > max_orbit_distance) then
             write (buf, '(a,es10.2e3,a)') "the exact orbit shot from the weighted-residual "// &

@@ -225,7 +225,8 @@ contains
 
     !> The normal force and gap samples of every contact (nt x n_c), and the checks of the
     !> normal law: `signorini` the largest pulling normal force relative to the largest one,
-    !> or penetration of the gap + lambda / k_n relative to the normal displacement amplitude;
+    !> or penetration of the gap + lambda / k_n relative to the normal displacement amplitude
+    !> (for an elastic contact at least its largest compression lambda / k_n);
     !> `impact` the largest normal velocity of a rigid contact where it closes, relative to
     !> its normal velocity amplitude. A contact without a normal channel: its constant normal
     !> load and a zero gap. `ucoef` holds the kinematic coefficients of the channels (omega
@@ -268,7 +269,10 @@ contains
                 gap(:, j) = geff
                 if (cn > 0.0_dp) gap(:, j) = geff - cn*rs(:, c)
                 lmax = maxval(rs(:, c))
-                amp = maxval(gap(:, j)) - minval(gap(:, j))
+                ! penetration relative to the normal motion, or for an elastic contact to
+                ! its largest compression lambda / k_n if larger: a contact closed all period
+                ! that hardly moves (stuck with it) has a normal motion of roundoff size
+                amp = max(maxval(gap(:, j)) - minval(gap(:, j)), cn*max(lmax, 0.0_dp))
                 if (lmax > 0.0_dp) signorini = max(signorini, -minval(rs(:, c))/lmax)
                 if (amp > 0.0_dp) signorini = max(signorini, -minval(geff)/amp)
                 if (cn > 0.0_dp) cycle

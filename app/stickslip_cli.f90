@@ -5,6 +5,7 @@
 !> findings into exit codes and stderr lines, prints progress, and draws the pictures
 !> (stickslip_gnuplot, the only code that starts a process).
 module stickslip_cli
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_version_info, only: stickslip_version
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
@@ -743,8 +744,8 @@ contains
             n, " points, modal amplitude ", res%points(1)%p%parameter, " to ", &
             res%points(n)%p%parameter, merge(" (complete)  ", " (incomplete)", res%complete)
         write (u, '(a,g0.7,a,g0.7,a,a,a)') "  linear limits: contacts stuck ", &
-            res%omega_stuck, " rad/s, slipping ", res%omega_slipping, " rad/s (started ", &
-            trim(res%start), ")"
+            res%omega_stuck, " rad/s, slipping ", res%omega_slipping, " rad/s (the free "// &
+            "structure's mode most like the stuck one; started ", trim(res%start), ")"
         k = maxloc(res%points(1:n)%damping_ratio, 1)
         write (u, '(a,g0.7,a,g0.7,a,g0.5,a,g0.5)') "  frequency ", &
             minval(res%points(1:n)%p%omega), " .. ", maxval(res%points(1:n)%p%omega), &
@@ -753,10 +754,24 @@ contains
         write (u, '(a,es9.2,a,f0.3,a,i0,a)') "  energy balance error at most ", &
             maxval(res%points(1:n)%energy_error), "; CPU ", res%seconds, " s (", &
             res%factorizations, " factorizations)"
+        if (case%modes%error_estimate) write (u, '(a,es9.2,a,es9.2,a,i0,a)') &
+            "  error estimate (vs half the harmonics) at most: omega ", &
+            max_finite([(res%points(k)%omega_error, k=1, n)]), " (relative), D ", &
+            max_finite([(res%points(k)%damping_error, k=1, n)]), "; ", &
+            count([(index(res%points(k)%p%check, 'truncation') > 0, k=1, n)]), &
+            " points flagged"
+
         write (u, '(a)') "  wrote "//case%directory//"/{modes.csv, modes_harmonics.csv, "// &
             "modes.gp, "//pictures(case%directory, [character(len=20) :: "modes.png"])// &
             "summary.nml}"
     end subroutine print_modes_summary
+
+    !> The largest finite entry of x (NaN when none is).
+    real(dp) function max_finite(x) result(m)
+        real(dp), intent(in) :: x(:)
+        m = ieee_value(1.0_dp, ieee_quiet_nan)
+        if (any(ieee_is_finite(x))) m = maxval(x, mask=ieee_is_finite(x))
+    end function max_finite
 
     subroutine print_robustness_summary(u, case, rows)
         integer, intent(in) :: u

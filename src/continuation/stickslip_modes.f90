@@ -11,16 +11,20 @@
 !> harmonic when the stuck guess does not converge. Every point is then finished as a
 !> weighted-residual solution (solution_from_forces: samples, stick statistics,
 !> dissipation) and checked: the energy the negative modal damping feeds in per cycle must
-!> equal what friction and viscous damping dissipate.
+!> equal what friction and viscous damping dissipate. With opts%error_estimate every point
+!> is solved again on the basis of half the harmonics and half the samples (the same family
+!> at the same modal amplitude, from the point's truncated forces): twice the differences of
+!> omega and of the damping ratio D estimate their errors (a warning 'truncation' above
+!> omega_error_warning, or above damping_error_warning of D).
 module stickslip_modes
-    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp, pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_progress, only: progress_t
     use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_model, only: model_t, validate_model, preload_force
-    use stickslip_lapack, only: dgesv
+    use stickslip_lapack, only: dgesv, dsygv
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: validate_options, solution_from_forces, energy_warning, &
         energy_untrusted, force_excess_warning, force_excess_untrusted
@@ -30,7 +34,7 @@ module stickslip_modes
     use stickslip_linear_modes, only: linear_modes
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step, reason_running, &
-        reason_end
+        reason_end, reason_failures
     use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
     use stickslip_sweep_result, only: frc_point_t, reason_text
     use stickslip_sweep_point, only: point_tally_t, keep_coefficients, contact_point_values
@@ -42,6 +46,12 @@ module stickslip_modes
 
     !> Largest `points` accepted.
     integer, parameter :: modes_max_points = 100000
+
+    !> A point's estimated errors that make it a warning 'truncation': of omega (relative)
+    !> and of D (relative to D, and at least damping_error_floor in D itself).
+    real(dp), parameter, public :: omega_error_warning = 1.0e-3_dp, &
+                                   damping_error_warning = 5.0e-2_dp, &
+                                   damping_error_floor = 1.0e-4_dp
 
     !> Options of a nonlinear modal analysis.
     type :: modes_options_t
@@ -55,6 +65,9 @@ module stickslip_modes
         !> Observed combinations of the DOFs (rows), as a sweep's: the amplitude columns of a
         !> reduced model's recovered DOFs; unallocated: every DOF of the model.
         real(dp), allocatable :: observe(:, :)
+        !> Estimate the truncation errors of omega and D at every point (a second solve on
+        !> half the harmonics).
+        logical :: error_estimate = .true.
     end type modes_options_t
 
     !> One point of a backbone.
@@ -69,6 +82,10 @@ module stickslip_modes
         !> Energy fed in per cycle by the negative modal damping [J], and the balance error
         !> |input - friction - viscous| / input.
         real(dp) :: energy_input = 0.0_dp, energy_error = 0.0_dp
+        !> Estimated truncation errors: 2 |omega_H - omega_H/2| / omega_H and 2 |D_H - D_H/2|
+        !> (NaN when not estimated or when the point was not found on half the harmonics;
+        !> evaluate_mode_point sets them).
+        real(dp) :: omega_error = 0.0_dp, damping_error = 0.0_dp
     end type mode_point_t
 
     !> A backbone.
@@ -140,8 +157,9 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Progress hook, told after every point.
         type(progress_t), intent(inout), optional :: progress
-        type(modes_family_t) :: fam
+        type(modes_family_t) :: fam, low
         type(continuation_options_t) :: copts
+        logical :: have_low
         type(continuation_state_t) :: state
         type(continuation_report_t) :: rep
         type(hbm_options_t) :: ho
@@ -149,6 +167,8 @@ contains
         type(point_tally_t) :: tally
         real(dp), allocatable :: ws(:), phis(:, :), phif(:, :), wfv(:), guess(:, :)
         real(dp), allocatable :: phi(:), phi_slip(:)
+        logical, allocatable :: unloaded(:)
+        real(dp), allocatable :: c_orig(:, :)
         real(dp) :: omega_ref, c0, fscale, last_tl
         integer :: k, nguess, g
         type(error_type), allocatable :: err_stuck, err_slip
@@ -168,18 +188,34 @@ contains
             return
         end if
         free = free_structure(model)
+        if (frictionless(free)) then
+            call fatal_error(error, "nonlinear modes: &friction mu = 0 (mu N = 0) at every "// &
+                             "contact and no normal law: the contacts carry no force, so every mode is the free "// &
+                             "structure's linear mode at every amplitude (frequency and "// &
+                             "damping constant: the linear modes, e.g. &run method = 'hbm' "// &
+                             "or a sweep with mu = 0); give a friction coefficient > 0", &
+                             stickslip_stat%input)
+            return
+        end if
         ! the linear limits: mode `mode` of the stuck structure, and the slipping mode most
         ! like it (largest |phi_f^T M phi_s|)
         call linear_modes(free, .true., ws, phis, err_stuck)
         call linear_modes(free, .false., wfv, phif, err_slip)
         if (allocated(err_stuck)) allocate (ws(0), phis(model%ndof, 0))
         if (allocated(err_slip)) allocate (wfv(0), phif(model%ndof, 0))
+        ! the free structure's modes that neither move nor load a contact: the contact forces
+        ! never excite them, but where one has the frequency (and damping) of the backbone
+        ! the dynamic stiffness is singular; and a stuck frequency shared by such a mode is
+        ! a double one, whose loaded combinations come first
+        unloaded = unloaded_free_modes(free, phif)
+        if (size(ws) >= opts%mode) call loaded_first(free, ws, phis, opts%mode)
         if (size(ws) >= opts%mode) then
             phi = phis(:, opts%mode)
             omega_ref = ws(opts%mode)
             res%omega_stuck = omega_ref
-            if (size(wfv) > 0) then
-                k = maxloc(abs(matmul(transpose(phif), matmul(free%mass, phi))), 1)
+            if (count(.not. unloaded) > 0) then
+                k = maxloc(abs(matmul(transpose(phif), matmul(free%mass, phi))), 1, &
+                           mask=.not. unloaded)
                 phi_slip = phif(:, k)
                 res%omega_slipping = wfv(k)
             end if
@@ -199,6 +235,11 @@ contains
             free%omega = omega_ref
             ho%rho = automatic_rho(free)
         end if
+        ! the structure's own damping: the energies of the points (the added one acts on
+        ! modes the points do not move)
+        c_orig = free%damping
+        if (any(unloaded)) call damp_unloaded(free, phif(:, pack([(k, k=1, size(wfv))], &
+                                                                unloaded)), omega_ref)
         call new_modes_family(fam, free, ho, phi, omega_ref, error)
         if (allocated(error)) return
         res%rho = ho%rho
@@ -217,8 +258,29 @@ contains
         ! follows ln a (evenly spaced points), shortened only where the mode changes fast
         ! (the stick-slip transition), not where the stuck reactions grow like a
         fscale = force_scale(free)
+        ! (xi's scale, 0.02 omega_ref: a step changes D by at most about 1 / (points - 1)
+        ! of 0.01 times the range of ln a, so the points crowd where D changes fast)
         copts%yscale = abs(copts%stop - copts%start)*[spread(fscale, 1, fam%n), omega_ref, &
-                                                      0.1_dp*omega_ref]
+                                                      0.02_dp*omega_ref]
+        ! the truncation estimate: the same family on half the harmonics
+        have_low = .false.
+        if (opts%error_estimate .and. fam%opts%harmonics >= 2) then
+            block
+                type(hbm_options_t) :: hl
+                hl = ho
+                hl%harmonics = fam%opts%harmonics/2
+                ! half the samples as well (when they still resolve H/2): the difference
+                ! then holds the quadrature's error (stick-slip instants on the grid of
+                ! samples) with the truncation's
+                if (hl%samples/2 > 4*hl%harmonics) hl%samples = hl%samples/2
+                call new_modes_family(low, free, hl, phi, omega_ref, error)
+            end block
+            if (allocated(error)) then
+                call fam%destroy()
+                return
+            end if
+            have_low = .true.
+        end if
         ! the start: the stuck guess first when the stuck contacts hold (the reaction of the
         ! linear motion within the friction limits), else the slipping one first
         allocate (guess(fam%n + 2, 0))
@@ -304,13 +366,25 @@ contains
         res%factorizations = fam%factorizations
         res%rejected = state%rejected
         call fam%destroy()
+        if (have_low) then
+            res%factorizations = res%factorizations + low%factorizations
+            call low%destroy()
+        end if
         if (allocated(error)) return
         res%complete = state%reason == reason_end
         if (res%complete) then
             res%diagnosis = ""
         else
             res%diagnosis = reason_text(state%reason)
-            if (allocated(rep%message)) then
+            if (state%reason == reason_failures) then
+                ! the continuation's parameter is ln a: say the amplitude, in its unit
+                write (buf, '(g0.6)') exp(state%lambda)
+                res%diagnosis = itoa(state%failures)//" failed points in a row after "// &
+                                "modal amplitude a = "//trim(adjustl(buf))//" (the model's "// &
+                                "length unit times the square root of its mass unit; the "// &
+                                "smallest step and the recovery both failed): try more "// &
+                                "&hbm samples (8 per harmonic or more), or other harmonics"
+            else if (allocated(rep%message)) then
                 if (len(rep%message) > 0) res%diagnosis = rep%message
             end if
         end if
@@ -324,7 +398,13 @@ contains
             character(len=*), intent(in) :: status
             type(mode_point_t) :: mp
             type(mode_point_t), allocatable :: grown(:)
-            call evaluate_mode_point(fam, state, opts, status, rep%nfev, mp, tally, error)
+            if (have_low) then
+                call evaluate_mode_point(fam, state, opts, status, rep%nfev, c_orig, mp, tally, &
+                                         error, low, copts)
+            else
+                call evaluate_mode_point(fam, state, opts, status, rep%nfev, c_orig, mp, tally, &
+                                         error)
+            end if
             if (allocated(error)) return
             if (res%npoints == size(res%points)) then
                 allocate (grown(2*res%npoints))
@@ -339,6 +419,90 @@ contains
             end if
         end subroutine add_point
     end subroutine run_modes
+
+    !> Whether no contact of `model` can carry a force: every friction limit 0 (mu = 0, or
+    !> mu N = 0; an Iwan element's sliders count) and no channel along a normal (a
+    !> unilateral contact's normal law acts without friction).
+    logical function frictionless(model)
+        type(model_t), intent(in) :: model
+        type(contact_set_t) :: cs
+        call new_contact_set(cs, model)
+        frictionless = .not. (cs%force_scale() > 0.0_dp) .and. &
+                       .not. any(cs%along == along_normal)
+    end function frictionless
+
+    !> Which of the free structure's modes `phif` (mass-normalized, N x m) neither move nor
+    !> load a contact channel: d^T phi = 0 for every channel direction d (to 1e-8 of the
+    !> mode's size; a free mode then carries no contact force either).
+    function unloaded_free_modes(model, phif) result(unloaded)
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: phif(:, :)
+        logical :: unloaded(size(phif, 2))
+        type(contact_set_t) :: cs
+        real(dp), allocatable :: d(:, :)
+        integer :: k
+        call new_contact_set(cs, model)
+        d = channel_directions(model, cs)
+        do k = 1, size(phif, 2)
+            unloaded(k) = maxval(abs(matmul(transpose(d), phif(:, k)))) <= &
+                          1.0e-8_dp*maxval(abs(phif(:, k)))*max(maxval(abs(d)), tiny(1.0_dp))
+        end do
+    end function unloaded_free_modes
+
+    !> Within the cluster of stuck modes of mode `mode`'s frequency (equal to 1e-8), the
+    !> combinations that load the contacts (their stuck reactions D^T (K - omega^2 M) phi,
+    !> by singular value) first, those that leave them unloaded last: the basis LAPACK
+    !> returns for a double frequency is any; mode `mode` is then a loaded one when the
+    !> cluster has one. The shapes stay mass-normalized (an orthogonal change of basis).
+    subroutine loaded_first(model, ws, phis, mode)
+        type(model_t), intent(in) :: model
+        real(dp), intent(in) :: ws(:)
+        real(dp), intent(inout) :: phis(:, :)
+        integer, intent(in) :: mode
+        type(contact_set_t) :: cs
+        real(dp), allocatable :: d(:, :), r(:, :), g(:, :), b(:, :), ev(:), work(:)
+        integer, allocatable :: idx(:)
+        integer :: m, info, k
+        idx = pack([(k, k=1, size(ws))], abs(ws - ws(mode)) <= 1.0e-8_dp*ws(mode))
+        m = size(idx)
+        if (m < 2) return
+        call new_contact_set(cs, model)
+        d = channel_directions(model, cs)
+        r = matmul(transpose(d), matmul(model%stiffness, phis(:, idx)) - &
+                   ws(mode)**2*matmul(model%mass, phis(:, idx)))
+        ! the right singular vectors of r: the eigenvectors of r^T r, largest first
+        g = matmul(transpose(r), r)
+        allocate (b(m, m), ev(m), work(max(1, 3*m)))
+        b = 0.0_dp
+        do k = 1, m
+            b(k, k) = 1.0_dp
+        end do
+        call dsygv(1, 'V', 'U', m, g, m, b, m, ev, work, size(work), info)
+        if (info /= 0) return
+        phis(:, idx) = matmul(phis(:, idx), g(:, m:1:-1))
+    end subroutine loaded_first
+
+    !> Add damping gamma M U U^T M to the modes U (mass-normalized free modes that neither
+    !> move nor load a contact), gamma = 10 omega_ref plus their own: the contact forces
+    !> never excite them (U^T W = 0), so the backbone does not change, and their dynamic
+    !> stiffness k - (h omega)^2 + i h omega (c + gamma - xi) can no longer vanish where one
+    !> has the frequency of the backbone and C - xi M = 0 on it (a stuck frequency equal to
+    !> a free one, with proportional damping or none). Only when C leaves them decoupled
+    !> (C U = M U U^T C U to 1e-9 of C): otherwise nothing is changed.
+    subroutine damp_unloaded(model, u, omega_ref)
+        type(model_t), intent(inout) :: model
+        real(dp), intent(in) :: u(:, :), omega_ref
+        real(dp), allocatable :: mu(:, :), cu(:, :), cuu(:, :)
+        real(dp) :: gamma, scale
+        mu = matmul(model%mass, u)
+        cu = matmul(model%damping, u)
+        cuu = matmul(transpose(u), cu)
+        scale = max(maxval(abs(model%damping)), tiny(1.0_dp))
+        if (maxval(abs(cu - matmul(mu, cuu))) > 1.0e-9_dp*scale*max(maxval(abs(u)), 1.0_dp)) &
+            return
+        gamma = 10.0_dp*omega_ref + maxval(abs(cuu))
+        model%damping = model%damping + gamma*matmul(mu, transpose(mu))
+    end subroutine damp_unloaded
 
     !> Whether the linear mode `phi` (frequency `omega` [rad/s]) of `model` leaves every
     !> contact channel still and unloaded: d^T phi = 0 and d^T (K - omega^2 M) phi = 0 for
@@ -361,16 +525,24 @@ contains
     !> The outputs of the continuation's point `state`: the weighted-residual solution of
     !> the free structure with damping C - xi M at omega (solution_from_forces), the modal
     !> quantities, the energy balance (input by -xi M = friction + viscous) and the
-    !> point's coefficients; its failed checks counted in `tally`.
-    subroutine evaluate_mode_point(fam, state, opts, status, nfev, mp, tally, error)
+    !> point's coefficients; with `low` (the family on half the harmonics, continued with
+    !> `copts`) the truncation estimates of omega and D; its failed checks counted in
+    !> `tally`.
+    subroutine evaluate_mode_point(fam, state, opts, status, nfev, damping, mp, tally, error, &
+                                   low, copts)
         type(modes_family_t), intent(inout) :: fam
         type(continuation_state_t), intent(in) :: state
         type(modes_options_t), intent(in) :: opts
         character(len=*), intent(in) :: status
         integer, intent(in) :: nfev
+        !> The structure's viscous damping C (the family's may hold damping added to modes
+        !> the contacts do not load, damp_unloaded).
+        real(dp), intent(in) :: damping(:, :)
         type(mode_point_t), intent(out) :: mp
         type(point_tally_t), intent(inout) :: tally
         type(error_type), allocatable, intent(out) :: error
+        type(modes_family_t), intent(inout), optional :: low
+        type(continuation_options_t), intent(in), optional :: copts
         type(model_t) :: m
         type(hbm_solution_t) :: ps
         type(sweep_options_t) :: so
@@ -407,20 +579,34 @@ contains
             ! the energies per cycle: viscous (C) and the input of -xi M, from the velocity
             ! coefficients (the integral of v^T A v over a period)
             period = 2.0_dp*pi/omega
-            viscous = quadratic_mean(ps, fam%model%damping)*period
+            viscous = quadratic_mean(ps, damping)*period
             kinetic = quadratic_mean(ps, fam%model%mass)*period
             mp%energy_input = xi*kinetic
             p%diss_friction = ps%diss_friction
             p%diss_damping = viscous
             p%dissipation = ps%diss_friction + viscous
+            ! relative to the larger of the two, and at least to what a damping ratio of
+            ! 1e-6 would dissipate (a stuck, undamped mode dissipates nothing: its roundoff
+            ! energies are no error)
             mp%energy_error = abs(mp%energy_input - p%dissipation)/ &
-                              max(abs(mp%energy_input), abs(p%dissipation), tiny(1.0_dp))
+                              max(abs(mp%energy_input), abs(p%dissipation), &
+                                  2.0e-6_dp*omega*kinetic, tiny(1.0_dp))
             p%floquet_max = 0.0_dp
             p%stable = -1
             p%truncation = 0.0_dp
         end associate
         mp%xi = xi
         mp%damping_ratio = xi/(2.0_dp*omega)
+        mp%omega_error = ieee_value(1.0_dp, ieee_quiet_nan)
+        mp%damping_error = mp%omega_error
+        if (present(low) .and. present(copts)) call ladder_errors(fam, low, copts, state, mp)
+        if (mp%omega_error > omega_error_warning .or. mp%damping_error > &
+            max(damping_error_warning*abs(mp%damping_ratio), damping_error_floor)) then
+            write (buf, '(a,2(es10.2e3,a))') "nonlinear mode: truncation error estimate "// &
+                "(vs half the harmonics) of omega ", mp%omega_error, " (relative), of D ", &
+                mp%damping_error, " (absolute): more &hbm harmonics"
+            call diag%add(level_warning, "truncation", trim(buf))
+        end if
         ! the checks: the energy balance and Coulomb's law
         if (mp%energy_error > energy_untrusted) then
             write (buf, '(a,es10.2e3)') "nonlinear mode: energy balance error (input of the "// &
@@ -439,6 +625,45 @@ contains
         end if
         call tally%add_point(diag, 0.0_dp, mp%p%parameter, mp%p%check_level, mp%p%check)
     end subroutine evaluate_mode_point
+
+    !> The truncation estimates of the point `state` of `fam`: the point solved again by
+    !> `low` (the family on half the harmonics) at the same modal amplitude, from its
+    !> truncated forces, omega and xi, on half the samples too when they resolve it;
+    !> mp%omega_error = 2 |omega - omega_low| / omega and mp%damping_error = 2 |D - D_low|.
+    !> Left NaN when that solve fails.
+    subroutine ladder_errors(fam, low, copts, state, mp)
+        type(modes_family_t), intent(inout) :: fam, low
+        type(continuation_options_t), intent(in) :: copts
+        type(continuation_state_t), intent(in) :: state
+        type(mode_point_t), intent(inout) :: mp
+        type(continuation_options_t) :: co
+        type(continuation_state_t) :: st
+        type(continuation_report_t) :: rp
+        type(error_type), allocatable :: err
+        real(dp), allocatable :: r(:, :)
+        real(dp) :: omega_low, d_low
+        integer :: n, nb, nbl, nc
+        n = fam%n
+        nb = fam%prob%basis%nb
+        nc = fam%prob%nc
+        nbl = low%prob%basis%nb
+        r = reshape(state%y(1:n), [nb, nc])
+        co = copts
+        co%start = state%lambda
+        co%stop = state%lambda + (copts%stop - copts%start)
+        co%yscale = [spread(copts%yscale(1), 1, low%n), copts%yscale(n + 1:n + 2)]
+        call start_continuation(low, co, [reshape(r(1:nbl, :), [nbl*nc]), state%y(n + 1), &
+                                          state%y(n + 2)], st, rp, err)
+        if (allocated(err)) return
+        if (.not. rp%accepted) return
+        omega_low = st%y(low%n + 1)
+        if (.not. (omega_low > 0.0_dp)) return
+        d_low = st%y(low%n + 2)/(2.0_dp*omega_low)
+        ! twice the differences: the error of H when the ladder converges like H^-0.6 or
+        ! faster (the stick-slip transition converges about like H^-0.5 to H^-1)
+        mp%omega_error = 2.0_dp*abs(mp%p%omega - omega_low)/mp%p%omega
+        mp%damping_error = 2.0_dp*abs(mp%damping_ratio - d_low)
+    end subroutine ladder_errors
 
     !> (1/T) integral over a period of v^T A v for the solution's velocity coefficients:
     !> v0^T A v0 + (1/2) sum_h (a_h^T A a_h + b_h^T A b_h).

@@ -43,7 +43,7 @@ module stickslip_case_studies
 contains
 
     !> Read &modes (optional; `given` tells whether it is present): mode, amplitude_start and
-    !> amplitude_stop (both required with the group), points, plot; validate.
+    !> amplitude_stop (both required with the group), points, plot, error_estimate; validate.
     subroutine read_modes_group(nml, opts, given, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
@@ -58,7 +58,7 @@ contains
         given = nml%find(g) > 0
         if (.not. given) return
         call check_names(nml, g, [character(len=16) :: "mode", "amplitude_start", &
-                             "amplitude_stop", "points", "plot"], error)
+                             "amplitude_stop", "points", "plot", "error_estimate"], error)
         if (allocated(error)) return
         call get_integer(nml, g, "mode", opts%mode, error)
         if (allocated(error)) return
@@ -79,6 +79,8 @@ contains
         call get_integer(nml, g, "points", opts%points, error)
         if (allocated(error)) return
         call get_logical(nml, g, "plot", opts%plot, error)
+        if (allocated(error)) return
+        call get_logical(nml, g, "error_estimate", opts%error_estimate, error)
         if (allocated(error)) return
         call validate_modes_options(opts%modes_options_t, error)
         if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['modes'])

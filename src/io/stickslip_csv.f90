@@ -516,7 +516,9 @@ contains
     !> |x_d| [m] of the DOFs selected, as frc.csv's), dissipation, diss_friction,
     !> diss_viscous [J per cycle], energy_error (|input - dissipation| / input),
     !> rmax_1..rmax_C [N], stick_1..stick_C, harmonics, residual, status, nfev; with contact
-    !> laws then open_1..open_C, slip_1..slip_C, normal_max_1..normal_max_C. Error: stat io.
+    !> laws then open_1..open_C, slip_1..slip_C, normal_max_1..normal_max_C; then trusted,
+    !> check, omega_error (relative) and damping_error (of D) as estimated against half the
+    !> harmonics (NaN when not estimated). Error: stat io.
     subroutine write_modes_csv(dir, res, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
@@ -555,7 +557,7 @@ contains
                  columns("rmax_", [(i, i=1, nc)])//columns("stick_", [(i, i=1, nc)])// &
                  ",harmonics,residual,status,nfev"
         if (laws) header = header//law_columns(nc)
-        header = header//",trusted,check"
+        header = header//",trusted,check,omega_error,damping_error"
         call open_temporary(dir, "modes.csv", u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
@@ -572,8 +574,10 @@ contains
                 if (stat == 0 .and. laws) write (u, '(*(:,",",' // real_fmt // '))', &
                                                  iostat=stat, iomsg=msg, advance='no') &
                     p%open, 1.0_dp - p%open - p%stick, p%normal_max
-                if (stat == 0) write (u, '(",",i0,",",a)', iostat=stat, iomsg=msg) &
-                    merge(0, 1, p%check_level >= level_untrusted), trim(p%check)
+                if (stat == 0) write (u, '(",",i0,",",a,2(",",' // real_fmt // '))', &
+                                      iostat=stat, iomsg=msg) &
+                    merge(0, 1, p%check_level >= level_untrusted), trim(p%check), &
+                    m%omega_error, m%damping_error
             end associate
         end do
         call close_and_rename(dir, "modes.csv", u, stat, msg, error)

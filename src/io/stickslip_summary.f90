@@ -4,6 +4,7 @@
 !> the effective case as namelist groups (read_case reads the file back as a case). Keys are
 !> contracts (doc/outputs.md). Written under a unique temporary name and renamed.
 module stickslip_summary
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, itoa
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
@@ -518,6 +519,11 @@ contains
                          stat, msg)
                 call put(u, "  max_energy_error = "//rtoa(maxval(pts%energy_error)), stat, msg)
                 call put(u, "  max_residual = "//rtoa(maxval(pts%p%residual)), stat, msg)
+                ! the largest truncation estimates (NaN where none was made)
+                call put(u, "  max_omega_error = "// &
+                         rtoa(finite_max([(pts(k)%omega_error, k=1, n)])), stat, msg)
+                call put(u, "  max_damping_error = "// &
+                         rtoa(finite_max([(pts(k)%damping_error, k=1, n)])), stat, msg)
             end associate
         end if
         call put(u, "  folds = "//itoa(res%folds), stat, msg)
@@ -529,6 +535,16 @@ contains
         end if
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_modes_summary
+
+    !> The largest finite value of x (NaN when none is).
+    real(dp) function finite_max(x) result(m)
+        real(dp), intent(in) :: x(:)
+        if (any(ieee_is_finite(x))) then
+            m = maxval(x, mask=ieee_is_finite(x))
+        else
+            m = ieee_value(1.0_dp, ieee_quiet_nan)
+        end if
+    end function finite_max
 
     !> Write `dir`/summary.nml for a robustness study: &summary (method = 'robustness', rows,
     !> then per method runs_<m> and successes_<m>, m = hbm_cold, hbm_warm, euler), then the

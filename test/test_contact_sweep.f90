@@ -14,7 +14,8 @@ module test_contact_sweep
     use stickslip_hbm, only: solve_periodic
     use stickslip_reference, only: reference_options_t
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
-    use stickslip_sweep_options, only: set_sweep_parameter
+    use stickslip_sweep_options, only: set_sweep_parameter, continuation_options_of
+    use stickslip_continuation, only: continuation_options_t, validate_continuation_options
     use stickslip_friction_family, only: friction_family_t, new_friction_family
     use fixtures, only: damped_seed, unilateral_seed, liftoff_model, planar_model
     use stickslip_diagnostics, only: level_untrusted
@@ -35,7 +36,34 @@ contains
         call test_designer_fold(t)
         call test_designer_stuck(t)
         call test_designer_crawl(t)
+        call test_automatic_step(t)
     end subroutine run_contact_sweep_tests
+
+    !> The automatic first step (|stop - start| / 100) stays within the min_step and max_step
+    !> a case gives: `&sweep max_step = 0.01` alone on a range of 2.2 was refused ("need
+    !> min_step <= step <= max_step (... <= 0.022 <= 0.01)"), the remedy the sweep's own
+    !> failure message gives.
+    subroutine test_automatic_step(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sweep_options_t) :: so
+        type(continuation_options_t) :: co
+        type(error_type), allocatable :: error
+        so%parameter = 'omega'
+        so%start = 3.0_dp
+        so%stop = 0.8_dp
+        so%max_step = 0.01_dp
+        co = continuation_options_of(so)
+        call validate_continuation_options(co, error)
+        call check(t, .not. allocated(error) .and. co%step == 0.01_dp .and. &
+                   co%max_step == 0.01_dp, "contact_sweep: max_step alone bounds the "// &
+                   "automatic step", real_text(co%step))
+        so%max_step = 0.0_dp
+        so%min_step = 0.05_dp
+        co = continuation_options_of(so)
+        call validate_continuation_options(co, error)
+        call check(t, .not. allocated(error) .and. co%step == 0.05_dp, "contact_sweep: "// &
+                   "min_step alone bounds the automatic step", real_text(co%step))
+    end subroutine test_automatic_step
 
     !> The designer's 3-DOF case (examples/designer_damper.nml, issue 24): DOF 1 the blade,
     !> DOFs 2 and 3 the platform's tangential and normal motion, an elastic unilateral

@@ -12,7 +12,8 @@
 !> - the change from a coarser harmonic set H_c = H/2 (same samples; the coarse solve is
 !>   warm-started from the fine coefficients truncated to the coarse basis, a prefix of the
 !>   fine one, so it is cheap): of the displacement history of every DOF,
-!>   max_t |x_p(t; H) - x_p(t; H_c)| relative to the amplitude A_p = max_t |x_p(t)|, and of
+!>   max_t |x_p(t; H) - x_p(t; H_c)| relative to the amplitude A_p = max_t |x_p(t)| (at least
+!>   1e-3 of the largest A_p: a DOF that hardly moves does not make the estimate), and of
 !>   the friction dissipation per period relative to the forcing work per period. For an
 !>   error decaying like C H^-p this change is (2^p - 1) times the error at H; it also sees
 !>   what a residual cannot (an ill-conditioned response). The sup norm, not the change of
@@ -48,6 +49,9 @@ module stickslip_truncation
     !> Fine-grid factor: the Coulomb defect and the amplitudes are evaluated at
     !> truncation_oversample * samples points per period.
     integer, parameter :: truncation_oversample = 4
+    !> A DOF's displacement change is relative to its amplitude, at least this share of the
+    !> largest amplitude.
+    real(dp), parameter :: amplitude_floor = 1.0e-3_dp
     !> Velocity floor of the Coulomb defect, relative to the peak velocity of the structure:
     !> a contact stuck all period (slip velocity ~ solver tolerance) is not divided by ~0.
     real(dp), parameter :: velocity_floor = 1.0e-4_dp
@@ -550,7 +554,10 @@ contains
         call new_fine_grid(grid, fb, truncation_oversample)
         allocate (xt(nf), xc(fine%nb))
         amax = maxval(est%amplitude)
-        floor_amp = max(1.0e-12_dp*amax, tiny(1.0_dp))
+        ! a DOF that hardly moves (a contact DOF stuck but for tiny slips, 1e-6 of the
+        ! response) is measured against 1e-3 of the largest amplitude, not its own: its
+        ! relative change can be large while the response's error is not
+        floor_amp = max(amplitude_floor*amax, tiny(1.0_dp))
         do p = 1, observed_count(model, observe)
             ! the coarse series, embedded in the fine basis, and the difference
             xc = 0.0_dp

@@ -60,21 +60,15 @@ contains
         type(modes_result_t) :: res
         type(error_type), allocatable :: error
         integer :: n
+        ! the seed's contact (DOF 2, mu N = 0.45) on the 3-DOF chain
+        m = seed(0.0_dp, 0.0_dp)
         m%ndof = 3
         m%mass = reshape([1.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 1.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, &
                           1.0_dp], [3, 3])
         m%stiffness = reshape([2.0_dp, -1.0_dp, 0.0_dp, -1.0_dp, 2.0_dp, -1.0_dp, 0.0_dp, &
                                -1.0_dp, 2.0_dp], [3, 3])
         m%damping = 0.01_dp*(m%mass + m%stiffness)
-        m%omega = 1.0_dp
-        m%force_dof = [1]
-        m%force_harmonic = [1]
         m%force_amplitude = [0.0_dp]
-        m%force_phase = [0.0_dp]
-        m%contact_dof = [2]
-        m%contact_dof2 = [0]
-        m%mu = [0.45_dp]
-        m%normal_load = [1.0_dp]
         ho%harmonics = 7
         ho%samples = 512
         mo%amplitude_start = 0.01_dp

@@ -190,8 +190,9 @@ contains
         free = free_structure(model)
         if (frictionless(free)) then
             call fatal_error(error, "nonlinear modes: &friction mu = 0 (mu N = 0) at every "// &
-                             "contact and no normal law: the contacts carry no force, so every mode is the free "// &
-                             "structure's linear mode at every amplitude (frequency and "// &
+                             "contact and no normal law: the contacts carry no force, so "// &
+                             "every mode is the free structure's linear mode at every "// &
+                             "amplitude (frequency and "// &
                              "damping constant: the linear modes, e.g. &run method = 'hbm' "// &
                              "or a sweep with mu = 0); give a friction coefficient > 0", &
                              stickslip_stat%input)

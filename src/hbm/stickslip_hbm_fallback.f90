@@ -13,7 +13,8 @@
 !>     grows; its own rho is reported in hbm_solution_t%rho);
 !>  4. the load homotopy at rho again, past the turning points of its path (a fold of the
 !>     response in the load: the natural steps stall there) by pseudo-arclength steps
-!>     (arclength_load), with a budget of its own.
+!>     (arclength_load) from where the natural steps of stage 2 stalled (load_stall_t; from
+!>     s = 0 when they did not get two answers), with a budget of its own.
 !> Each returns converged (sol%converged) or leaves y at its best point. The stage that
 !> succeeded is named in hbm_solution_t%rescue. A NaN met in a stage fails that stage only.
 module stickslip_hbm_fallback
@@ -48,6 +49,15 @@ module stickslip_hbm_fallback
     !> The other weights tried, as factors of rho, in this order.
     real(dp), parameter :: rho_factors(4) = [0.25_dp, 4.0_dp, 0.0625_dp, 16.0_dp]
 
+    !> Where the natural steps of a load homotopy stalled: its last two answers (ya at sa,
+    !> yb at s; have = .false. when it did not get two), so that the arclength stage goes on
+    !> from there instead of walking the natural steps again.
+    type :: load_stall_t
+        logical :: have = .false.
+        real(dp) :: sa = 0.0_dp, s = 0.0_dp
+        real(dp), allocatable :: ya(:), yb(:)
+    end type load_stall_t
+
 contains
 
     !> The fallbacks in order (module doc) after a failed first attempt whose last iterate
@@ -79,6 +89,7 @@ contains
         real(dp), allocatable :: ybest(:), ya(:), zero(:, :)
         real(dp) :: best, step_target, fscale_alt, target_alt, fnorm_alt
         integer :: k, last_njev, njev0
+        type(load_stall_t) :: stall
 
         rho_used = o%rho
         if (rigid_contact_opens(prob, y)) return
@@ -94,7 +105,8 @@ contains
             return
         end if
         call keep_best()
-        call rescue_load(prob, o, y, target_norm, step_target, sol, error, last_njev)
+        call rescue_load(prob, o, y, target_norm, step_target, sol, error, last_njev, &
+                         stall=stall)
         if (stage_failed()) return
         if (sol%converged) then
             sol%rescue = 'load'
@@ -148,12 +160,12 @@ contains
             end if
             call alt%destroy()
         end do
-        ! last: the load homotopy at rho again, past the turning points of its path, with a
-        ! budget of its own as large as the one spent
+        ! last: the load homotopy at rho again, past the turning points of its path, from
+        ! where its natural steps stalled, with a budget of its own as large as the one spent
         y = ybest
         last_njev = sol%njev + max(fallback_budget_min, fallback_budget_factor*njev0)
         call rescue_load(prob, o, y, target_norm, step_target, sol, error, last_njev, &
-                         arclength=.true.)
+                         arclength=.true., resume=stall)
         if (stage_failed()) return
         if (sol%converged) then
             sol%rescue = 'arclength'
@@ -260,7 +272,7 @@ contains
     !> `target_norm`; it stops short once sol%njev reaches last_njev. y: the answer at s = 1
     !> when converged, else the start. prob%dyn%v0 is restored.
     subroutine rescue_load(prob, opts, y, target_norm, step_target, sol, error, last_njev, &
-                           arclength)
+                           arclength, stall, resume)
         !> The projected contact equations.
         type(hb_problem_t), intent(inout) :: prob
         !> Solver options in effect (rho set).
@@ -279,6 +291,10 @@ contains
         integer, intent(in) :: last_njev
         !> Where the natural steps stall, follow the path in its arclength (arclength_load).
         logical, intent(in), optional :: arclength
+        !> Where the natural steps stalled (their last two answers), when they did.
+        type(load_stall_t), intent(out), optional :: stall
+        !> Go on from there (no natural steps) when it holds two answers.
+        type(load_stall_t), intent(in), optional :: resume
         complex(dp), allocatable :: v0(:, :)
         real(dp), allocatable :: ya(:), yb(:), yt(:), ystart(:)
         real(dp) :: s, sa, ds, st, tgt
@@ -287,6 +303,22 @@ contains
 
         v0 = prob%dyn%v0
         ystart = y
+        if (present(resume)) then
+            if (resume%have) then
+                ya = resume%ya
+                sa = resume%sa
+                yb = resume%yb
+                s = resume%s
+                have_two = .true.
+                ok = .false.
+                if (present(arclength)) ok = arclength
+                if (ok) call arclength_load(prob, opts, v0, ya, sa, yb, s, target_norm, &
+                                            step_target, sol, error, last_njev, ok)
+                if (ok .and. .not. allocated(error)) s = 1.0_dp
+                call finish(s >= 1.0_dp)
+                return
+            end if
+        end if
         ! s = 0: the static state, from no contact force
         allocate (ya(size(y)))
         ya = 0.0_dp
@@ -326,6 +358,13 @@ contains
         end do
         ! stalled short of s = 1 (a turning point of the path in the load: a fold of the
         ! response): follow the path in its arclength from the last two answers
+        if (present(stall) .and. s < 1.0_dp .and. have_two) then
+            stall%have = .true.
+            stall%ya = ya
+            stall%sa = sa
+            stall%yb = yb
+            stall%s = s
+        end if
         if (present(arclength)) ok = arclength
         if (.not. present(arclength)) ok = .false.
         if (ok .and. s < 1.0_dp .and. have_two .and. .not. allocated(error)) then

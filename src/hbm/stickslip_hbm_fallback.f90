@@ -299,10 +299,12 @@ contains
         real(dp), allocatable :: ya(:), yb(:), yt(:), ystart(:)
         real(dp) :: s, sa, ds, st, tgt
         integer :: k
-        logical :: have_two, ok
+        logical :: have_two, ok, follow
 
         v0 = prob%dyn%v0
         ystart = y
+        follow = .false.
+        if (present(arclength)) follow = arclength
         if (present(resume)) then
             if (resume%have) then
                 ya = resume%ya
@@ -311,9 +313,8 @@ contains
                 s = resume%s
                 have_two = .true.
                 ok = .false.
-                if (present(arclength)) ok = arclength
-                if (ok) call arclength_load(prob, opts, v0, ya, sa, yb, s, target_norm, &
-                                            step_target, sol, error, last_njev, ok)
+                if (follow) call arclength_load(prob, opts, v0, ya, sa, yb, s, target_norm, &
+                                                step_target, sol, error, last_njev, ok)
                 if (ok .and. .not. allocated(error)) s = 1.0_dp
                 call finish(s >= 1.0_dp)
                 return
@@ -365,9 +366,7 @@ contains
             stall%yb = yb
             stall%s = s
         end if
-        if (present(arclength)) ok = arclength
-        if (.not. present(arclength)) ok = .false.
-        if (ok .and. s < 1.0_dp .and. have_two .and. .not. allocated(error)) then
+        if (follow .and. s < 1.0_dp .and. have_two .and. .not. allocated(error)) then
             call arclength_load(prob, opts, v0, ya, sa, yb, s, target_norm, step_target, sol, &
                                 error, last_njev, ok)
             if (ok) s = 1.0_dp

@@ -14,9 +14,10 @@
 !> A contact stuck over the whole period holds any mean tangential force within its limits
 !> (the equations leave it free: a family of equally admissible answers at one parameter
 !> value). The continuation keeps the mean the branch arrived with: the rows of the
-!> tangential channels' mean forces get the term pin_weight rho (R_0 - R_0 of the last
-!> accepted point), which pins a free mean and leaves a determined one (a contact with slip
-!> phases) unchanged to about pin_weight times the change of one step. The points the
+!> tangential channels' mean forces get the term w rho (R_0 - R_0 of the last accepted
+!> point), w = pin_share times the solver tolerance: it pins a free mean (the rest of that
+!> row is roundoff) and moves a determined one (a contact with slip phases) by less than
+!> the tolerance, so that the reported point's solve starts at its answer. The points the
 !> sweep reports are settled by the single solve's rule (stickslip_hbm_finish).
 module stickslip_friction_family
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -33,7 +34,7 @@ module stickslip_friction_family
     use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_friction, only: psi_limit_derivative
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_contact_element, only: state_stick, along_normal
+    use stickslip_contact_element, only: state_stick
     use stickslip_model, only: preload_force
     use stickslip_continuation, only: parametric_system_t
     use stickslip_sweep_options, only: set_sweep_parameter
@@ -44,8 +45,9 @@ module stickslip_friction_family
     !> Dynamics kept by a friction family in omega (distinct omega values).
     integer, parameter, public :: dynamics_cache_size = 4
 
-    !> Weight of the term that pins the tangential mean forces to the last accepted point's.
-    real(dp), parameter :: pin_weight = 1.0e-8_dp
+    !> Weight of the term that pins the tangential mean forces to the last accepted point's,
+    !> as a share of the solver tolerance (&hbm tol).
+    real(dp), parameter :: pin_share = 0.1_dp
 
     !> The projected friction equations as a family in the parameter.
     type, extends(parametric_system_t) :: friction_family_t
@@ -129,7 +131,7 @@ contains
         integer, intent(in), optional :: dofs(:)
         !> Build the problem (default .true.).
         logical, intent(in), optional :: build
-        integer :: nb, nc, stat, k
+        integer :: nb, nc, stat
         fam%model = model
         fam%opts = hbm
         fam%opts%rho = rho
@@ -171,13 +173,7 @@ contains
         if (allocated(error)) return
         nb = fam%prob%basis%nb
         nc = fam%prob%nc
-        allocate (fam%mean_rows(0))
-        if (fam%prob%basis%i0 > 0) then
-            do k = 1, nc
-                if (fam%prob%contacts%along(k) /= along_normal) &
-                    fam%mean_rows = [fam%mean_rows, (k - 1)*nb + fam%prob%basis%i0]
-            end do
-        end if
+        fam%mean_rows = fam%prob%tangential_mean_rows()
         allocate (fam%states(hbm%samples, fam%prob%contacts%ncontact))
         allocate (fam%rs(hbm%samples, nc), fam%vs(hbm%samples, nc), fam%ss(hbm%samples, nc), &
                   fam%dv(nb, nc), fam%dvs(hbm%samples), fam%cw(hbm%samples/2 + 1))
@@ -365,7 +361,8 @@ contains
         end if
         call self%prob%residual(y, f, stat)
         if (allocated(self%anchor_y)) f(self%mean_rows) = f(self%mean_rows) + &
-            pin_weight*self%prob%rho*(y(self%mean_rows) - self%anchor_y(self%mean_rows))
+            pin_share*self%opts%tol*self%prob%rho*(y(self%mean_rows) - &
+                                                   self%anchor_y(self%mean_rows))
     end subroutine family_residual
 
     !> Pin the tangential mean forces to those of y (the point the continuation goes on from).
@@ -398,7 +395,8 @@ contains
         if (allocated(self%anchor_y)) then
             do j = 1, size(self%mean_rows)
                 jy(self%mean_rows(j), self%mean_rows(j)) = &
-                    jy(self%mean_rows(j), self%mean_rows(j)) + pin_weight*self%prob%rho
+                    jy(self%mean_rows(j), self%mean_rows(j)) + &
+                    pin_share*self%opts%tol*self%prob%rho
             end do
         end if
         if (.not. self%prob%contacts%coulomb_only) then

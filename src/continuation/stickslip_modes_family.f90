@@ -34,7 +34,6 @@ module stickslip_modes_family
     use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
     use stickslip_dynamics, only: dynamics_t, new_dynamics
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_contact_element, only: along_normal
     use stickslip_continuation, only: parametric_system_t
     implicit none
     private
@@ -114,7 +113,7 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(contact_set_t) :: cs
-        integer :: k, nb, j, c
+        integer :: k, nb
         type(model_t) :: m
         fam%model = free_structure(model)
         fam%model%omega = omega_ref
@@ -154,15 +153,9 @@ contains
                              stickslip_stat%input)
             return
         end if
-        allocate (fam%mean_rows(0))
-        if (fam%prob%basis%i0 > 0) then
-            ! the tangential channels' mean forces (undetermined where they stick all period)
-            fam%mean_weight = mean_weight
-            do c = 1, cs%nchannel
-                if (cs%along(c) /= along_normal) &
-                    fam%mean_rows = [fam%mean_rows, (c - 1)*nb + fam%prob%basis%i0]
-            end do
-        end if
+        ! the tangential channels' mean forces (undetermined where they stick all period)
+        fam%mean_rows = fam%prob%tangential_mean_rows()
+        if (size(fam%mean_rows) > 0) fam%mean_weight = mean_weight
     end subroutine new_modes_family
 
     !> Move the family's dynamics to (omega, xi): Z_h with damping C - xi M, factorized

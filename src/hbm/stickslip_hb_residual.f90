@@ -25,7 +25,7 @@ module stickslip_hb_residual
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_contact_element, only: hb_work_t, channel_t, kinematics_gap, &
-        kinematics_velocity
+        kinematics_velocity, along_normal
     implicit none
     private
     public :: hb_problem_t, new_hb_problem, new_condensed_problem
@@ -54,6 +54,7 @@ module stickslip_hb_residual
         procedure :: jacobian => hb_jacobian
         procedure :: kinematics
         procedure :: law_samples
+        procedure :: tangential_mean_rows
         procedure :: destroy => hb_destroy
     end type hb_problem_t
 
@@ -385,6 +386,20 @@ contains
                                                     u(:, c0:c0 + m - 1), state(:, j))
         end do
     end subroutine law_samples
+
+    !> The rows (and columns) of the tangential channels' mean forces among the unknowns
+    !> (channel c's constant term, (c - 1) nb + i0); none when the basis has no constant.
+    !> A contact stuck all period leaves these free: the families pin them.
+    function tangential_mean_rows(self) result(rows)
+        !> The problem.
+        class(hb_problem_t), intent(in) :: self
+        integer, allocatable :: rows(:)
+        integer :: c
+        allocate (rows(0))
+        if (self%basis%i0 <= 0) return
+        rows = pack([((c - 1)*self%basis%nb + self%basis%i0, c=1, self%nc)], &
+                    self%contacts%along(1:self%nc) /= along_normal)
+    end function tangential_mean_rows
 
     !> Release the FFT plans of the problem's basis.
     subroutine hb_destroy(self)

@@ -5,6 +5,7 @@
 module stickslip_expm
     use stickslip_kinds, only: dp
     use stickslip_lapack, only: dgetrf, dgetrs
+    use stickslip_dense_products, only: mat_mul
     implicit none
     private
     public :: expm
@@ -54,7 +55,7 @@ contains
         xk = x
         do k = 2, q
             c = c*real(q - k + 1, dp)/real(k*(2*q - k + 1), dp)
-            xk = matmul(x, xk)
+            xk = mat_mul(x, xk)
             num = num + c*xk
             if (mod(k, 2) == 0) then
                 den = den + c*xk
@@ -69,7 +70,7 @@ contains
         end if
         call dgetrs('N', n, n, den, n, ipiv, num, n, stat)
         do k = 1, s
-            num = matmul(num, num)
+            num = mat_mul(num, num)
         end do
         e = num
     end subroutine expm

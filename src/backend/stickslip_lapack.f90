@@ -1,12 +1,12 @@
 !> Explicit interfaces to the few LAPACK routines stickslip calls (system liblapack), and
-!> BLAS's dgemm (system libblas).
+!> BLAS's dgemm and dgemv (system libblas).
 !> Only interfaces: no state, no wrappers that hide `info`.
 module stickslip_lapack
     use stickslip_kinds, only: dp, sp
     implicit none
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
-        zgesv, dsygv, sgetrf, sgetrs, dgemm
+        zgesv, dsygv, sgetrf, sgetrs, dgemm, dgemv
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -46,6 +46,16 @@ module stickslip_lapack
             real(dp), intent(in) :: a(lda, *), b(ldb, *)
             real(dp), intent(inout) :: c(ldc, *)
         end subroutine dgemm
+
+        !> y <- alpha op(A) x + beta y (BLAS).
+        subroutine dgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
+            import :: dp
+            character(len=1), intent(in) :: trans
+            integer, intent(in) :: m, n, lda, incx, incy
+            real(dp), intent(in) :: alpha, beta
+            real(dp), intent(in) :: a(lda, *), x(*)
+            real(dp), intent(inout) :: y(*)
+        end subroutine dgemv
 
         !> Solve with the LU factors from dgetrf.
         subroutine dgetrs(trans, n, nrhs, a, lda, ipiv, b, ldb, info)

@@ -26,6 +26,7 @@ module stickslip_flow
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_expm, only: expm
+    use stickslip_dense_products, only: mat_mul
     use stickslip_flow_modes, only: ngauss, mode_t, flow_modes_t, new_flow_modes, propagate, &
         propagate_matrix, gauss_exponentials, identity_matrix
     use stickslip_flow_algebra, only: mode_index, start_codes, decide_codes, impact_jump, &
@@ -207,7 +208,7 @@ contains
                 if (want_energy) call energy(self%modes(im), t, yb, te, .false.)
                 if (want_mono) then
                     call expm(self%modes(im)%b(1:nz, 1:nz)*(te - tp), phi, stat)
-                    jac = matmul(phi, jac)
+                    jac = mat_mul(phi, jac)
                     fm = matmul(self%modes(im)%b, yeb)
                 end if
             end if
@@ -288,12 +289,12 @@ contains
                 ! does not see), J the jump of an impact
                 fp = rate(imnew, yeb)
                 h = dot_product(hit%c, fm)
-                sal = matmul(pv, jump)
+                sal = mat_mul(pv, jump)
                 if (abs(h) > 1.0e-300_dp) then
                     fm(1:nz) = matmul(sal, fm(1:nz))
                     call add_saltation(sal, fp, fm, hit%c, h)
                 end if
-                jac = matmul(sal, jac)
+                jac = mat_mul(sal, jac)
             end if
             if (want_orbit) then
                 do j = 1, self%nc

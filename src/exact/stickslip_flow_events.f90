@@ -9,6 +9,7 @@
 !> Newton iteration on the exact solution.
 module stickslip_flow_events
     use stickslip_kinds, only: dp
+    use stickslip_dense_products, only: mat_mul, mat_vec
     use stickslip_flow_modes, only: mode_t, flow_modes_t, propagate
     use stickslip_expm, only: expm
     implicit none
@@ -274,10 +275,10 @@ contains
             db = dot_product(md%drows(:, col), yb)
             thr = 1.0e-9_dp*gscale*self%omega
             if (gb <= 0.0_dp) then
-                tau = first_crossing(md, self%delta, ya, r, 0, h)
+                tau = first_crossing(md, self%delta, ya, r, 0, h, yb)
             else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
                 ! a dip between two positive values: does its minimum go below zero?
-                tmin = first_crossing(md, self%delta, ya, -r, 1, h)
+                tmin = first_crossing(md, self%delta, ya, -r, 1, h, yb)
                 if (value_at(md, self%delta, ya, r, tmin) > 0.0_dp) return
                 tau = first_crossing(md, self%delta, ya, r, 0, tmin)
             end if
@@ -296,15 +297,23 @@ contains
     !> A crossing of zero of g(tau) = r . b^order exp(b tau) y0 in (0, hi], taken to be
     !> positive at 0 and known to be <= 0 at hi: safeguarded Newton iteration (bisection
     !> when a Newton step leaves the bracket or stalls) until the bracket is a few ulps of
-    !> the period wide. Returns the end of the bracket where g <= 0.
-    real(dp) function first_crossing(md, delta, y0, r, order, hi0) result(hi)
+    !> the period wide. Returns the end of the bracket where g <= 0. The first iterate is
+    !> the root of the cubic Hermite interpolant of g over the bracket (g and its slope at
+    !> both ends: no propagation at 0); once a Newton step is below the bracket tolerance,
+    !> one more propagation a few ulps past the iterate closes the bracket (each
+    !> propagation costs dozens of matrix-vector products: a stiff reduced model with many
+    !> contacts spent most of its stability time here).
+    real(dp) function first_crossing(md, delta, y0, r, order, hi0, yhi) result(hi)
         type(mode_t), intent(in) :: md
         real(dp), intent(in) :: delta, y0(:), r(:)
         integer, intent(in) :: order
         real(dp), intent(in) :: hi0
+        !> The state at hi0 when the caller has it (exp(b hi0) y0).
+        real(dp), intent(in), optional :: yhi(:)
         real(dp) :: lo, tau, g, dg, step, old_step, tol, row(size(r)), row1(size(r))
-        real(dp) :: y(size(y0))
+        real(dp) :: y(size(y0)), g0, dg0, t2, bnorm, tlast, ylast(size(y0))
         integer :: iter, k
+        logical :: newton
         row = r
         do k = 1, order
             row = matmul(row, md%b)
@@ -313,30 +322,58 @@ contains
         lo = 0.0_dp
         hi = hi0
         tol = 4.0_dp*epsilon(1.0_dp)*hi0 + tiny(1.0_dp)
+        g0 = dot_product(row, y0)
+        dg0 = dot_product(row1, y0)
+        bnorm = maxval(sum(abs(md%b), 2))
         tau = hi
-        call propagate(md, delta, tau, y0, y)
+        if (present(yhi)) then
+            y = yhi
+        else
+            call propagate(md, delta, tau, y0, y)
+        end if
+        tlast = tau
+        ylast = y
         g = dot_product(row, y)
         dg = dot_product(row1, y)
+        if (g > 0.0_dp .or. hi - lo <= tol) return
+        ! the root of the cubic Hermite interpolant, a first iterate inside the bracket
+        tau = hermite_root(g0, dg0, g, dg, hi)
+        if (tau > lo .and. tau < hi) then
+            call state_at(tau)
+            g = dot_product(row, y)
+            dg = dot_product(row1, y)
+            if (g > 0.0_dp) then
+                lo = tau
+            else
+                hi = tau
+            end if
+            if (g == 0.0_dp) return
+        else
+            tau = hi
+        end if
         old_step = hi - lo
         step = old_step
         do iter = 1, 200
             if (hi - lo <= tol) exit
             ! Newton from tau, unless it leaves (lo, hi) or does not halve the bracket
+            newton = .false.
             if (dg /= 0.0_dp .and. abs(2.0_dp*g) < abs(old_step*dg)) then
                 old_step = step
                 step = g/dg
                 tau = tau - step
+                newton = .true.
                 if (.not. (tau > lo .and. tau < hi)) then
                     tau = 0.5_dp*(lo + hi)
                     old_step = step
                     step = hi - lo
+                    newton = .false.
                 end if
             else
                 old_step = step
                 step = 0.5_dp*(hi - lo)
                 tau = 0.5_dp*(lo + hi)
             end if
-            call propagate(md, delta, tau, y0, y)
+            call state_at(tau)
             g = dot_product(row, y)
             dg = dot_product(row1, y)
             if (g > 0.0_dp) then
@@ -345,8 +382,86 @@ contains
                 hi = tau
             end if
             if (g == 0.0_dp) exit
+            if (newton .and. abs(step) <= tol) then
+                ! converged: the root is within a few ulps of tau on the side Newton
+                ! approaches from; close the bracket there
+                if (g > 0.0_dp) then
+                    t2 = min(tau + 2.0_dp*abs(step) + tol, hi)
+                    if (t2 >= hi) exit
+                    call state_at(t2)
+                    if (dot_product(row, y) <= 0.0_dp) then
+                        hi = t2
+                        exit
+                    end if
+                    lo = t2
+                else
+                    t2 = max(tau - 2.0_dp*abs(step) - tol, lo)
+                    if (t2 <= lo) exit
+                    call state_at(t2)
+                    if (dot_product(row, y) > 0.0_dp) then
+                        lo = t2
+                        exit
+                    end if
+                    hi = t2
+                end if
+            end if
         end do
+
+    contains
+
+        !> y = exp(b t) y0: from the last state computed by a Taylor series when t is within
+        !> 1/16 of ||b||^-1 of it (a Newton step near the root: a few matrix-vector products,
+        !> forward or back), else by propagate from y0.
+        subroutine state_at(t)
+            real(dp), intent(in) :: t
+            real(dp) :: term(size(y0)), s
+            integer :: kk
+            s = t - tlast
+            if (abs(s)*bnorm <= 0.0625_dp) then
+                y = ylast
+                term = ylast
+                do kk = 1, 30
+                    term = mat_vec(md%b, term)*(s/kk)
+                    y = y + term
+                    if (maxval(abs(term)) <= epsilon(1.0_dp)*maxval(abs(y))) exit
+                end do
+            else
+                call propagate(md, delta, t, y0, y)
+            end if
+            tlast = t
+            ylast = y
+        end subroutine state_at
+
     end function first_crossing
+
+    !> A root in (0, h) of the cubic p with p(0) = ga, p'(0) = da, p(h) = gb, p'(h) = db
+    !> (ga > 0 >= gb), by bisection on p to 1e-6 h; -1 when h <= 0.
+    pure real(dp) function hermite_root(ga, da, gb, db, h) result(t)
+        real(dp), intent(in) :: ga, da, gb, db, h
+        real(dp) :: a, b, s
+        integer :: it
+        a = 0.0_dp
+        b = h
+        t = -1.0_dp
+        if (.not. (h > 0.0_dp)) return
+        do it = 1, 60
+            s = 0.5_dp*(a + b)
+            if (hermite_cubic(ga, da, gb, db, h, s/h) > 0.0_dp) then
+                a = s
+            else
+                b = s
+            end if
+            if (b - a <= 1.0e-6_dp*h) exit
+        end do
+        t = 0.5_dp*(a + b)
+    end function hermite_root
+
+    !> The cubic Hermite interpolant of hermite_root at x = t / h in [0, 1].
+    pure real(dp) function hermite_cubic(ga, da, gb, db, h, x) result(p)
+        real(dp), intent(in) :: ga, da, gb, db, h, x
+        p = (1.0_dp + 2.0_dp*x)*(1.0_dp - x)**2*ga + x*(1.0_dp - x)**2*h*da + &
+            x*x*(3.0_dp - 2.0_dp*x)*gb + x*x*(x - 1.0_dp)*h*db
+    end function hermite_cubic
 
     !> One grid step of the flow in mode md from t (balanced state yb): to t + delta by the
     !> cached exponential (full_step), or the remainder to tend; the exogenous part of ybb
@@ -373,7 +488,7 @@ contains
         else
             tb = t + self%delta
             full_step = .true.
-            ybb = matmul(md%ladder(:, :, 0), yb)
+            ybb = mat_vec(md%ladder(:, :, 0), yb)
         end if
         ybb(self%nz + 1:) = self%se*self%exo(tb)
     end subroutine grid_step
@@ -449,6 +564,6 @@ contains
         integer :: nz, stat
         nz = size(jac, 1)
         call expm(md%b(1:nz, 1:nz)*duration, phi, stat)
-        mono = matmul(self%tbi(1:nz, 1:nz), matmul(matmul(phi, jac), self%tb(1:nz, 1:nz)))
+        mono = mat_mul(self%tbi(1:nz, 1:nz), mat_mul(mat_mul(phi, jac), self%tb(1:nz, 1:nz)))
     end subroutine end_monodromy
 end module stickslip_flow_events

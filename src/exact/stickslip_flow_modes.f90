@@ -31,6 +31,7 @@ module stickslip_flow_modes
     use stickslip_contact_modes, only: element_geometry_t
     use stickslip_lapack, only: dsygv
     use stickslip_expm, only: expm
+    use stickslip_dense_products, only: mat_mul, mat_vec
     implicit none
     private
     public :: ngauss, mode_t, level_t, flow_modes_t, new_flow_modes
@@ -404,7 +405,7 @@ contains
         allocate (ladder(na, na, 0:nl))
         call expm(b*(delta*0.5_dp**nl), ladder(:, :, nl), stat)
         do k = nl, 1, -1
-            ladder(:, :, k - 1) = matmul(ladder(:, :, k), ladder(:, :, k))
+            ladder(:, :, k - 1) = mat_mul(ladder(:, :, k), ladder(:, :, k))
         end do
         if (stat /= 0 .or. .not. all(ieee_is_finite(ladder(:, :, 0)))) then
             call fatal_error(error, "reference: the matrix exponential of a contact mode "// &
@@ -455,21 +456,21 @@ contains
         r = max(tau, 0.0_dp)
         nsteps = int(r/delta)
         do k = 1, nsteps
-            y1 = matmul(ladder(:, :, 0), y1)
+            y1 = mat_vec(ladder(:, :, 0), y1)
         end do
         r = r - nsteps*delta
         h = delta
         do k = 1, nl
             h = 0.5_dp*h
             if (r >= h) then
-                y1 = matmul(ladder(:, :, k), y1)
+                y1 = mat_vec(ladder(:, :, k), y1)
                 r = r - h
             end if
         end do
         if (r <= 0.0_dp) return
         term = y1
         do k = 1, 30
-            term = matmul(b, term)*(r/k)
+            term = mat_vec(b, term)*(r/k)
             y1 = y1 + term
             if (maxval(abs(term)) <= epsilon(1.0_dp)*maxval(abs(y1))) exit
         end do

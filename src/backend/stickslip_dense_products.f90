@@ -1,0 +1,47 @@
+!> Dense matrix products on the linked BLAS (dgemm, dgemv) instead of the intrinsic matmul:
+!> the hot paths of the exact flow (the propagation of a state, the exponentials of a
+!> contact mode, the monodromy), where a stiff reduced model with many contacts spends most
+!> of its stability time (doc/benchmarks.md). Knows nothing of the model; no state.
+module stickslip_dense_products
+    use stickslip_kinds, only: dp
+    use stickslip_lapack, only: dgemm, dgemv
+    implicit none
+    private
+    public :: mat_mul, mat_vec
+
+contains
+
+    !> c = a b (a: m x k, b: k x n) by dgemm. No error: the shapes must agree (k =
+    !> size(b, 1); the caller's arrays).
+    function mat_mul(a, b) result(c)
+        !> Left and right factors.
+        real(dp), intent(in) :: a(:, :), b(:, :)
+        real(dp) :: c(size(a, 1), size(b, 2))
+        integer :: m, n, k
+        m = size(a, 1)
+        n = size(b, 2)
+        k = size(a, 2)
+        if (m == 0 .or. n == 0) return
+        if (k == 0) then
+            c = 0.0_dp
+            return
+        end if
+        call dgemm('N', 'N', m, n, k, 1.0_dp, a, m, b, k, 0.0_dp, c, m)
+    end function mat_mul
+
+    !> y = a x (a: m x n, x: n) by dgemv.
+    function mat_vec(a, x) result(y)
+        !> The matrix and the vector.
+        real(dp), intent(in) :: a(:, :), x(:)
+        real(dp) :: y(size(a, 1))
+        integer :: m, n
+        m = size(a, 1)
+        n = size(a, 2)
+        if (m == 0) return
+        if (n == 0) then
+            y = 0.0_dp
+            return
+        end if
+        call dgemv('N', m, n, 1.0_dp, a, m, x, 1, 0.0_dp, y, 1)
+    end function mat_vec
+end module stickslip_dense_products

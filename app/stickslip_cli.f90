@@ -8,7 +8,7 @@ module stickslip_cli
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_version_info, only: stickslip_version
-    use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, exit_code_of, itoa
     use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t, read_case
@@ -490,9 +490,9 @@ contains
             call emit(u)
         end if
         do j = 1, size(sol%stick_fraction)
-            write (u, '(a,i0,a,f0.1,a,i0,a,g0.4,a)', advance='no') "  contact ", j, &
-                ": sticks ", 100*sol%stick_fraction(j), "% of the period in ", &
-                sol%stick_phases(j), " phase(s); max |r| ", &
+            write (u, '(a,i0,a,a,a,g0.4,a)', advance='no') "  contact ", j, &
+                ": sticks ", stick_text(sol%stick_fraction(j), sol%stick_phases(j)), &
+                "; max |r| ", &
                 maxval(abs(sol%r(:, sol%contacts%first(j)))), &
                 limit_text(case, sol%contacts, j, sol%normal(:, j), sol%state(:, j))
             if (sol%offset_undetermined(j)) write (u, '(a)', advance='no') &
@@ -593,9 +593,8 @@ contains
             " ms CPU (start ", 1.0e3_dp*ref%start_seconds, " ms)"
         call emit(u)
         do j = 1, size(ref%stick_fraction)
-            write (u, '(a,i0,a,f0.1,a,i0,a)', advance='no') "  contact ", j, ": sticks ", &
-                100*ref%stick_fraction(j), "% of the period in ", ref%stick_phases(j), &
-                " phase(s); events"
+            write (u, '(a,i0,a,a,a)', advance='no') "  contact ", j, ": sticks ", &
+                stick_text(ref%stick_fraction(j), ref%stick_phases(j)), "; events"
             do k = 1, ref%nevent
                 if (ref%event_contact(k) == j) write (u, '(a,a,a,f0.5)', advance='no') " ", &
                     trim(event_name(ref%event_kind(k))), " t=", ref%event_t(k)
@@ -900,4 +899,22 @@ contains
             is_digit = c >= '0' .and. c <= '9'
         end function is_digit
     end function with_exponent_e
+    !> "12.5% of the period in 2 phase(s)" for a stick share `fraction` (0..1) and `phases`
+    !> stick phases; a share without a counted phase (isolated samples, phases shorter
+    !> than the harmonics resolve) is said so instead of "in 0 phase(s)".
+    function stick_text(fraction, phases) result(text)
+        !> Share of the period stuck and the stick phases counted.
+        real(dp), intent(in) :: fraction
+        integer, intent(in) :: phases
+        character(len=:), allocatable :: text
+        character(len=32) :: pct
+        write (pct, '(f8.1)') 100.0_dp*fraction
+        text = trim(adjustl(pct))//"% of the period"
+        if (phases > 0) then
+            text = text//" in "//itoa(phases)//" phase(s)"
+        else if (fraction > 0.0_dp) then
+            text = text//" in samples too few for a stick phase the harmonics resolve"
+        end if
+    end function stick_text
+
 end module stickslip_cli

@@ -339,14 +339,7 @@ contains
         ! the root of the cubic Hermite interpolant, a first iterate inside the bracket
         tau = hermite_root(g0, dg0, g, dg, hi)
         if (tau > lo .and. tau < hi) then
-            call state_at(tau)
-            g = dot_product(row, y)
-            dg = dot_product(row1, y)
-            if (g > 0.0_dp) then
-                lo = tau
-            else
-                hi = tau
-            end if
+            call iterate_at(tau)
             if (g == 0.0_dp) return
         else
             tau = hi
@@ -373,14 +366,7 @@ contains
                 step = 0.5_dp*(hi - lo)
                 tau = 0.5_dp*(lo + hi)
             end if
-            call state_at(tau)
-            g = dot_product(row, y)
-            dg = dot_product(row1, y)
-            if (g > 0.0_dp) then
-                lo = tau
-            else
-                hi = tau
-            end if
+            call iterate_at(tau)
             if (g == 0.0_dp) exit
             if (newton .and. abs(step) <= tol) then
                 ! converged: the root is within a few ulps of tau on the side Newton
@@ -408,6 +394,19 @@ contains
         end do
 
     contains
+
+        !> The iterate t: the state there, g and its slope, the bracket's side moved to t.
+        subroutine iterate_at(t)
+            real(dp), intent(in) :: t
+            call state_at(t)
+            g = dot_product(row, y)
+            dg = dot_product(row1, y)
+            if (g > 0.0_dp) then
+                lo = t
+            else
+                hi = t
+            end if
+        end subroutine iterate_at
 
         !> y = exp(b t) y0: from the last state computed by a Taylor series when t is within
         !> 1/16 of ||b||^-1 of it (a Newton step near the root: a few matrix-vector products,

@@ -560,9 +560,13 @@ contains
         !> dz1/dz0.
         real(dp), intent(out) :: mono(:, :)
         real(dp) :: phi(size(jac, 1), size(jac, 1))
+        real(dp), allocatable :: ti(:, :), t(:, :)
         integer :: nz, stat
         nz = size(jac, 1)
         call expm(md%b(1:nz, 1:nz)*duration, phi, stat)
-        mono = mat_mul(self%tbi(1:nz, 1:nz), mat_mul(mat_mul(phi, jac), self%tb(1:nz, 1:nz)))
+        ! contiguous copies of the state blocks of the transformations (for BLAS)
+        ti = self%tbi(1:nz, 1:nz)
+        t = self%tb(1:nz, 1:nz)
+        mono = mat_mul(ti, mat_mul(mat_mul(phi, jac), t))
     end subroutine end_monodromy
 end module stickslip_flow_events

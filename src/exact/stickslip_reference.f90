@@ -22,6 +22,7 @@ module stickslip_reference
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_flow, only: flow_t, new_flow, orbit_t
+    use stickslip_flow_modes, only: mode_t
     use stickslip_contact_measures, only: energy_balance_error
     implicit none
     private
@@ -353,6 +354,7 @@ contains
         logical, intent(in) :: light
         real(dp), intent(in), optional :: rs(:, :)
         type(shooting_t) :: shooting
+        type(mode_t), allocatable :: modes(:)
         type(hybrj_options_t) :: hopts
         type(hybrj_report_t) :: report
         real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:), ss(:), &
@@ -483,7 +485,11 @@ contains
         end if
         if (ampx == 0.0_dp .and. ampv == 0.0_dp) res%defect = 0.0_dp
         res%converged = res%defect <= opts%tol .and. all(ieee_is_finite(z1))
+        ! the flow to the result without a deep copy of its mode cache (every mode's
+        ! exponentials: megabytes on a reduced FE model with many contacts)
+        call move_alloc(shooting%flow%modes, modes)
         res%flow = shooting%flow
+        call move_alloc(modes, res%flow%modes)
         call finish_events(res, period)
         res%work_forcing = res%orbit%work_forcing
         res%work_gross = res%orbit%work_gross

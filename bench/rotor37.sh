@@ -29,6 +29,7 @@ if [ ! -s "$work/blade_sti.mtx" ] || [ ! -s "$work/blade_mas.mtx" ]; then
 fi
 fpm build --profile release >/dev/null
 exe=$(fpm run --profile release --runner echo 2>/dev/null | tail -n 1)
+case "$exe" in /*) ;; *) exe="$root/$exe" ;; esac
 step=$(awk -v p="$points" 'BEGIN { printf "%.6g", 130.0 / p }')
 cat > "$work/sweep.nml" <<EOF
 ! Rotor 37 blade (bench/rotor37.sh): 1 N at node 1353 y, 16 tip contacts in y
@@ -59,7 +60,8 @@ code=$?
 set -e
 t1=$(date +%s.%N)
 get() { sed -n "s/^ *$1 = *//p" out/summary.nml 2>/dev/null | head -n 1; }
-points_done=$(($(wc -l < out/frc.csv) - 1))
+points_done=0
+[ -s out/frc.csv ] && points_done=$(($(wc -l < out/frc.csv) - 1))
 awk -v wall="$(echo "$t1 - $t0" | bc)" -v red="$(get reduction_seconds)" \
     -v cpu="$(get cpu_seconds)" -v stab="$(get stability_cpu_seconds)" \
     -v pts="$points_done" -v code="$code" 'BEGIN {
@@ -69,4 +71,4 @@ awk -v wall="$(echo "$t1 - $t0" | bc)" -v red="$(get reduction_seconds)" \
     printf "  sweep                    %8.1f s CPU, of which stability %.1f s (%.3f s per point)\n", cpu, stab, (pts > 0 ? stab / pts : 0)
     printf "  reading and the rest     %8.1f s (wall - reduction - sweep)\n", wall - red - cpu
 }'
-grep -h "warning" run.err | head -n 5 || true
+grep -h "warning\|error" run.err | head -n 5 || true

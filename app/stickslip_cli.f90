@@ -137,7 +137,8 @@ contains
     !> draw the pictures, print a short summary on `out_unit` (unless --quiet), and on
     !> `err_unit` one line per warning (`stickslip: warning: ...`), the distrust of the
     !> answer (`stickslip: error: the answer cannot be trusted: ...`), errors, and the
-    !> progress of a long sweep, study or robustness study (unless --quiet). Returns the exit
+    !> progress of a long sweep, study or robustness study, and of the reading of large
+    !> Matrix Market files (after a second; unless --quiet). Returns the exit
     !> code: 0 ok (warnings included), 1 usage or input error, 2 numerical failure (not
     !> converged, singular dynamic stiffness) or an answer that cannot be trusted (its files
     !> are written), 3 I/O error (including a directory another run is writing).
@@ -148,13 +149,14 @@ contains
         integer, intent(in) :: out_unit
         !> Unit for warnings, errors and progress.
         integer, intent(in) :: err_unit
-        !> Seconds before the first progress line and between two (default 2 and 1 s).
+        !> Seconds before the first progress line and between two (default 2 and 1 s; 1
+        !> and 1 s for the reading of matrix files).
         real(dp), intent(in), optional :: progress_interval
         type(cli_options_t) :: opts
         type(error_type), allocatable :: error
         type(case_t) :: case
         type(run_result_t) :: result
-        type(progress_t) :: progress
+        type(progress_t) :: progress, reading
         integer :: k
 
         code = 0
@@ -175,7 +177,15 @@ contains
                 code = run_cases(opts%case_paths, opts%quiet, out_unit, err_unit)
                 return
             end if
-            call read_case(opts%case_path, case, error)
+            ! a long read of large matrix files reports its progress after about a second
+            if (.not. opts%quiet) reading%unit = err_unit
+            reading%delay = 1.0_dp
+            reading%interval = 1.0_dp
+            if (present(progress_interval)) then
+                reading%delay = progress_interval
+                reading%interval = progress_interval
+            end if
+            call read_case(opts%case_path, case, error, reading)
             if (.not. allocated(error)) call register_output_directory(case%directory)
         end if
         if (allocated(error)) then

@@ -46,6 +46,7 @@ program tester
     use test_arpack, only: run_arpack_tests
     use test_sparse, only: run_sparse_tests
     use test_matrix_market, only: run_matrix_market_tests
+    use test_decimal, only: run_decimal_tests
     use test_system_files, only: run_system_files_tests
     use test_output_selection, only: run_output_selection_tests
     use test_directions, only: run_directions_tests
@@ -122,6 +123,7 @@ program tester
         suite_t("reduction", run_reduction_tests),&
         suite_t("arpack", run_arpack_tests),&
         suite_t("sparse", run_sparse_tests),&
+        suite_t("decimal", run_decimal_tests),&
         suite_t("matrix_market", run_matrix_market_tests),&
         suite_t("system_files", run_system_files_tests),&
         suite_t("output_selection", run_output_selection_tests),&

@@ -415,6 +415,7 @@ contains
         type(progress_t) :: p
         integer :: u, k, code
         character(len=:), allocatable :: text, out, err
+        character(len=400) :: case_lines(7)
         open (newunit=u, status='scratch', action='readwrite')
         p%unit = u
         p%label = 'sweep'
@@ -456,6 +457,28 @@ contains
                  progress_interval=0.0_dp)
         call check(t, code == 0 .and. index(err, "stickslip: sweep") == 0, &
                    "progress: none with --quiet", err)
+        ! the reading of the Matrix Market files of a case (a second in the command line,
+        ! no delay here)
+        ! (the lines one by one: gfortran 12 corrupted the heap on a typed array
+        ! constructor [character(len=200) :: ...] holding these longer concatenations)
+        case_lines(1) = "&system mass_file = '"//project_path("examples/beam_mm/mass.mtx")//"',"
+        case_lines(2) = "  stiffness_file = '"//project_path("examples/beam_mm/stiffness.mtx")// &
+                        "' /"
+        case_lines(3) = "&forcing omega = 40.0, force_dof = 77, force_amplitude = 5.0 /"
+        case_lines(4) = "&friction contact_dof = 79, mu = 0.5, normal_load = 4.0 /"
+        case_lines(5) = "&hbm harmonics = 5, odd_only = T, samples = 64 /"
+        case_lines(6) = "&run method = 'hbm' /"
+        case_lines(7) = "&output directory = '"//dir//"_mm' /"
+        call write_lines(scratch//"/progress_mm.nml", case_lines)
+        call cli([character(len=200) :: scratch//"/progress_mm.nml"], code, out, err, &
+                 progress_interval=0.0_dp)
+        call check(t, code == 0 .and. index(err, "stickslip: reading ") > 0 .and. &
+                   index(err, "beam_mm/stiffness.mtx, ") > 0, &
+                   "progress: the CLI's reading lines", err)
+        call cli([character(len=200) :: "--quiet", scratch//"/progress_mm.nml"], code, out, &
+                 err, progress_interval=0.0_dp)
+        call check(t, code == 0 .and. index(err, "stickslip: reading") == 0, &
+                   "progress: no reading lines with --quiet", err)
     end subroutine test_progress
 
     !> The output directory of the shell-injection report: no command runs (no PWNED file

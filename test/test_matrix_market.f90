@@ -1,13 +1,17 @@
 !> Tests of the Matrix Market reader and writers: every supported kind read against the
 !> dense matrix written here, every class of bad file rejected with "<file>:<line>:" and
-!> what is wrong, and the round trip writer -> reader exact.
+!> what is wrong, and the round trip writer -> reader exact. The block reader (issue 25):
+!> every block size gives the same matrix and the same messages (lines across blocks, CR LF
+!> and CR across blocks), values bit for bit those of read(s, *), progress lines.
 module test_matrix_market
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_from_dense
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size, &
         write_matrix_market, &
-        write_matrix_market_array
+        write_matrix_market_array, max_mm_line
+    use stickslip_progress, only: progress_t
     use stickslip_files, only: make_directory
     use testing, only: test_counter_t, check, check_close, check_error
     use fixtures, only: enter_project_root, scratch, write_lines
@@ -33,7 +37,267 @@ contains
         call test_bad_files(t)
         call test_round_trip(t)
         call test_mutations(t)
+        call test_blocks(t)
+        call test_line_ends(t)
+        call test_long_lines(t)
+        call test_values_exact(t)
+        call test_progress(t)
     end subroutine run_matrix_market_tests
+
+    !> The bytes of `text` as the file `path`.
+    subroutine write_raw(path, text)
+        character(len=*), intent(in) :: path, text
+        integer :: u
+        open (newunit=u, file=path, status='replace', access='stream', form='unformatted')
+        write (u) text
+        close (u)
+    end subroutine write_raw
+
+    !> a and b hold the same entries, bit for bit.
+    logical function same_matrix(a, b)
+        type(sparse_matrix_t), intent(in) :: a, b
+        same_matrix = .false.
+        if (a%nrows /= b%nrows .or. a%ncols /= b%ncols) return
+        if (.not. (allocated(a%row_start) .and. allocated(b%row_start))) return
+        if (size(a%col) /= size(b%col)) return
+        if (any(a%row_start /= b%row_start) .or. any(a%col /= b%col)) return
+        same_matrix = all(transfer(a%val, 1_int64, size(a%val)) == &
+                          transfer(b%val, 1_int64, size(b%val)))
+    end function same_matrix
+
+    !> Every block size from 1 byte up gives the matrix (and the error) of the default
+    !> size: lines, numbers and CR LF pairs cut between two blocks; comments, blank lines,
+    !> tabs, forms of the general path (signed indices, `1.5+3`) between the common ones.
+    subroutine test_blocks(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=1), parameter :: lf = achar(10), cr = achar(13), tab = achar(9)
+        character(len=:), allocatable :: text, bad_text
+        type(sparse_matrix_t) :: a, b
+        type(error_type), allocatable :: error, error2
+        integer :: chunk
+        logical :: same, same_errors
+        text = sym_header//cr//lf//"% written by hand"//lf//lf//"  4 4 7"//lf// &
+               "1 1 5.5215441313185e+04"//cr//lf//"2 1 -1.8960205527810e+04"//cr// &
+               "2 2 9.1482364166893E+04"//lf//"%"//lf//"+3 01 -3.4844662247620d-10"//lf// &
+               tab//"3"//tab//"3 4.78e+04 "//lf//"4 2 1.5+3"//lf//"4 4 2.0436814886855e-08"
+        call write_raw(dir//"/blocks.mtx", text)
+        call read_matrix_market(dir//"/blocks.mtx", a, error)
+        call check_error(t, error, "mm blocks: read", .false.)
+        if (allocated(error)) return
+        call check(t, a%nrows == 4 .and. size(a%val) == 10, "mm blocks: 7 entries, 3 mirrored")
+        same = .true.
+        do chunk = 1, len(text) + 1
+            call read_matrix_market(dir//"/blocks.mtx", b, error, chunk=chunk)
+            same = same .and. .not. allocated(error)
+            if (same) same = same_matrix(a, b)
+        end do
+        call check(t, same, "mm blocks: every block size gives the same matrix")
+        ! an error found after a block boundary names the same line
+        bad_text = text(1:index(text, "4 2 1.5+3") - 1)//"4 2 1.5+3x"//lf//"4 4 1"//lf
+        call write_raw(dir//"/blocks_bad.mtx", bad_text)
+        call read_matrix_market(dir//"/blocks_bad.mtx", b, error2)
+        call check_error(t, error2, "mm blocks: bad value", .true., [character(len=40) :: &
+                         dir//"/blocks_bad.mtx:11:", "'1.5+3x' is not a real number"])
+        same_errors = allocated(error2)
+        do chunk = 1, len(bad_text) + 1
+            if (.not. same_errors) exit
+            call read_matrix_market(dir//"/blocks_bad.mtx", b, error, chunk=chunk)
+            same_errors = allocated(error)
+            if (same_errors) same_errors = error%message == error2%message
+        end do
+        call check(t, same_errors, "mm blocks: every block size gives the same message")
+    end subroutine test_blocks
+
+    !> LF, CR LF and a lone CR end lines (as in gfortran's formatted reads); LF CR is two
+    !> line ends (an empty line between); the last line needs no end.
+    subroutine test_line_ends(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=1), parameter :: lf = achar(10), cr = achar(13)
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: d(:, :)
+        integer :: k
+        character(len=2), parameter :: ends(4) = [character(len=2) :: lf, cr//lf, cr, lf//cr]
+        character(len=8), parameter :: names(4) = [character(len=8) :: "lf", "crlf", "cr", &
+                                                    "lfcr"]
+        do k = 1, size(ends)
+            call write_raw(dir//"/ends_"//trim(names(k))//".mtx", gen_header//trim(ends(k))// &
+                           "2 2 2"//trim(ends(k))//"1 1 2.5"//trim(ends(k))//"2 2 -1")
+            call read_matrix_market(dir//"/ends_"//trim(names(k))//".mtx", a, error, chunk=3)
+            call check_error(t, error, "mm line ends "//trim(names(k)), .false.)
+            if (allocated(error)) cycle
+            call sparse_to_dense(a, d, error)
+            call check(t, d(1, 1) == 2.5_dp .and. d(2, 2) == -1.0_dp .and. d(1, 2) == 0.0_dp, &
+                       "mm line ends "//trim(names(k))//": values")
+        end do
+        ! line numbers count a lone CR and the empty line of LF CR
+        call write_raw(dir//"/ends_count.mtx", gen_header//cr//"1 1 1"//lf//cr// &
+                       "1 1 NaN"//cr//lf)
+        call read_matrix_market(dir//"/ends_count.mtx", a, error)
+        call check_error(t, error, "mm line ends: line numbers", .true., &
+                         [character(len=60) :: dir//"/ends_count.mtx:4:", "'NaN'"])
+        ! the last line without an end, 256 characters long (the formatted reader of
+        ! commit 67986c6 failed there with "Sequential READ or WRITE not allowed after EOF")
+        call write_raw(dir//"/ends_256.mtx", gen_header//lf//"1 1 1"//lf//"1 1 2.5"// &
+                       repeat(" ", 249))
+        call read_matrix_market(dir//"/ends_256.mtx", a, error)
+        call check_error(t, error, "mm line ends: a last line of 256 characters", .false.)
+    end subroutine test_line_ends
+
+    !> A line of max_mm_line characters is read, one more is an error naming its line, for
+    !> block sizes around the line's length; also for a comment line and a last line.
+    subroutine test_long_lines(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=1), parameter :: lf = achar(10), cr = achar(13)
+        integer, parameter :: chunks(6) = [1, 7, max_mm_line - 1, max_mm_line, &
+                                           max_mm_line + 1, 8*1024*1024]
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: entry, comment
+        logical :: good_ok, bad_ok
+        integer :: c, extra
+        good_ok = .true.
+        bad_ok = .true.
+        do extra = 0, 1
+            entry = "1 1 2.5"//repeat(" ", max_mm_line - 7 + extra)
+            comment = "%"//repeat("x", max_mm_line - 1 + extra)
+            do c = 1, size(chunks)
+                call write_raw(dir//"/long_entry.mtx", gen_header//cr//lf//"1 1 1"//cr//lf// &
+                               entry//cr//lf)
+                call read_matrix_market(dir//"/long_entry.mtx", a, error, chunk=chunks(c))
+                call judge(dir//"/long_entry.mtx:3:")
+                call write_raw(dir//"/long_comment.mtx", gen_header//lf//comment//lf// &
+                               "1 1 1"//lf//"1 1 2")
+                call read_matrix_market(dir//"/long_comment.mtx", a, error, chunk=chunks(c))
+                call judge(dir//"/long_comment.mtx:2:")
+                call write_raw(dir//"/long_last.mtx", gen_header//lf//"1 1 1"//lf//entry)
+                call read_matrix_market(dir//"/long_last.mtx", a, error, chunk=chunks(c))
+                call judge(dir//"/long_last.mtx:3:")
+            end do
+        end do
+        call check(t, good_ok, "mm long lines: max_mm_line characters read")
+        call check(t, bad_ok, "mm long lines: one more is an error naming the line")
+    contains
+        subroutine judge(where)
+            character(len=*), intent(in) :: where
+            if (extra == 0) then
+                good_ok = good_ok .and. .not. allocated(error)
+            else if (.not. allocated(error)) then
+                bad_ok = .false.
+            else
+                bad_ok = bad_ok .and. index(error%message, where//" line longer than") == 1
+            end if
+        end subroutine judge
+    end subroutine test_long_lines
+
+    !> 3000 values in many forms (14, 17 and 18 digits, e/E/d/D, signs, exponents from
+    !> -300 to 300, more than 18 digits, denormals) read through the file, in a general
+    !> and a symmetric file: each stored value is bit for bit read(s, *) of its text.
+    subroutine test_values_exact(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: nv = 3000
+        character(len=16), parameter :: formats(6) = [character(len=16) :: "(es22.13e2)", &
+            "(es25.17e3)", "(es24.16e3)", "(es30.22e3)", "(es12.4e3)", "(f0.9)"]
+        character(len=32) :: s(nv)
+        real(dp) :: expected(nv), x, r(3)
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: text
+        character(len=24) :: index_text
+        integer :: k, p, stat
+        logical :: good
+        do k = 1, nv
+            call random_number(r)
+            x = (2*r(1) - 1)*10.0_dp**int(600*r(2) - 300)
+            if (int(6*r(3)) == 5) x = (2*r(1) - 1)*10.0_dp**int(20*r(2) - 10)  ! f0.9
+            if (k <= 30) x = (2*r(1) - 1)*2.0_dp**(-1074 + k)       ! subnormals
+            write (s(k), formats(1 + int(6*r(3)))) x
+            s(k) = adjustl(s(k))
+            p = scan(s(k), "E")
+            if (p > 0 .and. mod(k, 3) == 0) s(k)(p:p) = "d"
+            if (p > 0 .and. mod(k, 3) == 1) s(k)(p:p) = "e"
+            read (s(k), *, iostat=stat) expected(k)
+            if (stat /= 0 .or. .not. (abs(expected(k)) <= huge(x))) then
+                s(k) = "0.5"
+                expected(k) = 0.5_dp
+            end if
+        end do
+        text = gen_header//new_line('a')//itoa_(nv)//" 1 "//itoa_(nv)//new_line('a')
+        do k = 1, nv
+            write (index_text, '(i0)') k
+            text = text//trim(index_text)//" 1 "//trim(s(k))//new_line('a')
+        end do
+        call write_raw(dir//"/values.mtx", text)
+        call read_matrix_market(dir//"/values.mtx", a, error)
+        call check_error(t, error, "mm exact values: read", .false.)
+        if (allocated(error)) return
+        good = size(a%val) == nv
+        if (good) good = all(transfer(a%val, 1_int64, nv) == transfer(expected, 1_int64, nv))
+        call check(t, good, "mm exact values: bit for bit as read(s, *)")
+        ! the same values on the diagonal of a symmetric file
+        text = sym_header//new_line('a')//itoa_(nv)//" "//itoa_(nv)//" "//itoa_(nv)// &
+               new_line('a')
+        do k = 1, nv
+            write (index_text, '(i0,1x,i0)') k, k
+            text = text//trim(index_text)//" "//trim(s(k))//new_line('a')
+        end do
+        call write_raw(dir//"/values_sym.mtx", text)
+        call read_matrix_market(dir//"/values_sym.mtx", a, error, chunk=1000)
+        call check_error(t, error, "mm exact values: symmetric read", .false.)
+        if (allocated(error)) return
+        good = size(a%val) == nv
+        if (good) good = all(transfer(a%val, 1_int64, nv) == transfer(expected, 1_int64, nv))
+        call check(t, good, "mm exact values: symmetric, bit for bit as read(s, *)")
+    end subroutine test_values_exact
+
+    pure function itoa_(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=16) :: buffer
+        write (buffer, '(i0)') i
+        s = trim(buffer)
+    end function itoa_
+
+    !> Progress of a read: nothing without a unit; with one (no delay, every block) lines
+    !> `stickslip: reading <done>/<size> MB, <path>, <s> s`, counted in progress%lines.
+    subroutine test_progress(t)
+        type(test_counter_t), intent(inout) :: t
+        type(progress_t) :: progress
+        type(sparse_matrix_t) :: a
+        type(error_type), allocatable :: error
+        character(len=200) :: line
+        character(len=60), allocatable :: lines(:)
+        integer :: u, stat, lines_seen, k
+        ! 2000 entries of 14 bytes: 28 kB, read in blocks of 1000 bytes
+        allocate (lines(2002))
+        lines(1) = gen_header
+        lines(2) = "2000 2000 2000"
+        do k = 1, 2000
+            write (lines(k + 2), '(i4.4,1x,i4.4,1x,a)') k, k, "1.0"
+        end do
+        call write_lines(dir//"/progress.mtx", lines)
+        open (newunit=u, status='scratch', action='readwrite', form='formatted')
+        progress%label = "sweep"
+        call read_matrix_market(dir//"/progress.mtx", a, error, progress=progress, chunk=1000)
+        call check(t, .not. allocated(error) .and. progress%lines == 0, &
+                   "mm progress: off without a unit")
+        progress = progress_t(unit=u, delay=0.0_dp, interval=0.0_dp)
+        progress%label = "sweep"
+        call read_matrix_market(dir//"/progress.mtx", a, error, progress=progress, chunk=1000)
+        call check(t, .not. allocated(error) .and. progress%lines >= 20, &
+                   "mm progress: a line per block")
+        call check(t, progress%label == "sweep", "mm progress: the caller's label kept")
+        rewind (u)
+        lines_seen = 0
+        do
+            read (u, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            if (index(line, "stickslip: reading ") == 1 .and. &
+                index(line, "/28 kB, "//dir//"/progress.mtx, ") > 0) lines_seen = lines_seen + 1
+        end do
+        close (u)
+        call check(t, lines_seen == progress%lines, "mm progress: the lines' text", line)
+    end subroutine test_progress
 
     !> Random byte edits of a valid file: every outcome is a matrix or an error that names
     !> the file (never a crash, a hang or a message without the file).

@@ -1,5 +1,6 @@
-!> Progress of a long run (a sweep, a study, a robustness study): a hook the host passes
-!> to the loop, which calls `report` after each point. Nothing is printed unless the host
+!> Progress of a long run (a sweep, a study, a robustness study, the reading of a large
+!> Matrix Market file): a hook the host passes to the loop, which calls `report` after each
+!> point (each block read). Nothing is printed unless the host
 !> gives a unit; then one line `stickslip: <what> <done>/<total> ..., <elapsed> s` on it once
 !> `delay` seconds of wall time have passed since `start`, and at most once per `interval`
 !> seconds. The library never prints behind its host's back: off by default (unit -1).

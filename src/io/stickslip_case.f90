@@ -19,6 +19,7 @@ module stickslip_case
     use stickslip_robustness, only: robustness_options_t
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance, lower
     use stickslip_namelist_values, only: get_logical, get_string
+    use stickslip_progress, only: progress_t
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         max_dof, max_terms, group_error, system_files_t, max_file_dof, &
         sparse_system_t
@@ -124,14 +125,17 @@ contains
     !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
     !> model and case%reduction holds the report, the full-model DOF numbers and the rows of
     !> the basis for &output dofs (full-model numbers, checked against the full N; when given
-    !> they are boundary DOFs of the reduction).
-    subroutine read_case(path, case, error)
+    !> they are boundary DOFs of the reduction). Quiet unless `progress` has a unit: then the
+    !> reading of large Matrix Market files reports its progress there (read_matrix_market).
+    subroutine read_case(path, case, error, progress)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path
         !> The case read.
         type(case_t), intent(out) :: case
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Progress of long reads of matrix files (stickslip_progress; absent: quiet).
+        type(progress_t), intent(inout), optional :: progress
         type(nml_file_t) :: nml
         character(len=:), allocatable :: method
         logical :: method_given
@@ -147,7 +151,7 @@ contains
         call read_reduction_group(nml, case%reduction, error)
         if (allocated(error)) return
         call read_system_group(nml, case%model, case%system_files, error, &
-                               case%reduction%method, sparse)
+                               case%reduction%method, sparse, progress)
         if (allocated(error)) return
         if (.not. sparse%read .and. case%reduction%method == 'craig-bampton') then
             ! asked for explicitly, a reduction of inline matrices would be ignored silently

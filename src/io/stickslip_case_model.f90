@@ -18,6 +18,7 @@ module stickslip_case_model
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_symmetry_defect, &
         sparse_scaled_sum
     use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size
+    use stickslip_progress, only: progress_t
     implicit none
     private
     public :: read_system_group, read_forcing_group
@@ -87,7 +88,9 @@ contains
     !> With `sparse` present and `method` = 'craig-bampton', or 'auto' or 'none' and N >
     !> max_file_dof, the file matrices are kept sparse in `sparse` (no size limit) and model
     !> gets only ndof = N ('none': the exact sparse condensation, stickslip_sparse_dynamics).
-    subroutine read_system_group(nml, model, files, error, method, sparse)
+    !> With `progress`, a long read of a matrix file reports its progress there
+    !> (read_matrix_market).
+    subroutine read_system_group(nml, model, files, error, method, sparse, progress)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model: ndof, mass, stiffness, damping set.
@@ -100,6 +103,8 @@ contains
         character(len=*), intent(in), optional :: method
         !> The sparse matrices when the model is to be reduced.
         type(sparse_system_t), intent(out), optional :: sparse
+        !> Progress of the reading of large matrix files (stickslip_progress; absent: quiet).
+        type(progress_t), intent(inout), optional :: progress
         integer :: n, rows, cols
         logical :: found, from_files, keep_sparse
         type(sparse_matrix_t) :: tmp
@@ -371,7 +376,7 @@ contains
                                  "0 x 0 matrix")
                 return
             end if
-            call read_matrix_market(path, s, error)
+            call read_matrix_market(path, s, error, progress=progress)
             if (allocated(error)) then
                 error%message = nml%path//": &system "//name//": "//error%message
                 return

@@ -12,6 +12,7 @@ module stickslip_cli
     use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t, read_case
+    use stickslip_case_reduction, only: write_reduction_cache_of
     use stickslip_solution, only: hbm_solution_t
     use stickslip_driver, only: run_result_t, run_method
     use stickslip_robustness, only: robustness_row_t
@@ -154,7 +155,7 @@ contains
         type(error_type), allocatable :: error
         type(case_t) :: case
         type(run_result_t) :: result
-        type(progress_t) :: progress
+        type(progress_t) :: progress, reading
         integer :: k
 
         code = 0
@@ -175,8 +176,14 @@ contains
                 code = run_cases(opts%case_paths, opts%quiet, out_unit, err_unit)
                 return
             end if
-            call read_case(opts%case_path, case, error)
-            if (.not. allocated(error)) call register_output_directory(case%directory)
+            ! the phases of a reduction that take a second or more, as they finish
+            if (.not. opts%quiet) reading%unit = err_unit
+            call read_case(opts%case_path, case, error, reading)
+            if (.not. allocated(error)) then
+                call register_output_directory(case%directory)
+                ! a model reduced for this run goes to the reduction cache
+                call write_reduction_cache_of(case%reduction, reading)
+            end if
         end if
         if (allocated(error)) then
             ! a usage error carries the usage text (our own, several lines) after its message
@@ -284,6 +291,7 @@ contains
             code = exit_code_of(error%stat)
         else
             call register_output_directory(case%directory)
+            call write_reduction_cache_of(case%reduction)
             progress%label = trim(case%method)
             call run_method(case, result, error, progress)
             code = report_run(case, result, error, quiet, uo, ue)

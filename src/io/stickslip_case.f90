@@ -21,9 +21,10 @@ module stickslip_case
     use stickslip_namelist_values, only: get_logical, get_string
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         max_dof, max_terms, group_error, system_files_t, max_file_dof, &
-        sparse_system_t
+        sparse_system_t, load_sparse_system
     use stickslip_case_reduction, only: reduction_case_t, read_reduction_group, &
         reduce_case_model
+    use stickslip_progress, only: progress_t
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
         read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
@@ -39,7 +40,7 @@ module stickslip_case
     public :: system_files_t, max_file_dof, reduction_case_t
     public :: sweep_run_options_t, modes_run_options_t
     public :: max_sample_values
-    public :: put, rtoa, ltoa, rlist, ilist, llist
+    public :: put, rtoa, ltoa, rlist, ilist, llist, quoted
     public :: selected_dofs, default_output_dofs
 
     !> The groups of a case file.
@@ -124,14 +125,20 @@ contains
     !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
     !> model and case%reduction holds the report, the full-model DOF numbers and the rows of
     !> the basis for &output dofs (full-model numbers, checked against the full N; when given
-    !> they are boundary DOFs of the reduction).
-    subroutine read_case(path, case, error)
+    !> they are boundary DOFs of the reduction). The reduction's cache (&reduction cache) is
+    !> read there; a model reduced here waits in case%reduction (cache_status 'pending') for
+    !> write_reduction_cache_of, which the command line calls once the case is read (read_case
+    !> itself writes nothing). `progress` reports the phases of a reduction that take a
+    !> second or more (progress_t%phase).
+    subroutine read_case(path, case, error, progress)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path
         !> The case read.
         type(case_t), intent(out) :: case
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Where the phases of a reduction are reported (optional).
+        type(progress_t), intent(inout), optional :: progress
         type(nml_file_t) :: nml
         character(len=:), allocatable :: method
         logical :: method_given
@@ -146,8 +153,10 @@ contains
 
         call read_reduction_group(nml, case%reduction, error)
         if (allocated(error)) return
+        ! the entries of large matrix files are read when the reduction needs them (not on
+        ! a cache hit)
         call read_system_group(nml, case%model, case%system_files, error, &
-                               case%reduction%method, sparse)
+                               case%reduction%method, sparse, defer=.true.)
         if (allocated(error)) return
         if (.not. sparse%read .and. case%reduction%method == 'craig-bampton') then
             ! asked for explicitly, a reduction of inline matrices would be ignored silently
@@ -174,6 +183,8 @@ contains
             if (allocated(error)) return
             if (case%reduction%method == 'none') then
                 ! the exact sparse condensation: no reduction, the matrices kept sparse
+                call load_sparse_system(nml, case%system_files, case%model%ndof, sparse, error)
+                if (allocated(error)) return
                 allocate (case%sparse_model)
                 case%sparse_model%model = case%model
                 case%sparse_model%mass = sparse%mass
@@ -183,9 +194,9 @@ contains
                 case%reduction%report%reduced_dof = case%model%ndof
             else
                 case%reduction%keep_basis = case%full_field
-                call reduce_case_model(nml, case%reduction, sparse, case%hbm%harmonics, &
-                                       case%model, case%output_dofs, case%output_dofs_given, &
-                                       error)
+                call reduce_case_model(nml, case%reduction, sparse, case%system_files, &
+                                       case%hbm%harmonics, case%model, case%output_dofs, &
+                                       case%output_dofs_given, case%directory, error, progress)
                 if (allocated(error)) return
                 ! the truncation estimate judges the output DOFs, not modal coordinates
                 if (allocated(case%reduction%output_rows)) &
@@ -688,6 +699,9 @@ contains
             call put(unit, "  modes = "//itoa(case%reduction%modes), stat, msg)
             call put(unit, "  max_frequency = "//rtoa(case%reduction%max_frequency), stat, msg)
             call put(unit, "  damping_ratio = "//rtoa(case%reduction%damping_ratio), stat, msg)
+            call put(unit, "  error_estimate = "//ltoa(case%reduction%error_estimate), stat, msg)
+            if (allocated(case%reduction%cache)) call put(unit, "  cache = "// &
+                quoted(case%reduction%cache), stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&hbm", stat, msg)
             call put(unit, "  harmonics = "//itoa(o%harmonics), stat, msg)

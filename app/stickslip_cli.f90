@@ -12,6 +12,7 @@ module stickslip_cli
     use stickslip_diagnostics, only: diagnostics_t, level_note, level_warning, level_untrusted
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t, read_case
+    use stickslip_case_reduction, only: write_reduction_cache_of
     use stickslip_solution, only: hbm_solution_t
     use stickslip_driver, only: run_result_t, run_method
     use stickslip_robustness, only: robustness_row_t
@@ -177,7 +178,8 @@ contains
                 code = run_cases(opts%case_paths, opts%quiet, out_unit, err_unit)
                 return
             end if
-            ! a long read of large matrix files reports its progress after about a second
+            ! a long read of large matrix files reports its progress after about a second,
+            ! and the phases of a reduction that take a second or more as they finish
             if (.not. opts%quiet) reading%unit = err_unit
             reading%delay = 1.0_dp
             reading%interval = 1.0_dp
@@ -186,7 +188,11 @@ contains
                 reading%interval = progress_interval
             end if
             call read_case(opts%case_path, case, error, reading)
-            if (.not. allocated(error)) call register_output_directory(case%directory)
+            if (.not. allocated(error)) then
+                call register_output_directory(case%directory)
+                ! a model reduced for this run goes to the reduction cache
+                call write_reduction_cache_of(case%reduction, reading)
+            end if
         end if
         if (allocated(error)) then
             ! a usage error carries the usage text (our own, several lines) after its message
@@ -294,6 +300,7 @@ contains
             code = exit_code_of(error%stat)
         else
             call register_output_directory(case%directory)
+            call write_reduction_cache_of(case%reduction)
             progress%label = trim(case%method)
             call run_method(case, result, error, progress)
             code = report_run(case, result, error, quiet, uo, ue)

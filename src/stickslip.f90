@@ -20,7 +20,8 @@ module stickslip
         sparse_symmetry_defect
     use stickslip_sparse_model, only: sparse_model_t, validate_sparse_model
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
-        craig_bampton, recover_dofs, receptance_error, reduced_dof_of, reduce_vectors
+        craig_bampton, recover_dofs, receptance_error, reduced_dof_of, reduce_vectors, &
+        reduction_estimate_t, estimate_reduction_error
     ! the weighted residual
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic, validate_options
@@ -61,7 +62,8 @@ module stickslip
               sparse_from_dense, sparse_transpose, sparse_scaled_sum, sparse_symmetry_defect
     public :: sparse_model_t, validate_sparse_model, solve_periodic_sparse
     public :: reduction_options_t, reduction_report_t, reduced_model_t, craig_bampton, &
-              recover_dofs, receptance_error, reduced_dof_of, reduce_vectors
+              recover_dofs, receptance_error, reduced_dof_of, reduce_vectors, &
+              reduction_estimate_t, estimate_reduction_error
     public :: hbm_options_t, hbm_solution_t, solve_periodic, validate_options, automatic_rho
     public :: euler_options_t, euler_result_t, integrate_euler
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference, &

@@ -10,6 +10,7 @@ module stickslip_io
         run_euler_case, run_reference_case, run_side_by_side_case, run_study_case, &
         run_sweep_case, run_robustness_case
     use stickslip_files, only: make_directory
+    use stickslip_case_reduction, only: write_reduction_cache_of
     use stickslip_csv, only: write_hbm_csv, write_coefficients_csv, write_samples_csv, &
         write_events_csv, write_study_csv, write_frc_csv, write_robustness_csv
     use stickslip_summary, only: write_summary, write_euler_summary, write_reference_summary, &
@@ -27,6 +28,7 @@ module stickslip_io
     public :: run_result_t, run_method, method_names, run_case, run_euler_case, &
               run_reference_case, run_side_by_side_case, run_study_case, run_sweep_case, &
               run_robustness_case, exit_code_of
+    public :: write_reduction_cache_of
     public :: make_directory, write_hbm_csv, write_coefficients_csv, write_samples_csv, &
               write_events_csv, write_study_csv, write_frc_csv, write_robustness_csv
     public :: write_summary, write_euler_summary, write_reference_summary, &

@@ -43,6 +43,8 @@ program tester
     use test_fuzz, only: run_fuzz_tests
     use test_umfpack, only: run_umfpack_tests
     use test_reduction, only: run_reduction_tests
+    use test_reduction_estimate, only: run_reduction_estimate_tests
+    use test_reduction_cache, only: run_reduction_cache_tests
     use test_arpack, only: run_arpack_tests
     use test_sparse, only: run_sparse_tests
     use test_matrix_market, only: run_matrix_market_tests
@@ -121,6 +123,8 @@ program tester
         suite_t("fuzz", run_fuzz_tests),&
         suite_t("umfpack", run_umfpack_tests),&
         suite_t("reduction", run_reduction_tests),&
+        suite_t("reduction_estimate", run_reduction_estimate_tests),&
+        suite_t("reduction_cache", run_reduction_cache_tests),&
         suite_t("arpack", run_arpack_tests),&
         suite_t("sparse", run_sparse_tests),&
         suite_t("decimal", run_decimal_tests),&

@@ -2,13 +2,14 @@
 !> a random sparse nonsymmetric real matrix with several right-hand sides, a refactorization
 !> on the same pattern, a random sparse complex Z = K - w^2 M + i w C, and the failures: a
 !> singular real matrix, an undamped resonance (complex singular), bad patterns, a NaN, a
-!> solve without a factorization.
+!> solve without a factorization; the orderings, refinement off, and move_to.
 module test_umfpack
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat
     use stickslip_lapack, only: dgesv, zgesv
-    use stickslip_umfpack, only: sparse_lu_t, sparse_zlu_t
+    use stickslip_umfpack, only: sparse_lu_t, sparse_zlu_t, ordering_amd, ordering_cholmod, &
+        ordering_metis
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
@@ -21,7 +22,47 @@ contains
         call test_real(t)
         call test_complex(t)
         call test_failures(t)
+        call test_options(t)
     end subroutine run_umfpack_tests
+
+    !> The orderings (AMD, CHOLMOD's choice, METIS) and refinement off solve as dgesv does;
+    !> move_to hands a factorization over (the source empty, the target solving).
+    subroutine test_options(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 80
+        real(dp) :: a(n, n), lu(n, n), b(n), xd(n), xs(n)
+        integer, allocatable :: colptr(:), rowind(:)
+        real(dp), allocatable :: values(:)
+        integer :: ipiv(n), info, k
+        integer, parameter :: orderings(3) = [ordering_amd, ordering_cholmod, ordering_metis]
+        type(sparse_lu_t) :: slu, other
+        type(error_type), allocatable :: error
+        call random_sparse(n, 0.08_dp, 0.5_dp, a)
+        call random_number(b)
+        call dense_to_csc(a, colptr, rowind, values)
+        lu = a
+        xd = b
+        call dgesv(n, 1, lu, n, ipiv, xd, n, info)
+        do k = 1, 3
+            slu%ordering = orderings(k)
+            slu%refinement_steps = mod(k, 2)*2
+            call slu%factorize(n, colptr, rowind, values, error)
+            call check(t, .not. allocated(error) .and. slu%factor_entries >= n, &
+                       "umfpack options: factorizes with ordering "//achar(48 + k))
+            if (allocated(error)) return
+            call slu%solve(b, xs, error)
+            call check_close(t, xs, xd, "umfpack options: ordering "//achar(48 + k)// &
+                             " solves as dgesv", rtol=1.0e-10_dp, atol=1.0e-10_dp*maxval(abs(xd)))
+        end do
+        call slu%move_to(other)
+        call check(t, .not. slu%factorized() .and. slu%n == 0 .and. other%factorized() .and. &
+                   other%n == n, "umfpack options: move_to hands the factorization over")
+        call other%solve(b, xs, error)
+        call check_close(t, xs, xd, "umfpack options: the moved factorization solves", &
+                         rtol=1.0e-10_dp, atol=1.0e-10_dp*maxval(abs(xd)))
+        call slu%release()
+        call other%release()
+    end subroutine test_options
 
     !> The nonzeros of a dense real matrix in 1-based compressed sparse column form.
     subroutine dense_to_csc(a, colptr, rowind, values)

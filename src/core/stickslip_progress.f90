@@ -4,6 +4,10 @@
 !> gives a unit; then one line `stickslip: <what> <done>/<total> ..., <elapsed> s` on it once
 !> `delay` seconds of wall time have passed since `start`, and at most once per `interval`
 !> seconds. The library never prints behind its host's back: off by default (unit -1).
+!> Long single steps (the phases of a model reduction: reading the matrices, factorizing,
+!> the eigensolve, the error estimate, the cache) report themselves with `phase` once done,
+!> one line `stickslip: <text> in <seconds> s` each, for the phases that took at least
+!> `min_phase` seconds.
 module stickslip_progress
     use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
@@ -29,11 +33,15 @@ module stickslip_progress
         integer(int64) :: last = -1
         !> Lines printed.
         integer :: lines = 0
+        !> Shortest phase `phase` reports [s].
+        real(dp) :: min_phase = 1.0_dp
     contains
         !> Start the clock now.
         procedure :: begin => progress_begin
         !> A point is done: print a line when it is time.
         procedure :: report => progress_report
+        !> A phase is done: print a line when it took at least min_phase.
+        procedure :: phase => progress_phase
     end type progress_t
 
 contains
@@ -91,4 +99,23 @@ contains
         flush (self%unit)
         self%lines = self%lines + 1
     end subroutine progress_report
+
+    !> A phase of `seconds` seconds of wall time is done: print `stickslip: <text> in
+    !> <seconds> s` when the unit is on and seconds >= min_phase.
+    subroutine progress_phase(self, text, seconds)
+        !> The progress.
+        class(progress_t), intent(inout) :: self
+        !> What was done, for a person (e.g. 'reduction: K_ii factorized, 61081 DOFs').
+        character(len=*), intent(in) :: text
+        !> Its wall time [s].
+        real(dp), intent(in) :: seconds
+        character(len=32) :: buf
+        if (self%unit == -1) return
+        if (.not. (seconds >= self%min_phase)) return
+        write (buf, '(f0.1)') seconds
+        if (buf(1:1) == '.') buf = '0'//buf(1:len(buf) - 1)
+        write (self%unit, '(a)') "stickslip: "//text//" in "//trim(buf)//" s"
+        flush (self%unit)
+        self%lines = self%lines + 1
+    end subroutine progress_phase
 end module stickslip_progress

@@ -22,7 +22,7 @@ module stickslip_case
     use stickslip_progress, only: progress_t
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         max_dof, max_terms, group_error, system_files_t, max_file_dof, &
-        sparse_system_t
+        sparse_system_t, load_sparse_system
     use stickslip_case_reduction, only: reduction_case_t, read_reduction_group, &
         reduce_case_model
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
@@ -40,7 +40,7 @@ module stickslip_case
     public :: system_files_t, max_file_dof, reduction_case_t
     public :: sweep_run_options_t, modes_run_options_t
     public :: max_sample_values
-    public :: put, rtoa, ltoa, rlist, ilist, llist
+    public :: put, rtoa, ltoa, rlist, ilist, llist, quoted
     public :: selected_dofs, default_output_dofs
 
     !> The groups of a case file.
@@ -125,8 +125,12 @@ contains
     !> when &reduction asks for it (stickslip_case_reduction): case%model is then the reduced
     !> model and case%reduction holds the report, the full-model DOF numbers and the rows of
     !> the basis for &output dofs (full-model numbers, checked against the full N; when given
-    !> they are boundary DOFs of the reduction). Quiet unless `progress` has a unit: then the
-    !> reading of large Matrix Market files reports its progress there (read_matrix_market).
+    !> they are boundary DOFs of the reduction). The reduction's cache (&reduction cache) is
+    !> read there; a model reduced here waits in case%reduction (cache_status 'pending') for
+    !> write_reduction_cache_of, which the command line calls once the case is read (read_case
+    !> itself writes nothing). `progress` reports the reading of large Matrix Market files
+    !> (read_matrix_market) and the phases of a reduction that take a second or more
+    !> (progress_t%phase); absent: quiet.
     subroutine read_case(path, case, error, progress)
         !> Path of the namelist file.
         character(len=*), intent(in) :: path
@@ -134,7 +138,7 @@ contains
         type(case_t), intent(out) :: case
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
-        !> Progress of long reads of matrix files (stickslip_progress; absent: quiet).
+        !> Progress of long reads of matrix files and of the reduction's phases (optional).
         type(progress_t), intent(inout), optional :: progress
         type(nml_file_t) :: nml
         character(len=:), allocatable :: method
@@ -150,8 +154,11 @@ contains
 
         call read_reduction_group(nml, case%reduction, error)
         if (allocated(error)) return
+        ! the entries of large matrix files are read when the reduction needs them (not on
+        ! a cache hit)
         call read_system_group(nml, case%model, case%system_files, error, &
-                               case%reduction%method, sparse, progress)
+                               case%reduction%method, sparse, defer=.true., &
+                               progress=progress)
         if (allocated(error)) return
         if (.not. sparse%read .and. case%reduction%method == 'craig-bampton') then
             ! asked for explicitly, a reduction of inline matrices would be ignored silently
@@ -178,6 +185,8 @@ contains
             if (allocated(error)) return
             if (case%reduction%method == 'none') then
                 ! the exact sparse condensation: no reduction, the matrices kept sparse
+                call load_sparse_system(nml, case%system_files, case%model%ndof, sparse, error)
+                if (allocated(error)) return
                 allocate (case%sparse_model)
                 case%sparse_model%model = case%model
                 case%sparse_model%mass = sparse%mass
@@ -187,9 +196,9 @@ contains
                 case%reduction%report%reduced_dof = case%model%ndof
             else
                 case%reduction%keep_basis = case%full_field
-                call reduce_case_model(nml, case%reduction, sparse, case%hbm%harmonics, &
-                                       case%model, case%output_dofs, case%output_dofs_given, &
-                                       error)
+                call reduce_case_model(nml, case%reduction, sparse, case%system_files, &
+                                       case%hbm%harmonics, case%model, case%output_dofs, &
+                                       case%output_dofs_given, case%directory, error, progress)
                 if (allocated(error)) return
                 ! the truncation estimate judges the output DOFs, not modal coordinates
                 if (allocated(case%reduction%output_rows)) &
@@ -692,6 +701,9 @@ contains
             call put(unit, "  modes = "//itoa(case%reduction%modes), stat, msg)
             call put(unit, "  max_frequency = "//rtoa(case%reduction%max_frequency), stat, msg)
             call put(unit, "  damping_ratio = "//rtoa(case%reduction%damping_ratio), stat, msg)
+            call put(unit, "  error_estimate = "//ltoa(case%reduction%error_estimate), stat, msg)
+            if (allocated(case%reduction%cache)) call put(unit, "  cache = "// &
+                quoted(case%reduction%cache), stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&hbm", stat, msg)
             call put(unit, "  harmonics = "//itoa(o%harmonics), stat, msg)

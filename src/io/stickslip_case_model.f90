@@ -17,14 +17,14 @@ module stickslip_case_model
         get_reals, get_string
     use stickslip_sparse, only: sparse_matrix_t, sparse_to_dense, sparse_symmetry_defect, &
         sparse_scaled_sum
-    use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size
     use stickslip_progress, only: progress_t
+    use stickslip_matrix_market, only: read_matrix_market, read_matrix_market_size
     implicit none
     private
     public :: read_system_group, read_forcing_group
     public :: take_reals, take_integers, take_file_variable, read_column_file, not_beside_file
     public :: max_dof, max_terms, group_error, max_file_dof, system_files_t, resolve_path
-    public :: sparse_system_t
+    public :: sparse_system_t, load_sparse_system
 
     !> Largest ndof a case file can hold (host codes calling the library have no limit).
     integer, parameter :: max_dof = 64
@@ -58,8 +58,13 @@ module stickslip_case_model
     !> The matrices of a model from files kept sparse (for the reduction), damping including
     !> the Rayleigh terms.
     type :: sparse_system_t
-        !> The matrices were read sparse (model%mass etc. are then NOT set, model%ndof is N).
+        !> The model comes from files kept sparse (model%mass etc. are then NOT set,
+        !> model%ndof is N); the matrices are here once `loaded`.
         logical :: read = .false.
+        !> The matrices were read (read_system_group without `defer`, or
+        !> load_sparse_system): with `defer` only the files' size lines were checked, so that
+        !> a reduction found in its cache need not read them.
+        logical :: loaded = .false.
         !> Damping was given (damping_file or a Rayleigh factor).
         logical :: has_damping = .false.
         !> M, K, C (N x N, full storage).
@@ -88,9 +93,9 @@ contains
     !> With `sparse` present and `method` = 'craig-bampton', or 'auto' or 'none' and N >
     !> max_file_dof, the file matrices are kept sparse in `sparse` (no size limit) and model
     !> gets only ndof = N ('none': the exact sparse condensation, stickslip_sparse_dynamics).
-    !> With `progress`, a long read of a matrix file reports its progress there
-    !> (read_matrix_market).
-    subroutine read_system_group(nml, model, files, error, method, sparse, progress)
+    !> With `defer` true, a model kept sparse has its files' size lines checked only (sizes,
+    !> square, equal); load_sparse_system reads the entries when they are needed.
+    subroutine read_system_group(nml, model, files, error, method, sparse, defer, progress)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model: ndof, mass, stiffness, damping set.
@@ -103,11 +108,12 @@ contains
         character(len=*), intent(in), optional :: method
         !> The sparse matrices when the model is to be reduced.
         type(sparse_system_t), intent(out), optional :: sparse
-        !> Progress of the reading of large matrix files (stickslip_progress; absent: quiet).
+        !> Leave the entries of a model kept sparse unread (load_sparse_system reads them).
+        logical, intent(in), optional :: defer
+        !> Progress of long reads of matrix files (stickslip_progress; absent: quiet).
         type(progress_t), intent(inout), optional :: progress
         integer :: n, rows, cols
-        logical :: found, from_files, keep_sparse
-        type(sparse_matrix_t) :: tmp
+        logical :: found, from_files, keep_sparse, later
         if (nml%find("system") == 0) then
             call group_error(nml, error, "&system: required group not found")
             return
@@ -161,10 +167,13 @@ contains
                               ((method == 'auto' .or. method == 'none') .and. &
                                rows > max_file_dof)
             end if
+            later = .false.
+            if (present(defer)) later = defer
             if (keep_sparse) then
-                call read_sparse(files%mass_path, "mass_file", 0, sparse%mass)
+                ! the size line only: load_sparse_system reads the entries
+                call sparse_file_header(nml, files%mass_path, "mass_file", 0, rows, error)
                 if (allocated(error)) return
-                model%ndof = sparse%mass%nrows
+                model%ndof = rows
             else
                 call read_dense(files%mass_path, "mass_file", 0, model%mass)
                 if (allocated(error)) return
@@ -179,27 +188,18 @@ contains
             end if
             n = model%ndof
             if (keep_sparse) then
-                call read_sparse(files%stiffness_path, "stiffness_file", n, sparse%stiffness)
-                if (allocated(error)) return
                 sparse%read = .true.
                 sparse%has_damping = allocated(files%damping_file) .or. &
                                      files%rayleigh_alpha /= 0.0_dp .or. files%rayleigh_beta /= 0.0_dp
-                if (allocated(files%damping_file)) then
-                    call read_sparse(files%damping_path, "damping_file", n, sparse%damping)
+                if (later) then
+                    call sparse_file_header(nml, files%stiffness_path, "stiffness_file", n, &
+                                            rows, error)
                     if (allocated(error)) return
-                else
-                    call sparse_scaled_sum(0.0_dp, sparse%mass, 0.0_dp, sparse%mass, &
-                                           sparse%damping, error)
-                    if (allocated(error)) return
+                    if (allocated(files%damping_file)) call sparse_file_header(nml, &
+                        files%damping_path, "damping_file", n, rows, error)
+                    return
                 end if
-                if (files%rayleigh_alpha /= 0.0_dp .or. files%rayleigh_beta /= 0.0_dp) then
-                    call sparse_scaled_sum(1.0_dp, sparse%damping, files%rayleigh_alpha, &
-                                           sparse%mass, tmp, error)
-                    if (allocated(error)) return
-                    call sparse_scaled_sum(1.0_dp, tmp, files%rayleigh_beta, &
-                                           sparse%stiffness, sparse%damping, error)
-                    if (allocated(error)) return
-                end if
+                call load_sparse_system(nml, files, n, sparse, error)
                 return
             end if
             call read_dense(files%stiffness_path, "stiffness_file", n, model%stiffness)
@@ -331,67 +331,140 @@ contains
                                  "&reduction method = 'craig-bampton' or 'auto'")
                 return
             end if
-            call read_sparse(path, name, n, s)
+            call read_sparse_file(nml, path, name, n, s, error, progress)
             if (allocated(error)) return
             call sparse_to_dense(s, a, error)
             if (allocated(error)) error%message = nml%path//": &system "//name//" '"// &
                 path//"': "//error%message
         end subroutine read_dense
 
-        !> The sparse square matrix of a Matrix Market file; n > 0: its required size. The
-        !> size is checked from the size line before the entries are read.
-        subroutine read_sparse(path, name, n, s)
-            character(len=*), intent(in) :: path, name
-            integer, intent(in) :: n
-            type(sparse_matrix_t), intent(out) :: s
-            integer :: rows, cols, line
-            integer(int64) :: entries
-            call read_matrix_market_size(path, rows, cols, error, entries, line)
-            if (allocated(error)) then
-                error%message = nml%path//": &system "//name//": "//error%message
-                return
-            end if
-            ! a size the entries cannot back fails before anything of that size is made
-            if (name == "mass_file" .and. entries < int(rows, int64)) then
-                call group_error(nml, error, "&system "//name//" '"//path//"':"//itoa(line)// &
-                                 ": the size line claims a "//itoa(rows)//" x "//itoa(cols)// &
-                                 " matrix with "//itoa(entries)//" entries, but a positive "// &
-                                 "definite mass matrix needs its "//itoa(rows)//" diagonal "// &
-                                 "entries")
-                return
-            end if
-            if (rows /= cols) then
-                call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
-                                 itoa(rows)//" x "//itoa(cols)//" matrix, not square")
-                return
-            end if
-            if (n > 0 .and. rows /= n) then
-                call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
-                                 itoa(rows)//" x "//itoa(cols)//" matrix, but the model "// &
-                                 "has N = "//itoa(n)//" DOFs: sizes must agree")
-                return
-            end if
-            if (rows < 1) then
-                call group_error(nml, error, "&system "//name//" '"//path//"': an empty "// &
-                                 "0 x 0 matrix")
-                return
-            end if
-            call read_matrix_market(path, s, error, progress=progress)
-            if (allocated(error)) then
-                error%message = nml%path//": &system "//name//": "//error%message
-                return
-            end if
-            if (name == "mass_file") then
-                if (.not. (sparse_symmetry_defect(s) <= 1.0e-12_dp)) then
-                    call group_error(nml, error, "&system "//name//" '"//path//"': M is "// &
-                                     "not symmetric (max |M(i,j) - M(j,i)| is "// &
-                                     real_text(sparse_symmetry_defect(s))//" of its "// &
-                                     "largest entry)")
-                    return
-                end if
-            end if
-        end subroutine read_sparse
     end subroutine read_system_group
+
+    !> The matrices of a model from files kept sparse (read_system_group with `defer`): M, K
+    !> (N x N, n given) and C (damping_file or 0, plus rayleigh_alpha M + rayleigh_beta K)
+    !> read into `sparse` (sparse%loaded). Errors as read_system_group's for the files.
+    subroutine load_sparse_system(nml, files, n, sparse, error, progress)
+        !> The parsed case file (for messages).
+        type(nml_file_t), intent(in) :: nml
+        !> The file variables and Rayleigh factors (read_system_group).
+        type(system_files_t), intent(in) :: files
+        !> DOFs of the model.
+        integer, intent(in) :: n
+        !> The sparse matrices: read, has_damping set; the matrices on return.
+        type(sparse_system_t), intent(inout) :: sparse
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress of the reads (absent: quiet).
+        type(progress_t), intent(inout), optional :: progress
+        type(sparse_matrix_t) :: tmp
+        if (sparse%loaded) return
+        call read_sparse_file(nml, files%mass_path, "mass_file", n, sparse%mass, error, progress)
+        if (allocated(error)) return
+        call read_sparse_file(nml, files%stiffness_path, "stiffness_file", n, sparse%stiffness, &
+                              error, progress)
+        if (allocated(error)) return
+        if (allocated(files%damping_file)) then
+            call read_sparse_file(nml, files%damping_path, "damping_file", n, sparse%damping, &
+                                  error, progress)
+            if (allocated(error)) return
+        else
+            call sparse_scaled_sum(0.0_dp, sparse%mass, 0.0_dp, sparse%mass, sparse%damping, &
+                                   error)
+            if (allocated(error)) return
+        end if
+        if (files%rayleigh_alpha /= 0.0_dp .or. files%rayleigh_beta /= 0.0_dp) then
+            call sparse_scaled_sum(1.0_dp, sparse%damping, files%rayleigh_alpha, sparse%mass, &
+                                   tmp, error)
+            if (allocated(error)) return
+            call sparse_scaled_sum(1.0_dp, tmp, files%rayleigh_beta, sparse%stiffness, &
+                                   sparse%damping, error)
+            if (allocated(error)) return
+        end if
+        sparse%loaded = .true.
+    end subroutine load_sparse_system
+
+    !> The size of the square matrix of Matrix Market file `path` (&system `name`) from its
+    !> header and size line, checked: square, at least 1 x 1, of size n when n > 0, and (a
+    !> mass file) with at least N entries.
+    subroutine sparse_file_header(nml, path, name, n, rows, error)
+        !> The parsed case file (for messages).
+        type(nml_file_t), intent(in) :: nml
+        !> The file, and its &system variable (mass_file, stiffness_file, damping_file).
+        character(len=*), intent(in) :: path, name
+        !> The size it must have (0: any).
+        integer, intent(in) :: n
+        !> Its size.
+        integer, intent(out) :: rows
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: cols, line
+        integer(int64) :: entries
+        call read_matrix_market_size(path, rows, cols, error, entries, line)
+        if (allocated(error)) then
+            error%message = nml%path//": &system "//name//": "//error%message
+            return
+        end if
+        ! a size the entries cannot back fails before anything of that size is made
+        if (name == "mass_file" .and. entries < int(rows, int64)) then
+            call group_error(nml, error, "&system "//name//" '"//path//"':"//itoa(line)// &
+                             ": the size line claims a "//itoa(rows)//" x "//itoa(cols)// &
+                             " matrix with "//itoa(entries)//" entries, but a positive "// &
+                             "definite mass matrix needs its "//itoa(rows)//" diagonal "// &
+                             "entries")
+            return
+        end if
+        if (rows /= cols) then
+            call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
+                             itoa(rows)//" x "//itoa(cols)//" matrix, not square")
+            return
+        end if
+        if (n > 0 .and. rows /= n) then
+            call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
+                             itoa(rows)//" x "//itoa(cols)//" matrix, but the model "// &
+                             "has N = "//itoa(n)//" DOFs: sizes must agree")
+            return
+        end if
+        if (rows < 1) then
+            call group_error(nml, error, "&system "//name//" '"//path//"': an empty "// &
+                             "0 x 0 matrix")
+            return
+        end if
+    end subroutine sparse_file_header
+
+    !> The sparse square matrix of a Matrix Market file; n > 0: its required size. The
+    !> size is checked from the size line before the entries are read; a mass matrix must
+    !> be symmetric.
+    subroutine read_sparse_file(nml, path, name, n, s, error, progress)
+        !> The parsed case file (for messages).
+        type(nml_file_t), intent(in) :: nml
+        !> The file, and its &system variable (mass_file, stiffness_file, damping_file).
+        character(len=*), intent(in) :: path, name
+        !> The size it must have (0: any).
+        integer, intent(in) :: n
+        !> The matrix read.
+        type(sparse_matrix_t), intent(out) :: s
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress of the read (absent: quiet).
+        type(progress_t), intent(inout), optional :: progress
+        integer :: rows
+        call sparse_file_header(nml, path, name, n, rows, error)
+        if (allocated(error)) return
+        call read_matrix_market(path, s, error, progress=progress)
+        if (allocated(error)) then
+            error%message = nml%path//": &system "//name//": "//error%message
+            return
+        end if
+        if (name == "mass_file") then
+            if (.not. (sparse_symmetry_defect(s) <= 1.0e-12_dp)) then
+                call group_error(nml, error, "&system "//name//" '"//path//"': M is "// &
+                                 "not symmetric (max |M(i,j) - M(j,i)| is "// &
+                                 real_text(sparse_symmetry_defect(s))//" of its "// &
+                                 "largest entry)")
+                return
+            end if
+        end if
+    end subroutine read_sparse_file
 
     !> A file variable of `group`: as written, resolved against the case file's folder,
     !> absolute (all unallocated when not given). Error: an empty file name.

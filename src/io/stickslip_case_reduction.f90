@@ -22,18 +22,43 @@
 !> mode below 3 x the highest harmonic frequency of the run, H_max omega_max, with H_max the
 !> larger of &hbm harmonics and the forcing harmonics and omega_max the larger of &forcing
 !> omega and, for a sweep over omega, its start and stop; max_frequency > 0 overrides.
-!> The measured reduction error (receptance_error) is taken at error_frequencies: 1, 3 and 5
-!> times the forcing harmonics' frequencies (sweep ends for a sweep over omega), at most 8.
+!> The measured reduction error is taken at error_frequencies: 1, 3 and 5 times the forcing
+!> harmonics' frequencies (sweep ends for a sweep over omega), at most 8, by
+!> estimate_reduction_error (stickslip_reduction_estimate: an enriched Galerkin model on the
+!> factorization of K_ii the reduction made, the exact complex sparse LU of the full model
+!> only when its levels disagree); error_estimate = .false. skips it (reduction_error -1).
+!>
+!> The reduction cache (&reduction cache = 'auto', the default: the file reduction.cache in
+!> the &output directory; 'off'; or a file path): the reduced model, its basis and its
+!> report, keyed on a 64-bit FNV-1a hash of the bytes of the matrix files and of every
+!> input that changes the reduction or its error estimate (cache_key). A run whose key
+!> matches reads the model from the file and does not even read the matrix files; a file
+!> of another key is replaced silently, a damaged one with a warning; the file is written
+!> (atomically: a temporary, then renamed) by write_reduction_cache_of, which the command
+!> line calls once read_case has read and validated the whole case (read_case writes
+!> nothing: an input error found there writes no cache). Module stickslip_reduction_cache
+!> owns the file format.
 module stickslip_case_reduction
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
-    use stickslip_diagnostics, only: diagnostics_t, level_warning
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_note
     use stickslip_namelist, only: nml_file_t
-    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_string
-    use stickslip_case_model, only: group_error, sparse_system_t
+    use stickslip_namelist_values, only: check_names, get_integer, get_real, get_string, &
+        get_logical
+    use stickslip_case_model, only: group_error, sparse_system_t, system_files_t, &
+        load_sparse_system
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
-        craig_bampton, receptance_error, reduced_dof_of, recover_dofs, reduce_vectors
+        craig_bampton, reduced_dof_of, recover_dofs, reduce_vectors, reduction_estimate_t, &
+        estimate_reduction_error
+    use stickslip_umfpack, only: sparse_lu_t
+    use stickslip_progress, only: progress_t
+    use stickslip_hash, only: hash_t
+    use stickslip_version_info, only: stickslip_version
+    use stickslip_files, only: make_directory
+    use stickslip_reduction_cache, only: hash_file, write_reduction_cache, read_reduction_cache, &
+        cache_hit, cache_absent, cache_stale, cache_damaged, cache_foreign
     implicit none
     private
     !> Measured reduction error above which the reduction is reported (warning
@@ -41,7 +66,9 @@ module stickslip_case_reduction
     real(dp), parameter, public :: reduction_error_warning = 0.05_dp
 
     public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs, &
-        recover_full_field, error_frequencies
+        recover_full_field, error_frequencies, write_reduction_cache_of
+    !> File name of the default cache (&reduction cache = 'auto') in the output directory.
+    character(len=*), parameter, public :: default_cache_name = "reduction.cache"
 
     !> The &reduction group as read, what the reduction did, and the full-model DOF numbers.
     type :: reduction_case_t
@@ -53,6 +80,24 @@ module stickslip_case_reduction
         real(dp) :: max_frequency = 0.0_dp
         !> Modal damping ratio of the fixed-interface modes.
         real(dp) :: damping_ratio = 0.0_dp
+        !> Measure the reduction error (&reduction error_estimate).
+        logical :: error_estimate = .true.
+        !> &reduction cache as given: 'auto' (reduction.cache in the output directory),
+        !> 'off', or the path of the cache file.
+        character(len=:), allocatable :: cache
+        !> The cache file used ('' when off).
+        character(len=:), allocatable :: cache_path
+        !> What became of the cache: 'off', 'hit' (the model was read from it), 'written'
+        !> (made or replaced by this run), 'not written' (the write failed: a warning),
+        !> 'pending' (to be written by write_reduction_cache_of).
+        character(len=16) :: cache_status = 'off'
+        !> Wall time of reading the matrix files [s] (0 on a cache hit).
+        real(dp) :: read_seconds = 0.0_dp
+        !> Wall time of hashing the inputs and reading or writing the cache [s].
+        real(dp) :: cache_seconds = 0.0_dp
+        !> The key of this run's inputs and, while the cache is pending, the model to write.
+        integer(int64) :: cache_key = 0
+        type(reduced_model_t), allocatable :: cache_model
         !> What the reduction did (method 'none' when the model was not reduced).
         type(reduction_report_t) :: report
         !> The model's contact_dof, contact_dof2, force_dof in FULL-model numbering (allocated
@@ -88,8 +133,8 @@ contains
         character(len=:), allocatable :: method
         character(len=*), parameter :: g = "reduction"
         type(reduction_options_t), parameter :: defaults = reduction_options_t()
-        call check_names(nml, g, [character(len=13) :: "method", "modes", "max_frequency", &
-                                 "damping_ratio"], error)
+        call check_names(nml, g, [character(len=14) :: "method", "modes", "max_frequency", &
+                                 "damping_ratio", "error_estimate", "cache"], error)
         if (allocated(error)) return
         method = trim(red%method)
         call get_string(nml, g, "method", method, error)
@@ -128,24 +173,49 @@ contains
             call group_error(nml, error, "&reduction damping_ratio: must be in [0, 1)")
             return
         end if
+        call get_logical(nml, g, "error_estimate", red%error_estimate, error)
+        if (allocated(error)) return
+        red%cache = 'auto'
+        call get_string(nml, g, "cache", red%cache, error)
+        if (allocated(error)) return
+        red%cache = trim(red%cache)
+        if (len(red%cache) == 0) then
+            call group_error(nml, error, "&reduction cache = '': must be 'auto' (the file "// &
+                             default_cache_name//" in the &output directory), 'off' or the "// &
+                             "path of the cache file")
+            return
+        end if
+        if (red%cache(len(red%cache):) == '/') then
+            call group_error(nml, error, "&reduction cache = '"//red%cache//"': a file "// &
+                             "path, not a directory (ends in '/')")
+            return
+        end if
     end subroutine read_reduction_group
 
-    !> Reduce the sparse model `sparse` (read by read_system_group) to the dense `model`:
-    !> boundary = contact DOFs (of the DOF lists or of the directions W) and forced DOFs
-    !> (force_dof), remapped; W and the load shapes F of a force_file projected (T^T W, T^T F;
-    !> F adds load vectors to the basis); report and error measure in red%report.
-    !> `harmonics` is &hbm harmonics. Errors (input): a contact or force DOF outside 1..N
-    !> (named), no boundary DOF (e.g. a force_file without contacts); (numerical): the reduction failing; all start "<path>: ".
-    !> `output_dofs` (full numbers, checked in 1..N by the caller) are the DOFs the result
-    !> files hold; not `output_given`: set here to the contact and forced DOFs.
-    subroutine reduce_case_model(nml, red, sparse, harmonics, model, output_dofs, output_given, &
-                                 error)
+    !> Reduce the sparse model `sparse` (read by read_system_group, its entries read here when
+    !> needed) to the dense `model`: boundary = contact DOFs (of the DOF lists or of the
+    !> directions W) and forced DOFs (force_dof), remapped; W and the load shapes F of a
+    !> force_file projected (T^T W, T^T F; F adds load vectors to the basis); report and
+    !> error estimate in red%report. With the cache on (red%cache not 'off'), a cache file
+    !> whose key matches gives the reduced model instead (the matrix files are then not
+    !> read); otherwise the model reduced here waits in red%cache_model for
+    !> write_reduction_cache_of. `harmonics` is &hbm harmonics. Errors (input): a contact or
+    !> force DOF outside 1..N (named), no boundary DOF (e.g. a force_file without contacts);
+    !> (numerical): the reduction failing; (io): a matrix file that cannot be read; all
+    !> start "<path>: ". `output_dofs` (full numbers, checked in 1..N by the caller) are the
+    !> DOFs the result files hold; not `output_given`: set here to the contact and forced
+    !> DOFs. `directory` is the &output directory (the default cache's folder); `progress`
+    !> reports the phases that take a second or more.
+    subroutine reduce_case_model(nml, red, sparse, files, harmonics, model, output_dofs, &
+                                 output_given, directory, error, progress)
         !> The parsed case file (its path, and &sweep for the frequency range).
         type(nml_file_t), intent(in) :: nml
         !> The options; on return the report and the full-model DOF numbers.
         type(reduction_case_t), intent(inout) :: red
-        !> The full sparse matrices.
-        type(sparse_system_t), intent(in) :: sparse
+        !> The full sparse matrices (read here when not yet loaded and needed).
+        type(sparse_system_t), intent(inout) :: sparse
+        !> The matrix files and Rayleigh factors of &system.
+        type(system_files_t), intent(in) :: files
         !> &hbm harmonics.
         integer, intent(in) :: harmonics
         !> In: ndof = N, contacts and forcing in full numbering; out: the reduced dense model.
@@ -154,18 +224,27 @@ contains
         integer, allocatable, intent(inout) :: output_dofs(:)
         !> &output dofs was given.
         logical, intent(in) :: output_given
+        !> The &output directory.
+        character(len=*), intent(in) :: directory
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Where the phases are reported (optional).
+        type(progress_t), intent(inout), optional :: progress
         type(reduction_options_t) :: opts
         real(dp), allocatable :: unit_q(:), column(:)
         type(reduced_model_t) :: rm
-        integer, allocatable :: bset(:), d2(:)
-        real(dp), allocatable :: freqs(:)
-        real(dp) :: omega_max, start, stop, err
-        character(len=:), allocatable :: parameter
-        logical :: found_start, found_stop
-        integer :: n, k, h, i
-        real(dp), allocatable :: reduced_shape(:, :), law_directions(:, :)
+        type(reduction_report_t) :: cached_report
+        type(reduction_estimate_t) :: estimate
+        type(sparse_lu_t) :: interior_lu
+        type(hash_t) :: hk
+        integer, allocatable :: bset(:)
+        real(dp), allocatable :: freqs(:), directions(:, :)
+        real(dp) :: omega_max, start, stop
+        character(len=:), allocatable :: parameter, why
+        logical :: found_start, found_stop, have_model, want_estimate, may_write
+        integer :: n, k, h, i, status
+        integer(int64) :: t0, t1, rate
+        real(dp), allocatable :: reduced_shape(:, :)
 
         n = model%ndof
         call check_range("&forcing force_dof", model%force_dof)
@@ -227,90 +306,132 @@ contains
         opts = reduction_options_t(modes=red%modes, max_frequency=red%max_frequency, &
                                    highest_frequency=h*omega_max, &
                                    damping_ratio=red%damping_ratio)
-        if (sparse%has_damping .and. allocated(model%force_shape)) then
-            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
-                               error, cmat=sparse%damping, loads=model%force_shape)
-        else if (sparse%has_damping) then
-            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
-                               error, cmat=sparse%damping)
-        else if (allocated(model%force_shape)) then
-            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
-                               error, loads=model%force_shape)
-        else
-            call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, error)
-        end if
-        if (allocated(error)) then
-            if (index(error%message, "craig_bampton: options%") == 1) then
-                ! an option of &reduction at fault: name it
-                error%message = nml%path//": &reduction "// &
-                                error%message(len("craig_bampton: options%") + 1:)
-                k = index(error%message, "options%max_modes")
-                if (k > 0) error%message = error%message(1:k - 1)//"the"// &
-                                           error%message(k + len("options%max_modes = ") - 1:)
-                k = index(error%message, "the number of modes")
-                if (k > 0) error%message = error%message(1:k - 1)//"modes"// &
-                                           error%message(k + len("the number of modes"):)
-            else
-                error%message = nml%path//": &reduction method = '"//trim(red%method)// &
-                                "': "//error%message
-            end if
-            return
-        end if
-
-        ! the error measure at the run's frequencies (error_frequencies)
+        ! the error measure at the run's frequencies (error_frequencies) for the contact
+        ! directions (every force channel with contact laws)
         if (omega_max > abs(model%omega)) then
             freqs = error_frequencies(model%force_harmonic, [min(abs(start), abs(stop)), &
                                       omega_max], harmonics)
         else
             freqs = error_frequencies(model%force_harmonic, [abs(model%omega)], harmonics)
         end if
-        red%report%error_frequencies = freqs
-        d2 = model%contact_dof2
-        law_directions = all_contact_directions(model)
-        if (size(law_directions, 2) > 0 .and. size(freqs) > 0) then
-            ! contact laws: the receptance over every force channel (tangential and normal)
-            if (sparse%has_damping) then
-                call receptance_error(sparse%stiffness, sparse%mass, rm, law_directions, &
-                                      freqs, err, error, cmat=sparse%damping)
+        directions = measured_directions(model)
+        want_estimate = red%error_estimate .and. size(directions, 2) > 0 .and. size(freqs) > 0
+
+        ! the cache: a model reduced before from the same inputs
+        have_model = .false.
+        may_write = red%cache /= 'off'
+        red%cache_status = 'off'
+        red%cache_path = ''
+        if (red%cache /= 'off') then
+            call system_clock(t0, rate)
+            if (red%cache == 'auto') then
+                red%cache_path = directory//'/'//default_cache_name
             else
-                call receptance_error(sparse%stiffness, sparse%mass, rm, law_directions, &
-                                      freqs, err, error)
+                red%cache_path = red%cache
+            end if
+            call cache_key(red%cache_key)
+            if (allocated(error)) return
+            call read_reduction_cache(red%cache_path, red%cache_key, n, rm, cached_report, &
+                                      status, why)
+            select case (status)
+            case (cache_hit)
+                have_model = .true.
+                red%cache_status = 'hit'
+                call red%diagnostics%add(level_note, "reduction_cache_hit", "reduction: "// &
+                    "the reduced model was read from the cache "//red%cache_path//" (the "// &
+                    "reduction was skipped)")
+            case (cache_damaged)
+                call red%diagnostics%add(level_warning, "reduction_cache_damaged", &
+                    "reduction: the cache "//red%cache_path//" is damaged ("//why//"): "// &
+                    "ignored; the model was reduced again and the cache replaced")
+            case (cache_foreign)
+                ! someone else's file: never overwritten
+                may_write = .false.
+                call red%diagnostics%add(level_warning, "reduction_cache_foreign", &
+                    "reduction: "//red%cache_path//" is not a reduction cache: left as it "// &
+                    "is, and the reduced model not cached (give &reduction cache another "// &
+                    "file)")
+            case (cache_absent, cache_stale)
+                continue
+            end select
+            call system_clock(t1)
+            red%cache_seconds = real(t1 - t0, dp)/real(max(rate, 1_int64), dp)
+            if (present(progress)) call progress%phase("reduction: cache "// &
+                red%cache_path//": "//trim(merge("used        ", "not usable  ", have_model)), &
+                red%cache_seconds)
+        end if
+
+        if (have_model) then
+            red%report = cached_report
+            red%report%seconds = red%cache_seconds
+            red%report%error_seconds = 0.0_dp
+            if (want_estimate .and. (cached_report%error_method == 'off')) then
+                ! cached without its estimate: measure it now, and store it
+                call load_matrices()
+                if (allocated(error)) return
+                call measure(.false.)
+                if (allocated(error)) return
+                call keep_for_cache()
+            end if
+        else
+            call load_matrices()
+            if (allocated(error)) return
+            if (sparse%has_damping .and. allocated(model%force_shape)) then
+                call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
+                                   error, cmat=sparse%damping, loads=model%force_shape, &
+                                   interior_lu=interior_lu, progress=progress)
+            else if (sparse%has_damping) then
+                call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
+                                   error, cmat=sparse%damping, interior_lu=interior_lu, &
+                                   progress=progress)
+            else if (allocated(model%force_shape)) then
+                call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
+                                   error, loads=model%force_shape, interior_lu=interior_lu, &
+                                   progress=progress)
+            else
+                call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
+                                   error, interior_lu=interior_lu, progress=progress)
             end if
             if (allocated(error)) then
-                error%message = nml%path//": &reduction: reduction error measure: "// &
-                                error%message
+                call interior_lu%release()
+                if (index(error%message, "craig_bampton: options%") == 1) then
+                    ! an option of &reduction at fault: name it
+                    error%message = nml%path//": &reduction "// &
+                                    error%message(len("craig_bampton: options%") + 1:)
+                    k = index(error%message, "options%max_modes")
+                    if (k > 0) error%message = error%message(1:k - 1)//"the"// &
+                                               error%message(k + len("options%max_modes = ") - 1:)
+                    k = index(error%message, "the number of modes")
+                    if (k > 0) error%message = error%message(1:k - 1)//"modes"// &
+                                               error%message(k + len("the number of modes"):)
+                else
+                    error%message = nml%path//": &reduction method = '"//trim(red%method)// &
+                                    "': "//error%message
+                end if
                 return
             end if
-            red%report%error = err
-        else if (allocated(model%contact_direction) .and. size(freqs) > 0) then
-            if (sparse%has_damping) then
-                call receptance_error(sparse%stiffness, sparse%mass, rm, &
-                                      model%contact_direction, freqs, err, error, &
-                                      cmat=sparse%damping)
+            red%report%error_frequencies = freqs
+            if (want_estimate) then
+                call measure(.true.)
+                if (allocated(error)) return
+            else if (red%error_estimate) then
+                red%report%error_method = 'none'
             else
-                call receptance_error(sparse%stiffness, sparse%mass, rm, &
-                                      model%contact_direction, freqs, err, error)
+                red%report%error_method = 'off'
             end if
-            if (allocated(error)) then
-                error%message = nml%path//": &reduction: reduction error measure: "// &
-                                error%message
-                return
-            end if
-            red%report%error = err
-        else if (size(model%contact_dof) > 0 .and. size(freqs) > 0) then
-            if (sparse%has_damping) then
-                call receptance_error(sparse%stiffness, sparse%mass, rm, model%contact_dof, d2, &
-                                      freqs, err, error, cmat=sparse%damping)
-            else
-                call receptance_error(sparse%stiffness, sparse%mass, rm, model%contact_dof, d2, &
-                                      freqs, err, error)
-            end if
-            if (allocated(error)) then
-                error%message = nml%path//": &reduction: reduction error measure: "// &
-                                error%message
-                return
-            end if
-            red%report%error = err
+            call interior_lu%release()
+            if (may_write) call keep_for_cache()
+        end if
+        if (.not. red%error_estimate) then
+            ! not asked for: not reported, even when the cache holds one
+            red%report%error = -1.0_dp
+            red%report%error_method = 'off'
+            red%report%error_seconds = 0.0_dp
+            red%report%error_levels = 0
+            red%report%error_change = 0.0_dp
+            call red%diagnostics%add(level_note, "reduction_error_off", "reduction: the "// &
+                "error of the reduced model was not estimated (&reduction error_estimate "// &
+                "= .false.; reduction_error = -1)")
         end if
         call reduction_findings(red)
 
@@ -400,7 +521,159 @@ contains
                 end if
             end do
         end subroutine check_range
+
+        !> The matrix files read (unless they were), timed.
+        subroutine load_matrices()
+            integer(int64) :: s0, s1, r
+            if (sparse%loaded) return
+            call system_clock(s0, r)
+            call load_sparse_system(nml, files, n, sparse, error, progress)
+            if (allocated(error)) return
+            call system_clock(s1)
+            red%read_seconds = real(s1 - s0, dp)/real(max(r, 1_int64), dp)
+            if (present(progress)) call progress%phase("reduction: matrix files read ("// &
+                itoa(n)//" DOFs, "//itoa(sparse%stiffness%nnz())//" entries of K)", &
+                red%read_seconds)
+        end subroutine load_matrices
+
+        !> The error estimate of rm into red%report (on the reduction's factorization of
+        !> K_ii when `reuse`, else on one made for it).
+        subroutine measure(reuse)
+            logical, intent(in) :: reuse
+            logical :: proportional
+            ! C without a damping file is alpha M + beta K: no damping vectors needed
+            proportional = .not. allocated(files%damping_file)
+            if (sparse%has_damping .and. reuse) then
+                call estimate_reduction_error(sparse%stiffness, sparse%mass, rm, directions, &
+                                              freqs, estimate, error, cmat=sparse%damping, &
+                                              proportional=proportional, &
+                                              interior_lu=interior_lu, progress=progress)
+            else if (sparse%has_damping) then
+                call estimate_reduction_error(sparse%stiffness, sparse%mass, rm, directions, &
+                                              freqs, estimate, error, cmat=sparse%damping, &
+                                              proportional=proportional, progress=progress)
+            else if (reuse) then
+                call estimate_reduction_error(sparse%stiffness, sparse%mass, rm, directions, &
+                                              freqs, estimate, error, &
+                                              interior_lu=interior_lu, progress=progress)
+            else
+                call estimate_reduction_error(sparse%stiffness, sparse%mass, rm, directions, &
+                                              freqs, estimate, error, progress=progress)
+            end if
+            if (allocated(error)) then
+                call interior_lu%release()
+                error%message = nml%path//": &reduction: reduction error measure: "// &
+                                error%message
+                return
+            end if
+            red%report%error = estimate%error
+            red%report%error_frequencies = freqs
+            red%report%error_method = estimate%method
+            red%report%error_seconds = estimate%seconds
+            red%report%error_levels = estimate%levels
+            red%report%error_change = estimate%change
+        end subroutine measure
+
+        !> rm (with the report) kept for write_reduction_cache_of.
+        subroutine keep_for_cache()
+            if (allocated(red%cache_model)) deallocate (red%cache_model)
+            allocate (red%cache_model, source=rm)
+            red%cache_status = 'pending'
+        end subroutine keep_for_cache
+
+        !> The key of every input of the reduction and of its error estimate: the version,
+        !> the bytes of the matrix files, the Rayleigh factors, the boundary DOFs, the
+        !> options (mode count or rule and its highest frequency, damping ratio), the load
+        !> shapes, the frequencies and directions of the estimate.
+        subroutine cache_key(key)
+            integer(int64), intent(out) :: key
+            logical, allocatable :: is_boundary(:)
+            integer(int64) :: s0, s1, r
+            call system_clock(s0, r)
+            call hk%add("stickslip reduction cache key")
+            call hk%add(stickslip_version)
+            call hk%add(n)
+            call add_file(files%mass_path)
+            if (allocated(error)) return
+            call add_file(files%stiffness_path)
+            if (allocated(error)) return
+            call hk%add(allocated(files%damping_file))
+            if (allocated(files%damping_file)) call add_file(files%damping_path)
+            if (allocated(error)) return
+            call hk%add(files%rayleigh_alpha)
+            call hk%add(files%rayleigh_beta)
+            allocate (is_boundary(n))
+            is_boundary = .false.
+            is_boundary(bset) = .true.
+            call hk%add(pack([(i, i=1, n)], is_boundary))
+            call hk%add(opts%modes)
+            call hk%add(opts%max_frequency)
+            call hk%add(opts%highest_frequency)
+            call hk%add(opts%cutoff_factor)
+            call hk%add(opts%damping_ratio)
+            call hk%add(opts%max_modes)
+            call hk%add(allocated(model%force_shape))
+            if (allocated(model%force_shape)) call hk%add(model%force_shape)
+            call hk%add(freqs)
+            call hk%add(directions)
+            key = hk%value()
+            call system_clock(s1)
+            if (present(progress)) call progress%phase("reduction: inputs hashed for the "// &
+                "cache", real(s1 - s0, dp)/real(max(r, 1_int64), dp))
+        end subroutine cache_key
+
+        subroutine add_file(path)
+            character(len=*), intent(in) :: path
+            call hash_file(path, hk, error)
+            if (allocated(error)) error%message = nml%path//": &reduction cache: "// &
+                error%message
+        end subroutine add_file
     end subroutine reduce_case_model
+
+    !> Write the cache of a reduction made by reduce_case_model (red%cache_status
+    !> 'pending'), creating its folder when missing: red%cache_status becomes 'written', or
+    !> 'not written' with a warning 'reduction_cache_write' (never an error: the run goes
+    !> on without it). Nothing happens otherwise.
+    subroutine write_reduction_cache_of(red, progress)
+        !> The reduction of a case just read.
+        type(reduction_case_t), intent(inout) :: red
+        !> Where the phase is reported (optional).
+        type(progress_t), intent(inout), optional :: progress
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: dir, name
+        integer :: k
+        integer(int64) :: t0, t1, rate
+        if (red%cache_status /= 'pending' .or. .not. allocated(red%cache_model)) return
+        call system_clock(t0, rate)
+        k = index(red%cache_path, '/', back=.true.)
+        if (k == 0) then
+            dir = '.'
+            name = red%cache_path
+        else if (k == 1) then
+            dir = '/'
+            name = red%cache_path(2:)
+        else
+            dir = red%cache_path(1:k - 1)
+            name = red%cache_path(k + 1:)
+        end if
+        call make_directory(dir, error)
+        if (.not. allocated(error)) call write_reduction_cache(dir, name, red%cache_key, &
+                                                               red%cache_model, red%report, &
+                                                               error)
+        deallocate (red%cache_model)
+        if (allocated(error)) then
+            red%cache_status = 'not written'
+            call red%diagnostics%add(level_warning, "reduction_cache_write", "reduction: "// &
+                "the cache "//red%cache_path//" was not written ("//error%message// &
+                "): the next run reduces the model again")
+            return
+        end if
+        red%cache_status = 'written'
+        call system_clock(t1)
+        red%cache_seconds = red%cache_seconds + real(t1 - t0, dp)/real(max(rate, 1_int64), dp)
+        if (present(progress)) call progress%phase("reduction: cache "//red%cache_path// &
+            " written", real(t1 - t0, dp)/real(max(rate, 1_int64), dp))
+    end subroutine write_reduction_cache_of
 
     !> The values of the output DOFs from reduced values: y(:, k) = sum_r q(:, r) T(dofs(k), r)
     !> for every row (sample or basis function) of `q` (rows x nr) — exact, the recovery is
@@ -511,6 +784,30 @@ contains
             end if
         end associate
     end subroutine reduction_findings
+    !> The directions whose receptance measures the reduction error, N x m: every force
+    !> channel with contact laws (all_contact_directions), else the contact directions W,
+    !> else e_dof1 - e_dof2 of every contact (N x 0 without contacts).
+    function measured_directions(model) result(d)
+        type(model_t), intent(in) :: model
+        real(dp), allocatable :: d(:, :)
+        integer :: j, nc
+        d = all_contact_directions(model)
+        if (size(d, 2) > 0) return
+        if (allocated(model%contact_direction)) then
+            d = model%contact_direction
+            return
+        end if
+        nc = size(model%contact_dof)
+        deallocate (d)
+        allocate (d(model%ndof, nc))
+        d = 0.0_dp
+        do j = 1, nc
+            d(model%contact_dof(j), j) = 1.0_dp
+            if (model%contact_dof2(j) > 0) d(model%contact_dof2(j), j) = &
+                d(model%contact_dof2(j), j) - 1.0_dp
+        end do
+    end function measured_directions
+
     !> Every force channel direction of the model's contacts when it has normal or second
     !> tangential directions (the tangential columns w_j, then the nonzero normal and second
     !> tangential columns), N x m; N x 0 for a model without them (its error is measured on

@@ -185,8 +185,8 @@ contains
     !> Open a new temporary file for `dir/name` for writing: `dir/name.<pid>.<n>.tmp`,
     !> created exclusively (O_CREAT|O_EXCL) with the first free n, so that two runs (or two
     !> writers in one run) never write the same temporary. Finish with close_and_rename.
-    !> Error: stat io.
-    subroutine open_temporary(dir, name, unit, error)
+    !> Error: stat io. With `binary` true the unit is an unformatted stream.
+    subroutine open_temporary(dir, name, unit, error, binary)
         !> Directory (must exist).
         character(len=*), intent(in) :: dir
         !> Final file name.
@@ -195,14 +195,23 @@ contains
         integer, intent(out) :: unit
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> Open an unformatted stream (default: formatted sequential).
+        logical, intent(in), optional :: binary
         integer :: stat, k
         character(len=512) :: msg
         character(len=:), allocatable :: stem
-        logical :: exists
+        logical :: exists, stream
+        stream = .false.
+        if (present(binary)) stream = binary
         stem = dir//'/'//name//'.'//itoa(process_id())//'.'
         do k = 1, max_tries
-            open (newunit=unit, file=stem//itoa(k)//'.tmp', status='new', action='write', &
-                  iostat=stat, iomsg=msg)
+            if (stream) then
+                open (newunit=unit, file=stem//itoa(k)//'.tmp', status='new', action='write', &
+                      access='stream', form='unformatted', iostat=stat, iomsg=msg)
+            else
+                open (newunit=unit, file=stem//itoa(k)//'.tmp', status='new', action='write', &
+                      iostat=stat, iomsg=msg)
+            end if
             if (stat == 0) return
             inquire (file=stem//itoa(k)//'.tmp', exist=exists)
             if (.not. exists) exit

@@ -10,7 +10,7 @@ module stickslip_summary
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_solution, only: hbm_solution_t
     use stickslip_euler, only: euler_result_t
-    use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist
+    use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist, quoted
     use stickslip_reference, only: reference_result_t, reference_energy_error
     use stickslip_contact_measures, only: contact_energy_error => energy_balance_error
     use stickslip_compare, only: comparison_t, quantity_names
@@ -651,8 +651,12 @@ contains
     !> The reduction keys of &summary (only when the model was reduced): reduction_method,
     !> reduced_dof, full_dof, reduction_modes, reduction_load_vectors (static load-correction
     !> vectors of a force_file), reduction_highest_mode_frequency [rad/s], reduction_seconds,
-    !> reduction_error (-1: not measured, e.g. no contact), reduction_error_frequencies
-    !> [rad/s] (where it was measured). For the exact sparse condensation (&reduction method
+    !> reduction_error (-1: not measured, e.g. no contact or &reduction error_estimate =
+    !> .false.), reduction_error_frequencies [rad/s] (where it was measured; absent when not
+    !> asked for), reduction_error_method ('enriched', 'sparse LU', 'off', 'none'),
+    !> reduction_error_seconds, reduction_read_seconds (the matrix files), reduction_cache
+    !> ('off', 'hit', 'written', 'not written'), reduction_cache_file,
+    !> reduction_cache_seconds. For the exact sparse condensation (&reduction method
     !> = 'none', N > max_file_dof): reduction_method = 'none', reduced_dof = full_dof = N and
     !> reduction_error = 0 (exact); the time of the sparse factorizations is the hbm key
     !> condensation_seconds.
@@ -672,11 +676,25 @@ contains
                          rtoa(r%highest_mode_frequency), stat, msg)
                 call put(u, "  reduction_seconds = "//rtoa(r%seconds), stat, msg)
                 call put(u, "  reduction_error = "//rtoa(r%error), stat, msg)
-                if (allocated(r%error_frequencies)) then
+                if (allocated(r%error_frequencies) .and. r%error_method /= 'off') then
                     if (size(r%error_frequencies) > 0) call put(u, &
                         "  reduction_error_frequencies = "//rlist(r%error_frequencies), &
                         stat, msg)
                 end if
+                call put(u, "  reduction_error_method = '"//trim(r%error_method)//"'", stat, &
+                         msg)
+                call put(u, "  reduction_error_seconds = "//rtoa(r%error_seconds), stat, msg)
+                call put(u, "  reduction_read_seconds = "//rtoa(case%reduction%read_seconds), &
+                         stat, msg)
+                call put(u, "  reduction_cache = '"//trim(case%reduction%cache_status)//"'", &
+                         stat, msg)
+                if (allocated(case%reduction%cache_path)) then
+                    if (len(case%reduction%cache_path) > 0) call put(u, &
+                        "  reduction_cache_file = "//quoted(case%reduction%cache_path), &
+                        stat, msg)
+                end if
+                call put(u, "  reduction_cache_seconds = "// &
+                         rtoa(case%reduction%cache_seconds), stat, msg)
             else if (allocated(case%sparse_model)) then
                 ! &reduction method = 'none' on a sparse model: exact, nothing reduced
                 call put(u, "  reduction_method = 'none'", stat, msg)

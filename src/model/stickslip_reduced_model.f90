@@ -39,6 +39,12 @@ module stickslip_reduced_model
         !> Static load-correction vectors Psi, (n - nb) x nl, M_ii-orthonormal and
         !> M_ii-orthogonal to the modes (see the header of stickslip_reduction).
         real(dp), allocatable :: loads(:, :)
+        !> The modal damping ratio zeta added to the modes (2 zeta w_k on the diagonal of
+        !> `damping`; not in T^T C T).
+        real(dp) :: modal_damping_ratio = 0.0_dp
+        !> Frequency of the first fixed-interface mode left out [rad/s] (0: not known; every
+        !> mode kept, or the eigensolve stopped at the modes kept).
+        real(dp) :: next_frequency = 0.0_dp
     end type reduced_model_t
 
     !> Full-model DOFs from reduced coordinates, real (recover_real) or complex

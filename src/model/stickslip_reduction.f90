@@ -43,14 +43,17 @@
 !>
 !> The reduced model type, recovery and reduce_vectors live in stickslip_reduced_model, the
 !> reduction error (receptance_error: the contact receptance of the reduced model against the
-!> full sparse model) in stickslip_reduction_error; both are re-exported here.
+!> full sparse model) in stickslip_reduction_error, its cheap estimate on the interior
+!> factorization (estimate_reduction_error) in stickslip_reduction_estimate; all are
+!> re-exported here.
 module stickslip_reduction
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
-    use stickslip_umfpack, only: sparse_lu_t
+    use stickslip_umfpack, only: sparse_lu_t, ordering_cholmod
+    use stickslip_progress, only: progress_t
     use stickslip_arpack, only: eigen_options_t, eigen_report_t
     use stickslip_sparse_eigen, only: sparse_eigenpairs, sparse_eigenpairs_below, &
         eigen_range_report_t
@@ -58,10 +61,12 @@ module stickslip_reduction
     use stickslip_reduced_model, only: reduced_model_t, recover_dofs, reduced_dof_of, &
         reduce_vectors
     use stickslip_reduction_error, only: receptance_error
+    use stickslip_reduction_estimate, only: reduction_estimate_t, estimate_reduction_error
     implicit none
     private
     public :: reduction_options_t, reduction_report_t, reduced_model_t, craig_bampton, &
         recover_dofs, receptance_error, default_cutoff_factor, reduced_dof_of, reduce_vectors
+    public :: reduction_estimate_t, estimate_reduction_error
 
     !> Default factor of the mode-count rule: modes below 3 H omega_max are kept.
     real(dp), parameter :: default_cutoff_factor = 3.0_dp
@@ -110,6 +115,16 @@ module stickslip_reduction
         real(dp) :: error = -1.0_dp
         !> The frequencies where `error` was measured [rad/s] (set by the caller).
         real(dp), allocatable :: error_frequencies(:)
+        !> How `error` was obtained (set by the caller): 'enriched' (estimate_reduction_error,
+        !> its enrichment levels agreed), 'sparse LU' (the exact measure), 'off' (not asked
+        !> for), 'none' (nothing to measure: no contact or no frequency).
+        character(len=16) :: error_method = 'none'
+        !> Wall time of the error estimate [s] (0 when not computed in this run).
+        real(dp) :: error_seconds = 0.0_dp
+        !> Enrichment levels of the estimate and the change of its last level (relative to
+        !> max|G|, as `error`).
+        integer :: error_levels = 0
+        real(dp) :: error_change = 0.0_dp
     end type reduction_report_t
 
 contains
@@ -120,8 +135,14 @@ contains
     !> disagree, a DOF out of range, no boundary or no interior DOF, options out of range, a
     !> non-finite load; (numerical): K_ii singular (the interior moves as a rigid body when
     !> the boundary is fixed), the eigensolver failing.
+    !> K_ii is factorized once (UMFPACK, CHOLMOD's choice of ordering: METIS on 3D meshes),
+    !> for the constraint modes, the load vectors and the shift-invert Lanczos of the
+    !> fixed-interface modes alike, its solves without iterative refinement; with
+    !> `interior_lu` the factorization is handed to the caller on return (for the error
+    !> estimate, stickslip_reduction_estimate), released otherwise. With `progress`, the
+    !> phases that took a second or more are reported (progress_t%phase).
     subroutine craig_bampton(kmat, mmat, boundary_dofs, options, reduced, report, error, cmat, &
-                             loads)
+                             loads, interior_lu, progress)
         !> Stiffness K, N x N (full storage).
         type(sparse_matrix_t), intent(in) :: kmat
         !> Mass M, N x N.
@@ -140,10 +161,16 @@ contains
         type(sparse_matrix_t), intent(in), optional :: cmat
         !> Distributed loads F, N x n_terms (optional: load vectors for their interior parts).
         real(dp), intent(in), optional :: loads(:, :)
+        !> On return the sparse LU of K_ii (interior numbering, ascending full DOFs), when
+        !> the reduction succeeded and the interior was factorized sparse; the caller
+        !> releases it.
+        type(sparse_lu_t), intent(inout), optional :: interior_lu
+        !> Where the phases are reported (optional).
+        type(progress_t), intent(inout), optional :: progress
         integer, allocatable :: loc(:)
         integer :: n, nb, ni, j, p, r, q, nm, nr, nl
         real(dp), allocatable :: psi(:, :)
-        integer(int64) :: t0, t1, rate
+        integer(int64) :: t0, t1, rate, tphase
         type(sparse_matrix_t) :: kii, mii, kiit, miit, cii
         type(sparse_lu_t) :: lu
         real(dp), allocatable :: rhs(:, :), lam(:), vec(:, :), t(:, :), at(:, :)
@@ -153,6 +180,7 @@ contains
         type(eigen_range_report_t) :: rrep
 
         call system_clock(t0, rate)
+        tphase = t0
         n = kmat%nrows
         if (kmat%ncols /= n .or. mmat%nrows /= n .or. mmat%ncols /= n) then
             call fatal_error(error, "craig_bampton: K and M must be square of equal size", &
@@ -245,6 +273,8 @@ contains
                     rhs(loc(r), -loc(kmat%col(p))) - kmat%val(p)
             end do
         end do
+        lu%ordering = ordering_cholmod
+        lu%refinement_steps = 0
         call lu%factorize(ni, kiit%row_start, kiit%col, kiit%val, error)
         if (allocated(error)) then
             error%message = "craig_bampton: the interior stiffness K_ii ("//itoa(ni)// &
@@ -252,11 +282,16 @@ contains
                             "boundary DOFs?): "//error%message
             return
         end if
+        call phase("K_ii factorized ("//itoa(ni)//" interior DOFs, "// &
+                   real_text(lu%factor_entries, '(es9.2)')//" entries in L and U)")
         allocate (reduced%constraint(ni, nb))
         call lu%solve(rhs, reduced%constraint, error)
         if (.not. allocated(error) .and. present(loads)) call interior_load_solutions(psi)
-        call lu%release()
-        if (allocated(error)) return
+        if (allocated(error)) then
+            call lu%release()
+            return
+        end if
+        call phase(itoa(nb)//" constraint modes")
 
         ! fixed-interface modes
         limit = 0.0_dp
@@ -267,16 +302,25 @@ contains
         report%frequency_limit = limit
         if (options%modes > 0) then
             nm = min(options%modes, ni)
-            call eigen(nm, lam, vec)
-            if (allocated(error)) return
+            ! one more when the interior allows: the first mode left out (for the error
+            ! estimate's convergence bound)
+            call eigen(min(nm + 1, ni), lam, vec)
+            if (allocated(error)) then
+                call lu%release()
+                return
+            end if
         else if (limit > 0.0_dp) then
             if (ni <= dense_interior) then
                 call eigen(ni, lam, vec)
-                if (allocated(error)) return
+                if (allocated(error)) then
+                    call lu%release()
+                    return
+                end if
                 nm = last_kept(lam, vec)
                 if (nm > options%max_modes) then
                     if (options%max_frequency > 0.0_dp) then
                         call too_many_below(nm)
+                        call lu%release()
                         return
                     end if
                     nm = options%max_modes
@@ -291,13 +335,16 @@ contains
                                                  miit%row_start, miit%col, miit%val, lmax, &
                                                  options%max_modes, 0.0_dp, eopts, lam, vec, &
                                                  rrep, error, &
-                                                 stop_above=options%max_frequency > 0.0_dp)
+                                                 stop_above=options%max_frequency > 0.0_dp, &
+                                                 factorization=lu)
                     if (allocated(error)) then
                         error%message = "craig_bampton: fixed-interface modes: "//error%message
+                        call lu%release()
                         return
                     end if
                     if (rrep%estimated > 0) then
                         call too_many_below(rrep%estimated)
+                        call lu%release()
                         return
                     end if
                     nm = last_kept(lam, vec)
@@ -312,7 +359,16 @@ contains
         else
             nm = 0
         end if
+        if (nm > 0) call phase(itoa(nm)//" fixed-interface modes (highest "// &
+                               real_text(sqrt(max(lam(nm), 0.0_dp)), '(es10.3)')//" rad/s; "// &
+                               itoa(rrep%runs + merge(1, 0, erep%op_applications > 0))// &
+                               " Lanczos runs, "// &
+                               itoa(rrep%op_applications + erep%op_applications)//" solves)")
         reduced%nm = nm
+        reduced%modal_damping_ratio = options%damping_ratio
+        if (allocated(lam)) then
+            if (size(lam) > nm) reduced%next_frequency = sqrt(max(lam(nm + 1), 0.0_dp))
+        end if
         allocate (reduced%modes(ni, nm), reduced%frequencies(nm))
         if (nm > 0) then
             reduced%modes = vec(:, 1:nm)
@@ -349,6 +405,12 @@ contains
                 2.0_dp*options%damping_ratio*reduced%frequencies(j)
         end do
 
+        call phase("reduced matrices ("//itoa(nr)//" DOFs)")
+        if (present(interior_lu)) then
+            call lu%move_to(interior_lu)
+        else
+            call lu%release()
+        end if
         call system_clock(t1)
         report%method = 'craig-bampton'
         report%full_dof = n
@@ -471,6 +533,16 @@ contains
             call new_sparse_from_triplets(s, ni, ni, ri, ci, vi, error)
         end subroutine submatrix
 
+        !> A phase is done: report it (progress) with its wall time since the last one.
+        subroutine phase(text)
+            character(len=*), intent(in) :: text
+            integer(int64) :: now
+            call system_clock(now)
+            if (present(progress)) call progress%phase("reduction: "//text, &
+                real(now - tphase, dp)/real(max(rate, 1_int64), dp))
+            tphase = now
+        end subroutine phase
+
         !> The nev lowest fixed-interface eigenpairs (lam ascending, vec M_ii-orthonormal).
         subroutine eigen(nev, lam, vec)
             integer, intent(in) :: nev
@@ -504,7 +576,7 @@ contains
             else
                 call sparse_eigenpairs(ni, kiit%row_start, kiit%col, kiit%val, &
                                        miit%row_start, miit%col, miit%val, nev, 0.0_dp, &
-                                       eopts, lam, vec, erep, error)
+                                       eopts, lam, vec, erep, error, factorization=lu)
                 if (allocated(error)) error%message = "craig_bampton: fixed-interface "// &
                     "modes: "//error%message
             end if

@@ -32,7 +32,8 @@ module stickslip_reduction_cache
     !> check; a file that is not a reduction cache at all (not to be overwritten).
     integer, parameter :: cache_hit = 0, cache_absent = 1, cache_stale = 2, cache_damaged = 3, &
                           cache_foreign = 4
-    !> The format version (part of the header).
+    !> The format version (part of the header): raise it with any change of the layout, so
+    !> that an older file reads as another format (replaced silently), not as a damaged one.
     integer(int32), parameter :: cache_format = 1
     character(len=*), parameter :: magic = 'stickslip reduction cache'
     !> Bytes read at a time when hashing a file.

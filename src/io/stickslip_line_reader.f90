@@ -66,7 +66,7 @@ contains
         type(line_reader_t), intent(out) :: self
         !> The file.
         character(len=*), intent(in) :: path
-        !> Bytes per read (>= 1).
+        !> Bytes per read (taken into 1 .. 2**30).
         integer, intent(in) :: chunk
         !> Longest line [characters] (>= 1).
         integer, intent(in) :: max_line
@@ -75,7 +75,7 @@ contains
         !> Why the open failed.
         character(len=:), allocatable, intent(out) :: msg
         character(len=512) :: buffer
-        self%chunk = max(chunk, 1)
+        self%chunk = min(max(chunk, 1), 2**30)
         self%max_line = max(max_line, 1)
         open (newunit=self%unit, file=path, status='old', action='read', access='stream', &
               form='unformatted', iostat=stat, iomsg=buffer)

@@ -25,7 +25,8 @@
 !> exactly) is parsed straight from the block; any other line (comments, signs on indices,
 !> a value of more than 18 digits, `1.5+3`, errors) goes through the general line-by-line
 !> path, with Fortran's own read of the value, so the values and the messages are those of
-!> a plain formatted read. About 100-200 MB/s on the 113 MB Rotor 37 matrices.
+!> a plain formatted read. About 120-180 MB/s on the 113 MB Rotor 37 matrices (a 2-core
+!> VM; doc/benchmarks.md), 20 times the formatted reader.
 module stickslip_matrix_market
     use, intrinsic :: iso_fortran_env, only: int64, iostat_end
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -69,8 +70,8 @@ contains
         !> Where and how often to report the progress of a long read (unit, delay and
         !> interval are used; its `lines` count grows by the lines printed).
         type(progress_t), intent(inout), optional :: progress
-        !> Bytes read at once (default mm_chunk_bytes; values below 1 count as 1). Any
-        !> size gives the same result; small ones are for tests of lines across blocks.
+        !> Bytes read at once (default mm_chunk_bytes; taken into 1 .. 2**30). Any size
+        !> gives the same result; small ones are for tests of lines across blocks.
         integer, intent(in), optional :: chunk
         integer :: bytes
         bytes = mm_chunk_bytes

@@ -349,23 +349,10 @@ contains
         !> receive the factorization made here.
         type(sparse_lu_t), intent(inout), optional :: factorization
         type(sparse_shift_invert_t) :: op
-        integer :: refinement
-        refinement = 2
-        if (present(factorization)) then
-            refinement = factorization%refinement_steps
-            if (factorization%factorized()) then
-                call op%adopt(factorization, n, mcol, mrow, mval, sigma, error)
-                if (allocated(error)) return
-                op%lu%refinement_steps = 0
-            else
-                op%lu%ordering = factorization%ordering
-                call op%setup(n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
-                if (allocated(error)) return
-            end if
-        else
-            call op%setup(n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
-            if (allocated(error)) return
-        end if
+        integer :: refinement, made
+        call shift_invert_operator(op, n, kcol, krow, kval, mcol, mrow, mval, sigma, &
+                                   refinement, made, error, factorization)
+        if (allocated(error)) return
         call smallest_eigenpairs(op, n, nev, sigma, opts, values, vectors, report, error)
         if (present(factorization)) then
             call op%lu%move_to(factorization)
@@ -433,24 +420,9 @@ contains
                              //" must be >= 1 and lambda_max a number", stickslip_stat%input)
             return
         end if
-        refinement = 2
-        if (present(factorization)) refinement = factorization%refinement_steps
-        if (present(factorization)) then
-            if (factorization%factorized()) then
-                call op%adopt(factorization, n, mcol, mrow, mval, sigma, error)
-                if (allocated(error)) return
-                op%lu%refinement_steps = 0
-            else
-                op%lu%ordering = factorization%ordering
-                call op%setup(n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
-                if (allocated(error)) return
-                report%factorizations = 1
-            end if
-        else
-            call op%setup(n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
-            if (allocated(error)) return
-            report%factorizations = 1
-        end if
+        call shift_invert_operator(op, n, kcol, krow, kval, mcol, mrow, mval, sigma, &
+                                   refinement, report%factorizations, error, factorization)
+        if (allocated(error)) return
         cap = min(max_count, n - 1)
         nev = min(first_batch, cap)
         o = opts
@@ -557,4 +529,38 @@ contains
         ! a limit far above the spectrum seen (1e300) must not overflow the count
         nev = int(min(1.15_dp*m*exp(min(p*log(max(limit, hi)/hi), 40.0_dp)) + 9.0_dp, 1.0e9_dp))
     end function estimated_count
+    !> The shift-invert operator (K - sigma M)^-1 M of the two Lanczos drivers: adopting a
+    !> given factorization (no refinement steps: the caller's LU is trusted as it is), or
+    !> factorizing here (with the ordering an empty `factorization` asks for). `refinement`
+    !> returns the refinement steps to give back with the factorization, `made` 1 when a
+    !> factorization was made here (else 0). Errors as op%setup and op%adopt.
+    subroutine shift_invert_operator(op, n, kcol, krow, kval, mcol, mrow, mval, sigma, &
+                                     refinement, made, error, factorization)
+        !> The operator set up.
+        type(sparse_shift_invert_t), intent(inout) :: op
+        !> Order, K and M (CSC, 1-based, both triangles), the shift.
+        integer, intent(in) :: n, kcol(:), krow(:), mcol(:), mrow(:)
+        real(dp), intent(in) :: kval(:), mval(:), sigma
+        !> Refinement steps of the caller's factorization (2 without one); factorizations
+        !> made here.
+        integer, intent(out) :: refinement, made
+        !> Error (last but one).
+        type(error_type), allocatable, intent(out) :: error
+        !> A factorization to adopt, or an empty one whose ordering is used.
+        type(sparse_lu_t), intent(inout), optional :: factorization
+        refinement = 2
+        made = 1
+        if (present(factorization)) then
+            refinement = factorization%refinement_steps
+            if (factorization%factorized()) then
+                call op%adopt(factorization, n, mcol, mrow, mval, sigma, error)
+                op%lu%refinement_steps = 0
+                made = 0
+                return
+            end if
+            op%lu%ordering = factorization%ordering
+        end if
+        call op%setup(n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
+    end subroutine shift_invert_operator
+
 end module stickslip_sparse_eigen

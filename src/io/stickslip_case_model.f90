@@ -302,29 +302,12 @@ contains
             integer, intent(in) :: n
             real(dp), allocatable, intent(out) :: a(:, :)
             type(sparse_matrix_t) :: s
-            integer :: rows, cols, line
-            integer(int64) :: entries
-            call read_matrix_market_size(path, rows, cols, error, entries, line)
-            if (allocated(error)) then
-                error%message = nml%path//": &system "//name//": "//error%message
-                return
-            end if
-            ! a size the entries cannot back fails before anything of that size is made
-            if (name == "mass_file" .and. entries < int(rows, int64)) then
-                call group_error(nml, error, "&system "//name//" '"//path//"':"//itoa(line)// &
-                                 ": the size line claims a "//itoa(rows)//" x "//itoa(cols)// &
-                                 " matrix with "//itoa(entries)//" entries, but a positive "// &
-                                 "definite mass matrix needs its "//itoa(rows)//" diagonal "// &
-                                 "entries")
-                return
-            end if
-            if (n > 0 .and. (rows /= n .or. cols /= n)) then
-                call group_error(nml, error, "&system "//name//" '"//path//"': a "// &
-                                 itoa(rows)//" x "//itoa(cols)//" matrix, but the model "// &
-                                 "has N = "//itoa(n)//" DOFs: sizes must agree")
-                return
-            end if
-            if (rows > max_file_dof .and. rows == cols) then
+            integer :: rows
+            ! the size line first: a model too large for dense matrices fails before its
+            ! entries are read
+            call sparse_file_header(nml, path, name, n, rows, error)
+            if (allocated(error)) return
+            if (rows > max_file_dof) then
                 call group_error(nml, error, "&system "//name//" '"//path//"': N = "// &
                                  itoa(rows)//" DOFs: more than "//itoa(max_file_dof)// &
                                  ", the largest unreduced model (dense matrices); use "// &

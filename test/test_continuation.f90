@@ -39,6 +39,7 @@ contains
         call test_parameter_derivatives(t)
         call test_sweep_against_solves(t)
         call test_sweep_amplitude(t)
+        call test_many_contacts(t)
         call test_bad_sweep(t)
         call test_notes(t)
         call test_recovery(t)
@@ -279,6 +280,99 @@ contains
     !> A curve in omega through both resonances of the damped seed system; every point must
     !> be the solution a separate solve finds at its omega, the energy must balance and the
     !> points above the resonances must be stable.
+    !> Step control with many contacts (issue 25): a main mass with 16 tuned-apart absorbers,
+    !> each rubbing on the ground (mu N 0.01-0.0175), swept through the resonance where the
+    !> absorbers go from stuck to slipping and back, with the default step control (no
+    !> min_step): the curve ends in about as many points as the range over max_step asks
+    !> (before, the norm of the 16 contacts' forces made the steps crawl through the peak),
+    !> and its points are the separate solves'.
+    subroutine test_many_contacts(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: nt = 16
+        type(model_t) :: m, mk
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(reference_options_t) :: ro
+        type(error_type), allocatable :: error
+        real(dp) :: kt, worst, peak
+        integer :: i, k, kpeak, nslip
+        m%ndof = nt + 1
+        allocate (m%mass(nt + 1, nt + 1), m%stiffness(nt + 1, nt + 1))
+        m%mass = 0.0_dp
+        m%stiffness = 0.0_dp
+        m%mass(1, 1) = 1.0_dp
+        m%stiffness(1, 1) = 1.0_dp
+        do i = 2, nt + 1
+            kt = 0.05_dp*(1.0_dp + 0.03_dp*(i - 1))
+            m%mass(i, i) = 0.05_dp
+            m%stiffness(1, 1) = m%stiffness(1, 1) + kt
+            m%stiffness(i, i) = kt
+            m%stiffness(1, i) = -kt
+            m%stiffness(i, 1) = -kt
+        end do
+        m%damping = 0.01_dp*m%stiffness
+        m%omega = 1.0_dp
+        m%force_dof = [1]
+        m%force_harmonic = [1]
+        m%force_amplitude = [0.1_dp]
+        m%force_phase = [0.0_dp]
+        m%contact_dof = [(i, i=2, nt + 1)]
+        m%contact_dof2 = [(0, i=1, nt)]
+        m%mu = [(0.5_dp, i=1, nt)]
+        m%normal_load = [(0.02_dp*(1.0_dp + 0.05_dp*(i - 1)), i=1, nt)]
+        ho%harmonics = 3
+        ho%odd_only = .true.
+        so%parameter = 'omega'
+        so%start = 1.0_dp
+        so%stop = 1.8_dp
+        so%max_step = 0.04_dp
+        so%step = 0.04_dp
+        so%stability = .false.
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "16 contacts: sweep without error", .false.)
+        if (allocated(error)) return
+        call check(t, res%complete, "16 contacts: the sweep reaches the end", res%diagnosis)
+        call check(t, res%npoints <= 100, "16 contacts: no crawl through the resonance "// &
+                   "(range / max_step = 20; 58 points, 204 before issue 25)", &
+                   itoa(res%npoints)//" points")
+        peak = 0.0_dp
+        kpeak = 1
+        do k = 1, res%npoints
+            if (res%points(k)%amplitude(1) > peak) then
+                peak = res%points(k)%amplitude(1)
+                kpeak = k
+            end if
+        end do
+        nslip = 0
+        do k = 1, res%npoints
+            if (res%points(k)%stick(1) < 0.5_dp) nslip = nslip + 1
+        end do
+        call check(t, nslip > 3 .and. res%points(1)%stick(1) > 0.99_dp, "16 contacts: the "// &
+                   "absorbers stick off resonance and slip through it", itoa(nslip))
+        ! the separate solves with the curve's rho (the automatic one at its start: the
+        ! sampled equations near the peak have nearby solutions a different rho can pick)
+        mk = m
+        mk%omega = so%start
+        call solve_periodic(mk, ho, sol, error)
+        call check_error(t, error, "16 contacts: the start's solve", .false.)
+        if (allocated(error)) return
+        ho%rho = sol%rho
+        worst = 0.0_dp
+        do k = max(1, kpeak - 3), min(res%npoints, kpeak + 3)
+            mk = m
+            mk%omega = res%points(k)%parameter
+            call solve_periodic(mk, ho, sol, error)
+            if (allocated(error)) exit
+            worst = max(worst, maxval(abs([(maxval(abs(sol%x(:, i))), i=1, nt + 1)] - &
+                                          res%points(k)%amplitude))/peak)
+        end do
+        call check_error(t, error, "16 contacts: separate solves", .false.)
+        call check(t, worst <= 1.0e-6_dp, "16 contacts: the points about the peak are the "// &
+                   "separate solves'", "worst relative difference "//rtoa(worst))
+    end subroutine test_many_contacts
+
     subroutine test_sweep_against_solves(t)
         type(test_counter_t), intent(inout) :: t
         type(model_t) :: m, mk

@@ -11,10 +11,11 @@ module test_stability
     use stickslip_lapack, only: dgeev
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
-    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference
+    use stickslip_reference, only: reference_options_t, reference_result_t, sample_reference, &
+        reference_cache_t
     use stickslip_stability, only: floquet_t, floquet_multipliers, periodic_stability, &
         verify_periodicity
-    use fixtures, only: seed_model
+    use fixtures, only: seed_model, chain_model
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
@@ -31,7 +32,55 @@ contains
         call test_seed_damped(t)
         call test_verify_periodicity(t)
         call test_misuse(t)
+        call test_cache(t)
     end subroutine run_stability_tests
+
+    !> A sweep's stability with reference_cache_t (the contact modes retuned to the next
+    !> omega, the last monodromy as first Jacobian, the last orbit as first iterate) gives
+    !> the multipliers of a solve without it, to roundoff: the chain (two contacts, forcing
+    !> at harmonics 1 and 3, a relative contact) at omega 0.50, 0.51, 0.52, then at 0.70
+    !> (beyond the 10 % the cache keeps its modes for: a new flow).
+    subroutine test_cache(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp), parameter :: omegas(4) = [0.50_dp, 0.51_dp, 0.52_dp, 0.70_dp]
+        type(model_t) :: m
+        type(hbm_options_t) :: ho
+        type(hbm_solution_t) :: sol
+        type(reference_options_t) :: ro
+        type(reference_cache_t) :: cache
+        type(floquet_t) :: fa, fb
+        type(error_type), allocatable :: error
+        integer :: k
+        character(len=60) :: name
+        m = chain_model()
+        ho%harmonics = 25
+        ho%samples = 512
+        ho%want_samples = .true.
+        do k = 1, size(omegas)
+            write (name, '(a,f4.2)') "stability cache: omega = ", omegas(k)
+            m%omega = omegas(k)
+            call solve_periodic(m, ho, sol, error)
+            call check(t, .not. allocated(error) .and. sol%converged, trim(name)//": solved")
+            if (allocated(error) .or. .not. sol%converged) return
+            call periodic_stability(m, sol, ro, fa, error)
+            call check_error(t, error, trim(name)//": without the cache", .false.)
+            if (allocated(error)) return
+            call periodic_stability(m, sol, ro, fb, error, cache=cache)
+            call check_error(t, error, trim(name)//": with the cache", .false.)
+            if (allocated(error)) return
+            call check(t, cache%have_flow .and. allocated(cache%mono), &
+                       trim(name)//": the cache holds the flow and the monodromy")
+            call check(t, fa%verdict == fb%verdict .and. fa%verdict /= 'unknown', &
+                       trim(name)//": same verdict", fa%verdict//" / "//fb%verdict)
+            if (size(fa%multipliers) /= size(fb%multipliers)) then
+                call check(t, .false., trim(name)//": same number of multipliers")
+                cycle
+            end if
+            call check_close(t, [real(fb%multipliers, dp), aimag(fb%multipliers)], &
+                             [real(fa%multipliers, dp), aimag(fa%multipliers)], &
+                             trim(name)//": same multipliers", rtol=0.0_dp, atol=1.0e-9_dp)
+        end do
+    end subroutine test_cache
 
     !> floquet_multipliers on matrices with known eigenvalues: sorting, the three verdicts,
     !> zero multipliers.

@@ -28,7 +28,7 @@ module stickslip_sweep
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step, reason_running, &
         reason_end, reason_left, reason_failures, reason_max_points
-    use stickslip_reference, only: reference_options_t
+    use stickslip_reference, only: reference_options_t, reference_cache_t
     use stickslip_progress, only: progress_t
     use stickslip_sweep_options, only: sweep_options_t, validate_sweep_options, &
         continuation_options_of, sweep_parameter_value, set_sweep_parameter
@@ -101,6 +101,7 @@ contains
         type(model_t) :: m0
         real(dp), allocatable :: amplitude0(:)
         type(point_tally_t) :: tally
+        type(reference_cache_t) :: rcache
         type(diagnostics_t) :: held
         integer :: k
 
@@ -164,14 +165,16 @@ contains
         nb = fam%prob%basis%nb
         co%tol = hbm%tol
         co%fscale = max(fam%prob%rho*force_scale(fam%model), tiny(1.0_dp))
-        ! the arclength measures the friction force by the RMS of its coefficients relative to
-        ! the friction limit, weighted so that the smallest change the quadrature can make
+        ! the arclength measures the friction force by the RMS of its coefficients (over
+        ! every channel of every contact: with 16 contacts a change of all of them by the
+        ! same amount measures as much as one contact's) relative to the friction limit,
+        ! weighted so that the smallest change the quadrature can make
         ! (one sample switching between slip directions through stick: a force change of
         ! about 2.8 / samples in these units) is a tenth of the largest step: the curve of
         ! the sampled equations is a staircase of such switches near a resonance, and
         ! the parameter must dominate the step there; the force still takes over at folds
         weight = max(1.0_dp, 28.0_dp*abs(co%stop - co%start)/(real(hbm%samples, dp)*co%max_step))
-        co%yscale = [max(force_scale(fam%model), tiny(1.0_dp))*sqrt(real(nb, dp))*weight]
+        co%yscale = [max(force_scale(fam%model), tiny(1.0_dp))*sqrt(real(fam%prob%n, dp))*weight]
         if (opts%parameter == 'mu' .or. opts%parameter == 'normal_load' .or. &
             opts%parameter == 'preload') then
             ! the limits change along the curve: scale by the largest on the range
@@ -182,13 +185,13 @@ contains
                                          abs(opts%stop)), fam%amplitude0)
                 co%yscale = [max(force_scale(m2), tiny(1.0_dp))]
                 co%fscale = max(fam%prob%rho*co%yscale(1), tiny(1.0_dp))
-                co%yscale = co%yscale*sqrt(real(nb, dp))*weight
+                co%yscale = co%yscale*sqrt(real(fam%prob%n, dp))*weight
             end block
         end if
         ! where the contact forces grow beyond that scale (a resonance with lift-off, where
         ! the normal load and so the friction limit rise tenfold, and every sample switch
         ! with them) the scale grows with the forces: relative steps, not crawling ones
-        co%yref = co%yscale(1)/(sqrt(real(nb, dp))*weight)* &
+        co%yref = co%yscale(1)/(sqrt(real(fam%prob%n, dp))*weight)* &
                   sqrt(real(max(fam%prob%n/nb, 1), dp))
         allocate (res%points(64))
 
@@ -317,7 +320,7 @@ contains
             type(frc_point_t) :: pt
             type(frc_point_t), allocatable :: grown(:)
             call evaluate_point(fam, opts, ref, res%state, status, rep%nfev, pt, tally, &
-                                res%stability_seconds, error)
+                                res%stability_seconds, error, rcache)
             if (allocated(error)) return
             if (res%npoints == size(res%points)) then
                 allocate (grown(2*res%npoints))

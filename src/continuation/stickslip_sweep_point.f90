@@ -13,7 +13,7 @@ module stickslip_sweep_point
     use stickslip_hbm, only: solve_periodic
     use stickslip_hbm_sparse, only: solve_periodic_sparse
     use stickslip_continuation, only: continuation_state_t
-    use stickslip_reference, only: reference_options_t
+    use stickslip_reference, only: reference_options_t, reference_cache_t
     use stickslip_stability, only: floquet_t, periodic_stability
     use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_checks, only: truncation_warning, truncation_untrusted
@@ -79,7 +79,7 @@ contains
     !> `tally`. When the family is at the point's parameter, its dynamics are reused (no new
     !> factorization). Errors: those of the solve, the truncation estimate and the stability.
     subroutine evaluate_point(fam, opts, ref, state, status, nfev, pt, tally, &
-                              stability_seconds, error)
+                              stability_seconds, error, cache)
         !> The family of the curve (its sparse model, if any, is set to the point).
         type(friction_family_t), intent(inout) :: fam
         !> Sweep options.
@@ -100,6 +100,9 @@ contains
         real(dp), intent(inout) :: stability_seconds
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> What the stability of the previous point left (a sweep in omega only: the
+        !> contact modes are those of the same model at a nearby omega).
+        type(reference_cache_t), intent(inout), optional :: cache
         type(floquet_t) :: fl
         type(truncation_t) :: est
         type(model_t) :: m
@@ -170,7 +173,11 @@ contains
                              pt%check)
         if (opts%stability) then
             s0 = thread_cpu_seconds()
-            call periodic_stability(m, ps, ref, fl, error)
+            if (present(cache) .and. opts%parameter == 'omega') then
+                call periodic_stability(m, ps, ref, fl, error, cache=cache)
+            else
+                call periodic_stability(m, ps, ref, fl, error)
+            end if
             s1 = thread_cpu_seconds()
             stability_seconds = stability_seconds + (s1 - s0)
             if (allocated(error)) return

@@ -84,7 +84,11 @@ contains
 
     !> The earliest event in (ta, tb] of the (linear) mode md, if any: its time te, state ye
     !> and what it is (hit: a row or a quadratic event of the mode, with its gradient at
-    !> ye). States and rows in balanced coordinates.
+    !> ye). States and rows in balanced coordinates. Rows that end the step non-positive are
+    !> located in the order of the roots of their cubic Hermite interpolants (a cheap
+    !> estimate), each only when it is already non-positive at the earliest event located so
+    !> far: with many contacts several rows cross in one step, and one or two of them need
+    !> locating to roundoff instead of all.
     subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, hit)
         !> The dynamics md belongs to.
         class(flow_modes_t), intent(in) :: self
@@ -98,17 +102,36 @@ contains
         real(dp), intent(out) :: te, ye(:)
         !> With found: the event.
         type(event_hit_t), intent(out) :: hit
-        real(dp) :: tau, best
-        integer :: col
+        real(dp) :: tau, best, h, ga, gb, da, db, ytau(size(ya))
+        real(dp), allocatable :: est(:)
+        integer, allocatable :: cand(:)
+        integer :: col, k, nrow, i
         found = .false.
+        h = tb - ta
         best = huge(1.0_dp)
-        do col = 1, size(md%row_scale)
-            tau = row_crossing(self, md, col, md%row_scale(col), ta, ya, tb, yb)
-            if (tau < best) then
-                best = tau
-                found = .true.
-                hit%kind = 1
-                hit%index = col
+        nrow = size(md%row_scale)
+        allocate (cand(nrow), est(nrow))
+        k = 0
+        do col = 1, nrow
+            gb = dot_product(md%rows(:, col), yb)
+            if (gb <= 0.0_dp) then
+                ! a crossing: its estimate now, located below in the order of the estimates
+                k = k + 1
+                cand(k) = col
+                ga = dot_product(md%rows(:, col), ya)
+                da = dot_product(md%drows(:, col), ya)
+                db = dot_product(md%drows(:, col), yb)
+                est(k) = 0.0_dp
+                if (ga > 0.0_dp) est(k) = max(hermite_root(ga, da, gb, db, h), 0.0_dp)
+            else
+                ! a dip below zero between two positive values, if any
+                tau = row_crossing(self, md, col, md%row_scale(col), ta, ya, tb, yb)
+                if (tau < best) then
+                    best = tau
+                    found = .true.
+                    hit%kind = 1
+                    hit%index = col
+                end if
             end if
         end do
         do col = 1, size(md%qc)
@@ -120,9 +143,34 @@ contains
                 hit%index = col
             end if
         end do
+        if (found) call propagate(md, self%delta, best, ya, ye)
+        do while (k > 0)
+            ! the candidate with the earliest estimate, taken out of the list
+            i = minloc(est(1:k), 1)
+            col = cand(i)
+            cand(i) = cand(k)
+            est(i) = est(k)
+            k = k - 1
+            if (found) then
+                ! it crosses after the earliest event so far: not the first
+                if (dot_product(md%rows(:, col), ye) > 0.0_dp) cycle
+                tau = first_crossing(md, self%delta, ya, md%rows(:, col), 0, best, ye, ytau)
+            else
+                tau = first_crossing(md, self%delta, ya, md%rows(:, col), 0, h, yb, ytau)
+            end if
+            ! ties as a scan of the rows in order would break them: the lower row, rows
+            ! before quadratic events
+            if (.not. found .or. tau < best .or. &
+                (tau == best .and. (hit%kind == 2 .or. col < hit%index))) then
+                best = tau
+                found = .true.
+                hit%kind = 1
+                hit%index = col
+                ye = ytau
+            end if
+        end do
         if (found) then
             te = ta + best
-            call propagate(md, self%delta, best, ya, ye)
             ye(self%nz + 1:) = self%se*self%exo(te)
             if (hit%kind == 1) then
                 hit%element = md%row_element(hit%index)
@@ -303,15 +351,17 @@ contains
     !> one more propagation a few ulps past the iterate closes the bracket (each
     !> propagation costs dozens of matrix-vector products: a stiff reduced model with many
     !> contacts spent most of its stability time here).
-    real(dp) function first_crossing(md, delta, y0, r, order, hi0, yhi) result(hi)
+    real(dp) function first_crossing(md, delta, y0, r, order, hi0, yhi, yout) result(hi)
         type(mode_t), intent(in) :: md
         real(dp), intent(in) :: delta, y0(:), r(:)
         integer, intent(in) :: order
         real(dp), intent(in) :: hi0
         !> The state at hi0 when the caller has it (exp(b hi0) y0).
         real(dp), intent(in), optional :: yhi(:)
+        !> The state at the returned time (exp(b hi) y0).
+        real(dp), intent(out), optional :: yout(:)
         real(dp) :: lo, tau, g, dg, step, old_step, tol, row(size(r)), row1(size(r))
-        real(dp) :: y(size(y0)), g0, dg0, t2, bnorm, tlast, ylast(size(y0))
+        real(dp) :: y(size(y0)), g0, dg0, t2, bnorm, tlast, ylast(size(y0)), yh(size(y0))
         integer :: iter, k
         logical :: newton
         row = r
@@ -333,14 +383,21 @@ contains
         end if
         tlast = tau
         ylast = y
+        yh = y
         g = dot_product(row, y)
         dg = dot_product(row1, y)
-        if (g > 0.0_dp .or. hi - lo <= tol) return
+        if (g > 0.0_dp .or. hi - lo <= tol) then
+            if (present(yout)) yout = yh
+            return
+        end if
         ! the root of the cubic Hermite interpolant, a first iterate inside the bracket
         tau = hermite_root(g0, dg0, g, dg, hi)
         if (tau > lo .and. tau < hi) then
             call iterate_at(tau)
-            if (g == 0.0_dp) return
+            if (g == 0.0_dp) then
+                if (present(yout)) yout = yh
+                return
+            end if
         else
             tau = hi
         end if
@@ -377,6 +434,7 @@ contains
                     call state_at(t2)
                     if (dot_product(row, y) <= 0.0_dp) then
                         hi = t2
+                        yh = y
                         exit
                     end if
                     lo = t2
@@ -389,9 +447,11 @@ contains
                         exit
                     end if
                     hi = t2
+                    yh = y
                 end if
             end if
         end do
+        if (present(yout)) yout = yh
 
     contains
 
@@ -405,6 +465,7 @@ contains
                 lo = t
             else
                 hi = t
+                yh = y
             end if
         end subroutine iterate_at
 

@@ -135,6 +135,8 @@ module stickslip_flow_modes
         integer :: nmodes = 0
     contains
         procedure :: exo
+        !> The same dynamics at another omega, the mode cache kept (retune_modes).
+        procedure :: retune => retune_modes
         !> Code slots of element j.
         procedure :: slots
     end type flow_modes_t
@@ -412,6 +414,71 @@ contains
                              "is not finite", stickslip_stat%numerical)
         end if
     end subroutine ladder_of
+
+    !> The same dynamics at another forcing frequency `omega` [rad/s], its mode cache kept:
+    !> the exosystem's rotation in each mode's b, the slopes of the event rows and the
+    !> exosystem's columns of each ladder exp(b delta 2^-k) are recomputed; the structural
+    !> blocks (the phase matrices of x, v and the internal states, which do not depend on
+    !> omega) and their exponentials are not. The grid step delta, the balanced coordinates
+    !> and the scales of the events stay those of the first omega (any invertible balancing
+    !> gives the same flow; the grid of a period ends in a shorter last step). What one
+    !> retune costs: ~(12 + nl) n_a x n_e products per mode against a matrix exponential
+    !> and nl squarings of n_a x n_a matrices for a new one. `ok` is false, and nothing
+    !> changed, when a cached mode is nonlinear (a 2D slip) or has quadratic events: those
+    !> depend on omega otherwise; build a new flow then.
+    subroutine retune_modes(self, omega, ok)
+        !> The dynamics with its mode cache.
+        class(flow_modes_t), intent(inout) :: self
+        !> The new fundamental angular frequency [rad/s], > 0.
+        real(dp), intent(in) :: omega
+        !> Whether the cache could be kept.
+        logical, intent(out) :: ok
+        real(dp), allocatable :: cols(:, :), term(:, :)
+        real(dp) :: h
+        integer :: im, k, e0, kk
+        ok = .false.
+        if (.not. (omega > 0.0_dp)) return
+        do im = 1, self%nmodes
+            if (self%modes(im)%m > 0 .or. size(self%modes(im)%qc) > 0) return
+        end do
+        ok = .true.
+        self%omega = omega
+        self%period = two_pi/omega
+        e0 = self%nz
+        do im = 1, self%nmodes
+            associate (md => self%modes(im))
+                do k = 1, size(self%eharm)
+                    md%b(e0 + 2*k, e0 + 2*k + 1) = -self%eharm(k)*omega
+                    md%b(e0 + 2*k + 1, e0 + 2*k) = self%eharm(k)*omega
+                end do
+                md%drows = matmul(transpose(md%b), md%rows)
+                if (allocated(md%gauss)) deallocate (md%gauss)
+                ! the exosystem's columns of exp(b h) at the finest rung (||b h|| <= 1/16:
+                ! the Taylor series converges to roundoff in a dozen terms), then up the
+                ! ladder as the squarings built it: col(k - 1) = ladder(k) col(k)
+                h = self%delta*0.5_dp**md%nl
+                cols = md%ladder(:, e0 + 1:, md%nl)
+                cols = 0.0_dp
+                do k = 1, self%ne
+                    cols(e0 + k, k) = 1.0_dp
+                end do
+                term = cols
+                do kk = 1, 40
+                    term = mat_mul(md%b, term)*(h/kk)
+                    cols = cols + term
+                    ! converged on the scale of the structural rows (the forcing's
+                    ! response over one rung can be far below the exosystem's unit rows)
+                    if (maxval(abs(term)) <= epsilon(1.0_dp)*0.01_dp* &
+                        max(maxval(abs(cols(1:e0, :))), tiny(1.0_dp))) exit
+                end do
+                md%ladder(:, e0 + 1:, md%nl) = cols
+                do k = md%nl, 1, -1
+                    md%ladder(:, e0 + 1:, k - 1) = mat_mul(md%ladder(:, :, k), &
+                                                           md%ladder(:, e0 + 1:, k))
+                end do
+            end associate
+        end do
+    end subroutine retune_modes
 
     !> The n x n identity matrix.
     pure function identity_matrix(n) result(e)

@@ -29,6 +29,7 @@ module stickslip_reference
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference
     public :: validate_reference_options, reference_energy_error
     public :: energy_warning, energy_untrusted, coulomb_margin, reference_handles
+    public :: reference_cache_t, keep_flow
 
     !> Energy balance error of a converged orbit above which a warning is given: the flow
     !> is exact up to root finding and roundoff (~1e-12 measured on the examples).
@@ -125,11 +126,36 @@ module stickslip_reference
         type(diagnostics_t) :: diagnostics
     end type reference_result_t
 
+    !> What one shooting leaves for the next one on the same model at a nearby omega (the
+    !> points of a sweep in omega): the flow with its cache of contact modes, whose
+    !> exponentials are retuned to the new omega instead of being rebuilt
+    !> (stickslip_flow_modes, retune_modes), and the last converged monodromy, hybrj's
+    !> first Jacobian when the section falls on the same sample (Broyden updates correct it;
+    !> hybrj asks for an exact one when they do not suffice). The multipliers are those of
+    !> the final orbit's own monodromy either way. One cache per sequence of solves (per
+    !> thread); the caller keeps it and must not change the model except its omega.
+    type :: reference_cache_t
+        !> A flow is held, built for contact velocity scales vref.
+        logical :: have_flow = .false.
+        type(flow_t) :: flow
+        real(dp), allocatable :: vref(:)
+        !> The last converged monodromy (model coordinates), the section's sample and the
+        !> number of samples of its start.
+        real(dp), allocatable :: mono(:, :)
+        integer :: ksec = 0, ns = 0
+        !> That orbit's state at the section, and the start's state there (the shooting
+        !> starts from the last orbit moved by the change of the start: the truncation
+        !> error of a weighted-residual start changes little from one point to the next).
+        real(dp), allocatable :: zorbit(:), zstart(:)
+    end type reference_cache_t
+
     !> The shooting equations F(u) = (P(D u) - D u) / D, D the scales of x and v, for hybrj.
     type, extends(nonlinear_system_t) :: shooting_t
         type(flow_t) :: flow
         real(dp) :: t0 = 0.0_dp
         real(dp), allocatable :: scale(:), mono(:, :)
+        !> A monodromy to use as the first Jacobian instead of computing one.
+        real(dp), allocatable :: mono0(:, :)
         type(error_type), allocatable :: error
     contains
         procedure :: residual => shooting_residual
@@ -209,7 +235,7 @@ contains
     !> Errors: stat input (invalid model or options, start samples of the wrong shape or not
     !> finite); stat numerical (dependent stuck contact directions).
     subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name, light, &
-                               r_start)
+                               r_start, cache)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Reference options.
@@ -233,6 +259,9 @@ contains
         !> with one (the slider of a Jenkins or microslip element) come from them (absent:
         !> the springs of the sliders unloaded).
         real(dp), intent(in), optional :: r_start(:, :)
+        !> What the last solve of this model left (reference_cache_t), updated: the flow
+        !> goes into res%flow (hand it back with keep_flow), the monodromy stays.
+        type(reference_cache_t), intent(inout), optional :: cache
         character(len=:), allocatable :: name
         logical :: is_light
 
@@ -257,7 +286,8 @@ contains
         res%start = name
         is_light = .false.
         if (present(light)) is_light = light
-        call shoot_from(model, opts, name, x_start, v_start, res, error, is_light, r_start)
+        call shoot_from(model, opts, name, x_start, v_start, res, error, is_light, r_start, &
+                        cache)
         if (allocated(error)) return
         if (res%converged .and. is_light) then
             continue
@@ -344,7 +374,7 @@ contains
     !> One shooting attempt from samples xs, vs (t_k = k T / size(xs, 1)) of an approximate
     !> periodic solution (rs its channel forces, for the internal states), then the recording
     !> pass, the events and the samples.
-    subroutine shoot_from(model, opts, name, xs, vs, res, error, light, rs)
+    subroutine shoot_from(model, opts, name, xs, vs, res, error, light, rs, cache)
         type(model_t), intent(in) :: model
         type(reference_options_t), intent(in) :: opts
         character(len=*), intent(in) :: name
@@ -353,14 +383,16 @@ contains
         type(error_type), allocatable, intent(out) :: error
         logical, intent(in) :: light
         real(dp), intent(in), optional :: rs(:, :)
+        type(reference_cache_t), intent(inout), optional :: cache
         type(shooting_t) :: shooting
         type(mode_t), allocatable :: modes(:)
         type(hybrj_options_t) :: hopts
         type(hybrj_report_t) :: report
         real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:), ss(:), &
-                                 rk(:)
+                                 rk(:), zs(:), zp(:)
         real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3), vfloor
         integer :: n, nc, ns, j, k, ksec, nsamp, nz, nstate, s0
+        logical :: reused
         type(channel_t) :: ch
         character(len=400) :: buf
 
@@ -403,10 +435,25 @@ contains
         ! section: where the contacts slip fastest (away from the switching surfaces)
         ksec = maxloc(speed, 1)
         if (all(speed == huge(1.0_dp))) ksec = 1
+        if (present(cache)) then
+            ! the last orbit's section while the contacts still slip fast there (its
+            ! monodromy is then a first Jacobian for this one)
+            if (cache%ns == ns .and. cache%ksec >= 1 .and. cache%ksec <= ns) then
+                if (speed(cache%ksec) >= 0.5_dp*speed(ksec)) ksec = cache%ksec
+            end if
+        end if
         res%t_section = period*real(ksec - 1, dp)/real(ns, dp)
 
-        call new_flow(shooting%flow, model, opts%bracket_steps, vref, error, opts%ode_tol)
-        if (allocated(error)) return
+        reused = .false.
+        if (present(cache)) call reuse_flow(cache, model, opts, vref, shooting%flow, reused)
+        if (.not. reused) then
+            call new_flow(shooting%flow, model, opts%bracket_steps, vref, error, opts%ode_tol)
+            if (allocated(error)) return
+            if (present(cache)) then
+                cache%vref = vref
+                if (allocated(cache%mono)) deallocate (cache%mono)
+            end if
+        end if
         nz = shooting%flow%nz
         nstate = shooting%flow%ns
         ! the elements' internal states at the section, from the start's displacements and
@@ -432,7 +479,22 @@ contains
         shooting%t0 = res%t_section
         shooting%scale = [(xscale, k=1, n), (vscale, k=1, n), (xscale, k=1, nstate)]
         allocate (shooting%mono(nz, nz))
-        u = [xs(ksec, :), vs(ksec, :), ss]/shooting%scale
+        zs = [xs(ksec, :), vs(ksec, :), ss]
+        u = zs/shooting%scale
+        if (present(cache)) then
+            ! the last orbit at the same section: its monodromy is hybrj's first Jacobian,
+            ! and it moved by the change of the start is the first iterate (unless that
+            ! lands farther from the start than a tenth of its amplitude)
+            if (allocated(cache%mono)) then
+                if (cache%ksec == ksec .and. cache%ns == ns .and. size(cache%mono, 1) == nz) then
+                    shooting%mono0 = cache%mono
+                    if (allocated(cache%zorbit)) then
+                        zp = cache%zorbit + (zs - cache%zstart)
+                        if (maxval(abs(zp - zs)/shooting%scale) <= 0.1_dp) u = zp/shooting%scale
+                    end if
+                end if
+            end if
+        end if
         hopts%mode = 1
         hopts%maxfev = opts%maxfev
         hopts%xtol = 1.0e-15_dp
@@ -485,6 +547,17 @@ contains
         end if
         if (ampx == 0.0_dp .and. ampv == 0.0_dp) res%defect = 0.0_dp
         res%converged = res%defect <= opts%tol .and. all(ieee_is_finite(z1))
+        if (present(cache)) then
+            if (res%converged .and. all(ieee_is_finite(res%monodromy))) then
+                cache%mono = res%monodromy
+                cache%ksec = ksec
+                cache%ns = ns
+                cache%zorbit = z0
+                cache%zstart = zs
+            else if (allocated(cache%mono)) then
+                deallocate (cache%mono)
+            end if
+        end if
         ! the flow to the result without a deep copy of its mode cache (every mode's
         ! exponentials: megabytes on a reduced FE model with many contacts)
         call move_alloc(shooting%flow%modes, modes)
@@ -655,8 +728,13 @@ contains
         integer, intent(inout) :: stat
         real(dp) :: z0(size(x)), z1(size(x))
         integer :: i, k
-        z0 = x*self%scale
-        call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono)
+        if (allocated(self%mono0)) then
+            ! a neighbouring orbit's monodromy, once (then exact ones)
+            call move_alloc(self%mono0, self%mono)
+        else
+            z0 = x*self%scale
+            call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono)
+        end if
         if (allocated(self%error)) then
             stat = 1
             jac = 0.0_dp
@@ -676,4 +754,49 @@ contains
             jac(k, k) = jac(k, k) - 1.0_dp
         end do
     end subroutine shooting_jacobian
+
+    !> The cache's flow for a shooting of `model` with contact velocity scales vref, retuned
+    !> to model%omega (moved out of the cache: `flow` holds it and `reused` is true), when
+    !> it fits: the same numbers of DOFs, contacts and internal states, the same bracketing
+    !> steps and integration tolerance, omega within 10 % and every velocity scale within a
+    !> factor 4 of those it was built for (its grid step and event scales stay fit), and
+    !> only linear contact modes (retune_modes). Otherwise the cache is emptied.
+    subroutine reuse_flow(cache, model, opts, vref, flow, reused)
+        type(reference_cache_t), intent(inout) :: cache
+        type(model_t), intent(in) :: model
+        type(reference_options_t), intent(in) :: opts
+        real(dp), intent(in) :: vref(:)
+        type(flow_t), intent(inout) :: flow
+        logical, intent(out) :: reused
+        type(mode_t), allocatable :: modes(:)
+        reused = .false.
+        if (.not. cache%have_flow) return
+        cache%have_flow = .false.
+        if (.not. allocated(cache%vref)) return
+        if (cache%flow%n /= model%ndof .or. cache%flow%nc /= model%ncontact() .or. &
+            size(cache%vref) /= size(vref) .or. cache%flow%steps /= opts%bracket_steps .or. &
+            cache%flow%ode_tol /= opts%ode_tol) return
+        if (abs(model%omega/cache%flow%omega - 1.0_dp) > 0.1_dp) return
+        if (any(vref > 4.0_dp*cache%vref .or. cache%vref > 4.0_dp*vref)) return
+        call move_alloc(cache%flow%modes, modes)
+        flow = cache%flow
+        call move_alloc(modes, flow%modes)
+        call flow%retune(model%omega, reused)
+    end subroutine reuse_flow
+
+    !> Hand the flow of a shooting (res%flow, with its mode cache) to `cache` for the next
+    !> solve of the same model (solve_reference with cache), without copying its modes;
+    !> res%flow is left without modes (res cannot be sampled on other grids afterwards).
+    subroutine keep_flow(cache, res)
+        !> The cache of a sequence of solves.
+        type(reference_cache_t), intent(inout) :: cache
+        !> A result of solve_reference with that cache.
+        type(reference_result_t), intent(inout) :: res
+        type(mode_t), allocatable :: modes(:)
+        if (.not. allocated(res%flow%modes) .or. .not. allocated(cache%vref)) return
+        call move_alloc(res%flow%modes, modes)
+        cache%flow = res%flow
+        call move_alloc(modes, cache%flow%modes)
+        cache%have_flow = .true.
+    end subroutine keep_flow
 end module stickslip_reference

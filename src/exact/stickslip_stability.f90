@@ -30,7 +30,7 @@ module stickslip_stability
     use stickslip_solution, only: hbm_solution_t
     use stickslip_flow, only: flow_t, new_flow
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
-        sample_reference
+        sample_reference, reference_cache_t, keep_flow
     implicit none
     private
     public :: floquet_t, floquet_multipliers, periodic_stability, verify_periodicity
@@ -247,7 +247,7 @@ contains
     !> shooting and the eigenvalues. `ref` returns the exact orbit (with its monodromy).
     !> Errors: stat input (invalid model or options, sol without samples); stat numerical
     !> (dependent stuck contact directions, non-finite monodromy).
-    subroutine periodic_stability(model, sol, opts, fl, error, ref, tol)
+    subroutine periodic_stability(model, sol, opts, fl, error, ref, tol, cache)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> A weighted-residual solution of `model` with samples (want_samples).
@@ -262,6 +262,10 @@ contains
         type(reference_result_t), intent(out), optional :: ref
         !> Half-width of the marginal band about |mu| = 1 (default 1e-6).
         real(dp), intent(in), optional :: tol
+        !> What the stability of the previous point of a sweep in omega left (the contact
+        !> modes and the monodromy: reference_cache_t), updated for the next point. The
+        !> multipliers are the same with or without it, to roundoff.
+        type(reference_cache_t), intent(inout), optional :: cache
         type(reference_result_t) :: res
         real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
         real(dp) :: c0, c1, ampx, ampv, distance, ftol
@@ -283,7 +287,16 @@ contains
         end if
         ! the full reference (energies, checks, opts%samples) only when the caller wants it
         call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
-                             light=.not. present(ref), r_start=sol%r)
+                             light=.not. present(ref), r_start=sol%r, cache=cache)
+        if (present(cache) .and. .not. allocated(error)) then
+            if (.not. res%converged .or. .not. allocated(res%monodromy)) then
+                ! the last orbit's start or Jacobian may have led the shooting astray: once
+                ! more from the weighted-residual solution alone, the cache emptied
+                cache = reference_cache_t()
+                call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
+                                     light=.not. present(ref), r_start=sol%r)
+            end if
+        end if
         if (allocated(error)) then
             error%message = "periodic_stability: "//error%message
             return
@@ -352,6 +365,7 @@ contains
 
         subroutine give_ref()
             if (present(ref)) ref = res
+            if (present(cache)) call keep_flow(cache, res)
         end subroutine give_ref
     end subroutine periodic_stability
 

@@ -31,6 +31,8 @@ module stickslip_friction_family
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_sparse_model, only: sparse_model_t
     use stickslip_sparse_dynamics, only: new_sparse_dynamics
+    use stickslip_umfpack, only: sparse_zlu_t
+    use stickslip_progress, only: progress_t
     use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_friction, only: psi_limit_derivative
     use stickslip_contact_set, only: contact_set_t, new_contact_set
@@ -86,6 +88,11 @@ module stickslip_friction_family
         !> The model's sparse matrices (a sweep of the exact sparse condensation; its
         !> %model follows `model`), and the DOFs whose rows the dynamics keep.
         type(sparse_model_t), allocatable :: sparse
+        !> The analysis (ordering) of the sparse model's dynamic stiffness, kept from one
+        !> parameter to the next (release it with the family: analysis%release()).
+        type(sparse_zlu_t) :: analysis
+        !> Progress of the sparse condensations (per harmonic; unit off by default).
+        type(progress_t) :: progress
         integer, allocatable :: kept(:)
         !> Rows of the tangential channels' mean forces, and the point they are pinned to
         !> (empty until the continuation anchors the family).
@@ -158,7 +165,8 @@ contains
                 type(contact_set_t) :: cs
                 call new_basis(basis, hbm%harmonics, hbm%odd_only, hbm%samples, error)
                 if (allocated(error)) return
-                call new_sparse_dynamics(dyn, fam%sparse, basis, fam%kept, error)
+                call new_sparse_dynamics(dyn, fam%sparse, basis, fam%kept, error, &
+                                         analysis=fam%analysis, progress=fam%progress)
                 call basis%destroy()
                 if (allocated(error)) return
                 call new_contact_set(cs, fam%model)
@@ -185,7 +193,8 @@ contains
                 if (allocated(fam%sparse)) then
                     fam%sparse%model = m1
                     call new_sparse_dynamics(fam%unit, fam%sparse, fam%prob%basis, fam%kept, &
-                                             error)
+                                             error, analysis=fam%analysis, &
+                                             progress=fam%progress)
                     fam%sparse%model = fam%model
                 else
                     call new_dynamics(fam%unit, m1, fam%prob%basis, error)
@@ -292,10 +301,12 @@ contains
             if (self%singular_values(1) >= 0.0_dp) then
                 call new_sparse_dynamics(self%prob%dyn, self%sparse, self%prob%basis, &
                                          self%kept, error, singular_values=self%singular_values, &
-                                         with_omega_derivative=.true.)
+                                         with_omega_derivative=.true., &
+                                         analysis=self%analysis, progress=self%progress)
             else
                 call new_sparse_dynamics(self%prob%dyn, self%sparse, self%prob%basis, &
-                                         self%kept, error, with_omega_derivative=.true.)
+                                         self%kept, error, with_omega_derivative=.true., &
+                                         analysis=self%analysis, progress=self%progress)
             end if
         else if (self%singular_values(1) >= 0.0_dp) then
             call new_dynamics(self%prob%dyn, self%model, self%prob%basis, error, &

@@ -143,7 +143,12 @@ contains
                                      error, sparse, dofs, build=.false.)
             if (allocated(error)) return
             fam%sparse%model = m0
-            call solve_periodic_sparse(fam%sparse, ho, fam%kept, sol, error)
+            if (present(progress)) then
+                call solve_periodic_sparse(fam%sparse, ho, fam%kept, sol, error, &
+                                           progress=progress)
+            else
+                call solve_periodic_sparse(fam%sparse, ho, fam%kept, sol, error)
+            end if
         else
             call solve_periodic(m0, ho, sol, error)
         end if
@@ -162,6 +167,7 @@ contains
             call new_friction_family(fam, model, hbm, opts%parameter, opts%start, sol%rho, error)
         end if
         if (allocated(error)) return
+        if (present(progress)) fam%progress = progress
         nb = fam%prob%basis%nb
         co%tol = hbm%tol
         co%fscale = max(fam%prob%rho*force_scale(fam%model), tiny(1.0_dp))
@@ -200,7 +206,7 @@ contains
                 if (size(resume%state%y) /= fam%prob%n) then
                     call fatal_error(error, "sweep: the checkpoint has another number of "// &
                                      "unknowns than this case", stickslip_stat%input)
-                    call fam%prob%destroy()
+                    call release_family()
                     return
                 end if
                 res%state = resume%state
@@ -226,17 +232,17 @@ contains
             call start_continuation(fam, co, reshape(sol%rcoef, [fam%prob%n]), res%state, &
                                     rep, error)
             if (allocated(error)) then
-                call fam%prob%destroy()
+                call release_family()
                 return
             end if
             if (res%state%reason /= reason_running) then
                 call fatal_error(error, "sweep: "//rep%message, stickslip_stat%numerical)
-                call fam%prob%destroy()
+                call release_family()
                 return
             end if
             call add_point("start")
             if (allocated(error)) then
-                call fam%prob%destroy()
+                call release_family()
                 return
             end if
         end if
@@ -265,7 +271,7 @@ contains
                 if (len(rep%message) > 0) res%diagnosis = rep%message
             end if
         end do
-        call fam%prob%destroy()
+        call release_family()
         res%factorizations = fam%factorizations
         if (allocated(error)) return
         res%complete = res%state%reason == reason_end
@@ -286,6 +292,12 @@ contains
         end if
 
     contains
+
+        !> Free what the family holds beyond Fortran's reach (the sparse analysis).
+        subroutine release_family()
+            call fam%prob%destroy()
+            call fam%analysis%release()
+        end subroutine release_family
 
         !> What to change when the curve stops for `reason` (&sweep and &hbm variables).
         function remedy(reason) result(text)

@@ -119,7 +119,7 @@ contains
         end if
         select case (result%method)
         case ('hbm')
-            call run_case(case, result%hbm, error, result%checks)
+            call run_case(case, result%hbm, error, result%checks, progress)
             result%diagnostics = hbm_findings(result%hbm, result%checks)
             result%summary_written = allocated(result%hbm%diagnosis)
         case ('euler')

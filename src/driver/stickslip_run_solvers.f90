@@ -42,7 +42,7 @@ contains
     !> numerical is returned as well. Other errors: stat input (invalid case, prefixed with
     !> the case file), stat numerical (singular dynamic stiffness, NaN), stat io (files, a
     !> directory another run is writing).
-    subroutine run_case(case, sol, error, checks)
+    subroutine run_case(case, sol, error, checks, progress)
         !> The case to run.
         type(case_t), intent(in) :: case
         !> The solution.
@@ -51,25 +51,28 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The checks of the solution (truncation estimate, stability, periodicity defect).
         type(hbm_checks_t), intent(out), optional :: checks
+        !> Progress of long phases (the exact sparse condensation's harmonics).
+        type(progress_t), intent(inout), optional :: progress
         type(hbm_checks_t) :: ch
         type(directory_lock_t) :: lock
         character(len=:), allocatable :: stage
         call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call hbm_run(case, stage, sol, ch, error)
+        call hbm_run(case, stage, sol, ch, error, progress)
         call close_output(case, lock, error)
         if (present(checks)) checks = ch
         call name_case_file(case, error, ['opts ', 'copts', 'ref  ', 'basis'], &
                             ['hbm      ', 'hbm      ', 'reference', 'hbm      '])
     end subroutine run_case
 
-    subroutine hbm_run(case, dir, sol, ch, error)
+    subroutine hbm_run(case, dir, sol, ch, error, progress)
         type(case_t), intent(in) :: case
         !> The directory the results are written to (the run's staging directory).
         character(len=*), intent(in) :: dir
         type(hbm_solution_t), intent(out) :: sol
         type(hbm_checks_t), intent(out) :: ch
         type(error_type), allocatable, intent(out) :: error
+        type(progress_t), intent(inout), optional :: progress
         type(error_type), allocatable :: io_error
         logical :: wanted
         integer, allocatable :: cols(:)
@@ -79,10 +82,11 @@ contains
             if (case%full_field) then
                 ! every DOF kept (the selection first: the files' columns)
                 call solve_periodic_sparse(case%sparse_model, case%hbm, [selected_dofs(case), &
-                                           (i, i=1, case%sparse_model%model%ndof)], sol, error)
+                                           (i, i=1, case%sparse_model%model%ndof)], sol, error, &
+                                           progress=progress)
             else
                 call solve_periodic_sparse(case%sparse_model, case%hbm, selected_dofs(case), &
-                                           sol, error)
+                                           sol, error, progress=progress)
             end if
             ch%notes = sampling_notes(case%hbm%samples, case%hbm%harmonics)
             call sampling_diagnostics(case%hbm%samples, ch%diagnostics)

@@ -16,6 +16,7 @@ module stickslip_hbm_sparse
     use stickslip_hbm, only: condensed_structure_t, solve_condensed, validate_options
     use stickslip_rho, only: rho_from_channels, dominant_harmonic
     use stickslip_contact_set, only: new_contact_set
+    use stickslip_progress, only: progress_t
     implicit none
     private
     public :: solve_periodic_sparse, kept_dofs
@@ -31,7 +32,8 @@ contains
     !> condensed dynamics used. Errors: as solve_periodic (stat input: invalid model,
     !> options or `dofs` outside 1..N; stat numerical: singular K with a constant term,
     !> undamped resonance, an UMFPACK failure such as out of memory).
-    subroutine solve_periodic_sparse(smodel, opts, dofs, sol, error, r_start, dyn, dyn_out)
+    subroutine solve_periodic_sparse(smodel, opts, dofs, sol, error, r_start, dyn, dyn_out, &
+                                     progress)
         !> The structure with sparse matrices, its contacts and forcing.
         type(sparse_model_t), intent(in) :: smodel
         !> Solver options.
@@ -50,6 +52,8 @@ contains
         type(dynamics_t), intent(in), optional :: dyn
         !> The condensed dynamics of the solve.
         type(dynamics_t), intent(out), optional :: dyn_out
+        !> Progress of the condensation, a line per harmonic (the host's unit).
+        type(progress_t), intent(in), optional :: progress
         type(condensed_structure_t) :: s
         type(hbm_options_t) :: o
         type(basis_t) :: basis
@@ -109,7 +113,7 @@ contains
         else
             call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
             if (allocated(error)) return
-            call new_sparse_dynamics(built, smodel, basis, kept, error)
+            call new_sparse_dynamics(built, smodel, basis, kept, error, progress=progress)
             call system_clock(c3)
             call basis%destroy()
             if (allocated(error)) return

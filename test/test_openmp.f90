@@ -19,6 +19,8 @@ module test_openmp
     use stickslip_reference_start, only: reference_start_options_t
     use stickslip_robustness, only: robustness_options_t, robustness_row_t, run_robustness
     use stickslip_study, only: study_options_t, study_result_t, run_study
+    use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
+    use stickslip_reference, only: reference_options_t
     use stickslip_cli, only: string_t, run_cli
     use stickslip_files, only: make_directory
     use testing, only: test_counter_t, check, check_close, check_error
@@ -40,6 +42,7 @@ contains
         ! rows must not depend on the task order)
         call test_robustness_threads(t)
         call test_study_threads(t)
+        call test_sweep_stability_threads(t)
         call test_multi_case(t)
         if (.not. openmp) then
             write (output_unit, '(a)') "openmp: built without -fopenmp, the concurrent solve " // &
@@ -230,6 +233,64 @@ contains
                    .and. all(two%cpu_seconds >= 0.0_dp), &
                    "openmp: robustness grid mostly converged, CPU times >= 0")
     end subroutine test_robustness_threads
+
+    !> A sweep with stability on 1 thread (point by point, the cache of contact modes carried
+    !> along the curve) and on 2 (the stability stage after the curve, a block of points
+    !> per thread): the same points, the same verdicts and multipliers to 1e-9.
+    subroutine test_sweep_stability_threads(t)
+        type(test_counter_t), intent(inout) :: t
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: one, two
+        type(hbm_options_t) :: ho
+        type(reference_options_t) :: ro
+        type(error_type), allocatable :: error
+        type(model_t) :: m
+        integer :: k, saved, known
+        logical :: same
+        real(dp) :: worst
+        m = seed_model()
+        m%damping = 0.02_dp*m%stiffness
+        ho%harmonics = 15
+        ho%samples = 64
+        ho%rho = 0.2_dp
+        so%parameter = 'omega'
+        so%start = 4.0_dp
+        so%stop = 5.0_dp
+        so%step = 0.1_dp
+        so%max_step = 0.1_dp
+        so%stability = .true.
+        saved = max_threads()
+        call set_threads(1)
+        call run_sweep(m, ho, ro, so, one, error)
+        call check_error(t, error, "openmp: sweep with stability on 1 thread", .false.)
+        if (allocated(error)) then
+            call set_threads(saved)
+            return
+        end if
+        call set_threads(2)
+        call run_sweep(m, ho, ro, so, two, error)
+        call set_threads(saved)
+        call check_error(t, error, "openmp: sweep with stability on 2 threads", .false.)
+        if (allocated(error)) return
+        same = one%npoints == two%npoints .and. one%npoints > 5
+        worst = 0.0_dp
+        known = 0
+        if (same) then
+            do k = 1, one%npoints
+                same = same .and. one%points(k)%parameter == two%points(k)%parameter .and. &
+                       one%points(k)%stable == two%points(k)%stable
+                if (same .and. one%points(k)%stable /= -1) worst = max(worst, &
+                    abs(one%points(k)%floquet_max - two%points(k)%floquet_max))
+            end do
+            known = 0
+            do k = 1, one%npoints
+                if (one%points(k)%stable /= -1) known = known + 1
+            end do
+        end if
+        call check(t, same .and. worst <= 1.0e-9_dp .and. known > one%npoints/2, &
+                   "openmp: sweep stability on 2 threads = on 1 thread (same points and "// &
+                   "verdicts, multipliers to 1e-9)")
+    end subroutine test_sweep_stability_threads
 
     !> The work-precision study (H = 2, 3, 5, 10, Euler at 100 and 200 steps) on 1 and on
     !> 2 threads: the same rows, bitwise (see test_robustness_threads).

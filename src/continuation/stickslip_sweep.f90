@@ -36,7 +36,8 @@ module stickslip_sweep
         reason_text
     use stickslip_friction_family, only: friction_family_t, new_friction_family, &
         dynamics_cache_size
-    use stickslip_sweep_point, only: point_tally_t, evaluate_point
+    use stickslip_sweep_point, only: point_tally_t, evaluate_point, stability_stage
+    use stickslip_blas_threads, only: parallel_threads
     use stickslip_sweep_retrace, only: fold_watch_t, new_fold_watch
     implicit none
     private
@@ -101,6 +102,8 @@ contains
         type(model_t) :: m0
         real(dp), allocatable :: amplitude0(:)
         type(point_tally_t) :: tally
+        integer :: nthreads
+        logical :: defer
         type(reference_cache_t) :: rcache
         type(diagnostics_t) :: held
         integer :: k
@@ -124,6 +127,10 @@ contains
         call validate_sweep_options(model, opts, error)
         if (allocated(error)) return
         co = continuation_options_of(opts)
+        ! with several threads the stability of the points runs once the curve is traced,
+        ! on every thread (stability_stage); with one, point by point as they come
+        nthreads = parallel_threads()
+        defer = opts%stability .and. nthreads > 1 .and. .not. present(sparse)
         nc = model%ncontact()
         if (nc == 0) then
             call fatal_error(error, "sweep: the model has no friction contact (nothing to "// &
@@ -271,6 +278,18 @@ contains
                 if (len(rep%message) > 0) res%diagnosis = rep%message
             end if
         end do
+        if (defer .and. .not. allocated(error)) then
+            ! the stability of every point, on the cores, once the curve is traced
+            block
+                real(dp) :: before
+                before = res%stability_seconds
+                call stability_stage(fam, opts, ref, res%points(1:res%npoints), nthreads, &
+                                     res%stability_seconds, error, progress)
+                ! the sweep's CPU time counts its stability, on whichever thread it ran
+                res%seconds = res%seconds + (res%stability_seconds - before)
+            end block
+            if (.not. allocated(error) .and. present(observer)) call observer%observe(res, error)
+        end if
         call release_family()
         res%factorizations = fam%factorizations
         if (allocated(error)) return
@@ -332,7 +351,7 @@ contains
             type(frc_point_t) :: pt
             type(frc_point_t), allocatable :: grown(:)
             call evaluate_point(fam, opts, ref, res%state, status, rep%nfev, pt, tally, &
-                                res%stability_seconds, error, rcache)
+                                res%stability_seconds, error, rcache, defer_stability=defer)
             if (allocated(error)) return
             if (res%npoints == size(res%points)) then
                 allocate (grown(2*res%npoints))

@@ -21,9 +21,11 @@ module stickslip_sweep_point
     use stickslip_sweep_result, only: frc_point_t
     use stickslip_friction_family, only: friction_family_t
     use stickslip_contact_set, only: channel_directions
+    use stickslip_progress, only: progress_t
     implicit none
     private
     public :: point_tally_t, evaluate_point, keep_coefficients, contact_point_values
+    public :: stability_stage
 
     !> Which checks the points of a curve failed: per diagnostics key, how many points, the
     !> worst level and the parameter of the first (sweep_result_t%diagnostics gets one
@@ -79,7 +81,7 @@ contains
     !> `tally`. When the family is at the point's parameter, its dynamics are reused (no new
     !> factorization). Errors: those of the solve, the truncation estimate and the stability.
     subroutine evaluate_point(fam, opts, ref, state, status, nfev, pt, tally, &
-                              stability_seconds, error, cache)
+                              stability_seconds, error, cache, defer_stability)
         !> The family of the curve (its sparse model, if any, is set to the point).
         type(friction_family_t), intent(inout) :: fam
         !> Sweep options.
@@ -103,12 +105,13 @@ contains
         !> What the stability of the previous point left (a sweep in omega only: the
         !> contact modes are those of the same model at a nearby omega).
         type(reference_cache_t), intent(inout), optional :: cache
-        type(floquet_t) :: fl
+        !> Leave the stability to stability_stage (pt%stable = -1, floquet_max NaN).
+        logical, intent(in), optional :: defer_stability
+        logical :: defer
         type(truncation_t) :: est
         type(model_t) :: m
         type(hbm_solution_t) :: ps
         type(hbm_options_t) :: po
-        real(dp) :: s0, s1
         integer :: k, nb, nc
         logical :: at_point
         nb = fam%prob%basis%nb
@@ -171,22 +174,140 @@ contains
         end if
         call tally%add_point(ps%diagnostics, pt%truncation, pt%parameter, pt%check_level, &
                              pt%check)
-        if (opts%stability) then
-            s0 = thread_cpu_seconds()
-            if (present(cache) .and. opts%parameter == 'omega') then
-                call periodic_stability(m, ps, ref, fl, error, cache=cache)
-            else
-                call periodic_stability(m, ps, ref, fl, error)
-            end if
-            s1 = thread_cpu_seconds()
-            stability_seconds = stability_seconds + (s1 - s0)
-            if (allocated(error)) return
-            if (fl%verdict /= 'unknown') then
-                pt%floquet_max = fl%max_modulus
-                pt%stable = merge(1, 0, fl%stable)
-            end if
-        end if
+        defer = .false.
+        if (present(defer_stability)) defer = defer_stability
+        if (opts%stability .and. .not. defer) &
+            call stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache)
     end subroutine evaluate_point
+
+    !> The Floquet multipliers of the point `pt` from its weighted-residual solution `ps` of
+    !> `m` (with samples): pt%floquet_max and pt%stable, unless the verdict is 'unknown'.
+    !> `cache` (a sweep in omega only) carries the last point's flow. Errors: those of
+    !> periodic_stability.
+    subroutine stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache)
+        type(model_t), intent(in) :: m
+        type(hbm_solution_t), intent(in) :: ps
+        type(sweep_options_t), intent(in) :: opts
+        type(reference_options_t), intent(in) :: ref
+        type(frc_point_t), intent(inout) :: pt
+        !> CPU seconds of the stability so far [s], increased by this point's.
+        real(dp), intent(inout) :: stability_seconds
+        type(error_type), allocatable, intent(out) :: error
+        type(reference_cache_t), intent(inout), optional :: cache
+        type(floquet_t) :: fl
+        real(dp) :: s0
+        s0 = thread_cpu_seconds()
+        if (present(cache) .and. opts%parameter == 'omega') then
+            call periodic_stability(m, ps, ref, fl, error, cache=cache)
+        else
+            call periodic_stability(m, ps, ref, fl, error)
+        end if
+        stability_seconds = stability_seconds + (thread_cpu_seconds() - s0)
+        if (allocated(error)) return
+        if (fl%verdict /= 'unknown') then
+            pt%floquet_max = fl%max_modulus
+            pt%stable = merge(1, 0, fl%stable)
+        end if
+    end subroutine stability_from
+
+    !> The Floquet stability of the `points` of a curve of the dense family `fam` that have
+    !> no verdict (stable = -1: left by evaluate_point's defer_stability, or 'unknown' in a
+    !> resumed checkpoint), on `nthreads` OpenMP threads once the curve is traced: each
+    !> thread takes a contiguous block of points and carries its reference_cache_t from one
+    !> to the next (a sweep in omega); each point is solved again from its kept force
+    !> coefficients (converged already: one evaluation) for the samples the shooting starts
+    !> from. `stability_seconds` grows by the threads' CPU time; `progress` (its unit)
+    !> gets 'stickslip: stability k/n points' lines from the first thread. Errors: those of
+    !> the solve and of periodic_stability (the first thread's that failed).
+    subroutine stability_stage(fam, opts, ref, points, nthreads, stability_seconds, error, &
+                               progress)
+        !> The family of the curve (read only).
+        type(friction_family_t), intent(in) :: fam
+        !> Sweep options.
+        type(sweep_options_t), intent(in) :: opts
+        !> Options of the exact reference.
+        type(reference_options_t), intent(in) :: ref
+        !> The curve's points, their stability filled.
+        type(frc_point_t), intent(inout) :: points(:)
+        !> Threads to use (>= 1).
+        integer, intent(in) :: nthreads
+        !> CPU seconds of the stability so far [s].
+        real(dp), intent(inout) :: stability_seconds
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress of the stage (the host's unit).
+        type(progress_t), intent(in), optional :: progress
+        type :: task_t
+            type(error_type), allocatable :: error
+            real(dp) :: seconds = 0.0_dp
+        end type task_t
+        type(task_t), allocatable :: tasks(:)
+        type(progress_t) :: sp
+        integer, allocatable :: todo(:)
+        integer :: nt, it, k, done
+        todo = pack([(k, k=1, size(points))], points%stable == -1)
+        if (size(todo) == 0) return
+        nt = max(1, min(nthreads, size(todo)))
+        allocate (tasks(nt))
+        done = 0
+        if (present(progress)) then
+            sp = progress
+            sp%label = 'stability'
+            sp%items = 'points'
+            call sp%begin()
+        end if
+        !$omp parallel do schedule(static, 1) default(shared) private(it) num_threads(nt)
+        do it = 1, nt
+            call block_task(it)
+        end do
+        !$omp end parallel do
+        do it = 1, nt
+            stability_seconds = stability_seconds + tasks(it)%seconds
+            if (allocated(tasks(it)%error) .and. .not. allocated(error)) &
+                call move_alloc(tasks(it)%error, error)
+        end do
+
+    contains
+
+        !> Block it of the points to do, in order, with one cache.
+        subroutine block_task(it)
+            integer, intent(in) :: it
+            type(reference_cache_t) :: cache
+            type(model_t) :: m
+            type(hbm_options_t) :: po
+            type(hbm_solution_t) :: ps
+            integer :: j, kk, ndone
+            character(len=40) :: text
+            do j = (it - 1)*size(todo)/nt + 1, it*size(todo)/nt
+                kk = todo(j)
+                associate (pt => points(kk))
+                    m = fam%model
+                    call set_sweep_parameter(m, opts%parameter, pt%parameter, fam%amplitude0)
+                    po = fam%opts
+                    po%want_samples = .true.
+                    po%start = 'direct'
+                    if (allocated(pt%rcoef)) then
+                        call solve_periodic(m, po, ps, tasks(it)%error, r_start=pt%rcoef)
+                    else
+                        call solve_periodic(m, po, ps, tasks(it)%error)
+                    end if
+                    if (allocated(tasks(it)%error)) return
+                    call stability_from(m, ps, opts, ref, pt, tasks(it)%seconds, &
+                                        tasks(it)%error, cache)
+                    if (allocated(tasks(it)%error)) return
+                end associate
+                !$omp atomic capture
+                done = done + 1
+                ndone = done
+                !$omp end atomic
+                if (it == 1 .and. present(progress)) then
+                    write (text, '(g0.6)') points(kk)%parameter
+                    call sp%report(ndone, size(todo), trim(opts%parameter)//" = "// &
+                                   trim(adjustl(text)))
+                end if
+            end do
+        end subroutine block_task
+    end subroutine stability_stage
 
     !> Keep the Fourier coefficients of point `pt` (frc_point_t: harmonic, xcoef, rcoef,
     !> ucoef, omega) from its solution `ps` of `model`: the displacements observed as the

@@ -277,6 +277,7 @@ contains
             type(hbm_options_t) :: po
             type(hbm_solution_t) :: ps
             integer :: j, kk, ndone
+            real(dp) :: s0
             character(len=40) :: text
             do j = (it - 1)*size(todo)/nt + 1, it*size(todo)/nt
                 kk = todo(j)
@@ -286,11 +287,14 @@ contains
                     po = fam%opts
                     po%want_samples = .true.
                     po%start = 'direct'
+                    ! the solve again is part of the stability's cost
+                    s0 = thread_cpu_seconds()
                     if (allocated(pt%rcoef)) then
                         call solve_periodic(m, po, ps, tasks(it)%error, r_start=pt%rcoef)
                     else
                         call solve_periodic(m, po, ps, tasks(it)%error)
                     end if
+                    tasks(it)%seconds = tasks(it)%seconds + (thread_cpu_seconds() - s0)
                     if (allocated(tasks(it)%error)) return
                     call stability_from(m, ps, opts, ref, pt, tasks(it)%seconds, &
                                         tasks(it)%error, cache)

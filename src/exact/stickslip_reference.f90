@@ -147,6 +147,11 @@ module stickslip_reference
         !> starts from the last orbit moved by the change of the start: the truncation
         !> error of a weighted-residual start changes little from one point to the next).
         real(dp), allocatable :: zorbit(:), zstart(:)
+        !> The omega of that orbit, and the orbit and monodromy before it at the same
+        !> section (omega_before = 0: none): a secant through the two predicts the first
+        !> Jacobian and iterate to second order in the step.
+        real(dp) :: omega = 0.0_dp, omega_before = 0.0_dp
+        real(dp), allocatable :: mono_before(:, :), zorbit_before(:)
     end type reference_cache_t
 
     !> The shooting equations F(u) = (P(D u) - D u) / D, D the scales of x and v, for hybrj.
@@ -390,7 +395,7 @@ contains
         type(hybrj_report_t) :: report
         real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:), ss(:), &
                                  rk(:), zs(:), zp(:)
-        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3), vfloor
+        real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3), vfloor, ratio
         integer :: n, nc, ns, j, k, ksec, nsamp, nz, nstate, s0
         logical :: reused
         type(channel_t) :: ch
@@ -488,10 +493,15 @@ contains
             if (allocated(cache%mono)) then
                 if (cache%ksec == ksec .and. cache%ns == ns .and. size(cache%mono, 1) == nz) then
                     shooting%mono0 = cache%mono
-                    if (allocated(cache%zorbit)) then
-                        zp = cache%zorbit + (zs - cache%zstart)
-                        if (maxval(abs(zp - zs)/shooting%scale) <= 0.1_dp) u = zp/shooting%scale
+                    zp = cache%zorbit + (zs - cache%zstart)
+                    if (cache%omega_before /= 0.0_dp .and. cache%omega /= cache%omega_before) then
+                        ! the secant through the last two orbits (same section)
+                        ratio = (model%omega - cache%omega)/(cache%omega - cache%omega_before)
+                        if (abs(ratio) <= 2.0_dp) then
+                            shooting%mono0 = cache%mono + ratio*(cache%mono - cache%mono_before)
+                        end if
                     end if
+                    if (maxval(abs(zp - zs)/shooting%scale) <= 0.1_dp) u = zp/shooting%scale
                 end if
             end if
         end if
@@ -549,11 +559,20 @@ contains
         res%converged = res%defect <= opts%tol .and. all(ieee_is_finite(z1))
         if (present(cache)) then
             if (res%converged .and. all(ieee_is_finite(res%monodromy))) then
+                cache%omega_before = 0.0_dp
+                if (allocated(cache%mono) .and. cache%ksec == ksec .and. cache%ns == ns) then
+                    if (size(cache%mono, 1) == nz) then
+                        call move_alloc(cache%mono, cache%mono_before)
+                        call move_alloc(cache%zorbit, cache%zorbit_before)
+                        cache%omega_before = cache%omega
+                    end if
+                end if
                 cache%mono = res%monodromy
                 cache%ksec = ksec
                 cache%ns = ns
                 cache%zorbit = z0
                 cache%zstart = zs
+                cache%omega = model%omega
             else if (allocated(cache%mono)) then
                 deallocate (cache%mono)
             end if

@@ -250,12 +250,7 @@ contains
         nt = max(1, min(nthreads, size(todo)))
         allocate (tasks(nt))
         done = 0
-        if (present(progress)) then
-            sp = progress
-            sp%label = 'stability'
-            sp%items = 'points'
-            call sp%begin()
-        end if
+        if (present(progress)) sp = progress%stage('stability', 'points')
         !$omp parallel do schedule(static, 1) default(shared) private(it) num_threads(nt)
         do it = 1, nt
             call block_task(it)

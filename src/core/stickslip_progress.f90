@@ -42,6 +42,8 @@ module stickslip_progress
         procedure :: report => progress_report
         !> A phase is done: print a line when it took at least min_phase.
         procedure :: phase => progress_phase
+        !> The same unit and pace for another loop, started now: `stage(label, items)`.
+        procedure :: stage => progress_stage
     end type progress_t
 
 contains
@@ -53,6 +55,22 @@ contains
         call system_clock(self%start)
         self%last = -1
     end subroutine progress_begin
+
+    !> A progress on the unit and with the pace of `self` for another loop (a stage of the
+    !> run: the harmonics of a condensation, the stability of a curve's points), labelled
+    !> `label`, counting `items`, its clock started now.
+    function progress_stage(self, label, items) result(p)
+        !> The host's progress.
+        class(progress_t), intent(in) :: self
+        !> What progresses and what is counted (e.g. 'stability', 'points').
+        character(len=*), intent(in) :: label, items
+        type(progress_t) :: p
+        p = self
+        p%label = label
+        p%items = items
+        p%lines = 0
+        call p%begin()
+    end function progress_stage
 
     !> `done` of `total` points are done (total <= 0: unknown); `text` describes the last
     !> one (e.g. 'omega = 2.35'). Prints `stickslip: <label> <done>/<total> points, <text>,

@@ -191,12 +191,7 @@ contains
             end if
         end if
         zlu%ordering = ordering_metis
-        if (present(progress)) then
-            hprog = progress
-            hprog%label = 'exact condensation'
-            hprog%items = 'harmonics'
-            call hprog%begin()
-        end if
+        if (present(progress)) hprog = progress%stage('exact condensation', 'harmonics')
         do ih = 1, basis%nharm
             h = basis%harm(ih)
             homega = h*smodel%model%omega

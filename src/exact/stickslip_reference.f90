@@ -148,8 +148,10 @@ module stickslip_reference
         !> error of a weighted-residual start changes little from one point to the next).
         real(dp), allocatable :: zorbit(:), zstart(:)
         !> The omega of that orbit, and the orbit and monodromy before it at the same
-        !> section (omega_before = 0: none): a secant through the two predicts the first
-        !> Jacobian and iterate to second order in the step.
+        !> section (omega_before = 0: none): the secant through the two monodromies is the
+        !> first Jacobian (a secant through the orbits as first iterate found another
+        !> periodic orbit next to an unstable one: the iterate stays zorbit moved by the
+        !> start's change).
         real(dp) :: omega = 0.0_dp, omega_before = 0.0_dp
         real(dp), allocatable :: mono_before(:, :), zorbit_before(:)
     end type reference_cache_t
@@ -776,7 +778,8 @@ contains
 
     !> The cache's flow for a shooting of `model` with contact velocity scales vref, retuned
     !> to model%omega (moved out of the cache: `flow` holds it and `reused` is true), when
-    !> it fits: the same numbers of DOFs, contacts and internal states, the same bracketing
+    !> it fits: the same numbers of DOFs and contacts (the same model, by the caller's
+    !> contract: only omega changes), the same bracketing
     !> steps and integration tolerance, omega within 10 % and every velocity scale within a
     !> factor 4 of those it was built for (its grid step and event scales stay fit), and
     !> only linear contact modes (retune_modes). Otherwise the cache is emptied.

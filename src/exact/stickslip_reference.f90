@@ -36,6 +36,9 @@ module stickslip_reference
     real(dp), parameter :: energy_warning = 1.0e-6_dp
     !> Energy balance error above which the orbit cannot be trusted.
     real(dp), parameter :: energy_untrusted = 1.0e-2_dp
+    !> Most samples of a light reference (solve_reference with light): a divisor of the
+    !> start's samples, so that the light samples are every stride-th of the start's.
+    integer, parameter :: light_samples = 128
     !> Relative margin of Coulomb's law |r| <= (1 + margin) mu N at the samples (the stuck
     !> force is solved to 1e-15; the margin is roundoff, not a truncation allowance).
     real(dp), parameter :: coulomb_margin = 1.0e-6_dp
@@ -258,7 +261,8 @@ contains
         !> Name of the start, reported in res%start and the diagnosis (default 'given').
         character(len=*), intent(in), optional :: start_name
         !> Only what a stability verdict needs (default .false.): the orbit, its monodromy
-        !> and its samples on the start's grid (t_k = k T / ns instead of opts%samples);
+        !> and its samples on the start's grid or every stride-th of them (t_k = k T / m,
+        !> m the largest divisor of ns up to 128, instead of opts%samples);
         !> no energy integrals and no checks of the converged orbit (res%diagnostics holds
         !> only a failure to converge).
         logical, intent(in), optional :: light
@@ -538,7 +542,17 @@ contains
             return
         end if
         nsamp = opts%samples
-        if (light) nsamp = ns
+        if (light) then
+            ! the start's grid, every stride-th sample of it: at most light_samples (what a
+            ! stability verdict compares with its start; sampling costs matrix products)
+            nsamp = ns
+            do k = 1, ns
+                if (mod(ns, k) == 0 .and. ns/k <= light_samples) then
+                    nsamp = ns/k
+                    exit
+                end if
+            end do
+        end if
         allocate (res%t(nsamp), res%x(nsamp, n), res%v(nsamp, n), &
                   res%r(nsamp, res%contacts%nchannel), res%state(nsamp, nc), &
                   res%s(nsamp, nstate))

@@ -267,8 +267,9 @@ contains
         !> multipliers are the same with or without it, to roundoff.
         type(reference_cache_t), intent(inout), optional :: cache
         type(reference_result_t) :: res
-        real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
+        real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :), xs(:, :), vs(:, :)
         real(dp) :: c0, c1, ampx, ampv, distance, ftol
+        integer :: stride
         character(len=200) :: buf
 
         c0 = thread_cpu_seconds()
@@ -312,27 +313,36 @@ contains
             error%message = "periodic_stability: "//error%message
             return
         end if
-        ! the same orbit? compare on the grid of the weighted-residual samples
-        if (size(res%x, 1) == size(sol%x, 1)) then
+        ! the same orbit? compare on the grid of the weighted-residual samples (a light
+        ! reference has every stride-th of them)
+        stride = 0
+        if (size(res%x, 1) > 0) then
+            if (mod(size(sol%x, 1), size(res%x, 1)) == 0) stride = size(sol%x, 1)/size(res%x, 1)
+        end if
+        if (stride > 0) then
+            xs = sol%x(1::stride, :)
+            vs = sol%v(1::stride, :)
             xr = res%x
             vr = res%v
         else
+            xs = sol%x
+            vs = sol%v
             call sample_reference(res, size(sol%x, 1), xr, vr, rr, error)
             if (allocated(error)) return
         end if
         ampx = max(maxval(abs(xr)), tiny(1.0_dp))
         ampv = max(maxval(abs(vr)), tiny(1.0_dp))
-        distance = max(maxval(abs(sol%x - xr))/ampx, maxval(abs(sol%v - vr))/ampv)
+        distance = max(maxval(abs(xs - xr))/ampx, maxval(abs(vs - vr))/ampv)
         if (allocated(sol%offset_undetermined)) then
             if (any(sol%offset_undetermined)) then
                 ! a contact stuck all period: the orbits of every admissible mean force are
                 ! periodic (the shooting may land on another one than the settled value);
                 ! they differ by a static offset and share their multipliers
-                distance = max(maxval(abs(sol%x - spread(sum(sol%x, 1)/size(sol%x, 1), 1, &
-                                                          size(sol%x, 1)) - &
+                distance = max(maxval(abs(xs - spread(sum(xs, 1)/size(xs, 1), 1, &
+                                                          size(xs, 1)) - &
                                           (xr - spread(sum(xr, 1)/size(xr, 1), 1, &
                                                        size(xr, 1)))))/ampx, &
-                               maxval(abs(sol%v - vr))/ampv)
+                               maxval(abs(vs - vr))/ampv)
             end if
         end if
         fl%distance = distance

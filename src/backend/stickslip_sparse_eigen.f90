@@ -184,23 +184,18 @@ contains
         integer, allocatable :: scol(:), srow(:)
         real(dp), allocatable :: sval(:)
         call self%release()
-        if (size(kcol) /= n + 1 .or. size(mcol) /= n + 1) then
+        if (size(kcol) /= n + 1) then
             call fatal_error(error, "sparse eigenproblem: K and M need n + 1 = "//itoa(n + 1) &
                              //" column pointers", stickslip_stat%input)
             return
         end if
-        if (kcol(n + 1) - 1 /= size(krow) .or. size(krow) /= size(kval) .or. &
-            mcol(n + 1) - 1 /= size(mrow) .or. size(mrow) /= size(mval) .or. &
-            kcol(1) /= 1 .or. mcol(1) /= 1) then
-            call fatal_error(error, "sparse eigenproblem: K or M: colptr, rowind and values " &
+        if (kcol(n + 1) - 1 /= size(krow) .or. size(krow) /= size(kval) .or. kcol(1) /= 1) then
+            call fatal_error(error, "sparse eigenproblem: K: colptr, rowind and values " &
                              //"disagree", stickslip_stat%input)
             return
         end if
-        if (any(mrow < 1) .or. any(mrow > n)) then
-            call fatal_error(error, "sparse eigenproblem: M has a row number outside 1.." &
-                             //itoa(n), stickslip_stat%input)
-            return
-        end if
+        call check_mass(n, mcol, mrow, mval, error)
+        if (allocated(error)) return
         call csc_combine(n, kcol, krow, kval, 1.0_dp, mcol, mrow, mval, -sigma, scol, srow, sval)
         ! Lanczos needs no iterative refinement of its solves (2.5x their cost)
         self%lu%refinement_steps = 0
@@ -209,11 +204,39 @@ contains
             error%message = "K - sigma M, sigma = "//real_text(sigma, '(es12.5)')//": "//error%message
             return
         end if
+        call keep_mass(self, mcol, mrow, mval, sigma)
+    end subroutine op_setup
+
+    !> Errors (input) of M's compressed sparse column arrays for order n: not n + 1 column
+    !> pointers, pointers, row numbers and values that disagree, a row outside 1..n.
+    subroutine check_mass(n, mcol, mrow, mval, error)
+        integer, intent(in) :: n, mcol(:), mrow(:)
+        real(dp), intent(in) :: mval(:)
+        type(error_type), allocatable, intent(out) :: error
+        if (size(mcol) /= n + 1) then
+            call fatal_error(error, "sparse eigenproblem: K and M need n + 1 = "//itoa(n + 1) &
+                             //" column pointers", stickslip_stat%input)
+        else if (mcol(n + 1) - 1 /= size(mrow) .or. size(mrow) /= size(mval) .or. &
+                 mcol(1) /= 1) then
+            call fatal_error(error, "sparse eigenproblem: M: colptr, rowind and values "// &
+                             "disagree", stickslip_stat%input)
+        else if (any(mrow < 1) .or. any(mrow > n)) then
+            call fatal_error(error, "sparse eigenproblem: M has a row number outside 1.." &
+                             //itoa(n), stickslip_stat%input)
+        end if
+    end subroutine check_mass
+
+    !> The shift and a copy of M, once the operator holds its factorization.
+    subroutine keep_mass(self, mcol, mrow, mval, sigma)
+        class(sparse_shift_invert_t), intent(inout) :: self
+        integer, intent(in) :: mcol(:), mrow(:)
+        real(dp), intent(in) :: mval(:)
+        real(dp), intent(in) :: sigma
         self%sigma = sigma
         self%mcol = mcol
         self%mrow = mrow
         self%mval = mval
-    end subroutine op_setup
+    end subroutine keep_mass
 
     !> Take over `lu`, a factorization of K - sigma M of order n made by the caller (it is
     !> left empty: give it back with `self%lu%move_to(lu)`), and keep a copy of M. Errors
@@ -238,22 +261,10 @@ contains
                              "one of order "//itoa(n), stickslip_stat%input)
             return
         end if
-        if (size(mcol) /= n + 1 .or. mcol(n + 1) - 1 /= size(mrow) .or. &
-            size(mrow) /= size(mval)) then
-            call fatal_error(error, "sparse eigenproblem: M: colptr, rowind and values "// &
-                             "disagree", stickslip_stat%input)
-            return
-        end if
-        if (any(mrow < 1) .or. any(mrow > n)) then
-            call fatal_error(error, "sparse eigenproblem: M has a row number outside 1.." &
-                             //itoa(n), stickslip_stat%input)
-            return
-        end if
+        call check_mass(n, mcol, mrow, mval, error)
+        if (allocated(error)) return
         call lu%move_to(self%lu)
-        self%sigma = sigma
-        self%mcol = mcol
-        self%mrow = mrow
-        self%mval = mval
+        call keep_mass(self, mcol, mrow, mval, sigma)
     end subroutine op_adopt
 
     !> y = (K - sigma M)^-1 x.

@@ -133,8 +133,6 @@ module stickslip_umfpack
         procedure :: analysed => zlu_analysed
         !> Free the numeric factorization only; the analysis stays for `refactorize`.
         procedure :: release_numeric => zlu_release_numeric
-        !> Hand the analysis and factorization to another object (nothing is copied).
-        procedure :: move_to => zlu_move_to
     end type sparse_zlu_t
 
     interface
@@ -732,32 +730,6 @@ contains
         self%numeric = c_null_ptr
         self%rcond = 0.0_dp
     end subroutine zlu_release_numeric
-
-    !> Hand the analysis and factorization of `self` to `other` (whose own are released
-    !> first); self is left empty. No UMFPACK object is copied.
-    subroutine zlu_move_to(self, other)
-        !> The factorization given away.
-        class(sparse_zlu_t), intent(inout) :: self
-        !> The object that takes it.
-        class(sparse_zlu_t), intent(inout) :: other
-        call other%release()
-        other%n = self%n
-        other%rcond = self%rcond
-        other%ordering = self%ordering
-        other%refinement_steps = self%refinement_steps
-        other%factor_entries = self%factor_entries
-        other%control = self%control
-        other%symbolic = self%symbolic
-        other%numeric = self%numeric
-        if (allocated(self%ap)) call move_alloc(self%ap, other%ap)
-        if (allocated(self%ai)) call move_alloc(self%ai, other%ai)
-        if (allocated(self%ax)) call move_alloc(self%ax, other%ax)
-        self%symbolic = c_null_ptr
-        self%numeric = c_null_ptr
-        self%n = 0
-        self%rcond = 0.0_dp
-        self%factor_entries = 0.0_dp
-    end subroutine zlu_move_to
 
     !> Whether a numeric factorization is held.
     logical function zlu_factorized(self)

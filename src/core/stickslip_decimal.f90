@@ -185,7 +185,7 @@ contains
         logical, intent(out) :: ok
         integer(int64) :: w
         integer :: p, d, digits, mantissa, q, e, c, n, start
-        logical :: negative, negative_exponent
+        logical :: negative, negative_exponent, run_ok
         x = 0.0_dp
         ok = .false.
         n = len(text)
@@ -201,32 +201,14 @@ contains
         digits = 0       ! significant digits in w
         mantissa = 0     ! mantissa digits seen
         q = 0
-        do while (p <= n)
-            d = iachar(text(p:p)) - 48
-            if (d < 0 .or. d > 9) exit
-            mantissa = mantissa + 1
-            if (w > 0 .or. d > 0) then
-                if (digits >= max_decimal_digits) return
-                w = 10*w + d
-                digits = digits + 1
-            end if
-            p = p + 1
-        end do
+        call digit_run(text, n, 0, p, w, digits, mantissa, q, run_ok)
+        if (.not. run_ok) return
         if (.not. integer_only .and. p <= n) then
             if (text(p:p) == '.') then
                 p = p + 1
-                do while (p <= n)
-                    d = iachar(text(p:p)) - 48
-                    if (d < 0 .or. d > 9) exit
-                    mantissa = mantissa + 1
-                    if (w > 0 .or. d > 0) then
-                        if (digits >= max_decimal_digits) return
-                        w = 10*w + d
-                        digits = digits + 1
-                    end if
-                    q = q - 1
-                    p = p + 1
-                end do
+                ! each fraction digit lowers the decimal exponent by one
+                call digit_run(text, n, -1, p, w, digits, mantissa, q, run_ok)
+                if (.not. run_ok) return
             end if
         end if
         if (mantissa == 0) return
@@ -273,6 +255,32 @@ contains
         pos = p
         ok = .true.
     end subroutine scan_decimal
+
+    !> The digits of text(p:n) from p on into w (leading zeros skipped, at most
+    !> max_decimal_digits significant ones: ok false beyond), counting them in mantissa and
+    !> adding dq to the decimal exponent q for each; p is left on the first non-digit.
+    pure subroutine digit_run(text, n, dq, p, w, digits, mantissa, q, ok)
+        character(len=*), intent(in) :: text
+        integer, intent(in) :: n, dq
+        integer, intent(inout) :: p, digits, mantissa, q
+        integer(int64), intent(inout) :: w
+        logical, intent(out) :: ok
+        integer :: d
+        ok = .false.
+        do while (p <= n)
+            d = iachar(text(p:p)) - 48
+            if (d < 0 .or. d > 9) exit
+            mantissa = mantissa + 1
+            if (w > 0 .or. d > 0) then
+                if (digits >= max_decimal_digits) return
+                w = 10*w + d
+                digits = digits + 1
+            end if
+            q = q + dq
+            p = p + 1
+        end do
+        ok = .true.
+    end subroutine digit_run
 
     !> The correctly rounded w (parts(0) + parts(1) + parts(2)) when the sum shows it (ok).
     pure subroutine round_product(w, parts, x, ok)

@@ -82,14 +82,16 @@ contains
         logical, intent(in), optional :: with_omega_derivative
         !> The analysis of Z_h's pattern from an earlier call for the same model (any omega),
         !> reused and updated (empty or of another order: analysed here and kept).
-        type(sparse_zlu_t), intent(inout), optional :: analysis
+        type(sparse_zlu_t), intent(inout), optional, target :: analysis
         !> Progress of the harmonics (the host's unit; label and items set here).
         type(progress_t), intent(in), optional :: progress
         type(progress_t) :: hprog
         logical :: reuse
         type(z_pattern_t) :: pat
         type(sparse_lu_t) :: klu
-        type(sparse_zlu_t) :: zlu
+        type(sparse_zlu_t), target :: own
+        !> The factorization worked on: the caller's analysis, or this call's own.
+        type(sparse_zlu_t), pointer :: zlu
         real(dp), allocatable :: w(:, :), rrhs(:, :), rsol(:, :)
         complex(dp), allocatable :: rhs(:, :), xs(:, :), cx(:, :), z(:), dx(:, :), mx(:, :)
         logical :: deriv
@@ -184,11 +186,10 @@ contains
 
         allocate (rhs(n, nc + 1), xs(n, nc + 1), z(size(pat%k)))
         reuse = .false.
+        zlu => own
         if (present(analysis)) then
-            if (analysis%analysed() .and. analysis%n == n) then
-                call analysis%move_to(zlu)
-                reuse = .true.
-            end if
+            zlu => analysis
+            reuse = analysis%analysed() .and. analysis%n == n
         end if
         zlu%ordering = ordering_metis
         if (present(progress)) hprog = progress%stage('exact condensation', 'harmonics')
@@ -278,7 +279,6 @@ contains
         if (present(analysis)) then
             ! the factors go, the ordering stays for the next frequency
             call zlu%release_numeric()
-            call zlu%move_to(analysis)
         else
             call zlu%release()
         end if

@@ -42,6 +42,7 @@ program tester
     use test_case_messages, only: run_case_messages_tests
     use test_fuzz, only: run_fuzz_tests
     use test_umfpack, only: run_umfpack_tests
+    use test_cholmod, only: run_cholmod_tests
     use test_reduction, only: run_reduction_tests
     use test_reduction_estimate, only: run_reduction_estimate_tests
     use test_reduction_cache, only: run_reduction_cache_tests
@@ -122,6 +123,7 @@ program tester
         suite_t("trust", run_trust_tests),&
         suite_t("fuzz", run_fuzz_tests),&
         suite_t("umfpack", run_umfpack_tests),&
+        suite_t("cholmod", run_cholmod_tests),&
         suite_t("reduction", run_reduction_tests),&
         suite_t("reduction_estimate", run_reduction_estimate_tests),&
         suite_t("reduction_cache", run_reduction_cache_tests),&

@@ -1,5 +1,6 @@
 !> Eigenpairs of sparse K phi = lambda M phi: the shift-invert operator of stickslip_arpack
-!> realized with a sparse LU of K - sigma M (stickslip_umfpack), plus the two compressed
+!> realized with a sparse factorization of K - sigma M (an LU, stickslip_umfpack, or one the
+!> caller made, e.g. a Cholesky of K), plus the two compressed
 !> sparse column helpers it needs (alpha A + beta B on the union pattern, y = A x), and
 !> `sparse_eigenpairs_below`: every eigenpair below a limit in one Lanczos pass on one
 !> factorization (the count estimated from a first run of 20; the next run asks only for the
@@ -20,6 +21,7 @@ module stickslip_sparse_eigen
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_umfpack, only: sparse_lu_t
+    use stickslip_sparse_factor, only: sparse_factor_t
     use stickslip_arpack, only: shift_invert_operator_t, eigen_options_t, eigen_report_t, &
         smallest_eigenpairs
     implicit none
@@ -53,8 +55,8 @@ module stickslip_sparse_eigen
     type, extends(shift_invert_operator_t) :: sparse_shift_invert_t
         !> The shift sigma the LU was made at.
         real(dp) :: sigma = 0.0_dp
-        !> The sparse LU of K - sigma M.
-        type(sparse_lu_t) :: lu
+        !> The factorization of K - sigma M (a sparse LU when made here).
+        class(sparse_factor_t), allocatable :: fac
         integer, allocatable, private :: mcol(:), mrow(:)
         real(dp), allocatable, private :: mval(:)
         !> Known eigenvectors X (n x k, M-orthonormal) and M X: when allocated, every solve
@@ -198,8 +200,12 @@ contains
         if (allocated(error)) return
         call csc_combine(n, kcol, krow, kval, 1.0_dp, mcol, mrow, mval, -sigma, scol, srow, sval)
         ! Lanczos needs no iterative refinement of its solves (2.5x their cost)
-        self%lu%refinement_steps = 0
-        call self%lu%factorize(n, scol, srow, sval, error)
+        if (.not. allocated(self%fac)) allocate (sparse_lu_t :: self%fac)
+        select type (f => self%fac)
+        type is (sparse_lu_t)
+            f%refinement_steps = 0
+        end select
+        call self%fac%factorize(n, scol, srow, sval, error)
         if (allocated(error)) then
             error%message = "K - sigma M, sigma = "//real_text(sigma, '(es12.5)')//": "//error%message
             return
@@ -239,13 +245,13 @@ contains
     end subroutine keep_mass
 
     !> Take over `lu`, a factorization of K - sigma M of order n made by the caller (it is
-    !> left empty: give it back with `self%lu%move_to(lu)`), and keep a copy of M. Errors
-    !> (input): `lu` holds no factorization of order n, M's arrays disagree.
+    !> left unallocated: give it back with `move_alloc(self%fac, lu)`), and keep a copy of
+    !> M. Errors (input): `lu` holds no factorization of order n, M's arrays disagree.
     subroutine op_adopt(self, lu, n, mcol, mrow, mval, sigma, error)
         !> The operator.
         class(sparse_shift_invert_t), intent(inout) :: self
         !> The factorization of K - sigma M (moved into the operator).
-        type(sparse_lu_t), intent(inout) :: lu
+        class(sparse_factor_t), allocatable, intent(inout) :: lu
         !> Order of K and M.
         integer, intent(in) :: n
         !> M: column pointers, row numbers, values.
@@ -256,6 +262,11 @@ contains
         !> Error (last).
         type(error_type), allocatable, intent(out) :: error
         call self%release()
+        if (.not. allocated(lu)) then
+            call fatal_error(error, "sparse eigenproblem: no factorization given", &
+                             stickslip_stat%input)
+            return
+        end if
         if (.not. lu%factorized() .or. lu%n /= n) then
             call fatal_error(error, "sparse eigenproblem: the factorization given is not "// &
                              "one of order "//itoa(n), stickslip_stat%input)
@@ -263,7 +274,8 @@ contains
         end if
         call check_mass(n, mcol, mrow, mval, error)
         if (allocated(error)) return
-        call lu%move_to(self%lu)
+        if (allocated(self%fac)) deallocate (self%fac)
+        call move_alloc(lu, self%fac)
         call keep_mass(self, mcol, mrow, mval, sigma)
     end subroutine op_adopt
 
@@ -278,7 +290,7 @@ contains
         !> Set to 1 if the solve fails.
         integer, intent(inout) :: stat
         type(error_type), allocatable :: error
-        call self%lu%solve(x, y, error)
+        call self%fac%solve(x, y, error)
         if (allocated(error)) stat = 1
         if (allocated(self%deflate)) then
             if (size(self%deflate, 2) > 0) y = y - matmul(self%deflate, matmul(y, self%mdeflate))
@@ -318,7 +330,7 @@ contains
     subroutine op_release(self)
         !> The operator.
         class(sparse_shift_invert_t), intent(inout) :: self
-        call self%lu%release()
+        if (allocated(self%fac)) call self%fac%release()
         if (allocated(self%mcol)) deallocate (self%mcol)
         if (allocated(self%mrow)) deallocate (self%mrow)
         if (allocated(self%mval)) deallocate (self%mval)
@@ -356,19 +368,16 @@ contains
         type(eigen_report_t), intent(out) :: report
         !> Error (last).
         type(error_type), allocatable, intent(out) :: error
-        !> A factorization of K - sigma M to use (kept by the caller), or an empty one to
-        !> receive the factorization made here.
-        type(sparse_lu_t), intent(inout), optional :: factorization
+        !> A factorization of K - sigma M to use (kept by the caller), or an unallocated or
+        !> empty one to receive the factorization made here.
+        class(sparse_factor_t), allocatable, intent(inout), optional :: factorization
         type(sparse_shift_invert_t) :: op
-        integer :: refinement, made
+        integer :: made
         call shift_invert_operator(op, n, kcol, krow, kval, mcol, mrow, mval, sigma, &
-                                   refinement, made, error, factorization)
+                                   made, error, factorization)
         if (allocated(error)) return
         call smallest_eigenpairs(op, n, nev, sigma, opts, values, vectors, report, error)
-        if (present(factorization)) then
-            call op%lu%move_to(factorization)
-            factorization%refinement_steps = refinement
-        end if
+        if (present(factorization)) call move_alloc(op%fac, factorization)
         call op%release()
     end subroutine sparse_eigenpairs
 
@@ -383,11 +392,10 @@ contains
     !> run (Weyl's law: p = d/2 for a d-dimensional continuum, 1/4 for beam bending; p is
     !> fitted, not assumed), and one run asks for that many with a margin (repeated with a
     !> new estimate if it fell short). Errors as `sparse_eigenpairs`; max_count < 1 (input).
-    !> With `factorization` (a sparse LU of K - sigma M, e.g. the one a Craig-Bampton
-    !> reduction made of K_ii for its constraint modes) no factorization is made, and the
-    !> caller keeps it on return; given empty, the one made here (with its ordering) is
-    !> returned in it. Its solves run without iterative refinement during the runs (its
-    !> refinement_steps are restored on return).
+    !> With `factorization` (a factorization of K - sigma M, e.g. the Cholesky of K_ii a
+    !> Craig-Bampton reduction made for its constraint modes) no factorization is made, and
+    !> the caller keeps it on return; given unallocated or empty, the one made here (an LU,
+    !> or the empty object's kind with its options) is returned in it.
     subroutine sparse_eigenpairs_below(n, kcol, krow, kval, mcol, mrow, mval, lambda_max, &
                                        max_count, sigma, opts, values, vectors, report, error, &
                                        stop_above, factorization)
@@ -419,20 +427,20 @@ contains
         !> max_count (report%estimated, report%capped), instead of computing max_count
         !> eigenpairs that cannot all be kept anyway.
         logical, intent(in), optional :: stop_above
-        !> A factorization of K - sigma M to use (kept by the caller), or an empty one to
-        !> receive the factorization made here.
-        type(sparse_lu_t), intent(inout), optional :: factorization
+        !> A factorization of K - sigma M to use (kept by the caller), or an unallocated or
+        !> empty one to receive the factorization made here.
+        class(sparse_factor_t), allocatable, intent(inout), optional :: factorization
         type(sparse_shift_invert_t) :: op
         type(eigen_report_t) :: rep
         type(eigen_options_t) :: o
-        integer :: nev, cap, refinement
+        integer :: nev, cap
         if (max_count < 1 .or. .not. (lambda_max == lambda_max)) then
             call fatal_error(error, "eigenpairs below a limit: max_count = "//itoa(max_count) &
                              //" must be >= 1 and lambda_max a number", stickslip_stat%input)
             return
         end if
         call shift_invert_operator(op, n, kcol, krow, kval, mcol, mrow, mval, sigma, &
-                                   refinement, report%factorizations, error, factorization)
+                                   report%factorizations, error, factorization)
         if (allocated(error)) return
         cap = min(max_count, n - 1)
         nev = min(first_batch, cap)
@@ -514,10 +522,7 @@ contains
 
         !> The factorization back to the caller (when one was given), the operator freed.
         subroutine give_back()
-            if (present(factorization)) then
-                call op%lu%move_to(factorization)
-                factorization%refinement_steps = refinement
-            end if
+            if (present(factorization)) call move_alloc(op%fac, factorization)
             call op%release()
         end subroutine give_back
     end subroutine sparse_eigenpairs_below
@@ -541,35 +546,33 @@ contains
         nev = int(min(1.15_dp*m*exp(min(p*log(max(limit, hi)/hi), 40.0_dp)) + 9.0_dp, 1.0e9_dp))
     end function estimated_count
     !> The shift-invert operator (K - sigma M)^-1 M of the two Lanczos drivers: adopting a
-    !> given factorization (no refinement steps: the caller's LU is trusted as it is), or
-    !> factorizing here (with the ordering an empty `factorization` asks for). `refinement`
-    !> returns the refinement steps to give back with the factorization, `made` 1 when a
-    !> factorization was made here (else 0). Errors as op%setup and op%adopt.
+    !> given factorization (used as it is), or factorizing here (into the empty
+    !> `factorization` object when one is given: its kind and options; a sparse LU without
+    !> iterative refinement otherwise). `made` returns 1 when a factorization was made here
+    !> (else 0). Errors as op%setup and op%adopt.
     subroutine shift_invert_operator(op, n, kcol, krow, kval, mcol, mrow, mval, sigma, &
-                                     refinement, made, error, factorization)
+                                     made, error, factorization)
         !> The operator set up.
         type(sparse_shift_invert_t), intent(inout) :: op
         !> Order, K and M (CSC, 1-based, both triangles), the shift.
         integer, intent(in) :: n, kcol(:), krow(:), mcol(:), mrow(:)
         real(dp), intent(in) :: kval(:), mval(:), sigma
-        !> Refinement steps of the caller's factorization (2 without one); factorizations
-        !> made here.
-        integer, intent(out) :: refinement, made
+        !> Factorizations made here.
+        integer, intent(out) :: made
         !> Error (last but one).
         type(error_type), allocatable, intent(out) :: error
-        !> A factorization to adopt, or an empty one whose ordering is used.
-        type(sparse_lu_t), intent(inout), optional :: factorization
-        refinement = 2
+        !> A factorization to adopt, or an empty one to factorize into.
+        class(sparse_factor_t), allocatable, intent(inout), optional :: factorization
         made = 1
         if (present(factorization)) then
-            refinement = factorization%refinement_steps
-            if (factorization%factorized()) then
-                call op%adopt(factorization, n, mcol, mrow, mval, sigma, error)
-                op%lu%refinement_steps = 0
-                made = 0
-                return
+            if (allocated(factorization)) then
+                if (factorization%factorized()) then
+                    call op%adopt(factorization, n, mcol, mrow, mval, sigma, error)
+                    made = 0
+                    return
+                end if
+                call move_alloc(factorization, op%fac)
             end if
-            op%lu%ordering = factorization%ordering
         end if
         call op%setup(n, kcol, krow, kval, mcol, mrow, mval, sigma, error)
     end subroutine shift_invert_operator

@@ -40,6 +40,7 @@ module stickslip_umfpack
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_sparse_factor, only: sparse_factor_t, check_pattern
     implicit none
     private
     public :: sparse_lu_t, sparse_zlu_t, umfpack_status_text
@@ -62,10 +63,9 @@ module stickslip_umfpack
     integer(c_long), parameter :: umfpack_ok = 0_c_long, &
                                   warning_singular = 1_c_long
 
-    !> Sparse LU factorization of a real square matrix (UMFPACK, umfpack_dl_*).
-    type :: sparse_lu_t
-        !> Order of the matrix (0: nothing factorized).
-        integer :: n = 0
+    !> Sparse LU factorization of a real square matrix (UMFPACK, umfpack_dl_*); n and
+    !> factor_entries (entries of L and U) come from sparse_factor_t.
+    type, extends(sparse_factor_t) :: sparse_lu_t
         !> UMFPACK's estimate of the reciprocal condition number, min|U_ii| / max|U_ii| of the
         !> scaled factors (a cheap, rough indicator; relative to the matrix's own scale).
         real(dp) :: rcond = 0.0_dp
@@ -74,8 +74,6 @@ module stickslip_umfpack
         integer :: ordering = ordering_amd
         !> Most iterative refinement steps of a solve (0: none; UMFPACK's default 2).
         integer :: refinement_steps = 2
-        !> Entries of the factors L and U of the last factorization.
-        real(dp) :: factor_entries = 0.0_dp
         integer(c_long), allocatable, private :: ap(:), ai(:)
         real(c_double), allocatable, private :: ax(:)
         real(c_double), private :: control(n_control) = 0.0_c_double
@@ -87,13 +85,15 @@ module stickslip_umfpack
         !> Factorize new values on the pattern of the last `factorize` (the ordering and
         !> symbolic analysis are reused): `refactorize(values, error)`.
         procedure :: refactorize => lu_refactorize
-        procedure, private :: lu_solve_one, lu_solve_many
-        !> Solve A x = b for one (`b(:)`) or several (`b(:, :)`) right-hand sides.
-        generic :: solve => lu_solve_one, lu_solve_many
+        !> Solve A x = b (`solve(b, x, error)`, b(:) or b(:, :)).
+        procedure :: solve_one => lu_solve_one
+        procedure :: solve_many => lu_solve_many
         !> Free the UMFPACK objects and the stored matrix (safe to call twice).
         procedure :: release => lu_release
         !> Whether a factorization is held.
         procedure :: factorized => lu_factorized
+        !> 'LU'.
+        procedure :: name => lu_name
         !> Hand the factorization and options over to another object (`move_to(other)`),
         !> leaving this one empty.
         procedure :: move_to => lu_move_to
@@ -309,62 +309,6 @@ contains
         text = text//" (UMFPACK status "//itoa(status)//")"
     end function umfpack_status_text
 
-    !> Check a 1-based compressed sparse column pattern of an n x n matrix with nvalues values.
-    subroutine check_pattern(who, n, colptr, rowind, nvalues, error)
-        character(len=*), intent(in) :: who
-        integer, intent(in) :: n
-        integer, intent(in) :: colptr(:), rowind(:)
-        integer, intent(in) :: nvalues
-        type(error_type), allocatable, intent(out) :: error
-        integer :: j, k
-        if (n < 1) then
-            call fatal_error(error, who//": n = "//itoa(n)//": must be >= 1", stickslip_stat%input)
-            return
-        end if
-        if (size(colptr) /= n + 1) then
-            call fatal_error(error, who//": size(colptr) = "//itoa(size(colptr))//": must be n + 1 = " &
-                             //itoa(n + 1), stickslip_stat%input)
-            return
-        end if
-        if (colptr(1) /= 1) then
-            call fatal_error(error, who//": colptr(1) = "//itoa(colptr(1))//": must be 1 (1-based " &
-                             //"compressed sparse column)", stickslip_stat%input)
-            return
-        end if
-        do j = 1, n
-            if (colptr(j + 1) < colptr(j)) then
-                call fatal_error(error, who//": colptr("//itoa(j + 1)//") < colptr("//itoa(j) &
-                                 //"): column pointers must not decrease", stickslip_stat%input)
-                return
-            end if
-        end do
-        if (colptr(n + 1) - 1 /= size(rowind) .or. size(rowind) /= nvalues) then
-            call fatal_error(error, who//": colptr(n+1) - 1 = "//itoa(colptr(n + 1) - 1) &
-                             //", size(rowind) = "//itoa(size(rowind))//", size(values) = " &
-                             //itoa(nvalues)//": must agree", stickslip_stat%input)
-            return
-        end if
-        do j = 1, n
-            do k = colptr(j), colptr(j + 1) - 1
-                if (rowind(k) < 1 .or. rowind(k) > n) then
-                    call fatal_error(error, who//": rowind("//itoa(k)//") = "//itoa(rowind(k)) &
-                                     //" in column "//itoa(j)//": must be in 1.."//itoa(n), &
-                                     stickslip_stat%input)
-                    return
-                end if
-                if (k > colptr(j)) then
-                    if (rowind(k) <= rowind(k - 1)) then
-                        call fatal_error(error, who//": column "//itoa(j)//": row numbers must be " &
-                                         //"strictly ascending (rowind("//itoa(k)//") = " &
-                                         //itoa(rowind(k))//" after "//itoa(rowind(k - 1))//")", &
-                                         stickslip_stat%input)
-                        return
-                    end if
-                end if
-            end do
-        end do
-    end subroutine check_pattern
-
     !> The first non-finite entry of a value array (0 if none).
     pure integer function first_nonfinite(re, im) result(k)
         real(dp), intent(in) :: re(:), im(:)
@@ -509,7 +453,7 @@ contains
             return
         end if
         do j = 1, size(b, 2)
-            call self%lu_solve_one(b(:, j), x(:, j), error)
+            call self%solve_one(b(:, j), x(:, j), error)
             if (allocated(error)) return
         end do
     end subroutine lu_solve_many
@@ -535,6 +479,14 @@ contains
         class(sparse_lu_t), intent(in) :: self
         lu_factorized = c_associated(self%numeric)
     end function lu_factorized
+
+    !> 'LU', for reports.
+    function lu_name(self) result(text)
+        !> The factorization.
+        class(sparse_lu_t), intent(in) :: self
+        character(len=:), allocatable :: text
+        text = 'LU'
+    end function lu_name
 
     !> Hand the factorization (UMFPACK handles, the stored matrix) and the options over to
     !> `other` (whose own factorization is released first); `self` is left empty, with its

@@ -15,7 +15,8 @@
 module stickslip_sweep
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
-    use stickslip_thread_clock, only: thread_cpu_seconds
+    use stickslip_thread_clock, only: thread_cpu_seconds, thread_nap
+    !$ use omp_lib, only: omp_get_thread_num
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, validate_model
@@ -36,7 +37,7 @@ module stickslip_sweep
         reason_text
     use stickslip_friction_family, only: friction_family_t, new_friction_family, &
         dynamics_cache_size
-    use stickslip_sweep_point, only: point_tally_t, evaluate_point, stability_stage
+    use stickslip_sweep_point, only: point_tally_t, evaluate_point, stability_block
     use stickslip_blas_threads, only: parallel_threads
     use stickslip_sweep_retrace, only: fold_watch_t, new_fold_watch
     implicit none
@@ -107,6 +108,18 @@ contains
         type(reference_cache_t) :: rcache
         type(diagnostics_t) :: held
         integer :: k
+        ! the stability beside the curve (defer): the curve's model and options as they
+        ! were at the start, the points taken from the front and from the back so far, the
+        ! count done, their CPU time and error, whether the curve is traced
+        type(model_t) :: base_model
+        type(hbm_options_t) :: base_opts
+        integer :: front, back, stage_done
+        real(dp) :: stage_seconds
+        type(error_type), allocatable :: stage_error
+        type(progress_t) :: stage_progress
+        logical :: curve_done
+        !> Points a thread takes at a time for their stability.
+        integer, parameter :: stage_chunk = 8
 
         c0 = thread_cpu_seconds()
         if (present(sparse)) then
@@ -127,8 +140,8 @@ contains
         call validate_sweep_options(model, opts, error)
         if (allocated(error)) return
         co = continuation_options_of(opts)
-        ! with several threads the stability of the points runs once the curve is traced,
-        ! on every thread (stability_stage); with one, point by point as they come
+        ! with several threads the stability of the points runs on the other threads while
+        ! the curve is traced (stability_worker); with one, point by point as they come
         nthreads = parallel_threads()
         defer = opts%stability .and. nthreads > 1 .and. .not. present(sparse)
         nc = model%ncontact()
@@ -175,6 +188,15 @@ contains
         end if
         if (allocated(error)) return
         if (present(progress)) fam%progress = progress
+        front = 1
+        back = 0
+        curve_done = .false.
+        stage_done = 0
+        stage_seconds = 0.0_dp
+        if (defer) then
+            base_model = fam%model
+            base_opts = fam%opts
+        end if
         nb = fam%prob%basis%nb
         co%tol = hbm%tol
         co%fscale = max(fam%prob%rho*force_scale(fam%model), tiny(1.0_dp))
@@ -256,39 +278,30 @@ contains
 
         ! folds, and turns back that retrace the curve: stickslip_sweep_retrace
         call new_fold_watch(watch, opts%start, opts%stop)
-        do while (res%state%reason == reason_running)
-            state_before = res%state
-            call continuation_step(fam, co, res%state, rep, error)
-            if (allocated(error)) exit
-            if (rep%accepted) then
-                call watch%accepted(state_before, res)
-                if (rep%recovered) then
-                    call add_point("recovered")
-                else if (res%state%reason == reason_end) then
-                    call add_point("end")
-                else if (rep%halvings > 0) then
-                    call add_point("halved")
-                else
-                    call add_point("ok")
-                end if
-                if (allocated(error)) exit
-                call watch%check_retrace(res, co%max_step, opts%parameter)
-            end if
-            if (res%state%reason /= reason_running) then
-                if (len(rep%message) > 0) res%diagnosis = rep%message
-            end if
-        end do
-        if (defer .and. .not. allocated(error)) then
-            ! the stability of every point, on the cores, once the curve is traced
-            block
-                real(dp) :: before
-                before = res%stability_seconds
-                call stability_stage(fam, opts, ref, res%points(1:res%npoints), nthreads, &
-                                     res%stability_seconds, error, progress)
-                ! the sweep's CPU time counts its stability, on whichever thread it ran
-                res%seconds = res%seconds + (res%stability_seconds - before)
-            end block
+        if (defer) then
+            ! the stability of the points on the other threads while this one traces the
+            ! curve, each thread taking the next chunk of points in order and carrying its
+            ! reference cache from one chunk to the next; once the curve is traced this
+            ! thread takes chunks from the end of the curve backwards, until all are done
+            ! (the master thread traces: its CPU clock is the one c0 was read from)
+            if (present(progress)) stage_progress = progress%stage('stability', 'points')
+            !$omp parallel num_threads(nthreads) default(shared)
+            !$omp master
+            call trace()
+            !$omp critical (sweep_points)
+            curve_done = .true.
+            !$omp end critical (sweep_points)
+            !$omp end master
+            call stability_worker()
+            !$omp end parallel
+            res%stability_seconds = res%stability_seconds + stage_seconds
+            ! the sweep's CPU time counts its stability, on whichever thread it ran
+            res%seconds = res%seconds + stage_seconds
+            if (allocated(stage_error) .and. .not. allocated(error)) &
+                call move_alloc(stage_error, error)
             if (.not. allocated(error) .and. present(observer)) call observer%observe(res, error)
+        else
+            call trace()
         end if
         call release_family()
         res%factorizations = fam%factorizations
@@ -311,6 +324,107 @@ contains
         end if
 
     contains
+
+        !> The continuation from the current state to the end of the range (or a stop).
+        subroutine trace()
+            do while (res%state%reason == reason_running)
+                state_before = res%state
+                call continuation_step(fam, co, res%state, rep, error)
+                if (allocated(error)) exit
+                if (rep%accepted) then
+                    call watch%accepted(state_before, res)
+                    if (rep%recovered) then
+                        call add_point("recovered")
+                    else if (res%state%reason == reason_end) then
+                        call add_point("end")
+                    else if (rep%halvings > 0) then
+                        call add_point("halved")
+                    else
+                        call add_point("ok")
+                    end if
+                    if (allocated(error)) exit
+                    !$omp critical (sweep_points)
+                    call watch%check_retrace(res, co%max_step, opts%parameter)
+                    !$omp end critical (sweep_points)
+                end if
+                if (res%state%reason /= reason_running) then
+                    if (len(rep%message) > 0) res%diagnosis = rep%message
+                end if
+            end do
+        end subroutine trace
+
+        !> The stability of the curve's points, chunk by chunk (stage_chunk points taken in
+        !> order, from the front while the curve is traced, from the back by the thread
+        !> that traced it), on copies (the curve goes on meanwhile), the verdicts written
+        !> back; returns when no point is left (or after an error).
+        subroutine stability_worker()
+            type(reference_cache_t) :: cache
+            type(frc_point_t), allocatable :: copy(:)
+            type(error_type), allocatable :: task_error
+            real(dp) :: seconds
+            integer :: lo, hi, j
+            logical :: finished, backward
+            do
+                lo = 0
+                hi = -1
+                !$omp critical (sweep_points)
+                finished = allocated(stage_error) .or. &
+                           (curve_done .and. (front > res%npoints - back .or. allocated(error)))
+                backward = curve_done .and. traced_here()
+                if (.not. finished) then
+                    if (backward) then
+                        hi = res%npoints - back
+                        lo = max(front, hi - stage_chunk + 1)
+                        back = back + (hi - lo + 1)
+                    else if (front + stage_chunk - 1 <= res%npoints - back .or. &
+                             (curve_done .and. front <= res%npoints - back)) then
+                        lo = front
+                        hi = min(front + stage_chunk - 1, res%npoints - back)
+                        front = hi + 1
+                    end if
+                end if
+                if (hi >= lo) copy = res%points(lo:hi)
+                !$omp end critical (sweep_points)
+                if (finished) exit
+                if (hi < lo) then
+                    ! the curve has not reached the next chunk yet
+                    call thread_nap(0.01_dp)
+                    cycle
+                end if
+                seconds = 0.0_dp
+                call stability_block(base_model, base_opts, amplitude0, opts, ref, copy, &
+                                     seconds, task_error, stage_point_done, cache)
+                !$omp critical (sweep_points)
+                do j = lo, hi
+                    res%points(j)%stable = copy(j - lo + 1)%stable
+                    res%points(j)%floquet_max = copy(j - lo + 1)%floquet_max
+                end do
+                stage_seconds = stage_seconds + seconds
+                if (allocated(task_error) .and. .not. allocated(stage_error)) &
+                    call move_alloc(task_error, stage_error)
+                !$omp end critical (sweep_points)
+            end do
+        end subroutine stability_worker
+
+        !> Whether the calling thread is the one that traced the curve (OpenMP's master).
+        logical function traced_here()
+            traced_here = .true.
+            !$ traced_here = omp_get_thread_num() == 0
+        end function traced_here
+
+        !> One more point's stability done: counted, reported.
+        subroutine stage_point_done(pt)
+            type(frc_point_t), intent(in) :: pt
+            character(len=40) :: text
+            !$omp critical (sweep_progress)
+            stage_done = stage_done + 1
+            if (present(progress)) then
+                write (text, '(g0.6)') pt%parameter
+                call stage_progress%report(stage_done, 0, trim(opts%parameter)//" = "// &
+                                           trim(adjustl(text)))
+            end if
+            !$omp end critical (sweep_progress)
+        end subroutine stage_point_done
 
         !> Free what the family holds beyond Fortran's reach (the sparse analysis).
         subroutine release_family()
@@ -353,6 +467,7 @@ contains
             call evaluate_point(fam, opts, ref, res%state, status, rep%nfev, pt, tally, &
                                 res%stability_seconds, error, rcache, defer_stability=defer)
             if (allocated(error)) return
+            !$omp critical (sweep_points)
             if (res%npoints == size(res%points)) then
                 allocate (grown(2*res%npoints))
                 grown(1:res%npoints) = res%points(1:res%npoints)
@@ -364,6 +479,7 @@ contains
             res%seconds = res%seconds + (c1 - c0)
             c0 = c1
             if (present(observer)) call observer%observe(res, error)
+            !$omp end critical (sweep_points)
             if (present(progress)) then
                 write (buf, '(g0.6)') res%state%lambda
                 call progress%report(res%npoints, 0, trim(opts%parameter)//" = "// &

@@ -21,11 +21,10 @@ module stickslip_sweep_point
     use stickslip_sweep_result, only: frc_point_t
     use stickslip_friction_family, only: friction_family_t
     use stickslip_contact_set, only: channel_directions
-    use stickslip_progress, only: progress_t
     implicit none
     private
     public :: point_tally_t, evaluate_point, keep_coefficients, contact_point_values
-    public :: stability_stage
+    public :: stability_block
 
     !> Which checks the points of a curve failed: per diagnostics key, how many points, the
     !> worst level and the parameter of the first (sweep_result_t%diagnostics gets one
@@ -43,6 +42,14 @@ module stickslip_sweep_point
         procedure :: add_point => tally_add_point
         procedure :: report => tally_report
     end type point_tally_t
+
+    abstract interface
+        !> Told that the stability of `pt` is done.
+        subroutine point_done_interface(pt)
+            import :: frc_point_t
+            type(frc_point_t), intent(in) :: pt
+        end subroutine point_done_interface
+    end interface
 
 contains
 
@@ -105,7 +112,7 @@ contains
         !> What the stability of the previous point left (a sweep in omega only: the
         !> contact modes are those of the same model at a nearby omega).
         type(reference_cache_t), intent(inout), optional :: cache
-        !> Leave the stability to stability_stage (pt%stable = -1, floquet_max NaN).
+        !> Leave the stability to stability_block (pt%stable = -1, floquet_max NaN).
         logical, intent(in), optional :: defer_stability
         logical :: defer
         type(truncation_t) :: est
@@ -210,103 +217,70 @@ contains
         end if
     end subroutine stability_from
 
-    !> The Floquet stability of the `points` of a curve of the dense family `fam` that have
-    !> no verdict (stable = -1: left by evaluate_point's defer_stability, or 'unknown' in a
-    !> resumed checkpoint), on `nthreads` OpenMP threads once the curve is traced: each
-    !> thread takes a contiguous block of points and carries its reference_cache_t from one
-    !> to the next (a sweep in omega); each point is solved again from its kept force
-    !> coefficients (converged already: one evaluation) for the samples the shooting starts
-    !> from. `stability_seconds` grows by the threads' CPU time; `progress` (its unit)
-    !> gets 'stickslip: stability k/n points' lines from the first thread. Errors: those of
-    !> the solve and of periodic_stability (the first thread's that failed).
-    subroutine stability_stage(fam, opts, ref, points, nthreads, stability_seconds, error, &
-                               progress)
-        !> The family of the curve (read only).
-        type(friction_family_t), intent(in) :: fam
+    !> The Floquet stability of the `points` (of a curve of the dense family whose model,
+    !> options and start amplitudes are `base`, `hopts`, `amplitude0`) that have no
+    !> verdict (stable = -1), in order, on the calling thread with one reference_cache_t
+    !> carried from one point to the next (a sweep in omega): each point is solved again
+    !> from its kept force coefficients (converged already: one evaluation) for the samples
+    !> the shooting starts from. `seconds` grows by the CPU time of the solves and the
+    !> stability; `done` (optional) is called after each point; `cache` (optional) carries
+    !> the reference cache from the caller's previous block. Errors: those of the solve
+    !> and of periodic_stability (the block stops at the first).
+    subroutine stability_block(base, hopts, amplitude0, opts, ref, points, seconds, error, &
+                               done, cache)
+        !> The curve's model (its parameter is set to each point's), the family's hbm
+        !> options and the forcing amplitudes at the start (fam%model, fam%opts,
+        !> fam%amplitude0: copies, so that the curve may go on while blocks run).
+        type(model_t), intent(in) :: base
+        type(hbm_options_t), intent(in) :: hopts
+        real(dp), intent(in) :: amplitude0(:)
         !> Sweep options.
         type(sweep_options_t), intent(in) :: opts
         !> Options of the exact reference.
         type(reference_options_t), intent(in) :: ref
-        !> The curve's points, their stability filled.
+        !> The points, their stability filled.
         type(frc_point_t), intent(inout) :: points(:)
-        !> Threads to use (>= 1).
-        integer, intent(in) :: nthreads
-        !> CPU seconds of the stability so far [s].
-        real(dp), intent(inout) :: stability_seconds
+        !> CPU seconds [s], increased.
+        real(dp), intent(inout) :: seconds
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        !> Progress of the stage (the host's unit).
-        type(progress_t), intent(in), optional :: progress
-        type :: task_t
-            type(error_type), allocatable :: error
-            real(dp) :: seconds = 0.0_dp
-        end type task_t
-        type(task_t), allocatable :: tasks(:)
-        type(progress_t) :: sp
-        integer, allocatable :: todo(:)
-        integer :: nt, it, k, done
-        todo = pack([(k, k=1, size(points))], points%stable == -1)
-        if (size(todo) == 0) return
-        nt = max(1, min(nthreads, size(todo)))
-        allocate (tasks(nt))
-        done = 0
-        if (present(progress)) sp = progress%stage('stability', 'points')
-        !$omp parallel do schedule(static, 1) default(shared) private(it) num_threads(nt)
-        do it = 1, nt
-            call block_task(it)
-        end do
-        !$omp end parallel do
-        do it = 1, nt
-            stability_seconds = stability_seconds + tasks(it)%seconds
-            if (allocated(tasks(it)%error) .and. .not. allocated(error)) &
-                call move_alloc(tasks(it)%error, error)
-        end do
-
-    contains
-
-        !> Block it of the points to do, in order, with one cache.
-        subroutine block_task(it)
-            integer, intent(in) :: it
-            type(reference_cache_t) :: cache
-            type(model_t) :: m
-            type(hbm_options_t) :: po
-            type(hbm_solution_t) :: ps
-            integer :: j, kk, ndone
-            real(dp) :: s0
-            character(len=40) :: text
-            do j = (it - 1)*size(todo)/nt + 1, it*size(todo)/nt
-                kk = todo(j)
-                associate (pt => points(kk))
-                    m = fam%model
-                    call set_sweep_parameter(m, opts%parameter, pt%parameter, fam%amplitude0)
-                    po = fam%opts
-                    po%want_samples = .true.
-                    po%start = 'direct'
-                    ! the solve again is part of the stability's cost
-                    s0 = thread_cpu_seconds()
-                    if (allocated(pt%rcoef)) then
-                        call solve_periodic(m, po, ps, tasks(it)%error, r_start=pt%rcoef)
-                    else
-                        call solve_periodic(m, po, ps, tasks(it)%error)
-                    end if
-                    tasks(it)%seconds = tasks(it)%seconds + (thread_cpu_seconds() - s0)
-                    if (allocated(tasks(it)%error)) return
-                    call stability_from(m, ps, opts, ref, pt, tasks(it)%seconds, &
-                                        tasks(it)%error, cache)
-                    if (allocated(tasks(it)%error)) return
-                end associate
-                !$omp atomic capture
-                done = done + 1
-                ndone = done
-                !$omp end atomic
-                if (it == 1 .and. present(progress)) then
-                    write (text, '(g0.6)') points(kk)%parameter
-                    call sp%report(ndone, size(todo), trim(opts%parameter)//" = "// &
-                                   trim(adjustl(text)))
+        !> Called after each point (with the point).
+        procedure(point_done_interface), optional :: done
+        !> The cache to carry on (from the caller's last block; one of its own otherwise).
+        type(reference_cache_t), intent(inout), optional :: cache
+        type(reference_cache_t) :: own
+        type(model_t) :: m
+        type(hbm_options_t) :: po
+        type(hbm_solution_t) :: ps
+        integer :: k
+        real(dp) :: s0
+        do k = 1, size(points)
+            if (points(k)%stable /= -1) cycle
+            associate (pt => points(k))
+                m = base
+                call set_sweep_parameter(m, opts%parameter, pt%parameter, amplitude0)
+                po = hopts
+                po%want_samples = .true.
+                po%start = 'direct'
+                ! the solve again is part of the stability's cost
+                s0 = thread_cpu_seconds()
+                if (allocated(pt%rcoef)) then
+                    call solve_periodic(m, po, ps, error, r_start=pt%rcoef)
+                else
+                    call solve_periodic(m, po, ps, error)
                 end if
-            end do
-        end subroutine block_task
-    end subroutine stability_stage
+                seconds = seconds + (thread_cpu_seconds() - s0)
+                if (allocated(error)) return
+                if (present(cache)) then
+                    call stability_from(m, ps, opts, ref, pt, seconds, error, cache)
+                else
+                    call stability_from(m, ps, opts, ref, pt, seconds, error, own)
+                end if
+                if (allocated(error)) return
+            end associate
+            if (present(done)) call done(points(k))
+        end do
+    end subroutine stability_block
 
     !> Keep the Fourier coefficients of point `pt` (frc_point_t: harmonic, xcoef, rcoef,
     !> ucoef, omega) from its solution `ps` of `model`: the displacements observed as the

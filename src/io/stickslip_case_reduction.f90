@@ -52,7 +52,7 @@ module stickslip_case_reduction
     use stickslip_reduction, only: reduction_options_t, reduction_report_t, reduced_model_t, &
         craig_bampton, reduced_dof_of, recover_dofs, reduce_vectors, reduction_estimate_t, &
         estimate_reduction_error
-    use stickslip_umfpack, only: sparse_lu_t
+    use stickslip_sparse_factor, only: sparse_factor_t
     use stickslip_progress, only: progress_t
     use stickslip_hash, only: hash_t
     use stickslip_version_info, only: stickslip_version
@@ -235,7 +235,7 @@ contains
         type(reduced_model_t) :: rm
         type(reduction_report_t) :: cached_report
         type(reduction_estimate_t) :: estimate
-        type(sparse_lu_t) :: interior_lu
+        class(sparse_factor_t), allocatable :: interior_lu
         type(hash_t) :: hk
         integer, allocatable :: bset(:)
         real(dp), allocatable :: freqs(:), directions(:, :)
@@ -393,7 +393,7 @@ contains
                                    error, interior_lu=interior_lu, progress=progress)
             end if
             if (allocated(error)) then
-                call interior_lu%release()
+                if (allocated(interior_lu)) call interior_lu%release()
                 if (index(error%message, "craig_bampton: options%") == 1) then
                     ! an option of &reduction at fault: name it
                     error%message = nml%path//": &reduction "// &
@@ -419,7 +419,7 @@ contains
             else
                 red%report%error_method = 'off'
             end if
-            call interior_lu%release()
+            if (allocated(interior_lu)) call interior_lu%release()
             if (may_write) call keep_for_cache()
         end if
         if (.not. red%error_estimate) then
@@ -561,7 +561,7 @@ contains
                                               freqs, estimate, error, progress=progress)
             end if
             if (allocated(error)) then
-                call interior_lu%release()
+                if (allocated(interior_lu)) call interior_lu%release()
                 error%message = nml%path//": &reduction: reduction error measure: "// &
                                 error%message
                 return

@@ -52,7 +52,8 @@ module stickslip_reduction
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
-    use stickslip_umfpack, only: sparse_lu_t, ordering_cholmod
+    use stickslip_sparse_factor, only: sparse_factor_t
+    use stickslip_stiffness_factor, only: factorize_stiffness
     use stickslip_progress, only: progress_t
     use stickslip_arpack, only: eigen_options_t, eigen_report_t
     use stickslip_sparse_eigen, only: sparse_eigenpairs, sparse_eigenpairs_below, &
@@ -135,9 +136,9 @@ contains
     !> disagree, a DOF out of range, no boundary or no interior DOF, options out of range, a
     !> non-finite load; (numerical): K_ii singular (the interior moves as a rigid body when
     !> the boundary is fixed), the eigensolver failing.
-    !> K_ii is factorized once (UMFPACK, CHOLMOD's choice of ordering: METIS on 3D meshes),
-    !> for the constraint modes, the load vectors and the shift-invert Lanczos of the
-    !> fixed-interface modes alike, its solves without iterative refinement; with
+    !> K_ii is factorized once (CHOLMOD's Cholesky; UMFPACK's LU if K_ii is not positive
+    !> definite), for the constraint modes and the load vectors (block solves) and the
+    !> shift-invert Lanczos of the fixed-interface modes alike; with
     !> `interior_lu` the factorization is handed to the caller on return (for the error
     !> estimate, stickslip_reduction_estimate), released otherwise. With `progress`, the
     !> phases that took a second or more are reported (progress_t%phase).
@@ -164,7 +165,7 @@ contains
         !> On return the sparse LU of K_ii (interior numbering, ascending full DOFs), when
         !> the reduction succeeded and the interior was factorized sparse; the caller
         !> releases it.
-        type(sparse_lu_t), intent(inout), optional :: interior_lu
+        class(sparse_factor_t), allocatable, intent(inout), optional :: interior_lu
         !> Where the phases are reported (optional).
         type(progress_t), intent(inout), optional :: progress
         integer, allocatable :: loc(:)
@@ -172,7 +173,7 @@ contains
         real(dp), allocatable :: psi(:, :)
         integer(int64) :: t0, t1, rate, tphase
         type(sparse_matrix_t) :: kii, mii, kiit, miit, cii
-        type(sparse_lu_t) :: lu
+        class(sparse_factor_t), allocatable :: lu
         real(dp), allocatable :: rhs(:, :), lam(:), vec(:, :), t(:, :), at(:, :)
         real(dp) :: limit, lmax
         type(eigen_options_t) :: eopts
@@ -273,9 +274,7 @@ contains
                     rhs(loc(r), -loc(kmat%col(p))) - kmat%val(p)
             end do
         end do
-        lu%ordering = ordering_cholmod
-        lu%refinement_steps = 0
-        call lu%factorize(ni, kiit%row_start, kiit%col, kiit%val, error)
+        call factorize_stiffness(ni, kiit%row_start, kiit%col, kiit%val, lu, error)
         if (allocated(error)) then
             error%message = "craig_bampton: the interior stiffness K_ii ("//itoa(ni)// &
                             " DOFs) cannot be factorized (is the interior held by the "// &
@@ -283,7 +282,7 @@ contains
             return
         end if
         call phase("K_ii factorized ("//itoa(ni)//" interior DOFs, "// &
-                   real_text(lu%factor_entries, '(es9.2)')//" entries in L and U)")
+                   lu%name()//", "//real_text(lu%factor_entries, '(es9.2)')//" entries)")
         allocate (reduced%constraint(ni, nb))
         call lu%solve(rhs, reduced%constraint, error)
         if (.not. allocated(error) .and. present(loads)) call interior_load_solutions(psi)
@@ -407,7 +406,8 @@ contains
 
         call phase("reduced matrices ("//itoa(nr)//" DOFs)")
         if (present(interior_lu)) then
-            call lu%move_to(interior_lu)
+            if (allocated(interior_lu)) call interior_lu%release()
+            call move_alloc(lu, interior_lu)
         else
             call lu%release()
         end if

@@ -34,7 +34,8 @@ module stickslip_reduction_estimate
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
-    use stickslip_umfpack, only: sparse_lu_t, ordering_cholmod
+    use stickslip_sparse_factor, only: sparse_factor_t
+    use stickslip_stiffness_factor, only: factorize_stiffness
     use stickslip_lapack, only: zgesv
     use stickslip_reduced_model, only: reduced_model_t
     use stickslip_reduction_error, only: receptance_error
@@ -80,7 +81,7 @@ contains
     !> Estimate the reduction error of `reduced` (a Craig-Bampton model of K, M, C with its
     !> basis) for the contact directions W (N x n_c, nonzero on boundary DOFs only) at
     !> `frequencies` (see the module header). `interior_lu`, when given factorized, is the
-    !> sparse LU of K_ii in the reduction's interior numbering (craig_bampton's
+    !> factorization of K_ii in the reduction's interior numbering (craig_bampton's
     !> interior_lu); otherwise K_ii is factorized here. `proportional` (default .false.):
     !> C = alpha M + beta K, so no damping vectors are needed. Errors (input): W with the
     !> wrong number of rows or an interior entry, a model without its basis; (numerical):
@@ -106,11 +107,11 @@ contains
         type(sparse_matrix_t), intent(in), optional :: cmat
         !> C is alpha M + beta K (no damping vectors needed).
         logical, intent(in), optional :: proportional
-        !> The sparse LU of K_ii (used when factorized; left as given).
-        type(sparse_lu_t), intent(inout), optional :: interior_lu
+        !> The factorization of K_ii (used when factorized; left as given).
+        class(sparse_factor_t), allocatable, intent(inout), optional :: interior_lu
         !> Where the phases are reported (optional).
         type(progress_t), intent(inout), optional :: progress
-        type(sparse_lu_t) :: own_lu
+        class(sparse_factor_t), allocatable :: own_lu
         integer(int64) :: t0, t1, rate
         integer :: n, nb, ni, nr, nc, nf, level, f, k, nv, nlev
         integer, allocatable :: loc(:)
@@ -172,7 +173,7 @@ contains
 
         ! the interior factorization: the reduction's, or one made here
         if (present(interior_lu)) then
-            if (.not. interior_lu%factorized() .or. interior_lu%n /= ni) then
+            if (.not. given_factor()) then
                 call factorize_interior(own_lu)
                 if (allocated(error)) return
             end if
@@ -326,8 +327,16 @@ contains
         end subroutine finish
 
         subroutine release_own()
-            call own_lu%release()
+            if (allocated(own_lu)) call own_lu%release()
         end subroutine release_own
+
+        !> Whether the caller gave a factorization of K_ii.
+        logical function given_factor()
+            given_factor = .false.
+            if (.not. present(interior_lu)) return
+            if (.not. allocated(interior_lu)) return
+            given_factor = interior_lu%factorized() .and. interior_lu%n == ni
+        end function given_factor
 
         !> One progress line per level.
         subroutine report_level()
@@ -339,16 +348,14 @@ contains
                                 real(t1 - t0, dp)/real(max(rate, 1_int64), dp))
         end subroutine report_level
 
-        !> Factorize K_ii here (CHOLMOD's ordering, no refinement).
+        !> Factorize K_ii here (Cholesky, or LU when it is not positive definite).
         subroutine factorize_interior(lu)
-            type(sparse_lu_t), intent(inout) :: lu
+            class(sparse_factor_t), allocatable, intent(inout) :: lu
             type(sparse_matrix_t) :: kii, kiit
             call interior_block(kmat, kii)
             if (allocated(error)) return
             call sparse_transpose(kii, kiit)
-            lu%ordering = ordering_cholmod
-            lu%refinement_steps = 0
-            call lu%factorize(ni, kiit%row_start, kiit%col, kiit%val, error)
+            call factorize_stiffness(ni, kiit%row_start, kiit%col, kiit%val, lu, error)
             if (allocated(error)) error%message = "reduction error estimate: K_ii: "// &
                 error%message
         end subroutine factorize_interior
@@ -381,7 +388,7 @@ contains
             real(dp), allocatable, intent(out) :: x(:, :)
             allocate (x(ni, size(b, 2)))
             if (size(b, 2) == 0) return
-            if (own_lu%factorized()) then
+            if (allocated(own_lu)) then
                 call own_lu%solve(b, x, error)
             else
                 call interior_lu%solve(b, x, error)

@@ -289,7 +289,12 @@ contains
                 ! does not see), J the jump of an impact
                 fp = rate(imnew, yeb)
                 h = dot_product(hit%c, fm)
-                sal = mat_mul(pv, jump)
+                if (all(jump == identity_matrix(nz))) then
+                    ! no jump at this event (no impact, no slider unloaded): a product saved
+                    sal = pv
+                else
+                    sal = mat_mul(pv, jump)
+                end if
                 if (abs(h) > 1.0e-300_dp) then
                     fm(1:nz) = matmul(sal, fm(1:nz))
                     call add_saltation(sal, fp, fm, hit%c, h)

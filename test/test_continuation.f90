@@ -18,7 +18,10 @@ module test_continuation
     use stickslip_sweep_retrace, only: fold_watch_t, new_fold_watch
     use stickslip_checks, only: sampling_notes
     use testing, only: test_counter_t, check, check_close, check_error
-    use fixtures, only: seed_model, damped_seed
+    use fixtures, only: seed_model, damped_seed, msg
+    use stickslip_sweep_point, only: stability_block
+    use stickslip_sweep_result, only: frc_point_t
+    use stickslip_stability, only: floquet_t, periodic_stability
     implicit none
     private
     public :: run_continuation_tests, damped_seed
@@ -44,6 +47,7 @@ contains
         call test_notes(t)
         call test_recovery(t)
         call test_retrace_watch(t)
+        call test_fresh_start(t)
     end subroutine run_continuation_tests
 
     !> The fold watch of a sweep on synthetic curves (amplitude = parameter, a sweep from 0
@@ -519,4 +523,50 @@ contains
         call run_sweep(m, ho, ro, so, res, error)
         call check_error(t, error, "bad sweep: empty range", .true.)
     end subroutine test_bad_sweep
+    !> stability_block: a point whose weighted-residual solve at the curve's rho does not
+    !> converge (rho = 1e-14 on the damped seed: the friction equality barely sees the
+    !> force) gets its verdict from a fresh solve with the automatic rho, the multipliers of
+    !> periodic_stability on an ordinary solve.
+    subroutine test_fresh_start(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m
+        type(hbm_options_t) :: ho, curve
+        type(hbm_solution_t) :: ps
+        type(sweep_options_t) :: so
+        type(reference_options_t) :: ro
+        type(floquet_t) :: fl
+        type(frc_point_t) :: pts(1)
+        type(error_type), allocatable :: error
+        real(dp) :: seconds
+        m = damped_seed()
+        m%omega = 4.5_dp
+        ho%harmonics = 15
+        ho%want_samples = .true.
+        call solve_periodic(m, ho, ps, error)
+        if (.not. allocated(error)) call periodic_stability(m, ps, ro, fl, error)
+        call check(t, .not. allocated(error) .and. fl%verdict /= 'unknown', &
+                   "fresh start: the ordinary solve has a verdict", msg(error))
+        if (allocated(error)) return
+        curve = ho
+        curve%rho = 1.0e-14_dp
+        curve%start = 'direct'
+        call solve_periodic(m, curve, ps, error)
+        call check(t, .not. allocated(error) .and. .not. ps%converged, &
+                   "fresh start: the solve at the curve's rho does not converge (the case "// &
+                   "tests the retry)")
+        if (allocated(error)) return
+        so%parameter = 'omega'
+        so%stability = .true.
+        pts(1)%parameter = 4.5_dp
+        pts(1)%stable = -1
+        seconds = 0.0_dp
+        call stability_block(m, curve, m%force_amplitude, so, ro, pts, seconds, error)
+        call check(t, .not. allocated(error), "fresh start: the block runs", msg(error))
+        if (allocated(error)) return
+        call check(t, pts(1)%stable == merge(1, 0, fl%stable), &
+                   "fresh start: the verdict of the ordinary solve", itoa(pts(1)%stable))
+        call check_close(t, [pts(1)%floquet_max], [fl%max_modulus], &
+                         "fresh start: its largest multiplier", rtol=1.0e-9_dp, atol=0.0_dp)
+    end subroutine test_fresh_start
+
 end module test_continuation

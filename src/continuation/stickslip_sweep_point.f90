@@ -184,14 +184,18 @@ contains
         defer = .false.
         if (present(defer_stability)) defer = defer_stability
         if (opts%stability .and. .not. defer) &
-            call stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache)
+            call stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache, fam%opts)
     end subroutine evaluate_point
 
     !> The Floquet multipliers of the point `pt` from its weighted-residual solution `ps` of
     !> `m` (with samples): pt%floquet_max and pt%stable, unless the verdict is 'unknown'.
-    !> `cache` (a sweep in omega only) carries the last point's flow. Errors: those of
+    !> `cache` (a sweep in omega only) carries the last point's flow. With `hopts` (the
+    !> curve's hbm options), a point whose verdict is 'unknown' is tried once more from a
+    !> fresh solve with the automatic rho (the curve keeps the rho of its start; at another
+    !> rho the sampled equations give another approximation of the same orbit, which can be
+    !> the better start for the shooting), without the cache. Errors: those of
     !> periodic_stability.
-    subroutine stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache)
+    subroutine stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache, hopts)
         type(model_t), intent(in) :: m
         type(hbm_solution_t), intent(in) :: ps
         type(sweep_options_t), intent(in) :: opts
@@ -201,6 +205,7 @@ contains
         real(dp), intent(inout) :: stability_seconds
         type(error_type), allocatable, intent(out) :: error
         type(reference_cache_t), intent(inout), optional :: cache
+        type(hbm_options_t), intent(in), optional :: hopts
         type(floquet_t) :: fl
         real(dp) :: s0
         s0 = thread_cpu_seconds()
@@ -209,12 +214,32 @@ contains
         else
             call periodic_stability(m, ps, ref, fl, error)
         end if
+        if (.not. allocated(error) .and. fl%verdict == 'unknown' .and. present(hopts)) &
+            call fresh_start()
         stability_seconds = stability_seconds + (thread_cpu_seconds() - s0)
         if (allocated(error)) return
         if (fl%verdict /= 'unknown') then
             pt%floquet_max = fl%max_modulus
             pt%stable = merge(1, 0, fl%stable)
         end if
+
+    contains
+
+        !> The fresh solve (automatic rho, the usual start strategy) and its stability; a
+        !> solve that fails leaves the verdict 'unknown'.
+        subroutine fresh_start()
+            type(hbm_options_t) :: fresh
+            type(hbm_solution_t) :: ps2
+            type(error_type), allocatable :: solve_error
+            fresh = hopts
+            fresh%rho = 0.0_dp
+            fresh%start = 'auto'
+            fresh%want_samples = .true.
+            call solve_periodic(m, fresh, ps2, solve_error)
+            if (allocated(solve_error)) return
+            if (.not. ps2%converged) return
+            call periodic_stability(m, ps2, ref, fl, error)
+        end subroutine fresh_start
     end subroutine stability_from
 
     !> The Floquet stability of the `points` (of a curve of the dense family whose model,
@@ -272,9 +297,9 @@ contains
                 seconds = seconds + (thread_cpu_seconds() - s0)
                 if (allocated(error)) return
                 if (present(cache)) then
-                    call stability_from(m, ps, opts, ref, pt, seconds, error, cache)
+                    call stability_from(m, ps, opts, ref, pt, seconds, error, cache, hopts)
                 else
-                    call stability_from(m, ps, opts, ref, pt, seconds, error, own)
+                    call stability_from(m, ps, opts, ref, pt, seconds, error, own, hopts)
                 end if
                 if (allocated(error)) return
             end associate

@@ -235,8 +235,9 @@ contains
     end subroutine test_robustness_threads
 
     !> A sweep with stability on 1 thread (point by point, the cache of contact modes carried
-    !> along the curve) and on 2 (the stability stage after the curve, a block of points
-    !> per thread): the same points, the same verdicts and multipliers to 1e-9.
+    !> along the curve) and on 2 (the stability beside the curve, chunks of points on the
+    !> other thread, the tracing thread backwards at the end): the same points, the same
+    !> verdicts and multipliers to 1e-9.
     subroutine test_sweep_stability_threads(t)
         type(test_counter_t), intent(inout) :: t
         type(sweep_options_t) :: so

@@ -125,7 +125,7 @@ contains
         integer, allocatable :: code(:), oldcode(:), zset(:)
         real(dp), allocatable :: y(:), yb(:), ybb(:), yeb(:), ye(:), phi(:, :), jac(:, :), &
                                  sal(:, :), fm(:), fp(:), jump(:, :), pj(:, :), dirs(:, :), &
-                                 pv(:, :)
+                                 pv(:, :), eye(:, :)
         real(dp) :: t, tb, te, tp, tend, h, loss
         logical :: found, want_mono, want_orbit, full_step, want_energy, impact, fresh
         logical, allocatable :: armed(:, :)
@@ -147,6 +147,8 @@ contains
                   code(self%nslot), oldcode(self%nslot), jump(nz, nz), pj(nz, nz), &
                   dirs(3, self%nc))
         dirs = 0.0_dp
+        ! the identity, made once: each event starts its jump and projection from it
+        eye = identity_matrix(nz)
         y(1:nz) = z0
         y(nz + 1:) = self%exo(t0)
         if (want_mono) allocate (phi(nz, nz), sal(nz, nz))
@@ -217,7 +219,7 @@ contains
             if (want_orbit) call close_phase(im, te - tp)
             oldcode = code
             impact = .false.
-            jump = identity_matrix(nz)
+            jump = eye
             select case (hit%action)
             case (action_decide)
                 ! a velocity reaches zero: this element and every one holding a rigid
@@ -278,7 +280,7 @@ contains
             ! constrained directions: clear the roundoff left in their velocities (in the
             ! balanced state: a round trip through [x; v] would cost the stiff components
             ! accuracy)
-            pv = identity_matrix(nz)
+            pv = eye
             call project_velocities(self, self%modes(imnew), yeb, pv)
             yeb(nz + 1:) = self%se*self%exo(te)
             ye = matmul(self%tbi, yeb)
@@ -289,7 +291,7 @@ contains
                 ! does not see), J the jump of an impact
                 fp = rate(imnew, yeb)
                 h = dot_product(hit%c, fm)
-                if (all(jump == identity_matrix(nz))) then
+                if (all(jump == eye)) then
                     ! no jump at this event (no impact, no slider unloaded): a product saved
                     sal = pv
                 else

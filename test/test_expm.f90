@@ -2,11 +2,16 @@
 !> (cos/sin), a nilpotent matrix (the series ends), an upper-triangular matrix of large norm
 !> with distinct eigenvalues (scaling and squaring), a symmetric matrix through its known
 !> eigenvectors, exp(A) exp(-A) = I, a small random matrix against its Taylor series, the
-!> empty matrix and a non-finite one.
+!> empty matrix and a non-finite one. The modal form of a contact mode's dynamics
+!> (stickslip_flow_modal) against the matrix exponential: a free damped 3-DOF oscillator, the
+!> same with a velocity constraint (a stuck contact: deflated Jordan block), and a Jordan
+!> block it must refuse.
 module test_expm
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_expm, only: expm
+    use stickslip_flow_modal, only: modal_form_t, build_modal_form, modal_propagate, &
+        project_velocity_rows, off_constraints
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
@@ -19,6 +24,7 @@ contains
         call test_closed_forms(t)
         call test_taylor_and_inverse(t)
         call test_edge_cases(t)
+        call test_modal_form(t)
     end subroutine run_expm_tests
 
     subroutine test_closed_forms(t)
@@ -115,6 +121,56 @@ contains
         call expm(a, e, stat)
         call check(t, stat /= 0, "expm: infinite norm reported by stat")
     end subroutine test_edge_cases
+
+    !> exp(b tau) jac by the modal form against expm, b = [0 I; -P K, -P C] (P the projection
+    !> onto c^T u = 0; P = I without a constraint), columns of jac on the constraint.
+    subroutine test_modal_form(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 3
+        real(dp) :: k(n, n), c(n, n), b(2*n, 2*n), ed(2*n, 2*n), e(2*n, 2*n), jac(2*n, 4), &
+                    ref(2*n, 4), ctm(n, 1), p(n, n), j1(2, 2), e1(2, 2), taus(2)
+        type(modal_form_t) :: form
+        integer :: stat, i, m, nc
+        k = reshape([2.0_dp, -1.0_dp, 0.0_dp, -1.0_dp, 5.0_dp, -2.0_dp, 0.0_dp, -2.0_dp, &
+                     9.0_dp], [n, n])
+        c = 0.02_dp*k
+        ctm(:, 1) = [1.0_dp, -0.5_dp, 0.25_dp]
+        taus = [0.37_dp, 2.5_dp]
+        do nc = 0, 1
+            p = identity(n)
+            if (nc == 1) p = p - matmul(ctm, transpose(ctm))/sum(ctm**2)
+            b = 0.0_dp
+            b(1:n, n + 1:2*n) = identity(n)
+            b(n + 1:2*n, 1:n) = -matmul(p, k)
+            b(n + 1:2*n, n + 1:2*n) = -matmul(p, c)
+            call expm(b*0.1_dp, ed, stat)
+            call build_modal_form(form, b, ctm(:, 1:nc), n, 0.1_dp, ed)
+            call check(t, form%status == 1, "modal form: usable, "//merge("stuck", "free ", &
+                       nc == 1))
+            if (form%status /= 1) cycle
+            do i = 1, 4
+                jac(:, i) = [(sin(1.3_dp*m + 0.7_dp*i), m=1, 2*n)]
+            end do
+            call project_velocity_rows(ctm(:, 1:nc), n, jac)
+            call check(t, off_constraints(ctm(:, 1:nc), n, jac) < 1.0e-14_dp, &
+                       "modal form: projected columns are on the constraint")
+            do i = 1, 2
+                call expm(b*taus(i), e, stat)
+                ref = matmul(e, jac)
+                call modal_propagate(form, taus(i), jac)
+                call check_close(t, reshape(jac, [8*n]), reshape(ref, [8*n]), &
+                                 "modal form: exp(b tau) jac as expm, "// &
+                                 merge("stuck", "free ", nc == 1), rtol=0.0_dp, &
+                                 atol=1.0e-12_dp*maxval(abs(ref)))
+                jac = ref
+            end do
+        end do
+        ! x' = v, v' = 0 without a constraint to deflate it: no modal form
+        j1 = reshape([0.0_dp, 0.0_dp, 1.0_dp, 0.0_dp], [2, 2])
+        call expm(j1*0.1_dp, e1, stat)
+        call build_modal_form(form, j1, ctm(1:1, 1:0), 1, 0.1_dp, e1)
+        call check(t, form%status == -1, "modal form: a Jordan block is refused")
+    end subroutine test_modal_form
 
     pure function identity(n) result(m)
         integer, intent(in) :: n

@@ -27,13 +27,14 @@ module stickslip_flow
     use stickslip_model, only: model_t
     use stickslip_expm, only: expm
     use stickslip_dense_products, only: mat_mul
+    use stickslip_flow_modal, only: project_velocity_rows
     use stickslip_flow_modes, only: ngauss, mode_t, flow_modes_t, new_flow_modes, propagate, &
-        propagate_matrix, gauss_exponentials, identity_matrix
+        propagate_matrix, gauss_exponentials, identity_matrix, propagate_jacobian
     use stickslip_flow_algebra, only: mode_index, start_codes, decide_codes, impact_jump, &
         close_rigid_gaps, project_velocities, eval_inputs
     use stickslip_flow_events, only: event_stick, event_slip, event_reversal, event_graze, &
         event_open, event_close, event_impact, event_kind, event_name, find_event, grid_step, &
-        event_guard, add_saltation, end_monodromy, event_hit_t
+        event_guard, end_monodromy, event_hit_t
     use stickslip_flow_nonlinear, only: nodes, node, gauss_weight, max_level, nl_step_t, &
         nl_prepare, nl_step, nl_checked_step, nl_state_at, nl_exponentials, nl_dense, &
         nl_dense_jacobian, nl_input_at
@@ -121,11 +122,11 @@ contains
         !> With orbit: integrate the energies (default .true.; .false. leaves them 0).
         logical, intent(in), optional :: energies
         integer, parameter :: max_zero_length = 8
-        integer :: n, nz, na, im, imnew, j, k, nevents, zero_length, stat, max_events, level
+        integer :: n, nz, na, im, imnew, j, k, nevents, zero_length, max_events, level
         integer, allocatable :: code(:), oldcode(:), zset(:)
-        real(dp), allocatable :: y(:), yb(:), ybb(:), yeb(:), ye(:), phi(:, :), jac(:, :), &
-                                 sal(:, :), fm(:), fp(:), jump(:, :), pj(:, :), dirs(:, :), &
-                                 pv(:, :), eye(:, :)
+        real(dp), allocatable :: y(:), yb(:), ybb(:), yeb(:), ye(:), jac(:, :), &
+                                 fm(:), fp(:), jump(:, :), pj(:, :), dirs(:, :), &
+                                 eye(:, :), fmc(:, :), cj(:)
         real(dp) :: t, tb, te, tp, tend, h, loss
         logical :: found, want_mono, want_orbit, full_step, want_energy, impact, fresh
         logical, allocatable :: armed(:, :)
@@ -151,7 +152,7 @@ contains
         eye = identity_matrix(nz)
         y(1:nz) = z0
         y(nz + 1:) = self%exo(t0)
-        if (want_mono) allocate (phi(nz, nz), sal(nz, nz))
+        if (want_mono) allocate (fmc(nz, 1))
         yb = matmul(self%tb, y)
         ! the constraints of the start mode hold in the start state
         call close_rigid_gaps(self, yb, pj)
@@ -209,8 +210,7 @@ contains
                 end if
                 if (want_energy) call energy(self%modes(im), t, yb, te, .false.)
                 if (want_mono) then
-                    call expm(self%modes(im)%b(1:nz, 1:nz)*(te - tp), phi, stat)
-                    jac = mat_mul(phi, jac)
+                    call propagate_jacobian(self, self%modes(im), te - tp, jac)
                     fm = matmul(self%modes(im)%b, yeb)
                 end if
             end if
@@ -280,28 +280,32 @@ contains
             ! constrained directions: clear the roundoff left in their velocities (in the
             ! balanced state: a round trip through [x; v] would cost the stiff components
             ! accuracy)
-            pv = eye
-            call project_velocities(self, self%modes(imnew), yeb, pv)
+            call project_velocities(self, self%modes(imnew), yeb)
             yeb(nz + 1:) = self%se*self%exo(te)
             ye = matmul(self%tbi, yeb)
             ye(nz + 1:) = self%exo(te)
             if (want_mono) then
                 ! dy+ = P J (I - f- c^T / c.f-) dy- + f+ c^T / c.f- dy-, P the projection onto
                 ! the new constraints (a 2D stick removes the slip velocity the event row
-                ! does not see), J the jump of an impact
+                ! does not see), J the jump of an impact: jac <- P J jac + (f+ - P J f-) (c^T
+                ! jac) / c.f-, P applied to the velocity rows (low rank), J only where there
+                ! is a jump
                 fp = rate(imnew, yeb)
                 h = dot_product(hit%c, fm)
-                if (all(jump == eye)) then
-                    ! no jump at this event (no impact, no slider unloaded): a product saved
-                    sal = pv
-                else
-                    sal = mat_mul(pv, jump)
+                cj = matmul(hit%c(1:nz), jac)
+                if (.not. all(jump == eye)) then
+                    jac = mat_mul(jump, jac)
+                    fm(1:nz) = matmul(jump, fm(1:nz))
                 end if
+                call project_velocity_rows(self%modes(imnew)%ctm, n, jac)
+                fmc(:, 1) = fm(1:nz)
+                call project_velocity_rows(self%modes(imnew)%ctm, n, fmc)
                 if (abs(h) > 1.0e-300_dp) then
-                    fm(1:nz) = matmul(sal, fm(1:nz))
-                    call add_saltation(sal, fp, fm, hit%c, h)
+                    fm(1:nz) = (fp(1:nz) - fmc(:, 1))/h
+                    do k = 1, nz
+                        jac(:, k) = jac(:, k) + fm(1:nz)*cj(k)
+                    end do
                 end if
-                jac = mat_mul(sal, jac)
             end if
             if (want_orbit) then
                 do j = 1, self%nc

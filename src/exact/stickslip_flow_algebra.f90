@@ -22,6 +22,7 @@ module stickslip_flow_algebra
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_lapack, only: dgesv
     use stickslip_flow_modes, only: mode_t, flow_modes_t, build_ladder, identity_matrix
+    use stickslip_flow_modal, only: project_velocity_rows
     use stickslip_contact_modes, only: mode_terms_t, event_list_t
     use stickslip_contact_set, only: contact_set_t, new_element_set
     use stickslip_contact_element, only: element_box_t, state_stick, along_normal
@@ -743,13 +744,11 @@ contains
         m = size(md%ctm, 2)
         if (m == 0) return
         ! X = G^-1 [Ct^T u, Ct^T]
-        call gram_solve(md%ctm, reshape([matmul(yb(n + 1:2*n), md%ctm), transpose(md%ctm)], &
-                                        [m, n + 1]), x, ok)
+        call gram_solve(md%ctm, reshape(matmul(yb(n + 1:2*n), md%ctm), [m, 1]), x, ok)
         if (.not. ok) return
         yb(n + 1:2*n) = yb(n + 1:2*n) - matmul(md%ctm, x(:, 1))
-        ! P = I - Ct G^-1 Ct^T on the velocities
-        if (present(pj)) pj(n + 1:2*n, :) = matmul(identity_matrix(n) - &
-                                                   matmul(md%ctm, x(:, 2:)), pj(n + 1:2*n, :))
+        ! P = I - Ct G^-1 Ct^T on the velocities (applied in low rank)
+        if (present(pj)) call project_velocity_rows(md%ctm, n, pj)
     end subroutine project_velocities
 
     !> x = (C^T C)^-1 b for the m columns of c (n x m) and b (m x k) (LAPACK dgesv); ok =

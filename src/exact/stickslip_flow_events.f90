@@ -10,14 +10,13 @@
 module stickslip_flow_events
     use stickslip_kinds, only: dp
     use stickslip_dense_products, only: mat_mul, mat_vec
-    use stickslip_flow_modes, only: mode_t, flow_modes_t, propagate
-    use stickslip_expm, only: expm
+    use stickslip_flow_modes, only: mode_t, flow_modes_t, propagate, propagate_jacobian
     implicit none
     private
     public :: event_stick, event_slip, event_reversal, event_graze, event_open, event_close, &
         event_impact, event_kind, event_name
     public :: find_event, row_crossing, quadratic_crossing, grid_step, event_guard, &
-        add_saltation, end_monodromy, event_hit_t
+        end_monodromy, event_hit_t
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
     !> reverses without sticking; a slipping contact's velocity touches zero and it goes on;
@@ -587,47 +586,27 @@ contains
         end if
     end function event_guard
 
-    !> The rank-one part of the saltation matrix of an event, added to `sal`: the jump of
-    !> the vector field across the event, (fp - fm) c^T / h, with c the event row and h = c^T
-    !> fm its rate (nothing when h vanishes).
-    pure subroutine add_saltation(sal, fp, fm, c, h)
-        !> The saltation matrix (nz x nz); on entry the Jacobian of what the event does to
-        !> the state (an impact's jump, the projection onto new constraints) or the identity.
-        real(dp), intent(inout) :: sal(:, :)
-        !> Vector fields after and before the event, the event row (first nz entries used).
-        real(dp), intent(in) :: fp(:), fm(:), c(:)
-        !> c^T fm.
-        real(dp), intent(in) :: h
-        integer :: k, nz
-        nz = size(sal, 1)
-        if (.not. abs(h) > 1.0e-300_dp) return
-        do k = 1, nz
-            sal(:, k) = sal(:, k) + (fp(1:nz) - fm(1:nz))*c(k)/h
-        end do
-    end subroutine add_saltation
-
     !> The monodromy matrix of a period map in the model's coordinates, from the Jacobian
     !> `jac` of the balanced state up to the last phase's start and that phase (mode md,
     !> `duration` [s]): tbi_zz expm(B duration) jac tb_zz.
     subroutine end_monodromy(self, md, duration, jac, mono)
         !> The dynamics.
         class(flow_modes_t), intent(in) :: self
-        !> The last phase's mode.
-        type(mode_t), intent(in) :: md
+        !> The last phase's mode (its modal form may be built).
+        type(mode_t), intent(inout) :: md
         !> Its duration [s].
         real(dp), intent(in) :: duration
-        !> Jacobian of the balanced state at the last phase's start.
-        real(dp), intent(in) :: jac(:, :)
+        !> Jacobian of the balanced state at the last phase's start; on return, at the end.
+        real(dp), intent(inout) :: jac(:, :)
         !> dz1/dz0.
         real(dp), intent(out) :: mono(:, :)
-        real(dp) :: phi(size(jac, 1), size(jac, 1))
         real(dp), allocatable :: ti(:, :), t(:, :)
-        integer :: nz, stat
+        integer :: nz
         nz = size(jac, 1)
-        call expm(md%b(1:nz, 1:nz)*duration, phi, stat)
+        call propagate_jacobian(self, md, duration, jac)
         ! contiguous copies of the state blocks of the transformations (for BLAS)
         ti = self%tbi(1:nz, 1:nz)
         t = self%tb(1:nz, 1:nz)
-        mono = mat_mul(ti, mat_mul(mat_mul(phi, jac), t))
+        mono = mat_mul(ti, mat_mul(jac, t))
     end subroutine end_monodromy
 end module stickslip_flow_events

@@ -32,11 +32,13 @@ module stickslip_flow_modes
     use stickslip_lapack, only: dsygv
     use stickslip_expm, only: expm
     use stickslip_dense_products, only: mat_mul, mat_vec
+    use stickslip_flow_modal, only: modal_form_t, build_modal_form, modal_propagate, &
+        off_constraints
     implicit none
     private
     public :: ngauss, mode_t, level_t, flow_modes_t, new_flow_modes
     public :: propagate, propagate_matrix, gauss_exponentials, build_ladder, identity_matrix, &
-        ladder_of
+        ladder_of, propagate_jacobian
 
     !> Gauss-Legendre points per step for the energy integrals.
     integer, parameter :: ngauss = 8
@@ -91,6 +93,10 @@ module stickslip_flow_modes
         real(dp), allocatable :: aug(:, :), aug_ladder(:, :, :)
         integer :: aug_nl = 0
         type(level_t), allocatable :: level(:)
+        !> The modal form of the state block of b (a linear mode; built on the first
+        !> monodromy that needs it, stickslip_flow_modal): the phase propagators of the
+        !> monodromy in two matrix products instead of a matrix exponential.
+        type(modal_form_t) :: modal
     end type mode_t
 
     !> The piecewise-linear dynamics of one model. Holds a cache of the modes met so far:
@@ -542,6 +548,43 @@ contains
             if (maxval(abs(term)) <= epsilon(1.0_dp)*maxval(abs(y1))) exit
         end do
     end subroutine propagate_matrix
+
+    !> jac <- exp(B tau) jac, B the state block (n_z x n_z) of mode md's balanced dynamics
+    !> and tau >= 0 [s] a phase's duration: the Jacobian of the period map carried over a
+    !> linear phase. By the mode's modal form (built on first use) when it is usable and
+    !> the columns of jac lie on the mode's velocity constraints, as they do after the
+    !> event that entered the mode (stickslip_flow_modal); otherwise by the matrix
+    !> exponential. The two agree to roundoff (the form is checked against the mode's
+    !> exponential when built).
+    subroutine propagate_jacobian(self, md, tau, jac)
+        !> The dynamics md belongs to.
+        class(flow_modes_t), intent(in) :: self
+        !> The contact mode of the phase; its modal form may be built.
+        type(mode_t), intent(inout) :: md
+        !> Duration [s].
+        real(dp), intent(in) :: tau
+        !> n_z x m, propagated in place.
+        real(dp), intent(inout) :: jac(:, :)
+        !> Largest relative component of jac off the constraints for the modal form.
+        real(dp), parameter :: on_constraints = 1.0e-10_dp
+        real(dp), allocatable :: phi(:, :)
+        integer :: nz, stat
+        nz = self%nz
+        if (md%m == 0) then
+            if (md%modal%status == 0) call build_modal_form(md%modal, md%b(1:nz, 1:nz), &
+                                                            md%ctm, self%n, self%delta, &
+                                                            md%ladder(1:nz, 1:nz, 0))
+            if (md%modal%status == 1) then
+                if (off_constraints(md%ctm, self%n, jac) <= on_constraints) then
+                    call modal_propagate(md%modal, tau, jac)
+                    return
+                end if
+            end if
+        end if
+        allocate (phi(nz, nz))
+        call expm(md%b(1:nz, 1:nz)*tau, phi, stat)
+        jac = mat_mul(phi, jac)
+    end subroutine propagate_jacobian
 
     !> The exponentials at the Gauss points of a whole step, md%gauss, built on first use
     !> (only the recording pass integrates energies).

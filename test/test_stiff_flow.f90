@@ -20,6 +20,7 @@ module test_stiff_flow
     use stickslip_hbm, only: solve_periodic
     use stickslip_reference, only: reference_options_t, reference_result_t
     use stickslip_stability, only: floquet_t, floquet_multipliers, periodic_stability
+    use stickslip_flow, only: flow_t, new_flow
     use testing, only: test_counter_t, check
     implicit none
     private
@@ -52,7 +53,83 @@ contains
         type(test_counter_t), intent(inout) :: t
         call test_verdicts(t)
         call test_monodromy_fd(t)
+        call test_track_vs_ladder(t)
     end subroutine run_stiff_flow_tests
+
+    !> The period map and its monodromy on the 30-DOF reduced beam (n_z = 60: its linear
+    !> phases tracked in modal coordinates, stickslip_flow_track) against the same flow
+    !> stepped on the dyadic ladder (use_track = .false.), from the exact orbit's start and
+    !> from a perturbed state (other event times), at two frequencies of one flow (a
+    !> retune: the track's coefficients and the ladder's exosystem columns follow omega).
+    subroutine test_track_vs_ladder(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: m
+        type(hbm_solution_t) :: sol
+        type(floquet_t) :: fl
+        type(reference_options_t) :: ro
+        type(reference_result_t) :: ref
+        type(flow_t) :: ftrack, fladder
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: z0(:), za(:), zb(:), ma(:, :), mb(:, :), vref(:)
+        real(dp) :: dz, dm, omega
+        integer :: n, k, i, ntracked
+        logical :: ok, retuned
+        character(len=200) :: buf
+        m = reduced_beam(28, 50.0_dp)
+        n = m%ndof
+        call hbm_point(m, sol)
+        call periodic_stability(m, sol, ro, fl, error, ref=ref)
+        if (allocated(error)) then
+            call check(t, .false., "track: the reference on the 30-DOF beam", error%message)
+            return
+        end if
+        if (.not. ref%converged) then
+            call check(t, .false., "track: the reference converges on the 30-DOF beam", &
+                       ref%diagnosis)
+            return
+        end if
+        vref = [maxval(abs(ref%v(:, 2)))]
+        call new_flow(ftrack, m, ro%bracket_steps, vref, error)
+        if (.not. allocated(error)) call new_flow(fladder, m, ro%bracket_steps, vref, error)
+        if (allocated(error)) then
+            call check(t, .false., "track: new_flow", error%message)
+            return
+        end if
+        fladder%use_track = .false.
+        allocate (za(2*n), zb(2*n), ma(2*n, 2*n), mb(2*n, 2*n))
+        ok = .true.
+        buf = ''
+        do k = 1, 4
+            omega = merge(50.0_dp, 50.3_dp, k <= 2)
+            if (k == 3) then
+                call ftrack%retune(omega, retuned)
+                call fladder%retune(omega, ok)
+                ok = ok .and. retuned
+            end if
+            z0 = ref%orbit%phase_y(1:2*n, 1)
+            if (mod(k, 2) == 0) z0 = z0*(1.0_dp + 0.02_dp*[(sin(1.7_dp*i), i=1, 2*n)])
+            call ftrack%period_map(ref%t_section, z0, za, error, mono=ma)
+            if (.not. allocated(error)) call fladder%period_map(ref%t_section, z0, zb, error, &
+                                                                mono=mb)
+            if (allocated(error)) then
+                ok = .false.
+                buf = error%message
+                exit
+            end if
+            dz = maxval(abs(za - zb))/maxval(abs(zb))
+            dm = maxval(abs(ma - mb))/maxval(abs(mb))
+            write (buf, '(a,i0,a,2es10.2)') "case ", k, ": relative differences z, monodromy ", &
+                dz, dm
+            if (.not. (dz < 1.0e-10_dp .and. dm < 1.0e-8_dp)) then
+                ok = .false.
+                exit
+            end if
+        end do
+        ntracked = count([(ftrack%modes(i)%modal%coef_ok, i=1, ftrack%nmodes)])
+        call check(t, ok, "track: the tracked period map and monodromy = the ladder's", &
+                   trim(buf))
+        call check(t, ntracked > 0, "track: the 30-DOF beam's phases are tracked")
+    end subroutine test_track_vs_ladder
 
     !> The beam reduced to DOFs 77 (forced, 5 N at omega) and 79 (friction, mu N = 2 N)
     !> plus nm fixed-interface modes: reduced DOF 1 is 77, DOF 2 is 79.

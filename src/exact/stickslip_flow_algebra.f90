@@ -21,7 +21,8 @@ module stickslip_flow_algebra
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_lapack, only: dgesv
-    use stickslip_flow_modes, only: mode_t, flow_modes_t, build_ladder, identity_matrix
+    use stickslip_flow_modes, only: mode_t, flow_modes_t, build_ladder, identity_matrix, &
+        tune_mode
     use stickslip_flow_modal, only: project_velocity_rows
     use stickslip_contact_modes, only: mode_terms_t, event_list_t
     use stickslip_contact_set, only: contact_set_t, new_element_set
@@ -153,7 +154,11 @@ contains
         logical :: ok
         integer :: j, m, k, c0, w
         do im = 1, self%nmodes
-            if (all(self%modes(im)%code == code)) return
+            if (all(self%modes(im)%code == code)) then
+                ! at this omega (the cache may have been retuned since it was last used)
+                if (self%modes(im)%m == 0) call tune_mode(self, self%modes(im))
+                return
+            end if
         end do
         call assemble(self, code, terms, ok)
         if (.not. ok) then
@@ -242,7 +247,13 @@ contains
                 md%nl_elements = [md%nl_elements, md%in_elem(k)]
                 md%nl_first = [md%nl_first, k]
             end do
-            call build_ladder(self, md, error)
+            ! the ladder of a linear mode is built on first use (tune_ladder): its phases
+            ! may all be tracked in modal coordinates
+            md%omega_b = self%omega
+            if (md%m > 0) then
+                call build_ladder(self, md, error)
+                md%omega_ladder = self%omega
+            end if
         end associate
         ! never leave a broken mode in the cache
         if (allocated(error)) self%nmodes = self%nmodes - 1

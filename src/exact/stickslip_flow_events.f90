@@ -16,7 +16,7 @@ module stickslip_flow_events
     public :: event_stick, event_slip, event_reversal, event_graze, event_open, event_close, &
         event_impact, event_kind, event_name
     public :: find_event, row_crossing, quadratic_crossing, grid_step, event_guard, &
-        end_monodromy, event_hit_t
+        end_monodromy, event_hit_t, hermite_root
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
     !> reverses without sticking; a slipping contact's velocity touches zero and it goes on;
@@ -592,8 +592,8 @@ contains
     subroutine end_monodromy(self, md, duration, jac, mono)
         !> The dynamics.
         class(flow_modes_t), intent(in) :: self
-        !> The last phase's mode (its modal form may be built).
-        type(mode_t), intent(inout) :: md
+        !> The last phase's mode.
+        type(mode_t), intent(in) :: md
         !> Its duration [s].
         real(dp), intent(in) :: duration
         !> Jacobian of the balanced state at the last phase's start; on return, at the end.

@@ -47,6 +47,18 @@ module stickslip_flow_modal
         !> Real parts a and imaginary parts b of the eigenvalues; a pair is stored in
         !> consecutive entries with b > 0 first.
         real(dp), allocatable :: re(:), im(:)
+        !> The modal phase track's coefficients (stickslip_flow_track): W F (n_z x n_e, the
+        !> forcing columns of the mode's dynamics), the event rows' state parts r_z^T V
+        !> (n_ev x n_z), and at omega = coef_omega the particular solution P (n_z x n_e) and
+        !> the rows' exosystem parts P^T rho + r_e transposed (n_ev x n_e); coef_ok when
+        !> they are usable (coef_omega = huge: never, the forcing is off the constraints).
+        real(dp), allocatable :: wd(:, :), rho_t(:, :), pm(:, :), q_t(:, :)
+        !> 1 / lambda of each eigenvalue (0 for lambda = 0; a pair: of a + i b).
+        complex(dp), allocatable :: inv_lam(:)
+        !> exp(lambda delta) of each eigenvalue, delta the flow's grid step.
+        complex(dp), allocatable :: edelta(:)
+        real(dp) :: coef_omega = 0.0_dp
+        logical :: coef_ok = .false.
     end type modal_form_t
 
 contains

@@ -23,6 +23,7 @@
 !> and grid step length, none per Newton iterate.
 module stickslip_flow_modes
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp, pi, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, force_direction, preload_force
@@ -32,13 +33,12 @@ module stickslip_flow_modes
     use stickslip_lapack, only: dsygv
     use stickslip_expm, only: expm
     use stickslip_dense_products, only: mat_mul, mat_vec
-    use stickslip_flow_modal, only: modal_form_t, build_modal_form, modal_propagate, &
-        off_constraints
+    use stickslip_flow_modal, only: modal_form_t, modal_propagate, off_constraints
     implicit none
     private
     public :: ngauss, mode_t, level_t, flow_modes_t, new_flow_modes
     public :: propagate, propagate_matrix, gauss_exponentials, build_ladder, identity_matrix, &
-        ladder_of, propagate_jacobian
+        ladder_of, propagate_jacobian, tune_mode, tune_ladder
 
     !> Gauss-Legendre points per step for the energy integrals.
     integer, parameter :: ngauss = 8
@@ -97,6 +97,13 @@ module stickslip_flow_modes
         !> monodromy that needs it, stickslip_flow_modal): the phase propagators of the
         !> monodromy in two matrix products instead of a matrix exponential.
         type(modal_form_t) :: modal
+        !> The omega [rad/s] its b and drows, and its ladder, are tuned for (tune_mode,
+        !> tune_ladder).
+        real(dp) :: omega_b = 0.0_dp, omega_ladder = 0.0_dp
+        !> A hash of its state block b(1:n_z, 1:n_z) and constraint directions (0: not
+        !> computed): modes that differ only in their inputs (a slip direction) share them,
+        !> and their modal form is computed once (stickslip_flow_track's ensure_modal).
+        integer(int64) :: zkey = 0
     end type mode_t
 
     !> The piecewise-linear dynamics of one model. Holds a cache of the modes met so far:
@@ -139,6 +146,10 @@ module stickslip_flow_modes
         real(dp), allocatable :: lam(:), s(:), ct(:, :), ft(:, :)
         type(mode_t), allocatable :: modes(:)
         integer :: nmodes = 0
+        !> Linear phases tracked in the modal coordinates of their mode where it allows
+        !> (stickslip_flow_track); .false.: always stepped by the dyadic ladder (the same
+        !> flow to roundoff; tests compare the two).
+        logical :: use_track = .true.
     contains
         procedure :: exo
         !> The same dynamics at another omega, the mode cache kept (retune_modes).
@@ -421,17 +432,17 @@ contains
         end if
     end subroutine ladder_of
 
-    !> The same dynamics at another forcing frequency `omega` [rad/s], its mode cache kept:
-    !> the exosystem's rotation in each mode's b, the slopes of the event rows and the
-    !> exosystem's columns of each ladder exp(b delta 2^-k) are recomputed; the structural
-    !> blocks (the phase matrices of x, v and the internal states, which do not depend on
-    !> omega) and their exponentials are not. The grid step delta, the balanced coordinates
-    !> and the scales of the events stay those of the first omega (any invertible balancing
-    !> gives the same flow; the grid of a period ends in a shorter last step). What one
-    !> retune costs: ~(12 + nl) n_a x n_e products per mode against a matrix exponential
-    !> and nl squarings of n_a x n_a matrices for a new one. `ok` is false, and nothing
-    !> changed, when a cached mode is nonlinear (a 2D slip) or has quadratic events: those
-    !> depend on omega otherwise; build a new flow then.
+    !> The same dynamics at another forcing frequency `omega` [rad/s], its mode cache kept.
+    !> The modes are retuned when next used, each only as far as it is used: the exosystem's
+    !> rotation in b and the exosystem rows of the event rows' slopes by mode_index
+    !> (tune_mode), the exosystem's columns of the dyadic ladder by the phases stepped on it
+    !> (tune_ladder); the structural blocks (the phase matrices of x, v and the internal
+    !> states, which do not depend on omega), their exponentials and modal forms are kept.
+    !> The grid step delta, the balanced coordinates and the scales of the events stay those
+    !> of the first omega (any invertible balancing gives the same flow; the grid of a
+    !> period ends in a shorter last step). `ok` is false, and nothing changed, when a
+    !> cached mode is nonlinear (a 2D slip) or has quadratic events: those depend on omega
+    !> otherwise; build a new flow then.
     subroutine retune_modes(self, omega, ok)
         !> The dynamics with its mode cache.
         class(flow_modes_t), intent(inout) :: self
@@ -439,9 +450,7 @@ contains
         real(dp), intent(in) :: omega
         !> Whether the cache could be kept.
         logical, intent(out) :: ok
-        real(dp), allocatable :: cols(:, :), term(:, :)
-        real(dp) :: h
-        integer :: im, k, e0, kk
+        integer :: im
         ok = .false.
         if (.not. (omega > 0.0_dp)) return
         do im = 1, self%nmodes
@@ -450,41 +459,81 @@ contains
         ok = .true.
         self%omega = omega
         self%period = two_pi/omega
-        e0 = self%nz
-        do im = 1, self%nmodes
-            associate (md => self%modes(im))
-                do k = 1, size(self%eharm)
-                    md%b(e0 + 2*k, e0 + 2*k + 1) = -self%eharm(k)*omega
-                    md%b(e0 + 2*k + 1, e0 + 2*k) = self%eharm(k)*omega
-                end do
-                md%drows = matmul(transpose(md%b), md%rows)
-                if (allocated(md%gauss)) deallocate (md%gauss)
-                ! the exosystem's columns of exp(b h) at the finest rung (||b h|| <= 1/16:
-                ! the Taylor series converges to roundoff in a dozen terms), then up the
-                ! ladder as the squarings built it: col(k - 1) = ladder(k) col(k)
-                h = self%delta*0.5_dp**md%nl
-                cols = md%ladder(:, e0 + 1:, md%nl)
-                cols = 0.0_dp
-                do k = 1, self%ne
-                    cols(e0 + k, k) = 1.0_dp
-                end do
-                term = cols
-                do kk = 1, 40
-                    term = mat_mul(md%b, term)*(h/kk)
-                    cols = cols + term
-                    ! converged on the scale of the structural rows (the forcing's
-                    ! response over one rung can be far below the exosystem's unit rows)
-                    if (maxval(abs(term)) <= epsilon(1.0_dp)*0.01_dp* &
-                        max(maxval(abs(cols(1:e0, :))), tiny(1.0_dp))) exit
-                end do
-                md%ladder(:, e0 + 1:, md%nl) = cols
-                do k = md%nl, 1, -1
-                    md%ladder(:, e0 + 1:, k - 1) = mat_mul(md%ladder(:, :, k), &
-                                                           md%ladder(:, e0 + 1:, k))
-                end do
-            end associate
-        end do
     end subroutine retune_modes
+
+    !> Mode md at the flow's omega (after retune_modes): the exosystem's rotation in its b
+    !> and the exosystem rows of its event rows' slopes drows = b^T rows; its exponentials
+    !> at the Gauss points dropped. Nothing when it is tuned already.
+    subroutine tune_mode(self, md)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> A linear mode of its cache.
+        type(mode_t), intent(inout) :: md
+        integer :: k, e0
+        if (md%omega_b == self%omega) return
+        e0 = self%nz
+        do k = 1, size(self%eharm)
+            md%b(e0 + 2*k, e0 + 2*k + 1) = -self%eharm(k)*self%omega
+            md%b(e0 + 2*k + 1, e0 + 2*k) = self%eharm(k)*self%omega
+        end do
+        md%drows(e0 + 1:, :) = mat_mul(transpose(md%b(:, e0 + 1:)), md%rows)
+        if (allocated(md%gauss)) deallocate (md%gauss)
+        md%omega_b = self%omega
+    end subroutine tune_mode
+
+    !> Mode md's dyadic ladder exp(b delta 2^-k) at the flow's omega (tune_mode first):
+    !> built on first use; afterwards its exosystem columns retuned, at the finest rung by
+    !> the Taylor series, then up the ladder as the squarings built it. What it costs: ~(12 + nl) n_a x n_e products, against a
+    !> matrix exponential and nl squarings of n_a x n_a matrices for a new mode. Nothing
+    !> when it is tuned already.
+    subroutine tune_ladder(self, md, error)
+        !> The dynamics.
+        class(flow_modes_t), intent(in) :: self
+        !> A linear mode of its cache.
+        type(mode_t), intent(inout) :: md
+        !> Set when the ladder, built here on first use, is not finite.
+        type(error_type), allocatable, intent(inout) :: error
+        real(dp), allocatable :: cols(:, :), term(:, :)
+        real(dp) :: h
+        integer :: k, e0, kk
+        call tune_mode(self, md)
+        if (md%omega_ladder == self%omega) return
+        if (.not. allocated(md%ladder)) then
+            ! built on first use (a mode whose phases are all tracked in modal coordinates
+            ! never needs it)
+            call ladder_of(md%b, self%delta, md%ladder, md%nl, error)
+            if (allocated(error)) then
+                deallocate (md%ladder)
+                return
+            end if
+            md%omega_ladder = self%omega
+            return
+        end if
+        e0 = self%nz
+        ! the exosystem's columns of exp(b h) at the finest rung (||b h|| <= 1/16: the
+        ! Taylor series converges to roundoff in a dozen terms), then up the ladder as the
+        ! squarings built it: col(k - 1) = ladder(k) col(k)
+        h = self%delta*0.5_dp**md%nl
+        cols = md%ladder(:, e0 + 1:, md%nl)
+        cols = 0.0_dp
+        do k = 1, self%ne
+            cols(e0 + k, k) = 1.0_dp
+        end do
+        term = cols
+        do kk = 1, 40
+            term = mat_mul(md%b, term)*(h/kk)
+            cols = cols + term
+            ! converged on the scale of the structural rows (the forcing's response over
+            ! one rung can be far below the exosystem's unit rows)
+            if (maxval(abs(term)) <= epsilon(1.0_dp)*0.01_dp* &
+                max(maxval(abs(cols(1:e0, :))), tiny(1.0_dp))) exit
+        end do
+        md%ladder(:, e0 + 1:, md%nl) = cols
+        do k = md%nl, 1, -1
+            md%ladder(:, e0 + 1:, k - 1) = mat_mul(md%ladder(:, :, k), md%ladder(:, e0 + 1:, k))
+        end do
+        md%omega_ladder = self%omega
+    end subroutine tune_ladder
 
     !> The n x n identity matrix.
     pure function identity_matrix(n) result(e)
@@ -551,7 +600,8 @@ contains
 
     !> jac <- exp(B tau) jac, B the state block (n_z x n_z) of mode md's balanced dynamics
     !> and tau >= 0 [s] a phase's duration: the Jacobian of the period map carried over a
-    !> linear phase. By the mode's modal form (built on first use) when it is usable and
+    !> linear phase. By the mode's modal form (stickslip_flow_track's ensure_modal) when it
+    !> is usable and
     !> the columns of jac lie on the mode's velocity constraints, as they do after the
     !> event that entered the mode (stickslip_flow_modal); otherwise by the matrix
     !> exponential. The two agree to roundoff (the form is checked against the mode's
@@ -559,8 +609,8 @@ contains
     subroutine propagate_jacobian(self, md, tau, jac)
         !> The dynamics md belongs to.
         class(flow_modes_t), intent(in) :: self
-        !> The contact mode of the phase; its modal form may be built.
-        type(mode_t), intent(inout) :: md
+        !> The contact mode of the phase.
+        type(mode_t), intent(in) :: md
         !> Duration [s].
         real(dp), intent(in) :: tau
         !> n_z x m, propagated in place.
@@ -570,15 +620,10 @@ contains
         real(dp), allocatable :: phi(:, :)
         integer :: nz, stat
         nz = self%nz
-        if (md%m == 0) then
-            if (md%modal%status == 0) call build_modal_form(md%modal, md%b(1:nz, 1:nz), &
-                                                            md%ctm, self%n, self%delta, &
-                                                            md%ladder(1:nz, 1:nz, 0))
-            if (md%modal%status == 1) then
-                if (off_constraints(md%ctm, self%n, jac) <= on_constraints) then
-                    call modal_propagate(md%modal, tau, jac)
-                    return
-                end if
+        if (md%m == 0 .and. md%modal%status == 1) then
+            if (off_constraints(md%ctm, self%n, jac) <= on_constraints) then
+                call modal_propagate(md%modal, tau, jac)
+                return
             end if
         end if
         allocate (phi(nz, nz))

@@ -23,7 +23,7 @@ module stickslip_flow_algebra
     use stickslip_lapack, only: dgesv
     use stickslip_flow_modes, only: mode_t, flow_modes_t, build_ladder, identity_matrix, &
         tune_mode
-    use stickslip_flow_modal, only: project_velocity_rows
+    use stickslip_flow_modal, only: project_velocity_rows, gram_solve
     use stickslip_contact_modes, only: mode_terms_t, event_list_t
     use stickslip_contact_set, only: contact_set_t, new_element_set
     use stickslip_contact_element, only: element_box_t, state_stick, along_normal
@@ -761,24 +761,4 @@ contains
         ! P = I - Ct G^-1 Ct^T on the velocities (applied in low rank)
         if (present(pj)) call project_velocity_rows(md%ctm, n, pj)
     end subroutine project_velocities
-
-    !> x = (C^T C)^-1 b for the m columns of c (n x m) and b (m x k) (LAPACK dgesv); ok =
-    !> .false. when C^T C is singular (dependent constraint directions).
-    subroutine gram_solve(c, b, x, ok)
-        !> The directions, n x m.
-        real(dp), intent(in) :: c(:, :)
-        !> Right-hand sides, m x k.
-        real(dp), intent(in) :: b(:, :)
-        !> The solutions, m x k.
-        real(dp), allocatable, intent(out) :: x(:, :)
-        !> The system was solved.
-        logical, intent(out) :: ok
-        real(dp) :: g(size(c, 2), size(c, 2))
-        integer :: ipiv(size(c, 2)), info, m
-        m = size(c, 2)
-        g = matmul(transpose(c), c)
-        x = b
-        call dgesv(m, size(b, 2), g, m, ipiv, x, m, info)
-        ok = info == 0 .and. all(ieee_is_finite(x))
-    end subroutine gram_solve
 end module stickslip_flow_algebra

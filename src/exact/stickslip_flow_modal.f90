@@ -29,7 +29,7 @@ module stickslip_flow_modal
     implicit none
     private
     public :: modal_form_t, build_modal_form, modal_propagate, project_velocity_rows, &
-        off_constraints
+        off_constraints, gram_solve
 
     !> Smallest reciprocal 1-norm condition number of the eigenvector matrix accepted.
     real(dp), parameter :: min_rcond = 1.0e-8_dp
@@ -218,10 +218,16 @@ contains
             (amax*maxval(sqrt(sum(ctm**2, 1))))
     end function off_constraints
 
-    !> x = (C^T C)^-1 r (C n x k, r k x m) by dgesv; ok false when singular.
+    !> x = (C^T C)^-1 r for the k columns of c (n x k) and r (k x m) (LAPACK dgesv); ok =
+    !> .false. when C^T C is singular (dependent constraint directions) or x not finite.
     subroutine gram_solve(c, r, x, ok)
-        real(dp), intent(in) :: c(:, :), r(:, :)
+        !> The directions, n x k.
+        real(dp), intent(in) :: c(:, :)
+        !> Right-hand sides, k x m.
+        real(dp), intent(in) :: r(:, :)
+        !> The solutions, k x m.
         real(dp), allocatable, intent(out) :: x(:, :)
+        !> The system was solved.
         logical, intent(out) :: ok
         real(dp) :: g(size(c, 2), size(c, 2))
         integer :: ipiv(size(c, 2)), info, k

@@ -270,6 +270,7 @@ contains
         real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :), xs(:, :), vs(:, :)
         real(dp) :: c0, c1, ampx, ampv, distance, ftol
         integer :: stride
+        logical :: finer
         character(len=200) :: buf
 
         c0 = thread_cpu_seconds()
@@ -296,6 +297,18 @@ contains
                 cache = reference_cache_t()
                 call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
                                      light=.not. present(ref), r_start=sol%r)
+            end if
+        end if
+        finer = .false.
+        if (.not. allocated(error)) then
+            if (.not. res%converged .or. .not. allocated(res%monodromy)) then
+                ! an iterate met contacts switching again at one instant on the bracketing
+                ! grid (a degenerate event the grid's placement decides): once more on a grid
+                ! 1.5 times finer, not kept for the next point
+                call solve_reference(model, finer_grid(opts), sol%x, sol%v, res, error, &
+                                     start_name='hbm', light=.not. present(ref), &
+                                     r_start=sol%r)
+                finer = .true.
             end if
         end if
         if (allocated(error)) then
@@ -375,8 +388,16 @@ contains
 
         subroutine give_ref()
             if (present(ref)) ref = res
-            if (present(cache)) call keep_flow(cache, res)
+            if (present(cache) .and. .not. finer) call keep_flow(cache, res)
         end subroutine give_ref
+
+        !> The options with 1.5 times the bracketing steps.
+        function finer_grid(o) result(f)
+            type(reference_options_t), intent(in) :: o
+            type(reference_options_t) :: f
+            f = o
+            f%bracket_steps = (3*o%bracket_steps)/2
+        end function finer_grid
     end subroutine periodic_stability
 
     !> A-posteriori check of a weighted-residual solution: integrate `periods` periods of the

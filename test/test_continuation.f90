@@ -523,6 +523,7 @@ contains
         call run_sweep(m, ho, ro, so, res, error)
         call check_error(t, error, "bad sweep: empty range", .true.)
     end subroutine test_bad_sweep
+
     !> stability_block: a point whose weighted-residual solve at the curve's rho does not
     !> converge (rho = 1e-14 on the damped seed: the friction equality barely sees the
     !> force) gets its verdict from a fresh solve with the automatic rho, the multipliers of

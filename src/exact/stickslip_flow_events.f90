@@ -16,7 +16,7 @@ module stickslip_flow_events
     public :: event_stick, event_slip, event_reversal, event_graze, event_open, event_close, &
         event_impact, event_kind, event_name
     public :: find_event, row_crossing, quadratic_crossing, grid_step, event_guard, &
-        end_monodromy, event_hit_t, hermite_root
+        end_monodromy, event_hit_t, hermite_root, root_bracket_t, pop_earliest
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
     !> reverses without sticking; a slipping contact's velocity touches zero and it goes on;
@@ -33,7 +33,151 @@ module stickslip_flow_events
         real(dp), allocatable :: c(:)
     end type event_hit_t
 
+    !> Safeguarded Newton iteration on a function g over a bracket (lo, hi], g > 0 at lo and
+    !> g <= 0 at hi, by reverse communication: `next` gives the time to evaluate (or done),
+    !> the caller evaluates g and its slope there in its own way (a propagation of the
+    !> augmented state, a modal track) and hands them to `take`. The root of the cubic
+    !> Hermite interpolant over the bracket first, then a Newton step from the last
+    !> iterate, bisection when it leaves the bracket or does not halve it; once a Newton step
+    !> is below tol, one evaluation a few ulps past the iterate closes the bracket. Ends
+    !> when the bracket is at most tol wide, g is exactly 0, the bracket is closed or after
+    !> 200 iterates. The root is hi (the side where g <= 0); a caller that needs the state
+    !> there keeps the last one it evaluated with g <= 0.
+    type :: root_bracket_t
+        real(dp) :: lo = 0.0_dp, hi = 0.0_dp, tau = 0.0_dp, g = 0.0_dp, dg = 0.0_dp
+        real(dp) :: tol = 0.0_dp, step = 0.0_dp, old_step = 0.0_dp, t2 = 0.0_dp
+        integer :: iter = 0
+        !> What the next `take` answers: 1 an iterate, 2 a probe after it, 3 one before it.
+        integer :: pending = 0
+        logical :: newton = .false., done = .false., hermite = .false.
+    contains
+        procedure :: start => root_start
+        procedure :: next => root_next
+        procedure :: take => root_take
+    end type root_bracket_t
+
 contains
+
+    !> Start on the bracket (lo, hi], g > 0 at lo and <= 0 at hi, with the values glo, ghi
+    !> and slopes dlo, dhi of g at its ends, to a bracket width tol: the first iterate is the
+    !> root of the cubic Hermite interpolant (no evaluation at lo), else Newton from hi.
+    pure subroutine root_start(self, lo, hi, glo, dlo, ghi, dhi, tol)
+        class(root_bracket_t), intent(inout) :: self
+        real(dp), intent(in) :: lo, hi, glo, dlo, ghi, dhi, tol
+        self%iter = 0
+        self%pending = 0
+        self%newton = .false.
+        self%lo = lo
+        self%hi = hi
+        self%tol = tol
+        self%g = ghi
+        self%dg = dhi
+        self%old_step = hi - lo
+        self%step = self%old_step
+        self%done = ghi == 0.0_dp
+        self%tau = lo + hermite_root(glo, dlo, ghi, dhi, hi - lo)
+        self%hermite = self%tau > lo .and. self%tau < hi
+        if (.not. self%hermite) self%tau = hi
+    end subroutine root_start
+
+    !> The next time t to evaluate, or done.
+    pure subroutine root_next(self, t, done)
+        class(root_bracket_t), intent(inout) :: self
+        real(dp), intent(out) :: t
+        logical, intent(out) :: done
+        t = self%hi
+        if (self%pending >= 2) then
+            t = self%t2
+            done = .false.
+            return
+        end if
+        if (self%done .or. self%hi - self%lo <= self%tol .or. self%iter >= 200) &
+            self%done = .true.
+        done = self%done
+        if (done) return
+        self%iter = self%iter + 1
+        if (self%hermite) then
+            ! the Hermite interpolant's root, the first iterate
+            self%newton = .false.
+            self%pending = 1
+            t = self%tau
+            return
+        end if
+        ! Newton from tau, unless it leaves (lo, hi) or does not halve the bracket
+        self%newton = .false.
+        if (self%dg /= 0.0_dp .and. abs(2.0_dp*self%g) < abs(self%old_step*self%dg)) then
+            self%old_step = self%step
+            self%step = self%g/self%dg
+            self%tau = self%tau - self%step
+            self%newton = .true.
+            if (.not. (self%tau > self%lo .and. self%tau < self%hi)) then
+                self%tau = 0.5_dp*(self%lo + self%hi)
+                self%old_step = self%step
+                self%step = self%hi - self%lo
+                self%newton = .false.
+            end if
+        else
+            self%old_step = self%step
+            self%step = 0.5_dp*(self%hi - self%lo)
+            self%tau = 0.5_dp*(self%lo + self%hi)
+        end if
+        self%pending = 1
+        t = self%tau
+    end subroutine root_next
+
+    !> g and its slope at the time `next` gave.
+    pure subroutine root_take(self, g, dg)
+        class(root_bracket_t), intent(inout) :: self
+        real(dp), intent(in) :: g, dg
+        select case (self%pending)
+        case (1)
+            self%g = g
+            self%dg = dg
+            if (g > 0.0_dp) then
+                self%lo = self%tau
+            else
+                self%hi = self%tau
+            end if
+            self%pending = 0
+            if (self%hermite) then
+                ! the Newton steps' history starts on the bracket the first iterate left
+                self%hermite = .false.
+                self%old_step = self%hi - self%lo
+                self%step = self%old_step
+            end if
+            if (g == 0.0_dp) then
+                self%done = .true.
+            else if (self%newton .and. abs(self%step) <= self%tol) then
+                ! converged: the root is within a few ulps of tau on the side Newton
+                ! approaches from; close the bracket there
+                if (g > 0.0_dp) then
+                    self%t2 = min(self%tau + 2.0_dp*abs(self%step) + self%tol, self%hi)
+                    self%done = self%t2 >= self%hi
+                    if (.not. self%done) self%pending = 2
+                else
+                    self%t2 = max(self%tau - 2.0_dp*abs(self%step) - self%tol, self%lo)
+                    self%done = self%t2 <= self%lo
+                    if (.not. self%done) self%pending = 3
+                end if
+            end if
+        case (2)
+            self%pending = 0
+            if (g <= 0.0_dp) then
+                self%hi = self%t2
+                self%done = .true.
+            else
+                self%lo = self%t2
+            end if
+        case (3)
+            self%pending = 0
+            if (g > 0.0_dp) then
+                self%lo = self%t2
+                self%done = .true.
+            else
+                self%hi = self%t2
+            end if
+        end select
+    end subroutine root_take
 
     !> Kind of the change of one code slot at an event (0 stuck, +1 / -1 slipping, 2 open):
     !> event_open, event_close or event_impact (`impacted`) for the normal law, else
@@ -104,7 +248,7 @@ contains
         real(dp) :: tau, best, h, ga, gb, da, db, ytau(size(ya))
         real(dp), allocatable :: est(:)
         integer, allocatable :: cand(:)
-        integer :: col, k, nrow, i
+        integer :: col, k, nrow
         found = .false.
         h = tb - ta
         best = huge(1.0_dp)
@@ -144,12 +288,7 @@ contains
         end do
         if (found) call propagate(md, self%delta, best, ya, ye)
         do while (k > 0)
-            ! the candidate with the earliest estimate, taken out of the list
-            i = minloc(est(1:k), 1)
-            col = cand(i)
-            cand(i) = cand(k)
-            est(i) = est(k)
-            k = k - 1
+            col = pop_earliest(cand, est, k)
             if (found) then
                 ! it crosses after the earliest event so far: not the first
                 if (dot_product(md%rows(:, col), ye) > 0.0_dp) cycle
@@ -346,10 +485,9 @@ contains
     !> when a Newton step leaves the bracket or stalls) until the bracket is a few ulps of
     !> the period wide. Returns the end of the bracket where g <= 0. The first iterate is
     !> the root of the cubic Hermite interpolant of g over the bracket (g and its slope at
-    !> both ends: no propagation at 0); once a Newton step is below the bracket tolerance,
-    !> one more propagation a few ulps past the iterate closes the bracket (each
-    !> propagation costs dozens of matrix-vector products: a stiff reduced model with many
-    !> contacts spent most of its stability time here).
+    !> both ends: no propagation at 0), then root_bracket_t (each propagation costs dozens
+    !> of matrix-vector products: a stiff reduced model with many contacts spent most of its
+    !> stability time here; hence the bracket closed by one propagation past the iterate).
     real(dp) function first_crossing(md, delta, y0, r, order, hi0, yhi, yout) result(hi)
         type(mode_t), intent(in) :: md
         real(dp), intent(in) :: delta, y0(:), r(:)
@@ -359,10 +497,11 @@ contains
         real(dp), intent(in), optional :: yhi(:)
         !> The state at the returned time (exp(b hi) y0).
         real(dp), intent(out), optional :: yout(:)
-        real(dp) :: lo, tau, g, dg, step, old_step, tol, row(size(r)), row1(size(r))
-        real(dp) :: y(size(y0)), g0, dg0, t2, bnorm, tlast, ylast(size(y0)), yh(size(y0))
-        integer :: iter, k
-        logical :: newton
+        real(dp) :: lo, tau, g, dg, tol, row(size(r)), row1(size(r)), t
+        real(dp) :: y(size(y0)), g0, dg0, bnorm, tlast, ylast(size(y0)), yh(size(y0))
+        type(root_bracket_t) :: rb
+        integer :: k
+        logical :: done
         row = r
         do k = 1, order
             row = matmul(row, md%b)
@@ -389,84 +528,19 @@ contains
             if (present(yout)) yout = yh
             return
         end if
-        ! the root of the cubic Hermite interpolant, a first iterate inside the bracket
-        tau = hermite_root(g0, dg0, g, dg, hi)
-        if (tau > lo .and. tau < hi) then
-            call iterate_at(tau)
-            if (g == 0.0_dp) then
-                if (present(yout)) yout = yh
-                return
-            end if
-        else
-            tau = hi
-        end if
-        old_step = hi - lo
-        step = old_step
-        do iter = 1, 200
-            if (hi - lo <= tol) exit
-            ! Newton from tau, unless it leaves (lo, hi) or does not halve the bracket
-            newton = .false.
-            if (dg /= 0.0_dp .and. abs(2.0_dp*g) < abs(old_step*dg)) then
-                old_step = step
-                step = g/dg
-                tau = tau - step
-                newton = .true.
-                if (.not. (tau > lo .and. tau < hi)) then
-                    tau = 0.5_dp*(lo + hi)
-                    old_step = step
-                    step = hi - lo
-                    newton = .false.
-                end if
-            else
-                old_step = step
-                step = 0.5_dp*(hi - lo)
-                tau = 0.5_dp*(lo + hi)
-            end if
-            call iterate_at(tau)
-            if (g == 0.0_dp) exit
-            if (newton .and. abs(step) <= tol) then
-                ! converged: the root is within a few ulps of tau on the side Newton
-                ! approaches from; close the bracket there
-                if (g > 0.0_dp) then
-                    t2 = min(tau + 2.0_dp*abs(step) + tol, hi)
-                    if (t2 >= hi) exit
-                    call state_at(t2)
-                    if (dot_product(row, y) <= 0.0_dp) then
-                        hi = t2
-                        yh = y
-                        exit
-                    end if
-                    lo = t2
-                else
-                    t2 = max(tau - 2.0_dp*abs(step) - tol, lo)
-                    if (t2 <= lo) exit
-                    call state_at(t2)
-                    if (dot_product(row, y) > 0.0_dp) then
-                        lo = t2
-                        exit
-                    end if
-                    hi = t2
-                    yh = y
-                end if
-            end if
+        call rb%start(lo, hi, g0, dg0, g, dg, tol)
+        do
+            call rb%next(t, done)
+            if (done) exit
+            call state_at(t)
+            g = dot_product(row, y)
+            if (g <= 0.0_dp) yh = y
+            call rb%take(g, dot_product(row1, y))
         end do
+        hi = rb%hi
         if (present(yout)) yout = yh
 
     contains
-
-        !> The iterate t: the state there, g and its slope, the bracket's side moved to t.
-        subroutine iterate_at(t)
-            real(dp), intent(in) :: t
-            call state_at(t)
-            g = dot_product(row, y)
-            dg = dot_product(row1, y)
-            if (g > 0.0_dp) then
-                lo = t
-            else
-                hi = t
-                yh = y
-            end if
-        end subroutine iterate_at
 
         !> y = exp(b t) y0: from the last state computed by a Taylor series when t is within
         !> 1/16 of ||b||^-1 of it (a Newton step near the root: a few matrix-vector products,
@@ -492,6 +566,22 @@ contains
         end subroutine state_at
 
     end function first_crossing
+
+    !> The candidate with the earliest estimate among the first k of cand (est their
+    !> estimates), taken out of the list (k decreases by one; the last takes its place).
+    integer function pop_earliest(cand, est, k) result(col)
+        !> Candidate rows and their estimated crossing times.
+        integer, intent(inout) :: cand(:)
+        real(dp), intent(inout) :: est(:)
+        !> Number of candidates left, >= 1.
+        integer, intent(inout) :: k
+        integer :: i
+        i = minloc(est(1:k), 1)
+        col = cand(i)
+        cand(i) = cand(k)
+        est(i) = est(k)
+        k = k - 1
+    end function pop_earliest
 
     !> A root in (0, h) of the cubic p with p(0) = ga, p'(0) = da, p(h) = gb, p'(h) = db
     !> (ga > 0 >= gb), by bisection on p to 1e-6 h; -1 when h <= 0.

@@ -18,8 +18,9 @@
 !> the range of Pi, and B_d is diagonalizable (the static shapes and the constrained
 !> velocities are its eigenvectors of eigenvalue 0). The form is used only when it is
 !> accurate: dgeev succeeded, V is well conditioned (reciprocal condition >= min_rcond) and
-!> V exp(Lambda delta) W agrees with the mode's exponential exp(B delta) (its dyadic ladder)
-!> on the range of Pi to check_tol; otherwise the caller keeps the matrix exponential.
+!> V exp(Lambda delta) W agrees with the mode's exponential exp(B delta) (its dyadic
+!> ladder's, or a matrix exponential of B when the ladder is not built) on the range of Pi
+!> to check_tol; otherwise the caller keeps the matrix exponential.
 !> Knows nothing of events or files; no state besides the forms it returns.
 module stickslip_flow_modal
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -29,8 +30,11 @@ module stickslip_flow_modal
     implicit none
     private
     public :: modal_form_t, build_modal_form, modal_propagate, project_velocity_rows, &
-        off_constraints, gram_solve
+        off_constraints, gram_solve, on_constraints
 
+    !> Largest relative component off a mode's constraints (off_constraints) of the columns
+    !> the modal form propagates (a Jacobian, a phase's start state, the forcing columns).
+    real(dp), parameter :: on_constraints = 1.0e-10_dp
     !> Smallest reciprocal 1-norm condition number of the eigenvector matrix accepted.
     real(dp), parameter :: min_rcond = 1.0e-8_dp
     !> Largest difference, relative to the largest entry of exp(B delta), between the modal
@@ -123,7 +127,8 @@ contains
         form%im = wi
         ! the check: V exp(Lambda delta) W against exp(b delta) on the range of Pi
         form%status = 1
-        e1 = 0.0_dp*e_delta
+        allocate (e1(nz, nz))
+        e1 = 0.0_dp
         do k = 1, nz
             e1(k, k) = 1.0_dp
         end do

@@ -33,7 +33,8 @@ module stickslip_flow_modes
     use stickslip_lapack, only: dsygv
     use stickslip_expm, only: expm
     use stickslip_dense_products, only: mat_mul, mat_vec
-    use stickslip_flow_modal, only: modal_form_t, modal_propagate, off_constraints
+    use stickslip_flow_modal, only: modal_form_t, modal_propagate, off_constraints, &
+        on_constraints
     implicit none
     private
     public :: ngauss, mode_t, level_t, flow_modes_t, new_flow_modes
@@ -72,7 +73,8 @@ module stickslip_flow_modes
         !> drows(:, k) . y).
         real(dp), allocatable :: drows(:, :)
         !> Dyadic ladder of exponentials ladder(:, :, k) = exp(b delta 2^-k), k = 0..nl,
-        !> ||b delta 2^-nl|| <= 1/16 (balanced coordinates).
+        !> ||b delta 2^-nl|| <= 1/16 (balanced coordinates); of a linear mode built on first
+        !> use (tune_ladder), unallocated until then.
         real(dp), allocatable :: ladder(:, :, :)
         integer :: nl = 0
         !> exp(b delta (1 + x_i) / 2) at the Gauss points x_i (balanced; built on first use).
@@ -615,8 +617,6 @@ contains
         real(dp), intent(in) :: tau
         !> n_z x m, propagated in place.
         real(dp), intent(inout) :: jac(:, :)
-        !> Largest relative component of jac off the constraints for the modal form.
-        real(dp), parameter :: on_constraints = 1.0e-10_dp
         real(dp), allocatable :: phi(:, :)
         integer :: nz, stat
         nz = self%nz

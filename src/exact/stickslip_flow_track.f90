@@ -25,17 +25,13 @@ module stickslip_flow_track
     use stickslip_dense_products, only: mat_mul, mat_vec
     use stickslip_lapack, only: dgemm
     use stickslip_flow_modes, only: mode_t, flow_modes_t
-    use stickslip_flow_modal, only: off_constraints, build_modal_form
+    use stickslip_flow_modal, only: off_constraints, build_modal_form, on_constraints
     use stickslip_expm, only: expm
     use stickslip_hash, only: hash_t
-    use stickslip_flow_events, only: event_hit_t, hermite_root
+    use stickslip_flow_events, only: event_hit_t, hermite_root, root_bracket_t, pop_earliest
     implicit none
     private
     public :: track_t, ensure_modal, track_usable, start_track, track_state, track_find_event
-
-    !> Largest relative component of the forcing columns or of a phase's start state off the
-    !> mode's constraints for the modal track.
-    real(dp), parameter :: on_constraints = 1.0e-10_dp
 
     !> One linear phase: its start t_a [s], eta, and the values and slopes of the mode's
     !> event rows at the last grid point (reused as the next step's start).
@@ -425,14 +421,15 @@ contains
         real(dp), intent(out) :: te, ye(:)
         !> The event.
         type(event_hit_t), intent(out) :: hit
-        real(dp), allocatable :: ga(:), da(:), gb(:), db(:), est(:), gab(:, :)
-        integer, allocatable :: cand(:)
+        ! automatic arrays: no allocation per grid step
+        real(dp) :: ga(size(md%row_scale)), da(size(md%row_scale)), gb(size(md%row_scale)), &
+                    db(size(md%row_scale)), est(size(md%row_scale)), gab(size(md%row_scale), 2)
+        integer :: cand(size(md%row_scale))
         real(dp) :: h, best, tau, thr, tmin
-        integer :: nrow, col, k, i
+        integer :: nrow, col, k
         found = .false.
         h = tb - ta
         nrow = size(md%row_scale)
-        allocate (gab(nrow, 2))
         if (trk%tlast == ta .and. allocated(trk%glast)) then
             ga = trk%glast
             da = trk%dlast
@@ -448,7 +445,6 @@ contains
         trk%glast = gb
         trk%dlast = db
         best = huge(1.0_dp)
-        allocate (cand(nrow), est(nrow))
         k = 0
         do col = 1, nrow
             if (gb(col) <= 0.0_dp) then
@@ -475,11 +471,7 @@ contains
             end if
         end do
         do while (k > 0)
-            i = minloc(est(1:k), 1)
-            col = cand(i)
-            cand(i) = cand(k)
-            est(i) = est(k)
-            k = k - 1
+            col = pop_earliest(cand, est, k)
             if (found) then
                 ! crosses after the earliest event so far: not the first
                 if (row_value(self, md, trk, col, ta + best) > 0.0_dp) cycle
@@ -509,9 +501,9 @@ contains
 
     !> The end of a bracket a few ulps wide around the first zero in (lo0, hi0] of sgn *
     !> (row col of mode md differentiated `order` times) at ta + tau, positive at lo0 (value
-    !> glo) and non-positive at hi0 (ghi), on the side where it is non-positive: safeguarded
-    !> Newton iteration (bisection when a step leaves the bracket or does not halve it),
-    !> started at the root of the cubic Hermite interpolant.
+    !> glo) and non-positive at hi0 (ghi), on the side where it is non-positive: the root of
+    !> the cubic Hermite interpolant, then stickslip_flow_events' root_bracket_t (the ladder's
+    !> event location, on evaluations of the track).
     real(dp) function crossing(self, md, trk, col, order, sgn, ta, lo0, hi0, glo, ghi) &
         result(hi)
         class(flow_modes_t), intent(in) :: self
@@ -519,68 +511,22 @@ contains
         type(track_t), intent(in) :: trk
         integer, intent(in) :: col, order
         real(dp), intent(in) :: sgn, ta, lo0, hi0, glo, ghi
-        real(dp) :: lo, tol, tau, g, dg, step, old_step, t2, dlo, dhi
-        integer :: iter
-        logical :: newton
+        type(root_bracket_t) :: rb
+        real(dp) :: lo, tol, g, dg, dlo, dhi, t
+        logical :: done
         lo = lo0
         hi = hi0
         tol = 4.0_dp*epsilon(1.0_dp)*hi0 + tiny(1.0_dp)
         if (ghi > 0.0_dp .or. hi - lo <= tol) return
         call one_row(self, md, trk, col, ta + lo, order, g, dlo)
         call one_row(self, md, trk, col, ta + hi, order, g, dhi)
-        dlo = sgn*dlo
-        dhi = sgn*dhi
-        tau = lo + hermite_root(glo, dlo, ghi, dhi, hi - lo)
-        if (.not. (tau > lo .and. tau < hi)) tau = 0.5_dp*(lo + hi)
-        call at(tau)
-        if (g == 0.0_dp) return
-        old_step = hi - lo
-        step = old_step
-        do iter = 1, 200
-            if (hi - lo <= tol) exit
-            newton = .false.
-            if (dg /= 0.0_dp .and. abs(2.0_dp*g) < abs(old_step*dg)) then
-                old_step = step
-                step = g/dg
-                tau = tau - step
-                newton = .true.
-                if (.not. (tau > lo .and. tau < hi)) then
-                    tau = 0.5_dp*(lo + hi)
-                    old_step = step
-                    step = hi - lo
-                    newton = .false.
-                end if
-            else
-                old_step = step
-                step = 0.5_dp*(hi - lo)
-                tau = 0.5_dp*(lo + hi)
-            end if
-            call at(tau)
-            if (g == 0.0_dp) exit
-            if (newton .and. abs(step) <= tol) then
-                ! close the bracket a few ulps to the other side of the root
-                if (g > 0.0_dp) then
-                    t2 = min(tau + 2.0_dp*abs(step) + tol, hi)
-                else
-                    t2 = max(tau - 2.0_dp*abs(step) - tol, lo)
-                end if
-                if (t2 > lo .and. t2 < hi) call at(t2)
-            end if
+        call rb%start(lo, hi, glo, sgn*dlo, ghi, sgn*dhi, tol)
+        do
+            call rb%next(t, done)
+            if (done) exit
+            call one_row(self, md, trk, col, ta + t, order, g, dg)
+            call rb%take(sgn*g, sgn*dg)
         end do
-
-    contains
-
-        !> g, dg at tau; the bracket's side moved there.
-        subroutine at(tau)
-            real(dp), intent(in) :: tau
-            call one_row(self, md, trk, col, ta + tau, order, g, dg)
-            g = sgn*g
-            dg = sgn*dg
-            if (g > 0.0_dp) then
-                lo = tau
-            else
-                hi = tau
-            end if
-        end subroutine at
+        hi = rb%hi
     end function crossing
 end module stickslip_flow_track

@@ -47,6 +47,7 @@ program tester
     use test_reduction_estimate, only: run_reduction_estimate_tests
     use test_reduction_cache, only: run_reduction_cache_tests
     use test_arpack, only: run_arpack_tests
+    use test_block_lanczos, only: run_block_lanczos_tests
     use test_sparse, only: run_sparse_tests
     use test_matrix_market, only: run_matrix_market_tests
     use test_decimal, only: run_decimal_tests
@@ -128,6 +129,7 @@ program tester
         suite_t("reduction_estimate", run_reduction_estimate_tests),&
         suite_t("reduction_cache", run_reduction_cache_tests),&
         suite_t("arpack", run_arpack_tests),&
+        suite_t("block_lanczos", run_block_lanczos_tests),&
         suite_t("sparse", run_sparse_tests),&
         suite_t("decimal", run_decimal_tests),&
         suite_t("matrix_market", run_matrix_market_tests),&

@@ -23,7 +23,7 @@ module test_arpack
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
-    public :: run_arpack_tests
+    public :: run_arpack_tests, grid, all_pairs
 
     real(dp), parameter :: pi = acos(-1.0_dp)
 

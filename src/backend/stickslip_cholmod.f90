@@ -93,6 +93,8 @@ module stickslip_cholmod
         procedure :: factorized => chol_factorized
         !> 'Cholesky'.
         procedure :: name => chol_name
+        !> .true.: a supernodal solve passes over L once for the whole block.
+        procedure :: solves_blocks => chol_solves_blocks
     end type sparse_cholesky_t
 
     interface
@@ -362,5 +364,14 @@ contains
         text = merge('supernodal Cholesky', 'Cholesky           ', self%supernodal)
         text = trim(text)
     end function chol_name
+
+    !> Whether block solves are cheap: a supernodal factor is read once per block (dense
+    !> BLAS on its supernodes; 17 right-hand sides cost about 3.5 single solves on the
+    !> Rotor 37 blade's K_ii), a simplicial one column by column.
+    logical function chol_solves_blocks(self) result(cheap)
+        !> The factorization.
+        class(sparse_cholesky_t), intent(in) :: self
+        cheap = self%supernodal .and. c_associated(self%factor)
+    end function chol_solves_blocks
 
 end module stickslip_cholmod

@@ -6,7 +6,7 @@ module stickslip_lapack
     implicit none
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
-        zgesv, dsygv, sgetrf, sgetrs, dgemm, dgemv
+        zgesv, dsygv, dsyev, sgetrf, sgetrs, dgemm, dgemv
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -143,6 +143,18 @@ module stickslip_lapack
             complex(dp), intent(inout) :: b(ldb, *)
             integer, intent(out) :: info
         end subroutine zgesv
+
+        !> Symmetric eigenproblem A x = lambda x, eigenvalues w ascending; with jobz = 'V' a
+        !> holds the orthonormal eigenvectors. lwork = -1 is a workspace query.
+        subroutine dsyev(jobz, uplo, n, a, lda, w, work, lwork, info)
+            import :: dp
+            character(len=1), intent(in) :: jobz, uplo
+            integer, intent(in) :: n, lda, lwork
+            real(dp), intent(inout) :: a(lda, *)
+            real(dp), intent(out) :: w(*)
+            real(dp), intent(out) :: work(*)
+            integer, intent(out) :: info
+        end subroutine dsyev
 
         !> Generalized symmetric-definite eigenproblem A x = lambda B x (itype 1), eigenvalues
         !> w ascending; with jobz = 'V' a holds the B-orthonormal eigenvectors and b its

@@ -34,6 +34,9 @@ module stickslip_sparse_factor
         procedure(factorized_interface), deferred :: factorized
         !> What the factorization is, for reports ('LU', 'Cholesky').
         procedure(name_interface), deferred :: name
+        !> Whether a solve with many right-hand sides costs much less than that many solves
+        !> (one pass over the factors for the block): .false. unless a kind says so.
+        procedure :: solves_blocks => factor_solves_blocks
     end type sparse_factor_t
 
     abstract interface
@@ -80,6 +83,13 @@ module stickslip_sparse_factor
     end interface
 
 contains
+
+    !> .false.: by default a block solve is taken to cost one solve per column.
+    logical function factor_solves_blocks(self) result(cheap)
+        !> The factorization.
+        class(sparse_factor_t), intent(in) :: self
+        cheap = .false.
+    end function factor_solves_blocks
 
     !> Check a 1-based compressed sparse column pattern of an n x n matrix with nvalues values
     !> (errors, input, name `who`: n < 1, pointers that do not start at 1, decrease or disagree

@@ -51,7 +51,8 @@ module stickslip_reduction
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
-    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
+    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose, &
+        sparse_times_block
     use stickslip_sparse_factor, only: sparse_factor_t
     use stickslip_stiffness_factor, only: factorize_stiffness
     use stickslip_progress, only: progress_t
@@ -358,11 +359,18 @@ contains
         else
             nm = 0
         end if
-        if (nm > 0) call phase(itoa(nm)//" fixed-interface modes (highest "// &
-                               real_text(sqrt(max(lam(nm), 0.0_dp)), '(es10.3)')//" rad/s; "// &
-                               itoa(rrep%runs + merge(1, 0, erep%op_applications > 0))// &
-                               " Lanczos runs, "// &
-                               itoa(rrep%op_applications + erep%op_applications)//" solves)")
+        if (nm > 0 .and. rrep%block_solves > 0) then
+            call phase(itoa(nm)//" fixed-interface modes (highest "// &
+                       real_text(sqrt(max(lam(nm), 0.0_dp)), '(es10.3)')//" rad/s; "// &
+                       "block Lanczos, "//itoa(rrep%block_solves)//" block solves of "// &
+                       itoa(rrep%op_applications)//" vectors)")
+        else if (nm > 0) then
+            call phase(itoa(nm)//" fixed-interface modes (highest "// &
+                       real_text(sqrt(max(lam(nm), 0.0_dp)), '(es10.3)')//" rad/s; "// &
+                       itoa(rrep%runs + merge(1, 0, erep%op_applications > 0))// &
+                       " Lanczos runs, "// &
+                       itoa(rrep%op_applications + erep%op_applications)//" solves)")
+        end if
         reduced%nm = nm
         reduced%modal_damping_ratio = options%damping_ratio
         if (allocated(lam)) then
@@ -456,7 +464,7 @@ contains
             m = 0
             do c = 1, size(raw, 2)
                 v(:, 1) = raw(:, c)
-                call csr_times_dense(mii, v, mv)
+                call sparse_times_block(mii, v, mv)
                 norm0 = sqrt(max(dot_product(v(:, 1), mv(:, 1)), 0.0_dp))
                 if (.not. (norm0 > 0.0_dp)) cycle
                 do pass = 1, 2
@@ -466,7 +474,7 @@ contains
                                                            matmul(mv(:, 1), reduced%modes))
                     if (m > 0) v(:, 1) = v(:, 1) - matmul(kept(:, 1:m), &
                                                           matmul(mv(:, 1), kept(:, 1:m)))
-                    call csr_times_dense(mii, v, mv)
+                    call sparse_times_block(mii, v, mv)
                 end do
                 norm1 = sqrt(max(dot_product(v(:, 1), mv(:, 1)), 0.0_dp))
                 if (.not. (norm1 > load_vector_tolerance*norm0)) cycle
@@ -489,7 +497,7 @@ contains
                      (present(cmat) .or. options%damping_ratio > 0.0_dp)
             if (damped .and. present(cmat)) then
                 allocate (cphi(ni, size(lam)))
-                call csr_times_dense(cii, vec, cphi)
+                call sparse_times_block(cii, vec, cphi)
             end if
             last = 0
             do kk = 1, size(lam)
@@ -587,7 +595,7 @@ contains
             type(sparse_matrix_t), intent(in) :: a
             real(dp), allocatable, intent(out) :: r(:, :)
             allocate (at(n, nr))
-            call csr_times_dense(a, t, at)
+            call sparse_times_block(a, t, at)
             r = matmul(transpose(t), at)
             r = 0.5_dp*(r + transpose(r))
             deallocate (at)
@@ -606,21 +614,4 @@ contains
         end subroutine too_many_below
     end subroutine craig_bampton
 
-    !> y = A x for a CSR matrix A and a dense block x.
-    pure subroutine csr_times_dense(a, x, y)
-        type(sparse_matrix_t), intent(in) :: a
-        real(dp), intent(in) :: x(:, :)
-        real(dp), intent(out) :: y(:, :)
-        integer :: row, k, j
-        real(dp) :: acc
-        do j = 1, size(x, 2)
-            do row = 1, a%nrows
-                acc = 0.0_dp
-                do k = a%row_start(row), a%row_start(row + 1) - 1
-                    acc = acc + a%val(k)*x(a%col(k), j)
-                end do
-                y(row, j) = acc
-            end do
-        end do
-    end subroutine csr_times_dense
 end module stickslip_reduction

@@ -33,7 +33,9 @@ module stickslip_reduction_estimate
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
-    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose
+    use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_transpose, &
+        sparse_times_block
+    use stickslip_block_lanczos, only: m_orthonormalize
     use stickslip_sparse_factor, only: sparse_factor_t
     use stickslip_stiffness_factor, only: factorize_stiffness
     use stickslip_lapack, only: zgesv
@@ -119,7 +121,7 @@ contains
         real(dp), allocatable :: wb(:, :), v(:, :), newv(:, :), mv(:, :), cv(:, :)
         real(dp), allocatable :: kred(:, :), mred(:, :), cred(:, :), kz(:, :), mz(:, :), &
                                  cz(:, :), ma(:, :), ca(:, :), ef(:, :), base(:, :), &
-                                 seeds(:, :)
+                                 seeds(:, :), mbase(:, :)
         complex(dp), allocatable :: gr(:, :), g(:, :)
         real(dp) :: gmax, last_change, exact
 
@@ -213,6 +215,7 @@ contains
         allocate (base(ni, 0))
         if (reduced%nm > 0) base = reshape([base, reduced%modes], [ni, size(base, 2) + reduced%nm])
         if (reduced%nl > 0) base = reshape([base, reduced%loads], [ni, size(base, 2) + reduced%nl])
+        call interior_products(mmat, base, mbase)
         allocate (v(ni, 0), ef(nf, estimate_max_levels))
         ef = 0.0_dp
         accepted = .false.
@@ -221,12 +224,14 @@ contains
         do level = 1, estimate_max_levels
             call interior_solves(seeds, newv)
             if (allocated(error)) return
-            call orthonormalize(newv)
+            call orthonormalize(newv, mv)
+            if (allocated(error)) return
             nlev = level
             estimate%levels = level
             if (size(newv, 2) > 0) then
                 v = reshape([v, newv], [ni, size(v, 2) + size(newv, 2)])
                 base = reshape([base, newv], [ni, size(base, 2) + size(newv, 2)])
+                mbase = reshape([mbase, mv], [ni, size(mbase, 2) + size(mv, 2)])
             end if
             nv = size(v, 2)
             estimate%vectors = nv
@@ -261,8 +266,8 @@ contains
                     exit
                 end if
             end if
-            ! the next level's seeds: M_ii (and C_ii) times the new vectors
-            call interior_products(mmat, newv, mv)
+            ! the next level's seeds: M_ii (and C_ii) times the new vectors (M_ii: from the
+            ! orthonormalization)
             if (with_c) then
                 call interior_products(cmat, newv, cv)
                 seeds = reshape([mv, cv], [ni, 2*size(newv, 2)])
@@ -402,11 +407,11 @@ contains
         subroutine basis_images(a, at)
             type(sparse_matrix_t), intent(in) :: a
             real(dp), allocatable, intent(out) :: at(:, :)
-            real(dp), allocatable :: t(:, :)
-            integer :: row, kk, c
+            real(dp), allocatable :: t(:, :), full(:, :)
+            integer :: c
             ! only the constraint-mode and load-vector columns bring new directions for a
             ! mass-like matrix: K_ii^-1 M_ii Phi_n = Phi_n Lambda^-1 (M); for C all columns
-            allocate (t(n, nr))
+            allocate (t(n, nr), full(n, nr))
             t = 0.0_dp
             do c = 1, nb
                 t(reduced%boundary(c), c) = 1.0_dp
@@ -414,16 +419,8 @@ contains
             t(reduced%interior, 1:nb) = reduced%constraint
             if (reduced%nm > 0) t(reduced%interior, nb + 1:nb + reduced%nm) = reduced%modes
             if (reduced%nl > 0) t(reduced%interior, nb + reduced%nm + 1:nr) = reduced%loads
-            allocate (at(ni, nr))
-            do c = 1, nr
-                do row = 1, n
-                    if (loc(row) == 0) cycle
-                    at(loc(row), c) = 0.0_dp
-                    do kk = a%row_start(row), a%row_start(row + 1) - 1
-                        at(loc(row), c) = at(loc(row), c) + a%val(kk)*t(a%col(kk), c)
-                    end do
-                end do
-            end do
+            call sparse_times_block(a, t, full)
+            at = full(reduced%interior, :)
         end subroutine basis_images
 
         !> A_ii x for interior vectors x (ni x m).
@@ -431,49 +428,25 @@ contains
             type(sparse_matrix_t), intent(in) :: a
             real(dp), intent(in) :: x(:, :)
             real(dp), allocatable, intent(out) :: y(:, :)
-            integer :: row, kk, c
-            real(dp) :: acc
-            allocate (y(ni, size(x, 2)))
-            do c = 1, size(x, 2)
-                do row = 1, n
-                    if (loc(row) == 0) cycle
-                    acc = 0.0_dp
-                    do kk = a%row_start(row), a%row_start(row + 1) - 1
-                        if (loc(a%col(kk)) > 0) acc = acc + a%val(kk)*x(loc(a%col(kk)), c)
-                    end do
-                    y(loc(row), c) = acc
-                end do
-            end do
+            real(dp), allocatable :: xf(:, :), yf(:, :)
+            allocate (xf(n, size(x, 2)), yf(n, size(x, 2)))
+            xf = 0.0_dp
+            xf(reduced%interior, :) = x
+            call sparse_times_block(a, xf, yf)
+            y = yf(reduced%interior, :)
         end subroutine interior_products
 
-        !> Each column of x M_ii-orthogonalized (classical Gram-Schmidt, twice) against
-        !> `base` (M_ii-orthonormal) and the columns kept before it, dropped below
-        !> drop_tolerance of its norm, normalized; x is replaced by the columns kept.
-        subroutine orthonormalize(x)
+        !> The columns of x M_ii-orthogonalized (classical Gram-Schmidt, twice) against
+        !> `base` (M_ii-orthonormal, M_ii base in mbase) and M_ii-orthonormalized among
+        !> themselves (m_orthonormalize: directions below drop_tolerance of their norm
+        !> dropped); x is replaced by the vectors kept, mx returns M_ii times them.
+        subroutine orthonormalize(x, mx)
             real(dp), allocatable, intent(inout) :: x(:, :)
-            real(dp), allocatable :: kept(:, :), col(:, :), mcol(:, :)
-            real(dp) :: norm0, norm1
-            integer :: c, pass, m, nbase
-            nbase = size(base, 2)
-            allocate (kept(ni, size(x, 2)), col(ni, 1))
-            m = 0
-            do c = 1, size(x, 2)
-                col(:, 1) = x(:, c)
-                call interior_products(mmat, col, mcol)
-                norm0 = sqrt(max(dot_product(col(:, 1), mcol(:, 1)), 0.0_dp))
-                if (.not. (norm0 > 0.0_dp)) cycle
-                do pass = 1, 2
-                    if (nbase > 0) col(:, 1) = col(:, 1) - matmul(base, matmul(mcol(:, 1), base))
-                    if (m > 0) col(:, 1) = col(:, 1) - matmul(kept(:, 1:m), &
-                                                              matmul(mcol(:, 1), kept(:, 1:m)))
-                    call interior_products(mmat, col, mcol)
-                end do
-                norm1 = sqrt(max(dot_product(col(:, 1), mcol(:, 1)), 0.0_dp))
-                if (.not. (norm1 > drop_tolerance*norm0)) cycle
-                m = m + 1
-                kept(:, m) = col(:, 1)/norm1
-            end do
-            x = kept(:, 1:m)
+            real(dp), allocatable, intent(out) :: mx(:, :)
+            integer :: kept
+            call interior_products(mmat, x, mx)
+            call m_orthonormalize(x, mx, base, mbase, size(base, 2), drop_tolerance, kept, &
+                                  error)
         end subroutine orthonormalize
 
         !> [T V]^T A [T V], (nr + nv)^2, from T^T A T (`tat`) and the enrichment vectors v
@@ -483,21 +456,14 @@ contains
             type(sparse_matrix_t), intent(in) :: a
             real(dp), intent(in) :: tat(:, :)
             real(dp), allocatable, intent(out) :: r(:, :)
-            real(dp), allocatable :: av(:, :), tav(:, :)
-            integer :: row, kk, c
-            real(dp) :: acc
+            real(dp), allocatable :: av(:, :), tav(:, :), vf(:, :)
             allocate (r(nr + nv, nr + nv), av(n, nv), tav(nr, nv))
             r(1:nr, 1:nr) = tat
             if (nv == 0) return
-            do c = 1, nv
-                do row = 1, n
-                    acc = 0.0_dp
-                    do kk = a%row_start(row), a%row_start(row + 1) - 1
-                        if (loc(a%col(kk)) > 0) acc = acc + a%val(kk)*v(loc(a%col(kk)), c)
-                    end do
-                    av(row, c) = acc
-                end do
-            end do
+            allocate (vf(n, nv))
+            vf = 0.0_dp
+            vf(reduced%interior, :) = v
+            call sparse_times_block(a, vf, av)
             tav(1:nb, :) = av(reduced%boundary, :) + &
                            matmul(transpose(reduced%constraint), av(reduced%interior, :))
             if (reduced%nm > 0) tav(nb + 1:nb + reduced%nm, :) = &

@@ -12,7 +12,10 @@ module stickslip_sparse
     private
     public :: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, sparse_to_dense, &
         sparse_transpose, sparse_scaled_sum, sparse_symmetry_defect, sparse_max_abs, &
-        sparse_from_dense, max_dense_entries
+        sparse_from_dense, max_dense_entries, sparse_times_block
+
+    !> Columns of a block that sparse_times_block multiplies in one pass over the matrix.
+    integer, parameter :: block_chunk = 16
 
     !> Most entries (rows x columns) sparse_to_dense creates: 2**25 doubles = 256 MiB.
     integer(int64), parameter :: max_dense_entries = 2_int64**25
@@ -163,6 +166,38 @@ contains
             a%row_start(i + 1) = k + 1
         end do
     end subroutine sparse_from_dense
+
+    !> Y = A X for a block X (ncols x k; Y: nrows x k): one pass over A for up to 16 columns
+    !> (X transposed so that each entry of A reads a contiguous row of it), the rows shared
+    !> among the OpenMP threads when the product is large. On the Rotor 37 blade's mass
+    !> matrix (7 million entries) 34 columns cost about what 5 single products did. No
+    !> error: the shapes are the caller's (size(x, 1) = ncols, size(y) = [nrows, k]).
+    subroutine sparse_times_block(a, x, y)
+        !> The matrix.
+        type(sparse_matrix_t), intent(in) :: a
+        !> The block, ncols x k.
+        real(dp), intent(in) :: x(:, :)
+        !> The product, nrows x k.
+        real(dp), intent(out) :: y(:, :)
+        real(dp), allocatable :: xt(:, :)
+        real(dp) :: acc(block_chunk)
+        integer :: c0, nc, i, p
+        logical :: large
+        large = real(a%nnz(), dp)*real(size(x, 2), dp) > 4.0e6_dp
+        do c0 = 1, size(x, 2), block_chunk
+            nc = min(block_chunk, size(x, 2) - c0 + 1)
+            xt = transpose(x(:, c0:c0 + nc - 1))
+            !$omp parallel do schedule(static) private(i, p, acc) if (large)
+            do i = 1, a%nrows
+                acc(1:nc) = 0.0_dp
+                do p = a%row_start(i), a%row_start(i + 1) - 1
+                    acc(1:nc) = acc(1:nc) + a%val(p)*xt(1:nc, a%col(p))
+                end do
+                y(i, c0:c0 + nc - 1) = acc(1:nc)
+            end do
+            !$omp end parallel do
+        end do
+    end subroutine sparse_times_block
 
     !> y = A x. Errors (stat input) when size(x) /= ncols.
     subroutine sparse_matvec(a, x, y, error)

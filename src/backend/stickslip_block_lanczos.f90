@@ -6,22 +6,24 @@
 !> time is in the solves and the mass products, one vector at a time there. On the Rotor 37
 !> blade's 61,081 interior DOFs one solve costs 0.06-0.1 s and 17 at once 0.21 s; the 34
 !> fixed-interface modes of its Craig-Bampton reduction took ARPACK 156 solves in two runs
-!> (15.7 s), the block method a dozen block solves (doc/benchmarks.md, "Rotor 37 ... fifth
+!> (15.7 s), the block method 21 solves of 8 columns (6-7 s; doc/benchmarks.md, "Rotor 37 ... fifth
 !> part"). Also, it keeps no state outside its arguments (ARPACK's SAVEd variables make that
 !> one serialize concurrent calls).
 !>
 !> The method: a block Krylov basis V of Op = (K - sigma M)^-1 M, M-orthonormal, every new
-!> block orthogonalized against the whole basis twice (classical Gram-Schmidt with dgemm) and
-!> then within itself (SVQB: the eigenvectors of its scaled Gram matrix, directions below
-!> rank_tolerance dropped, a fresh pseudo-random direction when the basis became invariant).
-!> The Rayleigh quotient T = V^T M Op V is formed from the first Gram-Schmidt coefficients
-!> (Op V is the solve's result), so the Ritz pairs theta, s of T are the exact Rayleigh-Ritz
-!> pairs of the basis, and the residual of Ritz vector V s, Op V s - theta V s = W s_b (W the
-!> new block after orthogonalization against V, s_b the last block's rows of s), has the
-!> M-norm sqrt(s_b^T W^T M W s_b): no extra product. A pair is converged when that is <=
-!> tol theta. lambda = sigma + 1 / theta; pairs with theta <= 0 (lambda below sigma) are not
-!> returned. The basis grows until the wanted pairs, the lowest ones, have all converged;
-!> no restarts (the basis is capped by the caller, who falls back to ARPACK beyond it).
+!> block W = Op V_last orthogonalized against the whole basis twice (classical Gram-Schmidt
+!> by dgemm, M W carried along) and then within itself (SVQB; `m_orthonormalize`), fresh
+!> pseudo-random directions when the basis became invariant. The projected matrix T is
+!> block tridiagonal, as in exact arithmetic: its diagonal blocks from the first
+!> Gram-Schmidt pass (symmetrized), its off-diagonal blocks R from the normalization (W =
+!> V_new R). (The full V^T M Op V was tried first: the solves' roundoff makes it unsymmetric
+!> at 1e-8 on the blade and couples each converged vector to every new block, so the
+!> residuals stalled there.) The residual of a Ritz vector V s, Op V s - theta V s = W s_b
+!> (s_b the last block's rows of s), has the M-norm sqrt(s_b^T G s_b), G = W^T M W: no extra
+!> product. A pair is converged when that is <= tol theta. lambda = sigma + 1 / theta;
+!> pairs with theta <= 0 (lambda below sigma) are not returned. The basis grows until the
+!> wanted pairs, the lowest ones, have all converged; no restarts (the basis is capped by
+!> the caller, who falls back to ARPACK beyond it).
 !>
 !> Matrices are 1-based compressed sparse column, both triangles stored. No state.
 module stickslip_block_lanczos

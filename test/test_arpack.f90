@@ -23,7 +23,7 @@ module test_arpack
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
-    public :: run_arpack_tests, grid, all_pairs
+    public :: run_arpack_tests, membrane, identity
 
     real(dp), parameter :: pi = acos(-1.0_dp)
 
@@ -101,6 +101,32 @@ contains
         end subroutine spring
     end subroutine grid
 
+    !> Test membrane g (1: a random 24 x 20 grid, 2: a uniform 22 x 22 grid with exact double
+    !> eigenvalues): K, M, all eigenvalues w (dsygv), the count `want` of those below `limit`,
+    !> a limit in a gap of the spectrum near the 45th (60th) (double eigenvalues never
+    !> split), and the case's name.
+    subroutine membrane(g, k, m, w, want, limit, name)
+        integer, intent(in) :: g
+        real(dp), allocatable, intent(out) :: k(:, :), m(:, :), w(:)
+        integer, intent(out) :: want
+        real(dp), intent(out) :: limit
+        character(len=*), intent(out) :: name
+        if (g == 1) then
+            call grid(24, 20, .false., k, m)
+            want = 45
+            name = "random 24 x 20 grid"
+        else
+            call grid(22, 22, .true., k, m)
+            name = "uniform 22 x 22 grid"
+            want = 60
+        end if
+        call all_pairs(k, m, w)
+        do while (w(want + 1) - w(want) < 1.0e-6_dp*w(want))
+            want = want + 1
+        end do
+        limit = 0.5_dp*(w(want) + w(want + 1))
+    end subroutine membrane
+
     !> sparse_eigenpairs_below against LAPACK dsygv (all eigenpairs) on membranes of about
     !> 500 DOFs: every eigenvalue below the limit found (the count estimated from the first
     !> 20, a second run), equal to dsygv's, one more above it, M-orthonormal vectors with
@@ -117,22 +143,8 @@ contains
         integer :: n, want, g, j
         character(len=24) :: name
         do g = 1, 2
-            if (g == 1) then
-                call grid(24, 20, .false., k, m)
-                want = 45
-                name = "random 24 x 20 grid"
-            else
-                call grid(22, 22, .true., k, m)
-                name = "uniform 22 x 22 grid"
-                want = 60
-            end if
+            call membrane(g, k, m, w, want, limit, name)
             n = size(k, 1)
-            call all_pairs(k, m, w)
-            ! the limit in a gap of the spectrum (double eigenvalues are never split)
-            do while (w(want + 1) - w(want) < 1.0e-6_dp*w(want))
-                want = want + 1
-            end do
-            limit = 0.5_dp*(w(want) + w(want + 1))
             call dense_to_csc(k, kcol, krow, kval)
             call dense_to_csc(m, mcol, mrow, mval)
             call sparse_eigenpairs_below(n, kcol, krow, kval, mcol, mrow, mval, limit, 500, &

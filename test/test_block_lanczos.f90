@@ -4,7 +4,8 @@
 !> residuals, the exact double eigenvalues of a uniform square grid; the nev lowest; the cap
 !> max_count; the count estimate stopping a run; a basis too small reported, not an error.
 !> On a 3D lattice of 2744 DOFs, sparse_eigenpairs_below given a supernodal Cholesky takes
-!> the block path and agrees with ARPACK's run on an LU. m_orthonormalize: a block with a
+!> the block path and agrees with ARPACK's run on an LU, and so does sparse_eigenpairs' nev
+!> lowest on that factor. m_orthonormalize: a block with a
 !> dependent column and one inside the basis comes out M-orthonormal, M-orthogonal to the
 !> basis, with the dependent directions dropped and x_projected = x_kept r. The block products
 !> (CSR: sparse_times_block, across its 16-column chunks; CSC: csc_times_block) against one
@@ -15,15 +16,15 @@ module test_block_lanczos
     use stickslip_umfpack, only: sparse_lu_t
     use stickslip_cholmod, only: sparse_cholesky_t
     use stickslip_sparse_factor, only: sparse_factor_t
-    use stickslip_arpack, only: eigen_options_t
-    use stickslip_sparse_eigen, only: sparse_eigenpairs_below, eigen_range_report_t, &
-        csc_matvec
+    use stickslip_arpack, only: eigen_options_t, eigen_report_t
+    use stickslip_sparse_eigen, only: sparse_eigenpairs_below, sparse_eigenpairs, &
+        eigen_range_report_t, csc_matvec
     use stickslip_block_lanczos, only: block_lanczos_report_t, block_lowest_eigenpairs, &
         csc_times_block, m_orthonormalize
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, &
         sparse_times_block
     use test_umfpack, only: dense_to_csc
-    use test_arpack, only: grid, all_pairs
+    use test_arpack, only: membrane, identity
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
@@ -52,21 +53,8 @@ contains
         integer :: n, want, g, j
         character(len=24) :: name
         do g = 1, 2
-            if (g == 1) then
-                call grid(24, 20, .false., k, m)
-                want = 45
-                name = "random 24 x 20 grid"
-            else
-                call grid(22, 22, .true., k, m)
-                name = "uniform 22 x 22 grid"
-                want = 60
-            end if
+            call membrane(g, k, m, w, want, limit, name)
             n = size(k, 1)
-            call all_pairs(k, m, w)
-            do while (w(want + 1) - w(want) < 1.0e-6_dp*w(want))
-                want = want + 1
-            end do
-            limit = 0.5_dp*(w(want) + w(want + 1))
             call dense_to_csc(k, kcol, krow, kval)
             call dense_to_csc(m, mcol, mrow, mval)
             call lu%factorize(n, kcol, krow, kval, error)
@@ -134,6 +122,7 @@ contains
         class(sparse_factor_t), allocatable :: chol, none
         real(dp), allocatable :: v1(:), x1(:, :), v2(:), x2(:, :), mx(:, :), kx(:, :)
         type(eigen_range_report_t) :: r1, r2
+        type(eigen_report_t) :: erep
         type(error_type), allocatable :: error
         real(dp) :: limit
         integer :: n, j
@@ -171,6 +160,17 @@ contains
                          "block Lanczos: lattice: residuals", atol=1.0e-9_dp*maxval(v1))
         call check_close(t, maxval(abs(matmul(transpose(x1), mx) - identity(size(v1)))), &
                          0.0_dp, "block Lanczos: lattice: M-orthonormal", atol=1.0e-10_dp)
+        ! the nev lowest (sparse_eigenpairs, `&reduction modes`) on the same factor
+        call sparse_eigenpairs(n, k%row_start, k%col, k%val, m%row_start, m%col, m%val, 12, &
+                               0.0_dp, eigen_options_t(), v1, x1, erep, error, &
+                               factorization=chol)
+        call check(t, .not. allocated(error) .and. size(v1) == 12 .and. &
+                   erep%block_solves > 0, &
+                   "block Lanczos: lattice: the 12 lowest on the Cholesky, block path", &
+                   itoa(erep%op_applications)//" solves, basis "//itoa(erep%ncv))
+        if (.not. allocated(error) .and. size(v1) == 12) &
+            call check_close(t, v1, v2(1:12), "block Lanczos: lattice: ... = ARPACK's", &
+                             rtol=1.0e-10_dp)
         call chol%release()
         if (allocated(none)) call none%release()
     end subroutine test_lattice
@@ -317,15 +317,5 @@ contains
         end subroutine put
     end subroutine lattice
 
-    !> The n x n identity.
-    pure function identity(n) result(e)
-        integer, intent(in) :: n
-        real(dp) :: e(n, n)
-        integer :: i
-        e = 0.0_dp
-        do i = 1, n
-            e(i, i) = 1.0_dp
-        end do
-    end function identity
 
 end module test_block_lanczos

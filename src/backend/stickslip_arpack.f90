@@ -73,6 +73,8 @@ module stickslip_arpack
         integer :: ncv = 0
         !> Last ARPACK info (dsaupd, or dseupd if dsaupd succeeded).
         integer :: info = 0
+        !> Block solves when stickslip_sparse_eigen ran its block Lanczos instead (0: ARPACK).
+        integer :: block_solves = 0
     end type eigen_report_t
 
     interface

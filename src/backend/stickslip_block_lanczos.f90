@@ -70,7 +70,7 @@ contains
     !> The lowest eigenpairs lambda > sigma of K phi = lambda M phi, ascending, M-orthonormal,
     !> given `fac`, a factorization of K - sigma M (used, not changed): the smallest count m
     !> with m >= nev and (values(m) > lambda_max or m = max_count), all converged. With
-    !> `estimate_after` = e: once e pairs have converged, the count below lambda_max is
+    !> `estimate_after` = e > 0: once e pairs have converged, the count below lambda_max is
     !> estimated from them (`estimated_count` without its margin) and, when above max_count,
     !> those pairs are returned (report%capped, report%estimated). Errors: bad sizes (input), a
     !> failed solve or dsyev (numerical). The basis reaching max_basis columns first is no
@@ -105,7 +105,8 @@ contains
         type(block_lanczos_report_t), intent(out) :: report
         !> Error (last but one).
         type(error_type), allocatable, intent(out) :: error
-        !> Estimate the count below lambda_max once this many pairs have converged.
+        !> Estimate the count below lambda_max once this many pairs have converged (<= 0 or
+        !> absent: never).
         integer, intent(in), optional :: estimate_after
         real(dp), allocatable :: v(:, :), mv(:, :), t(:, :), w(:, :), mw(:, :), c(:, :)
         real(dp), allocatable :: a(:, :), theta(:), lam(:), res(:), rcoef(:, :), g(:, :)
@@ -132,7 +133,8 @@ contains
         if (.not. (tol > 0.0_dp)) tol = default_tolerance
         cap = min(n, max_basis)
         bs = min(default_block, cap)
-        estimated = .not. present(estimate_after)
+        estimated = .true.
+        if (present(estimate_after)) estimated = estimate_after <= 0
         allocate (v(n, min(cap, 8*bs)), mv(n, min(cap, 8*bs)), t(cap, cap))
         t = 0.0_dp
         m = 0

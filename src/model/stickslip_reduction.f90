@@ -359,11 +359,12 @@ contains
         else
             nm = 0
         end if
-        if (nm > 0 .and. rrep%block_solves > 0) then
+        if (nm > 0 .and. rrep%block_solves + erep%block_solves > 0) then
             call phase(itoa(nm)//" fixed-interface modes (highest "// &
                        real_text(sqrt(max(lam(nm), 0.0_dp)), '(es10.3)')//" rad/s; "// &
-                       "block Lanczos, "//itoa(rrep%block_solves)//" block solves of "// &
-                       itoa(rrep%op_applications)//" vectors)")
+                       "block Lanczos, "//itoa(rrep%block_solves + erep%block_solves)// &
+                       " block solves of "// &
+                       itoa(rrep%op_applications + erep%op_applications)//" vectors)")
         else if (nm > 0) then
             call phase(itoa(nm)//" fixed-interface modes (highest "// &
                        real_text(sqrt(max(lam(nm), 0.0_dp)), '(es10.3)')//" rad/s; "// &

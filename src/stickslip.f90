@@ -11,7 +11,8 @@ module stickslip
         level_untrusted
     use stickslip_progress, only: progress_t
     use stickslip_version_info, only: stickslip_version, stickslip_thread_safe
-    use stickslip_blas_threads, only: blas_library, blas_thread_safe, limit_blas_threads
+    use stickslip_blas_threads, only: blas_library, blas_thread_safe, limit_blas_threads, &
+        blas_core_advice
     ! the model
     use stickslip_model, only: model_t, validate_model, contact_velocity_direction, &
         force_direction
@@ -56,7 +57,7 @@ module stickslip
     public :: dp, error_type, stickslip_stat
     public :: diagnosis_t, diagnostics_t, level_note, level_warning, level_untrusted
     public :: progress_t, stickslip_version, stickslip_thread_safe, blas_library, &
-        blas_thread_safe, limit_blas_threads
+        blas_thread_safe, limit_blas_threads, blas_core_advice
     public :: model_t, validate_model, contact_velocity_direction, force_direction
     public :: sparse_matrix_t, new_sparse_from_triplets, sparse_matvec, sparse_to_dense, &
               sparse_from_dense, sparse_transpose, sparse_scaled_sum, sparse_symmetry_defect

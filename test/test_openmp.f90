@@ -13,7 +13,8 @@ module test_openmp
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_version_info, only: stickslip_thread_safe
-    use stickslip_blas_threads, only: blas_thread_safe, blas_library, parallel_threads
+    use stickslip_blas_threads, only: blas_thread_safe, blas_library, parallel_threads, &
+        advised_core
     use stickslip_lapack, only: dgetrf, dgetrs
     use stickslip_euler, only: euler_options_t
     use stickslip_reference_start, only: reference_start_options_t
@@ -44,6 +45,7 @@ contains
         call test_study_threads(t)
         call test_sweep_stability_threads(t)
         call test_multi_case(t)
+        call test_advised_core(t)
         if (.not. openmp) then
             write (output_unit, '(a)') "openmp: built without -fopenmp, the concurrent solve " // &
                 "is not tested (the default build, with OpenMP, tests it)"
@@ -52,6 +54,26 @@ contains
         call test_concurrent_solves(t)
         call test_concurrent_lapack(t)
     end subroutine run_openmp_tests
+
+    !> The OpenBLAS kernels advised for a CPU from its /proc/cpuinfo flags, only when OpenBLAS
+    !> fell back to its generic Prescott ones: AVX-512 SkylakeX, AVX2 + FMA Haswell, whole
+    !> flags only (not a prefix of a longer one).
+    subroutine test_advised_core(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: avx512 = 'fpu sse2 avx avx2 fma avx512f avx512dq '// &
+            'avx512cd avx512bw avx512vl avx512_bf16'
+        call check(t, advised_core('Prescott', avx512) == 'SkylakeX', &
+                   "blas core: an AVX-512 CPU on generic kernels gets SkylakeX")
+        call check(t, advised_core('Prescott', 'fpu sse2 avx avx2 fma bmi2') == 'Haswell', &
+                   "blas core: an AVX2 + FMA CPU on generic kernels gets Haswell")
+        call check(t, advised_core('Prescott', 'fpu sse2 avx avx512f avx512vl') == '', &
+                   "blas core: no advice without AVX2 and FMA")
+        call check(t, advised_core('Prescott', 'fpu avx2_x fmax avx512fx') == '', &
+                   "blas core: flags are matched whole")
+        call check(t, advised_core('Haswell', avx512) == '' .and. &
+                   advised_core('SkylakeX', avx512) == '', &
+                   "blas core: no advice when OpenBLAS recognised the CPU")
+    end subroutine test_advised_core
 
     !> The linked BLAS/LAPACK from 2 threads at once: 3000 LU solves of one 60 x 60 system
     !> must all equal the serial solve bitwise whenever blas_thread_safe() says the BLAS is

@@ -21,6 +21,7 @@ module test_stiff_flow
     use stickslip_reference, only: reference_options_t, reference_result_t
     use stickslip_stability, only: floquet_t, floquet_multipliers, periodic_stability
     use stickslip_flow, only: flow_t, new_flow
+    use stickslip_flow_events, only: dip_samples, dip_bracket
     use testing, only: test_counter_t, check
     implicit none
     private
@@ -54,7 +55,42 @@ contains
         call test_verdicts(t)
         call test_monodromy_fd(t)
         call test_track_vs_ladder(t)
+        call test_fresh_dips(t)
     end subroutine run_stiff_flow_tests
+
+    !> The samples of a row that starts its phase at zero and flat, and the dip they find: a
+    !> hump then a dip below zero within the step (what a stiff blade's slip velocity did
+    !> after a grazing stick -> slip, 2 us into a 3 us step, unseen by the slopes at the
+    !> step's ends), the start's roundoff that is no dip, a row below zero from the start, a
+    !> row that stays positive.
+    subroutine test_fresh_dips(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp), parameter :: h = 3.0e-6_dp, t1 = 2.0e-7_dp, zero = 1.0e-8_dp
+        real(dp) :: ts(41), gs(41), lo, glo, hi, ghi
+        logical :: dips
+        integer :: k
+        ts = dip_samples(h)
+        call check(t, all(ts(2:) > ts(:40)) .and. ts(1) > 0.0_dp .and. ts(1) <= 1.0e-8_dp*h &
+                   .and. ts(41) < h, "fresh dips: 41 ascending samples in (0, h), the first "// &
+                   "below 1e-8 h")
+        ! a hump, then below zero from t1 on (and positive again by the step's end)
+        gs = [(ts(k)*(t1 - ts(k))*(h - ts(k))*1.0e12_dp, k=1, 41)]
+        call dip_bracket(ts, gs, -1.0e-14_dp, zero, dips, lo, glo, hi, ghi)
+        call check(t, dips .and. lo < t1 .and. hi > t1 .and. glo > 0.0_dp .and. ghi < 0.0_dp, &
+                   "fresh dips: a hump then a dip is bracketed around its zero")
+        ! roundoff about zero, then positive: no dip
+        gs = [(merge(-5.0e-9_dp, ts(k)*1.0e3_dp, ts(k) < 1.0e-9_dp), k=1, 41)]
+        call dip_bracket(ts, gs, -1.0e-14_dp, zero, dips, lo, glo, hi, ghi)
+        call check(t, .not. dips, "fresh dips: the start's roundoff about zero is no dip")
+        ! below zero from the start
+        gs = -ts*1.0e3_dp
+        call dip_bracket(ts, gs, 0.0_dp, zero, dips, lo, glo, hi, ghi)
+        call check(t, dips .and. lo == 0.0_dp .and. glo <= 0.0_dp .and. hi <= 1.0e-5_dp*h, &
+                   "fresh dips: a row below zero from the start dips at once")
+        gs = ts*1.0e3_dp
+        call dip_bracket(ts, gs, 0.0_dp, zero, dips, lo, glo, hi, ghi)
+        call check(t, .not. dips, "fresh dips: a row that rises has no dip")
+    end subroutine test_fresh_dips
 
     !> The period map and its monodromy on the 30-DOF reduced beam (n_z = 60: its linear
     !> phases tracked in modal coordinates, stickslip_flow_track) against the same flow

@@ -17,6 +17,11 @@
 !>   of system time in a 0.2 s run).
 !> - OpenBLAS's OpenMP build runs single-threaded inside OpenMP parallel regions; safe.
 !> - Any other BLAS (reference, MKL, ...) is taken as thread-safe.
+!> OpenBLAS chooses its kernels for the CPU when it is loaded, and falls back to its generic
+!> 'Prescott' (SSE3) kernels for a CPU it does not know: Debian 12's 0.3.21 on Intel
+!> Sapphire/Emerald Rapids, where dgemm then runs 3-4 times slower than with the AVX-512
+!> kernels. `blas_core_advice` tells the value of OPENBLAS_CORETYPE that fixes it (the stickslip
+!> program restarts itself with it, app/stickslip_blas_restart.f90).
 !> No state is kept: every function asks the dynamic linker again (a few microseconds).
 module stickslip_blas_threads
     use, intrinsic :: iso_c_binding, only: c_ptr, c_funptr, c_null_ptr, c_null_char, c_char, &
@@ -25,6 +30,7 @@ module stickslip_blas_threads
     implicit none
     private
     public :: blas_library, blas_thread_safe, limit_blas_threads, parallel_threads
+    public :: blas_core_advice, advised_core
 
     interface
         !> glibc's symbol lookup (in libc itself since glibc 2.34).
@@ -147,6 +153,90 @@ contains
             if (.not. blas_thread_safe()) parallel_threads = 1
         end if
     end function parallel_threads
+
+    !> The value of OPENBLAS_CORETYPE that gives this CPU the OpenBLAS kernels it can run when
+    !> the linked OpenBLAS did not recognise it and runs its generic 'Prescott' kernels:
+    !> 'SkylakeX' (AVX-512), 'Haswell' (AVX2 and FMA). '' when there is nothing to fix: not
+    !> OpenBLAS, OPENBLAS_CORETYPE already set, OpenBLAS found a core of its own, or the CPU's
+    !> flags (/proc/cpuinfo) are unreadable or lack AVX2. OpenBLAS reads the variable only when
+    !> it is loaded: acting on the advice takes a new process. No errors.
+    function blas_core_advice() result(core)
+        character(len=:), allocatable :: core
+        procedure(string_getter), pointer :: get_core
+        type(c_funptr) :: f
+        type(c_ptr) :: s
+        character(kind=c_char), pointer :: chars(:)
+        character(len=:), allocatable :: detected
+        integer :: length, stat, n, i
+        core = ''
+        call get_environment_variable("OPENBLAS_CORETYPE", length=length, status=stat)
+        if (stat /= 1) return
+        f = c_dlsym(c_null_ptr, "openblas_get_corename"//c_null_char)
+        if (.not. c_associated(f)) return
+        call c_f_procpointer(f, get_core)
+        s = get_core()
+        if (.not. c_associated(s)) return
+        n = c_strlen(s)
+        call c_f_pointer(s, chars, [n])
+        allocate (character(len=n) :: detected)
+        do i = 1, n
+            detected(i:i) = chars(i)
+        end do
+        if (detected /= 'Prescott') return
+        core = advised_core(detected, cpu_flags())
+    end function blas_core_advice
+
+    !> The OpenBLAS core for a CPU with the feature flags `flags` (as /proc/cpuinfo lists them,
+    !> separated by blanks) when OpenBLAS detected the core `detected`: 'SkylakeX' when it
+    !> detected its generic 'Prescott' and the CPU has avx512f, avx512cd, avx512bw, avx512dq
+    !> and avx512vl; 'Haswell' when it has avx2 and fma; '' otherwise. No errors.
+    pure function advised_core(detected, flags) result(core)
+        !> OpenBLAS's core name (openblas_get_corename).
+        character(len=*), intent(in) :: detected
+        !> The CPU's feature flags, blank-separated.
+        character(len=*), intent(in) :: flags
+        character(len=:), allocatable :: core
+        core = ''
+        if (detected /= 'Prescott') return
+        if (has('avx512f') .and. has('avx512cd') .and. has('avx512bw') .and. &
+            has('avx512dq') .and. has('avx512vl')) then
+            core = 'SkylakeX'
+        else if (has('avx2') .and. has('fma')) then
+            core = 'Haswell'
+        end if
+    contains
+        pure logical function has(flag)
+            character(len=*), intent(in) :: flag
+            has = index(' '//flags//' ', ' '//flag//' ') > 0
+        end function has
+    end function advised_core
+
+    !> The first 'flags' line of /proc/cpuinfo, after its colon (tabs as blanks); '' when the
+    !> file cannot be read.
+    function cpu_flags() result(flags)
+        character(len=:), allocatable :: flags
+        character(len=16384) :: line
+        integer :: unit, ios, colon, i
+        flags = ''
+        open (newunit=unit, file='/proc/cpuinfo', status='old', action='read', iostat=ios)
+        if (ios /= 0) return
+        do
+            read (unit, '(a)', iostat=ios) line
+            if (ios /= 0) exit
+            do i = 1, len_trim(line)
+                if (line(i:i) == achar(9)) line(i:i) = ' '
+            end do
+            if (line(1:5) /= 'flags') cycle
+            colon = index(line, ':')
+            if (colon < 6) cycle
+            if (colon > 6) then
+                if (line(6:colon - 1) /= '') cycle
+            end if
+            flags = trim(line(colon + 1:))
+            exit
+        end do
+        close (unit)
+    end function cpu_flags
 
     !> openblas_get_parallel() of the linked OpenBLAS, or not_openblas.
     integer function openblas_threading()

@@ -1,5 +1,6 @@
 !> Pseudo-arclength continuation of the solutions y(s), lambda(s) of F(y, lambda) = 0, generic
 !> in its residual: a tangent predictor, MINPACK hybrj as the corrector on the bordered system
+!> (from powell_min_unknowns unknowns its algorithm on LAPACK's QR, stickslip_powell)
 !>     F(y, lambda) = 0,   t_y . (y - y_p) / y_s^2 + t_l (lambda - lambda_p) / p_s^2 = 0
 !> (the hyperplane through the predicted point orthogonal to the tangent, in the scaled
 !> coordinates y / y_s, lambda / p_s), with the system's analytic dF/dy and dF/dlambda. Turning
@@ -22,6 +23,7 @@ module stickslip_continuation
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
+    use stickslip_powell, only: solve_powell
     use stickslip_lapack, only: dgetrf, dgetrs
     implicit none
     private
@@ -29,6 +31,12 @@ module stickslip_continuation
     public :: continuation_report_t, start_continuation, continuation_step
     public :: validate_continuation_options
     public :: reason_running, reason_end, reason_failures, reason_max_points, reason_left
+
+    !> Fewest unknowns of the bordered system for which the corrector runs hybrj's algorithm
+    !> on LAPACK's blocked QR (stickslip_powell: the same iterates up to roundoff) instead of
+    !> MINPACK's hybrj: at the Rotor 37 blade's 481 unknowns hybrj's own unblocked qrfac and
+    !> qform took half of the corrector's time. As the weighted residual's newton_min_unknowns.
+    integer, parameter :: powell_min_unknowns = 48
 
     !> Why a continuation stopped (continuation_state_t%reason).
     integer, parameter :: reason_running = 0, reason_end = 1, reason_failures = 2, &
@@ -460,7 +468,8 @@ contains
         end if
     end subroutine rescale_tangent
 
-    !> hybrj on the bordered system from u; ok when ||F|| meets the tolerance.
+    !> hybrj on the bordered system from u (its algorithm on LAPACK's QR from
+    !> powell_min_unknowns unknowns); ok when ||F|| meets the tolerance.
     subroutine correct(b, opts, u, report, ok, error)
         type(bordered_t), intent(inout) :: b
         type(continuation_options_t), intent(in) :: opts
@@ -477,7 +486,11 @@ contains
         u0 = u
         ok = .false.
         do attempt = 1, 2
-            call solve_hybrj(b, u, hopts, hrep, error)
+            if (size(u) >= powell_min_unknowns) then
+                call solve_powell(b, u, hopts, hrep, error)
+            else
+                call solve_hybrj(b, u, hopts, hrep, error)
+            end if
             report%nfev = report%nfev + hrep%nfev
             if (allocated(error)) then
                 if (error%stat /= stickslip_stat%callback) return

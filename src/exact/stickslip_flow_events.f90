@@ -16,6 +16,7 @@ module stickslip_flow_events
     public :: event_stick, event_slip, event_reversal, event_graze, event_open, event_close, &
         event_impact, event_kind, event_name
     public :: find_event, row_crossing, quadratic_crossing, grid_step, event_guard, &
+        dip_samples, dip_bracket, &
         end_monodromy, event_hit_t, hermite_root, root_bracket_t, pop_earliest
 
     !> Event kinds: a contact sticks; a stuck contact starts slipping; a slipping contact
@@ -641,6 +642,64 @@ contains
         end if
         ybb(self%nz + 1:) = self%se*self%exo(tb)
     end subroutine grid_step
+
+    !> Times in (0, h) [s] at which an event row that starts a phase at zero and flat is
+    !> sampled for a dip below zero (its element switched as its rate vanished, and the
+    !> slopes at the step's ends cannot tell a dip that follows a hump): h 2^-k, k = 1..30,
+    !> and the other multiples h k / 16, k = 3, 5, 6, 7, 9, ..., 15, ascending. No errors.
+    pure function dip_samples(h) result(ts)
+        !> The step [s].
+        real(dp), intent(in) :: h
+        real(dp) :: ts(41)
+        integer, parameter :: sixteenths(11) = [3, 5, 6, 7, 9, 10, 11, 12, 13, 14, 15]
+        integer :: k, i, j
+        do k = 1, 30
+            ts(k) = h*0.5_dp**(31 - k)
+        end do
+        ts(31:) = h*real(sixteenths, dp)/16.0_dp
+        ! insertion sort: the uniform part interleaves the ascending geometric one
+        do i = 31, size(ts)
+            j = i
+            do while (j > 1)
+                if (ts(j - 1) <= ts(j)) exit
+                ts([j - 1, j]) = ts([j, j - 1])
+                j = j - 1
+            end do
+        end do
+    end function dip_samples
+
+    !> Whether (dips) a row with value g0 at its phase's start and gs at the ascending times ts
+    !> goes below zero: the first sample below -zero (the start's roundoff about zero is not a
+    !> dip) is hi (value ghi), the last positive sample before it lo (value glo; lo = 0 and
+    !> glo = g0 when there is none: then glo <= 0 and the row is below zero from the start).
+    !> No errors.
+    pure subroutine dip_bracket(ts, gs, g0, zero, dips, lo, glo, hi, ghi)
+        !> Sample times [s] (ascending) and the row's values there.
+        real(dp), intent(in) :: ts(:), gs(:)
+        !> The row's value at the start, and the width of its roundoff about zero.
+        real(dp), intent(in) :: g0, zero
+        !> Whether a sample is below -zero.
+        logical, intent(out) :: dips
+        !> The bracket (lo, hi] of the first zero and the values at its ends.
+        real(dp), intent(out) :: lo, glo, hi, ghi
+        integer :: k
+        dips = .false.
+        lo = 0.0_dp
+        glo = g0
+        hi = 0.0_dp
+        ghi = 0.0_dp
+        do k = 1, size(ts)
+            if (gs(k) > 0.0_dp) then
+                lo = ts(k)
+                glo = gs(k)
+            else if (gs(k) < -zero) then
+                hi = ts(k)
+                ghi = gs(k)
+                dips = .true.
+                return
+            end if
+        end do
+    end subroutine dip_bracket
 
     !> Count an event at te (the phase before it began at tp) and say whether the period map
     !> must stop: '' when it goes on; why, when the contacts switched again at the same

@@ -28,7 +28,8 @@ module stickslip_flow_track
     use stickslip_flow_modal, only: off_constraints, build_modal_form, on_constraints
     use stickslip_expm, only: expm
     use stickslip_hash, only: hash_t
-    use stickslip_flow_events, only: event_hit_t, hermite_root, root_bracket_t, pop_earliest
+    use stickslip_flow_events, only: event_hit_t, hermite_root, root_bracket_t, pop_earliest, &
+        dip_samples, dip_bracket
     implicit none
     private
     public :: track_t, ensure_modal, track_usable, start_track, track_state, track_find_event
@@ -455,7 +456,17 @@ contains
                                                                 db(col), h), 0.0_dp)
             else
                 thr = 1.0e-9_dp*md%row_scale(col)*self%omega
-                if (ga(col) > 0.0_dp .and. da(col) < -thr .and. db(col) > thr) then
+                if (ta == trk%ta .and. abs(ga(col)) <= 1.0e-9_dp*md%row_scale(col) .and. &
+                    abs(da(col)) <= thr) then
+                    ! a row at zero and flat at the phase's start (its element switched as its
+                    ! rate vanished): a dip below zero soon after is sampled
+                    tau = fresh_dip(self, md, trk, col, ta, h, ga(col))
+                    if (tau < best) then
+                        best = tau
+                        found = .true.
+                        hit%index = col
+                    end if
+                else if (ga(col) > 0.0_dp .and. da(col) < -thr .and. db(col) > thr) then
                     ! a dip between two positive values: its minimum, then the root before it
                     tmin = crossing(self, md, trk, col, 1, -1.0_dp, ta, 0.0_dp, h, -da(col), &
                                     -db(col))
@@ -498,6 +509,36 @@ contains
         end if
 
     end subroutine track_find_event
+
+    !> The first zero in (0, h] of row col after ta, the start of its phase, where the row
+    !> starts at zero and flat (glo its value there) and ends the step positive: the row at
+    !> stickslip_flow_events' dip_samples, the first sample below zero located from the last
+    !> positive one before it (crossing), or that sample itself when none is positive before
+    !> it (dip_bracket); huge when no sample is below zero.
+    real(dp) function fresh_dip(self, md, trk, col, ta, h, glo) result(tau)
+        class(flow_modes_t), intent(in) :: self
+        type(mode_t), intent(in) :: md
+        type(track_t), intent(in) :: trk
+        integer, intent(in) :: col
+        real(dp), intent(in) :: ta, h, glo
+        real(dp), allocatable :: ts(:), gs(:)
+        real(dp) :: lo, gl, hi, gh
+        integer :: k
+        logical :: dips
+        ts = dip_samples(h)
+        allocate (gs(size(ts)))
+        do k = 1, size(ts)
+            gs(k) = row_value(self, md, trk, col, ta + ts(k))
+        end do
+        tau = huge(1.0_dp)
+        call dip_bracket(ts, gs, glo, 1.0e-9_dp*md%row_scale(col), dips, lo, gl, hi, gh)
+        if (.not. dips) return
+        if (gl > 0.0_dp) then
+            tau = crossing(self, md, trk, col, 0, 1.0_dp, ta, lo, hi, gl, gh)
+        else
+            tau = hi
+        end if
+    end function fresh_dip
 
     !> The end of a bracket a few ulps wide around the first zero in (lo0, hi0] of sgn *
     !> (row col of mode md differentiated `order` times) at ta + tau, positive at lo0 (value

@@ -77,28 +77,13 @@ contains
     !> "not OpenBLAS (reference, MKL or another)". No errors.
     function blas_library() result(text)
         character(len=:), allocatable :: text
-        procedure(string_getter), pointer :: get_config
-        type(c_funptr) :: f
-        type(c_ptr) :: s
-        character(kind=c_char), pointer :: chars(:)
-        integer :: n, i
-        f = c_dlsym(c_null_ptr, "openblas_get_config"//c_null_char)
-        if (.not. c_associated(f)) then
+        logical :: found
+        call openblas_string("openblas_get_config", found, text)
+        if (.not. found) then
             text = "not OpenBLAS (reference, MKL or another)"
             return
         end if
-        call c_f_procpointer(f, get_config)
-        s = get_config()
-        if (.not. c_associated(s)) then
-            text = "OpenBLAS"
-        else
-            n = c_strlen(s)
-            call c_f_pointer(s, chars, [n])
-            allocate (character(len=n) :: text)
-            do i = 1, n
-                text(i:i) = chars(i)
-            end do
-        end if
+        if (len(text) == 0) text = "OpenBLAS"
         select case (openblas_threading())
         case (openblas_serial)
             text = text//" (serial build)"
@@ -162,26 +147,14 @@ contains
     !> it is loaded: acting on the advice takes a new process. No errors.
     function blas_core_advice() result(core)
         character(len=:), allocatable :: core
-        procedure(string_getter), pointer :: get_core
-        type(c_funptr) :: f
-        type(c_ptr) :: s
-        character(kind=c_char), pointer :: chars(:)
         character(len=:), allocatable :: detected
-        integer :: length, stat, n, i
+        integer :: length, stat
+        logical :: found
         core = ''
         call get_environment_variable("OPENBLAS_CORETYPE", length=length, status=stat)
         if (stat /= 1) return
-        f = c_dlsym(c_null_ptr, "openblas_get_corename"//c_null_char)
-        if (.not. c_associated(f)) return
-        call c_f_procpointer(f, get_core)
-        s = get_core()
-        if (.not. c_associated(s)) return
-        n = c_strlen(s)
-        call c_f_pointer(s, chars, [n])
-        allocate (character(len=n) :: detected)
-        do i = 1, n
-            detected(i:i) = chars(i)
-        end do
+        call openblas_string("openblas_get_corename", found, detected)
+        if (.not. found) return
         if (detected /= 'Prescott') return
         core = advised_core(detected, cpu_flags())
     end function blas_core_advice
@@ -237,6 +210,33 @@ contains
         end do
         close (unit)
     end function cpu_flags
+
+    !> The C string that OpenBLAS's `char *symbol(void)` returns (openblas_get_config,
+    !> openblas_get_corename): found false when the process has no such symbol (not
+    !> OpenBLAS), text '' when it returned NULL.
+    subroutine openblas_string(symbol, found, text)
+        character(len=*), intent(in) :: symbol
+        logical, intent(out) :: found
+        character(len=:), allocatable, intent(out) :: text
+        procedure(string_getter), pointer :: getter
+        type(c_funptr) :: f
+        type(c_ptr) :: s
+        character(kind=c_char), pointer :: chars(:)
+        integer :: n, i
+        text = ''
+        f = c_dlsym(c_null_ptr, symbol//c_null_char)
+        found = c_associated(f)
+        if (.not. found) return
+        call c_f_procpointer(f, getter)
+        s = getter()
+        if (.not. c_associated(s)) return
+        n = c_strlen(s)
+        call c_f_pointer(s, chars, [n])
+        text = repeat(' ', n)
+        do i = 1, n
+            text(i:i) = chars(i)
+        end do
+    end subroutine openblas_string
 
     !> openblas_get_parallel() of the linked OpenBLAS, or not_openblas.
     integer function openblas_threading()

@@ -14,6 +14,7 @@ module test_contact_sweep
     use stickslip_hbm, only: solve_periodic
     use stickslip_reference, only: reference_options_t
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
+    use stickslip_sweep_result, only: frc_point_t
     use stickslip_sweep_options, only: set_sweep_parameter, continuation_options_of
     use stickslip_continuation, only: continuation_options_t, validate_continuation_options
     use stickslip_friction_family, only: friction_family_t, new_friction_family
@@ -35,6 +36,8 @@ contains
         call test_planar_stability(t)
         call test_designer_fold(t)
         call test_designer_stuck(t)
+        call test_preload_vibration(t)
+        call test_vibration_of_coefficients(t)
         call test_designer_crawl(t)
         call test_automatic_step(t)
     end subroutine run_contact_sweep_tests
@@ -161,6 +164,77 @@ contains
                    "contact_sweep: designer: every point's stability known, none untrusted "// &
                    "(the Signorini check of a closed, stuck contact)")
     end subroutine test_designer_stuck
+
+    !> A preloaded damper that sticks: the designer damper at 0.85 rad/s (stuck all period at
+    !> preload 2, above) swept in the preload 2 -> 4. Its vibration is the stuck linear
+    !> response, whatever the preload: half the peak-to-peak and the first harmonic of every
+    !> DOF stay put (to 1e-8), while max_t |x| of the normal DOF, which holds the preload's
+    !> static offset, rises with it (by more than 20 %).
+    subroutine test_preload_vibration(t)
+        type(test_counter_t), intent(inout) :: t
+        type(hbm_options_t) :: ho
+        type(reference_options_t) :: ro
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(model_t) :: m
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: vib(:, :), h1(:, :), half(:), first(:)
+        real(dp) :: spread_vib, spread_h1, rise
+        integer :: k, n
+        ho%harmonics = 15
+        ho%samples = 256
+        so%parameter = 'preload'
+        so%start = 2.0_dp
+        so%stop = 4.0_dp
+        m = designer(2.0_dp, 0.3_dp)
+        m%omega = 0.85_dp
+        call run_sweep(m, ho, ro, so, res, error)
+        call check_error(t, error, "contact_sweep: preloaded damper: swept", .false.)
+        if (allocated(error)) return
+        n = res%npoints
+        allocate (vib(3, n), h1(3, n))
+        do k = 1, n
+            call res%points(k)%vibration(half, first)
+            vib(:, k) = half
+            h1(:, k) = first
+        end do
+        spread_vib = maxval([(maxval(abs(vib(:, k) - vib(:, 1)))/maxval(abs(vib(:, 1))), &
+                              k=1, n)])
+        spread_h1 = maxval([(maxval(abs(h1(:, k) - h1(:, 1)))/maxval(abs(h1(:, 1))), k=1, n)])
+        rise = res%points(n)%amplitude(3)/res%points(1)%amplitude(3) - 1.0_dp
+        call check(t, res%complete .and. n >= 5 .and. &
+                   all([(res%points(k)%stick(1) == 1.0_dp, k=1, n)]), &
+                   "contact_sweep: preloaded damper: stuck all period from preload 2 to 4 ("// &
+                   itoa(n)//" points)", res%diagnosis)
+        call check(t, spread_vib <= 1.0e-8_dp .and. spread_h1 <= 1.0e-8_dp .and. &
+                   rise > 0.2_dp, "contact_sweep: preloaded damper: the vibration amplitudes "// &
+                   "flat where it sticks, max |x| of the normal DOF rising with the preload", &
+                   "half peak-to-peak spread "//real_text(spread_vib)//", first harmonic "// &
+                   real_text(spread_h1)//", max |x_3| rise "//real_text(rise))
+    end subroutine test_preload_vibration
+
+    !> frc_point_t%vibration against series known in closed form: x = 5 + cos t (half the
+    !> peak-to-peak 1, first harmonic 1, max |x| 6), x = 0.6 cos t + 0.8 sin t (1 and 1), x =
+    !> sin 3t (1 and 0), and NaN for a point without coefficients (an old checkpoint's).
+    subroutine test_vibration_of_coefficients(t)
+        type(test_counter_t), intent(inout) :: t
+        type(frc_point_t) :: p
+        real(dp), allocatable :: half(:), first(:)
+        p%amplitude = [6.0_dp, 1.0_dp, 1.0_dp]
+        p%harmonic = [0, 1, 1, 3, 3]
+        p%xcoef = reshape([5.0_dp, 1.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, &
+                           0.0_dp, 0.6_dp, 0.8_dp, 0.0_dp, 0.0_dp, &
+                           0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 1.0_dp], [5, 3])
+        call p%vibration(half, first)
+        call check(t, all(abs(half - [1.0_dp, 1.0_dp, 1.0_dp]) <= 2.0e-3_dp) .and. &
+                   all(abs(first - [1.0_dp, 1.0_dp, 0.0_dp]) <= 1.0e-14_dp), &
+                   "contact_sweep: vibration amplitudes of known series (half the "// &
+                   "peak-to-peak on 192 samples, the first harmonic exact)")
+        deallocate (p%xcoef)
+        call p%vibration(half, first)
+        call check(t, all(half /= half) .and. all(first /= first), &
+                   "contact_sweep: vibration amplitudes NaN without coefficients")
+    end subroutine test_vibration_of_coefficients
 
     !> The harsh designer case (preload 0.3, forcing 1.5: the damper open 77 % of the period at
     !> resonance, normal forces 50 times the preload) swept 3 -> 0.8 rad/s at H = 10: the

@@ -539,7 +539,8 @@ contains
         if (allocated(error)) return
         call check(t, first_line(frc_dir//"/frc.csv") == "parameter,amp_4,amp_2,dissipation,"// &
                    "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
-                   "arclength,diss_friction,diss_damping,nfev,trusted,check", "frc unit: header", &
+                   "arclength,diss_friction,diss_damping,nfev,vib_4,vib_2,h1_4,h1_2,trusted,check", &
+                   "frc unit: header", &
                    first_line(frc_dir//"/frc.csv"))
         v = read_numbers(frc_dir//"/frc.csv", 0, 3)
         call check(t, size(v, 1) == 2, "frc unit: two rows")
@@ -551,9 +552,21 @@ contains
         script = slurp_file(frc_dir//"/frc.gp")
         call check(t, index(script, "title 'DOF 4'") > 0 .and. index(script, "title 'DOF 2'") > 0 &
                    .and. index(script, "DOF 1") == 0 .and. index(script, "DOF 3") == 0 .and. &
-                   index(script, "DOF 5") == 0 .and. index(script, "do for [k=2:3]") > 0 .and. &
-                   index(script, "using 1:4 ") == 0 .and. index(script, "using 4:") == 0, &
-                   "frc unit: frc.gp draws amp_4, amp_2 only")
+                   index(script, "DOF 5") == 0 .and. &
+                   index(script, "do for [name in 'vib_4 vib_2']") > 0 .and. &
+                   index(script, "column('vib_4')") > 0 .and. &
+                   index(script, "column('vib_2')") > 0 .and. index(script, "vib_1") == 0 .and. &
+                   index(script, "amp_") == 0, &
+                   "frc unit: frc.gp draws vib_4, vib_2 only (the vibration amplitude by default)")
+        call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2], amplitude='max_abs')
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "column('amp_4')") > 0 .and. index(script, "vib_") == 0 &
+                   .and. index(script, "max_t |x(t)|") > 0, &
+                   "frc unit: plot_amplitude 'max_abs' draws amp_4, amp_2")
+        call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2], amplitude='first_harmonic')
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "column('h1_2')") > 0 .and. index(script, "vib_") == 0, &
+                   "frc unit: plot_amplitude 'first_harmonic' draws h1_4, h1_2")
         ! labels (a reduced model: reduced DOFs 4, 2 are full DOFs 70, 40)
         call write_frc_csv(frc_dir, res, error, [4, 2], [70, 40])
         call check_error(t, error, "frc unit, labels: written", .false.)
@@ -578,7 +591,8 @@ contains
         call check(t, code == 0, "seed sweep dofs = 2: exit 0", err)
         call check(t, first_line(sweep_dir//"/frc.csv") == "parameter,amp_2,dissipation,"// &
                    "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
-                   "arclength,diss_friction,diss_damping,nfev,trusted,check", "seed sweep dofs = 2: frc.csv "// &
+                   "arclength,diss_friction,diss_damping,nfev,vib_2,h1_2,trusted,check", &
+                   "seed sweep dofs = 2: frc.csv "// &
                    "header", first_line(sweep_dir//"/frc.csv"))
         script = slurp_file(sweep_dir//"/frc.gp")
         call check(t, index(script, "title 'DOF 2'") > 0 .and. index(script, "DOF 1") == 0, &

@@ -3,7 +3,8 @@
 !> writer extends it), and words for why the continuation stopped. Data only: run_sweep
 !> (stickslip_sweep) fills them.
 module stickslip_sweep_result
-    use stickslip_kinds, only: dp
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
+    use stickslip_kinds, only: dp, two_pi
     use stickslip_diagnostics, only: diagnostics_t
     use stickslip_error, only: error_type
     use stickslip_continuation, only: continuation_state_t, reason_running, reason_end, &
@@ -60,6 +61,8 @@ module stickslip_sweep_result
         !> checkpoint.
         integer, allocatable :: harmonic(:)
         real(dp), allocatable :: xcoef(:, :), rcoef(:, :), ucoef(:, :)
+    contains
+        procedure :: vibration => point_vibration
     end type frc_point_t
 
     !> A forced-response curve.
@@ -107,6 +110,60 @@ module stickslip_sweep_result
     end interface
 
 contains
+
+    !> The vibration amplitudes of the point's observed displacements (the columns of
+    !> `amplitude`), from its Fourier coefficients: half the peak-to-peak, (max_t x - min_t
+    !> x) / 2, over 64 H samples of the period (a preloaded contact's static offset left out,
+    !> which max_t |x| includes), and the modulus sqrt(a_1^2 + b_1^2) of the first harmonic
+    !> (0 when the basis has none) [m, the model's length unit]. NaN for a point without
+    !> coefficients (read from an old checkpoint). No errors.
+    subroutine point_vibration(self, half_range, first)
+        !> The point.
+        class(frc_point_t), intent(in) :: self
+        !> Half the peak-to-peak and the first harmonic's modulus, per observed displacement.
+        real(dp), allocatable, intent(out) :: half_range(:), first(:)
+        real(dp), allocatable :: u(:, :), basis(:)
+        real(dp) :: phase
+        integer :: nx, nrow, ns, j, k, hmax
+        logical, allocatable :: sine(:)
+        nx = size(self%amplitude)
+        allocate (half_range(nx), first(nx))
+        if (.not. (allocated(self%harmonic) .and. allocated(self%xcoef))) then
+            half_range = ieee_value(1.0_dp, ieee_quiet_nan)
+            first = half_range
+            return
+        end if
+        nrow = size(self%harmonic)
+        nx = size(self%xcoef, 2)
+        ! each harmonic's first row is its cosine, the second its sine
+        allocate (sine(nrow))
+        do k = 1, nrow
+            sine(k) = self%harmonic(k) > 0 .and. count(self%harmonic(1:k - 1) == &
+                                                      self%harmonic(k)) == 1
+        end do
+        first = 0.0_dp
+        do k = 1, nrow
+            if (self%harmonic(k) == 1) first = first + self%xcoef(k, :)**2
+        end do
+        first = sqrt(first)
+        hmax = max(1, maxval(self%harmonic))
+        ns = 64*hmax
+        allocate (u(ns, nx), basis(nrow))
+        do j = 1, ns
+            phase = two_pi*real(j - 1, dp)/real(ns, dp)
+            do k = 1, nrow
+                if (self%harmonic(k) == 0) then
+                    basis(k) = 1.0_dp
+                else if (sine(k)) then
+                    basis(k) = sin(self%harmonic(k)*phase)
+                else
+                    basis(k) = cos(self%harmonic(k)*phase)
+                end if
+            end do
+            u(j, :) = matmul(basis, self%xcoef)
+        end do
+        half_range = 0.5_dp*(maxval(u, dim=1) - minval(u, dim=1))
+    end subroutine point_vibration
 
     !> Words for a continuation_state_t%reason.
     pure function reason_text(reason) result(text)

@@ -205,8 +205,14 @@ contains
         call new_contact_set(contacts, case%model)
         call write_frc_harmonics_csv(dir, res, error, cols, selected_dofs(case), contacts)
         if (allocated(error)) return
-        call write_frc_plot_script(dir, trim(case%sweep%parameter), &
-                                   ncols, error, cols, selected_dofs(case))
+        if (allocated(case%plot_amplitude)) then
+            call write_frc_plot_script(dir, trim(case%sweep%parameter), &
+                                       ncols, error, cols, selected_dofs(case), &
+                                       case%plot_amplitude)
+        else
+            call write_frc_plot_script(dir, trim(case%sweep%parameter), &
+                                       ncols, error, cols, selected_dofs(case))
+        end if
         if (allocated(error)) return
         call write_sweep_summary(dir, case, res, error)
         if (allocated(error)) return

@@ -112,6 +112,9 @@ module stickslip_case
         !> coefficients of every DOF of the model (of the full model from files, recovered
         !> through the reduction basis when it was reduced).
         logical :: full_field = .false.
+        !> &output plot_amplitude: the amplitude frc.png draws ('half_peak_to_peak', the
+        !> default; 'first_harmonic'; 'max_abs').
+        character(len=:), allocatable :: plot_amplitude
     end type case_t
 
 contains
@@ -181,7 +184,8 @@ contains
         if (sparse%read) then
             ! &output dofs in full numbers, checked against the full N before the reduction
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
-                                   case%output_dofs_given, case%full_field, error)
+                                   case%output_dofs_given, case%full_field, &
+                                   case%plot_amplitude, error)
             if (allocated(error)) return
             if (case%reduction%method == 'none') then
                 ! the exact sparse condensation: no reduction, the matrices kept sparse
@@ -231,7 +235,8 @@ contains
 
         if (.not. sparse%read) then
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
-                                   case%output_dofs_given, case%full_field, error)
+                                   case%output_dofs_given, case%full_field, &
+                                   case%plot_amplitude, error)
             if (allocated(error)) return
         end if
         if (case%model%ncontact() == 0) call case%diagnostics%add(level_warning, "no_contact", &
@@ -723,6 +728,8 @@ contains
             if (case%output_dofs_given .and. allocated(case%output_dofs)) &
                 call put(unit, "  dofs = "//ilist(case%output_dofs), stat, msg)
             if (case%full_field) call put(unit, "  full_field = T", stat, msg)
+            if (allocated(case%plot_amplitude)) call put(unit, "  plot_amplitude = '"// &
+                                                         case%plot_amplitude//"'", stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&run", stat, msg)
             call put(unit, "  method = '"//trim(case%method)//"'", stat, msg)

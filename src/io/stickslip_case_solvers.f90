@@ -182,7 +182,8 @@ contains
     !> the DOFs the result files hold, in the order given (each in 1..N, no duplicates;
     !> absent: default_output_dofs(model)). Errors (stat input) name &output and the
     !> variable, for dofs its element: "&output dofs(2) = 0: ...".
-    subroutine read_output_group(nml, model, directory, dofs, dofs_given, full_field, error)
+    subroutine read_output_group(nml, model, directory, dofs, dofs_given, full_field, &
+                                 plot_amplitude, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model read (its ndof, contacts and forcing give the default selection).
@@ -195,15 +196,28 @@ contains
         logical, intent(out) :: dofs_given
         !> &output full_field: write the harmonic coefficients of every DOF (full_field.mtx).
         logical, intent(out) :: full_field
+        !> &output plot_amplitude: the amplitude the pictures draw, 'half_peak_to_peak'
+        !> (default), 'first_harmonic' or 'max_abs'.
+        character(len=:), allocatable, intent(out) :: plot_amplitude
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         integer :: k
         directory = 'out'
         dofs_given = .false.
         full_field = .false.
-        call check_names(nml, "output", [character(len=10) :: "directory", "dofs", &
-                                          "full_field"], error)
+        plot_amplitude = 'half_peak_to_peak'
+        call check_names(nml, "output", [character(len=14) :: "directory", "dofs", &
+                                          "full_field", "plot_amplitude"], error)
         if (allocated(error)) return
+        call get_string(nml, "output", "plot_amplitude", plot_amplitude, error)
+        if (allocated(error)) return
+        select case (plot_amplitude)
+        case ('half_peak_to_peak', 'first_harmonic', 'max_abs')
+        case default
+            call group_error(nml, error, "&output plot_amplitude = '"//plot_amplitude// &
+                             "': not one of 'half_peak_to_peak', 'first_harmonic', 'max_abs'")
+            return
+        end select
         call get_logical(nml, "output", "full_field", full_field, error)
         if (allocated(error)) return
         call get_string(nml, "output", "directory", directory, error)

@@ -322,7 +322,9 @@ contains
     !> truncation (relative harmonic truncation error estimate, NaN when not computed), then
     !> arclength, diss_friction, diss_damping [J], nfev; with contact laws then open_1..
     !> open_C, slip_1..slip_C (shares of the period) and normal_max_1..normal_max_C (max_t
-    !> lambda_j [N]). Error: stat io.
+    !> lambda_j [N]); then vib_<d> (half the peak-to-peak, (max_t x - min_t x) / 2 [m]) and
+    !> h1_<d> (the first harmonic's modulus [m]) of the same DOFs as amp_<d>
+    !> (frc_point_t%vibration); last trusted and check. Error: stat io.
     subroutine write_frc_csv(dir, res, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
@@ -338,9 +340,10 @@ contains
         integer :: u, k, i, stat, n, nc
         character(len=512) :: msg
         character(len=:), allocatable :: header
-        character(len=200) :: fmt
+        character(len=200) :: fmt, vfmt
         logical :: laws
         integer, allocatable :: sel(:), numbers(:)
+        real(dp), allocatable :: half_range(:), first(:)
         stat = 0
         msg = ''
         n = 0
@@ -368,7 +371,10 @@ contains
         laws = .false.
         if (res%npoints > 0) laws = allocated(res%points(1)%open)
         if (laws) header = header//law_columns(nc)
+        ! the vibration amplitudes: half the peak-to-peak and the first harmonic's modulus
+        header = header//columns("vib_", numbers(1:n))//columns("h1_", numbers(1:n))
         header = header//",trusted,check"
+        write (vfmt, '(a,i0,a)') '(', max(1, 2*n), '(",",' // real_fmt // '))'
         write (fmt, '(a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // ',","),i0,",",' // &
             real_fmt // ',",",a,",",' // real_fmt // ',",",i0,",",4(' // real_fmt // &
             ',","),i0)'
@@ -395,6 +401,9 @@ contains
                         p%floquet_max, p%stable, p%truncation, p%arclength, p%diss_friction, &
                         p%diss_damping, p%nfev
                 end if
+                call p%vibration(half_range, first)
+                if (stat == 0 .and. n > 0) write (u, vfmt, iostat=stat, iomsg=msg, &
+                                                  advance='no') half_range(sel), first(sel)
                 ! the point's own verdict: 1 unless a check distrusts it, and that check
                 if (stat == 0) write (u, '(",",i0,",",a)', iostat=stat, iomsg=msg) &
                     merge(0, 1, p%check_level >= level_untrusted), trim(p%check)

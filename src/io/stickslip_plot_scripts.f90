@@ -19,14 +19,16 @@ module stickslip_plot_scripts
 contains
 
     !> Write `dir`/frc.gp, the gnuplot script that draws two pictures from frc.csv:
-    !> frc.png, the amplitude [m] of every DOF of frc.csv (all N, or the `dofs` selected, the
-    !> columns amp_<d> in their order) against the swept parameter (amplitude on a log
-    !> scale), unstable points marked with red crosses; frc_dissipation.png, the energy the
+    !> frc.png, the amplitude [m] of every DOF of frc.csv (all N, or the `dofs` selected, in
+    !> their order; `amplitude` chooses the columns: vib_<d>, half the peak-to-peak, by
+    !> default; h1_<d> the first harmonic's modulus; amp_<d> max_t |x|) against the swept
+    !> parameter (amplitude on a log scale), unstable points marked with red crosses
+    !> (columns read by name); frc_dissipation.png, the energy the
     !> friction contacts dissipate per cycle [J] against the amplitude of each of these DOFs
     !> (log-log), with the total (friction + viscous) against the first. Curves are named
     !> "DOF <d>" and the axes carry their units; no text is read as gnuplot markup.
     !> Error: stat io.
-    subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs, labels)
+    subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs, labels, amplitude)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> Name of the swept parameter ('omega', 'force_amplitude', 'mu', 'normal_load',
@@ -41,9 +43,12 @@ contains
         !> The numbers in the column titles amp_<d> (default: `dofs`), e.g. full-model
         !> numbers of a reduced model.
         integer, intent(in), optional :: labels(:)
+        !> The amplitude drawn (&output plot_amplitude): 'half_peak_to_peak' (the columns
+        !> vib_<d>, the default), 'first_harmonic' (h1_<d>) or 'max_abs' (amp_<d>).
+        character(len=*), intent(in), optional :: amplitude
         integer :: u, stat, k, nsel
         character(len=512) :: msg
-        character(len=:), allocatable :: sep, dof_name
+        character(len=:), allocatable :: sep, dof_name, prefix, label, names
         integer, allocatable :: sel(:)
         if (present(dofs)) then
             sel = dofs
@@ -56,6 +61,23 @@ contains
         if (present(labels) .and. present(dofs)) then
             if (any(labels /= dofs)) dof_name = "full-model DOF "
         end if
+        prefix = "vib_"
+        label = "vibration amplitude (max_t x - min_t x) / 2 [m]"
+        if (present(amplitude)) then
+            select case (amplitude)
+            case ('first_harmonic')
+                prefix = "h1_"
+                label = "first-harmonic amplitude |x_1| [m]"
+            case ('max_abs')
+                prefix = "amp_"
+                label = "amplitude max_t |x(t)| [m]"
+            end select
+        end if
+        names = ""
+        do k = 1, nsel
+            if (k > 1) names = names//" "
+            names = names//prefix//itoa(sel(k))
+        end do
         call begin_script(dir, "frc", "Forced-response curve and dissipation per cycle "// &
                           "(frc.png, frc_dissipation.png)", u, stat, msg, error)
         if (allocated(error)) return
@@ -66,7 +88,9 @@ contains
                  "decades below the largest (a contact stuck all period drives its DOF to "// &
                  "roundoff)", stat, msg)
         call put(u, "ymax = 0; ymin = 1e300", stat, msg)
-        call put(u, "do for [k=2:"//itoa(1 + nsel)//"] { stats f using k nooutput; "// &
+        call put(u, "# the amplitude drawn (&output plot_amplitude): the columns "//names, &
+                 stat, msg)
+        call put(u, "do for [name in '"//names//"'] { stats f using (column(name)) nooutput; "// &
                  "if (STATS_max > ymax) { ymax = STATS_max }; "// &
                  "if (STATS_min > 0 && STATS_min < ymin) { ymin = STATS_min } }", stat, msg)
         call put(u, "alo = (ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4); ahi = ymax*1.5", &
@@ -77,22 +101,23 @@ contains
         call put(u, "set logscale y", stat, msg)
         call put(u, "if (ymax > 0) set yrange [alo:ahi]", stat, msg)
         call put(u, "set xlabel '"//parameter_label(parameter)//"'", stat, msg)
-        call put(u, "set ylabel 'amplitude max_t |x(t)| [m]'", stat, msg)
+        call put(u, "set ylabel '"//label//"'", stat, msg)
         call put(u, "set title 'Forced-response curve (red crosses: unstable points, "// &
                  "Floquet multipliers; orange circles: untrusted points, frc.csv column check)'", &
                  stat, msg)
         call put(u, "# the column 'stable' (1, 0 unstable, -1 unknown), the column 'trusted' "// &
                  "(0: a check distrusts the point)", stat, msg)
-        call put(u, "unstable(k) = (column('stable') == 0 ? column(k) : 1/0)", stat, msg)
-        call put(u, "untrusted(k) = (column('trusted') == 0 ? column(k) : 1/0)", stat, msg)
+        call put(u, "unstable(name) = (column('stable') == 0 ? column(name) : 1/0)", stat, msg)
+        call put(u, "untrusted(name) = (column('trusted') == 0 ? column(name) : 1/0)", stat, &
+                 msg)
         do k = 1, nsel
             sep = merge("plot ", "     ", k == 1)
-            call put(u, sep//"f using 1:"//itoa(1 + k)//" with lines lw 1.5 "// &
-                     "title '"//dof_name//itoa(sel(k))//"', \", stat, msg)
-            call put(u, "     f using 1:(untrusted("//itoa(1 + k)//")) with points "// &
+            call put(u, sep//"f using 1:(column('"//prefix//itoa(sel(k))//"')) with lines "// &
+                     "lw 1.5 title '"//dof_name//itoa(sel(k))//"', \", stat, msg)
+            call put(u, "     f using 1:(untrusted('"//prefix//itoa(sel(k))//"')) with points "// &
                      "pt 6 ps 1.0 lc rgb 'orange' "//merge("title 'untrusted'", &
                      "notitle          ", k == nsel)//", \", stat, msg)
-            call put(u, "     f using 1:(unstable("//itoa(1 + k)//")) with points "// &
+            call put(u, "     f using 1:(unstable('"//prefix//itoa(sel(k))//"')) with points "// &
                      "pt 2 ps 0.8 lc rgb 'red' "//merge("title 'unstable'", "notitle         ", &
                      k == nsel)//trim(merge("   ", ", \", k == nsel)), stat, msg)
         end do
@@ -108,7 +133,7 @@ contains
         call put(u, "if (STATS_max > 0) { set yrange [STATS_max*1e-5:STATS_max*2] } "// &
                  "else { unset yrange }", stat, msg)
         call put(u, "if (ymax > 0) set xrange [alo:ahi]", stat, msg)
-        call put(u, "set xlabel 'amplitude max_t |x(t)| [m]'", stat, msg)
+        call put(u, "set xlabel '"//label//"'", stat, msg)
         call put(u, "set ylabel 'energy dissipated per cycle [J]'", stat, msg)
         call put(u, "set title 'Dissipation per cycle (solid: friction contacts; dashed: "// &
                  "friction + viscous)'", stat, msg)
@@ -116,11 +141,13 @@ contains
         call put(u, "positive(y) = (y > 0 ? y : 1/0)", stat, msg)
         do k = 1, nsel
             sep = merge("plot ", "     ", k == 1)
-            call put(u, sep//"f using "//itoa(1 + k)//":(positive(column('diss_friction')))"// &
+            call put(u, sep//"f using (column('"//prefix//itoa(sel(k))//"')):"// &
+                     "(positive(column('diss_friction')))"// &
                      " with lines lw 1.5 title '"//dof_name//itoa(sel(k))//"', \", &
                      stat, msg)
         end do
-        call put(u, "     f using 2:(positive(column('dissipation'))) with lines "// &
+        call put(u, "     f using (column('"//prefix//itoa(sel(1))//"')):"// &
+                 "(positive(column('dissipation'))) with lines "// &
                  "dt 2 lc rgb 'black' title 'total, against "//dof_name//itoa(sel(1))//"'", &
                  stat, msg)
         call close_and_rename(dir, "frc.gp", u, stat, msg, error)

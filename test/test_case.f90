@@ -250,6 +250,16 @@ contains
         call expect_bad(t, "empty_directory", [character(len=120) :: base, &
             "&output directory = '  ' /"], inp, [character(len=60) :: "&output directory", &
             "must not be empty"])
+        ! the units go into the pictures' gnuplot strings: no quotes, a known frequency axis
+        call expect_bad(t, "quoted_unit", [character(len=120) :: base, &
+            "&output length_unit = ""m'm"" /"], inp, [character(len=60) :: &
+            "&output length_unit", "without quotes"])
+        call expect_bad(t, "frequency_unit", [character(len=120) :: base, &
+            "&output time_unit = 'ms', frequency_unit = 'rpm' /"], inp, &
+            [character(len=60) :: "&output frequency_unit = 'rpm'", "'Hz'"])
+        call expect_bad(t, "plot_amplitude", [character(len=120) :: base, &
+            "&output plot_amplitude = 'peak' /"], inp, &
+            [character(len=60) :: "&output plot_amplitude = 'peak'", "'half_peak_to_peak'"])
         ! binary garbage: never echoed raw
         block
             integer :: u, i

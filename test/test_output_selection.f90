@@ -18,6 +18,7 @@ module test_output_selection
     use stickslip_sweep, only: sweep_result_t
     use stickslip_csv, only: write_frc_csv
     use stickslip_plot_scripts, only: write_frc_plot_script
+    use stickslip_plot_units, only: plot_units_t
     use stickslip_files, only: make_directory
     use test_cli, only: cli
     use testing, only: test_counter_t, check, check_error
@@ -539,7 +540,8 @@ contains
         if (allocated(error)) return
         call check(t, first_line(frc_dir//"/frc.csv") == "parameter,amp_4,amp_2,dissipation,"// &
                    "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
-                   "arclength,diss_friction,diss_damping,nfev,vib_4,vib_2,h1_4,h1_2,trusted,check", &
+                   "arclength,diss_friction,diss_damping,nfev,omega,frequency,vib_4,vib_2,h1_4,h1_2,"// &
+                   "trusted,check", &
                    "frc unit: header", &
                    first_line(frc_dir//"/frc.csv"))
         v = read_numbers(frc_dir//"/frc.csv", 0, 3)
@@ -567,6 +569,23 @@ contains
         script = slurp_file(frc_dir//"/frc.gp")
         call check(t, index(script, "column('h1_2')") > 0 .and. index(script, "vib_") == 0, &
                    "frc unit: plot_amplitude 'first_harmonic' draws h1_4, h1_2")
+        ! an mm-t-s model on a Hz axis: the labels name its units, the x column is frequency
+        call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2], &
+                                   units=plot_units_t(length='mm', force='N', time='s', &
+                                                      cycles=.true.))
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "/ 2 [mm]'") > 0 .and. index(script, "[N mm]'") > 0 .and. &
+                   index(script, "omega / 2 pi [Hz]'") > 0 .and. &
+                   index(script, "using (column('frequency')):(column('vib_4'))") > 0 .and. &
+                   index(script, "[m]") == 0 .and. index(script, "[J]") == 0, &
+                   "frc unit: an mm-t-s model's labels in mm, N mm and Hz")
+        call write_frc_plot_script(frc_dir, "preload", 5, error, [4, 2], &
+                                   units=plot_units_t(length='mm', force='kN', time='ms', &
+                                                      cycles=.true.))
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "contacts [kN]'") > 0 .and. index(script, "[kN mm]'") > 0 &
+                   .and. index(script, "using 1:(column('vib_4'))") > 0, &
+                   "frc unit: a preload sweep in kN keeps the parameter on x")
         ! labels (a reduced model: reduced DOFs 4, 2 are full DOFs 70, 40)
         call write_frc_csv(frc_dir, res, error, [4, 2], [70, 40])
         call check_error(t, error, "frc unit, labels: written", .false.)
@@ -591,7 +610,7 @@ contains
         call check(t, code == 0, "seed sweep dofs = 2: exit 0", err)
         call check(t, first_line(sweep_dir//"/frc.csv") == "parameter,amp_2,dissipation,"// &
                    "rmax_1,stick_1,harmonics,residual,status,floquet_max,stable,truncation,"// &
-                   "arclength,diss_friction,diss_damping,nfev,vib_2,h1_2,trusted,check", &
+                   "arclength,diss_friction,diss_damping,nfev,omega,frequency,vib_2,h1_2,trusted,check", &
                    "seed sweep dofs = 2: frc.csv "// &
                    "header", first_line(sweep_dir//"/frc.csv"))
         script = slurp_file(sweep_dir//"/frc.gp")

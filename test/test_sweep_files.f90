@@ -194,7 +194,7 @@ contains
         close (u)
         call check(t, header == "parameter,amp_1,amp_2,dissipation,rmax_1,stick_1,harmonics,"// &
                    "residual,status,floquet_max,stable,truncation,arclength,diss_friction,"// &
-                   "diss_damping,nfev,vib_1,vib_2,h1_1,h1_2,trusted,check", &
+                   "diss_damping,nfev,omega,frequency,vib_1,vib_2,h1_1,h1_2,trusted,check", &
                    "sweep cli: frc.csv header", header)
         call check(t, rows >= 11, "sweep cli: rows")
         inquire (file=dir//"/"//checkpoint_name, exist=exists)

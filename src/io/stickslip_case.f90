@@ -28,6 +28,7 @@ module stickslip_case
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
         read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
+    use stickslip_plot_units, only: plot_units_t
     use stickslip_case_friction, only: read_friction_group, friction_form_t
     use stickslip_case_microslip, only: read_microslip_group
     use stickslip_iwan_element, only: iwan_element_t
@@ -115,6 +116,9 @@ module stickslip_case
         !> &output plot_amplitude: the amplitude frc.png draws ('half_peak_to_peak', the
         !> default; 'first_harmonic'; 'max_abs').
         character(len=:), allocatable :: plot_amplitude
+        !> &output length_unit, force_unit, time_unit, frequency_unit: the units the pictures
+        !> name (labels only).
+        type(plot_units_t) :: units
     end type case_t
 
 contains
@@ -185,7 +189,7 @@ contains
             ! &output dofs in full numbers, checked against the full N before the reduction
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
                                    case%output_dofs_given, case%full_field, &
-                                   case%plot_amplitude, error)
+                                   case%plot_amplitude, case%units, error)
             if (allocated(error)) return
             if (case%reduction%method == 'none') then
                 ! the exact sparse condensation: no reduction, the matrices kept sparse
@@ -236,7 +240,7 @@ contains
         if (.not. sparse%read) then
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
                                    case%output_dofs_given, case%full_field, &
-                                   case%plot_amplitude, error)
+                                   case%plot_amplitude, case%units, error)
             if (allocated(error)) return
         end if
         if (case%model%ncontact() == 0) call case%diagnostics%add(level_warning, "no_contact", &
@@ -730,6 +734,11 @@ contains
             if (case%full_field) call put(unit, "  full_field = T", stat, msg)
             if (allocated(case%plot_amplitude)) call put(unit, "  plot_amplitude = '"// &
                                                          case%plot_amplitude//"'", stat, msg)
+            call put(unit, "  length_unit = '"//trim(case%units%length)//"'", stat, msg)
+            call put(unit, "  force_unit = '"//trim(case%units%force)//"'", stat, msg)
+            call put(unit, "  time_unit = '"//trim(case%units%time)//"'", stat, msg)
+            call put(unit, "  frequency_unit = '"// &
+                     trim(merge('Hz   ', 'rad/s', case%units%cycles))//"'", stat, msg)
             call put(unit, "/", stat, msg)
             call put(unit, "&run", stat, msg)
             call put(unit, "  method = '"//trim(case%method)//"'", stat, msg)

@@ -18,6 +18,7 @@ module stickslip_case_solvers
         get_string, get_integers
     use stickslip_case_model, only: group_error, max_dof, max_file_dof
     use stickslip_case_messages, only: to_case_message
+    use stickslip_plot_units, only: plot_units_t
     implicit none
     private
     public :: read_hbm_group, read_euler_group, read_reference_group, read_run_group
@@ -183,7 +184,7 @@ contains
     !> absent: default_output_dofs(model)). Errors (stat input) name &output and the
     !> variable, for dofs its element: "&output dofs(2) = 0: ...".
     subroutine read_output_group(nml, model, directory, dofs, dofs_given, full_field, &
-                                 plot_amplitude, error)
+                                 plot_amplitude, units, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The model read (its ndof, contacts and forcing give the default selection).
@@ -199,16 +200,67 @@ contains
         !> &output plot_amplitude: the amplitude the pictures draw, 'half_peak_to_peak'
         !> (default), 'first_harmonic' or 'max_abs'.
         character(len=:), allocatable, intent(out) :: plot_amplitude
+        !> &output length_unit, force_unit, time_unit, frequency_unit: the units the
+        !> pictures' labels name.
+        type(plot_units_t), intent(out) :: units
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: text
+        integer :: k2
+        character(len=10), parameter :: unit_names(3) = [character(len=10) :: &
+            "length", "force", "time"]
         integer :: k
         directory = 'out'
         dofs_given = .false.
         full_field = .false.
         plot_amplitude = 'half_peak_to_peak'
         call check_names(nml, "output", [character(len=14) :: "directory", "dofs", &
-                                          "full_field", "plot_amplitude"], error)
+                                          "full_field", "plot_amplitude", "length_unit", &
+                                          "force_unit", "time_unit", "frequency_unit"], error)
         if (allocated(error)) return
+        do k = 1, 3
+            select case (k)
+            case (1)
+                text = trim(units%length)
+            case (2)
+                text = trim(units%force)
+            case default
+                text = trim(units%time)
+            end select
+            call get_string(nml, "output", trim(unit_names(k))//"_unit", text, error)
+            if (allocated(error)) return
+            ! the label goes into a gnuplot string: plain printable text, no quotes
+            if (len_trim(text) == 0 .or. len_trim(text) > len(units%length) .or. &
+                scan(text, "'""\`") > 0 .or. any([(iachar(text(k2:k2)) < 32 .or. &
+                                                  iachar(text(k2:k2)) > 126, &
+                                                  k2=1, len(text))])) then
+                call group_error(nml, error, "&output "//trim(unit_names(k))//"_unit = '"// &
+                                 text//"': 1 to "//itoa(len(units%length))//" printable "// &
+                                 "characters without quotes or backslashes, e.g. 'mm'")
+                return
+            end if
+            select case (k)
+            case (1)
+                units%length = text
+            case (2)
+                units%force = text
+            case default
+                units%time = text
+            end select
+        end do
+        text = 'rad/s'
+        call get_string(nml, "output", "frequency_unit", text, error)
+        if (allocated(error)) return
+        select case (text)
+        case ('rad/s')
+            units%cycles = .false.
+        case ('Hz')
+            units%cycles = .true.
+        case default
+            call group_error(nml, error, "&output frequency_unit = '"//text// &
+                             "': not 'rad/s' (omega) or 'Hz' (omega / 2 pi)")
+            return
+        end select
         call get_string(nml, "output", "plot_amplitude", plot_amplitude, error)
         if (allocated(error)) return
         select case (plot_amplitude)

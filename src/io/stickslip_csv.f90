@@ -9,7 +9,7 @@
 module stickslip_csv
     use, intrinsic :: iso_fortran_env, only: int64
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
-    use stickslip_kinds, only: dp
+    use stickslip_kinds, only: dp, two_pi
     use stickslip_diagnostics, only: level_untrusted
     use stickslip_error, only: error_type, itoa
     use stickslip_solution, only: hbm_solution_t
@@ -322,7 +322,8 @@ contains
     !> truncation (relative harmonic truncation error estimate, NaN when not computed), then
     !> arclength, diss_friction, diss_damping [J], nfev; with contact laws then open_1..
     !> open_C, slip_1..slip_C (shares of the period) and normal_max_1..normal_max_C (max_t
-    !> lambda_j [N]); then vib_<d> (half the peak-to-peak, (max_t x - min_t x) / 2 [m]) and
+    !> lambda_j [N]); then omega [rad/s] and frequency = omega / 2 pi [Hz] of the point,
+    !> vib_<d> (half the peak-to-peak, (max_t x - min_t x) / 2 [m]) and
     !> h1_<d> (the first harmonic's modulus [m]) of the same DOFs as amp_<d>
     !> (frc_point_t%vibration); last trusted and check. Error: stat io.
     subroutine write_frc_csv(dir, res, error, dofs, labels)
@@ -371,7 +372,9 @@ contains
         laws = .false.
         if (res%npoints > 0) laws = allocated(res%points(1)%open)
         if (laws) header = header//law_columns(nc)
-        ! the vibration amplitudes: half the peak-to-peak and the first harmonic's modulus
+        ! the point's frequency, angular and in cycles; the vibration amplitudes: half the
+        ! peak-to-peak and the first harmonic's modulus
+        header = header//",omega,frequency"
         header = header//columns("vib_", numbers(1:n))//columns("h1_", numbers(1:n))
         header = header//",trusted,check"
         write (vfmt, '(a,i0,a)') '(', max(1, 2*n), '(",",' // real_fmt // '))'
@@ -402,6 +405,8 @@ contains
                         p%diss_damping, p%nfev
                 end if
                 call p%vibration(half_range, first)
+                if (stat == 0) write (u, '(2(",",' // real_fmt // '))', iostat=stat, &
+                                      iomsg=msg, advance='no') p%omega, p%omega/two_pi
                 if (stat == 0 .and. n > 0) write (u, vfmt, iostat=stat, iomsg=msg, &
                                                   advance='no') half_range(sel), first(sel)
                 ! the point's own verdict: 1 unless a check distrusts it, and that check
@@ -544,7 +549,6 @@ contains
         character(len=:), allocatable :: header
         logical :: laws
         integer, allocatable :: sel(:), numbers(:)
-        real(dp), parameter :: two_pi = 2.0_dp*acos(-1.0_dp)
         stat = 0
         msg = ''
         n = 0

@@ -12,6 +12,7 @@ module stickslip_plot_scripts
     use stickslip_robustness, only: robustness_options_t
     use stickslip_case, only: put, rtoa
     use stickslip_files, only: open_temporary, close_and_rename
+    use stickslip_plot_units, only: plot_units_t, energy_unit, cycles_unit
     implicit none
     private
     public :: write_frc_plot_script, write_robustness_plot_script, write_modes_plot_script
@@ -28,7 +29,8 @@ contains
     !> (log-log), with the total (friction + viscous) against the first. Curves are named
     !> "DOF <d>" and the axes carry their units; no text is read as gnuplot markup.
     !> Error: stat io.
-    subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs, labels, amplitude)
+    subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs, labels, amplitude, &
+                                     units)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> Name of the swept parameter ('omega', 'force_amplitude', 'mu', 'normal_load',
@@ -46,9 +48,12 @@ contains
         !> The amplitude drawn (&output plot_amplitude): 'half_peak_to_peak' (the columns
         !> vib_<d>, the default), 'first_harmonic' (h1_<d>) or 'max_abs' (amp_<d>).
         character(len=*), intent(in), optional :: amplitude
+        !> The units the labels name (default SI, omega in rad/s).
+        type(plot_units_t), intent(in), optional :: units
+        type(plot_units_t) :: un
         integer :: u, stat, k, nsel
         character(len=512) :: msg
-        character(len=:), allocatable :: sep, dof_name, prefix, label, names
+        character(len=:), allocatable :: sep, dof_name, prefix, label, names, xcol, lu
         integer, allocatable :: sel(:)
         if (present(dofs)) then
             sel = dofs
@@ -61,18 +66,23 @@ contains
         if (present(labels) .and. present(dofs)) then
             if (any(labels /= dofs)) dof_name = "full-model DOF "
         end if
+        if (present(units)) un = units
+        lu = " ["//trim(un%length)//"]"
         prefix = "vib_"
-        label = "vibration amplitude (max_t x - min_t x) / 2 [m]"
+        label = "vibration amplitude (max_t x - min_t x) / 2"//lu
         if (present(amplitude)) then
             select case (amplitude)
             case ('first_harmonic')
                 prefix = "h1_"
-                label = "first-harmonic amplitude |x_1| [m]"
+                label = "first-harmonic amplitude |x_1|"//lu
             case ('max_abs')
                 prefix = "amp_"
-                label = "amplitude max_t |x(t)| [m]"
+                label = "amplitude max_t |x(t)|"//lu
             end select
         end if
+        ! the x column: the parameter, or for a sweep in omega on a cycles axis the frequency
+        xcol = "1"
+        if (parameter == 'omega' .and. un%cycles) xcol = "(column('frequency'))"
         names = ""
         do k = 1, nsel
             if (k > 1) names = names//" "
@@ -100,7 +110,7 @@ contains
         call put(u, "set output 'frc.png'.suffix", stat, msg)
         call put(u, "set logscale y", stat, msg)
         call put(u, "if (ymax > 0) set yrange [alo:ahi]", stat, msg)
-        call put(u, "set xlabel '"//parameter_label(parameter)//"'", stat, msg)
+        call put(u, "set xlabel '"//parameter_label(parameter, un)//"'", stat, msg)
         call put(u, "set ylabel '"//label//"'", stat, msg)
         call put(u, "set title 'Forced-response curve (red crosses: unstable points, "// &
                  "Floquet multipliers; orange circles: untrusted points, frc.csv column check)'", &
@@ -112,12 +122,13 @@ contains
                  msg)
         do k = 1, nsel
             sep = merge("plot ", "     ", k == 1)
-            call put(u, sep//"f using 1:(column('"//prefix//itoa(sel(k))//"')) with lines "// &
-                     "lw 1.5 title '"//dof_name//itoa(sel(k))//"', \", stat, msg)
-            call put(u, "     f using 1:(untrusted('"//prefix//itoa(sel(k))//"')) with points "// &
-                     "pt 6 ps 1.0 lc rgb 'orange' "//merge("title 'untrusted'", &
+            call put(u, sep//"f using "//xcol//":(column('"//prefix//itoa(sel(k))//"')) "// &
+                     "with lines lw 1.5 title '"//dof_name//itoa(sel(k))//"', \", stat, msg)
+            call put(u, "     f using "//xcol//":(untrusted('"//prefix//itoa(sel(k))//"')) "// &
+                     "with points pt 6 ps 1.0 lc rgb 'orange' "//merge("title 'untrusted'", &
                      "notitle          ", k == nsel)//", \", stat, msg)
-            call put(u, "     f using 1:(unstable('"//prefix//itoa(sel(k))//"')) with points "// &
+            call put(u, "     f using "//xcol//":(unstable('"//prefix//itoa(sel(k))//"')) "// &
+                     "with points "// &
                      "pt 2 ps 0.8 lc rgb 'red' "//merge("title 'unstable'", "notitle         ", &
                      k == nsel)//trim(merge("   ", ", \", k == nsel)), stat, msg)
         end do
@@ -134,7 +145,8 @@ contains
                  "else { unset yrange }", stat, msg)
         call put(u, "if (ymax > 0) set xrange [alo:ahi]", stat, msg)
         call put(u, "set xlabel '"//label//"'", stat, msg)
-        call put(u, "set ylabel 'energy dissipated per cycle [J]'", stat, msg)
+        call put(u, "set ylabel 'energy dissipated per cycle ["//energy_unit(un)//"]'", stat, &
+                 msg)
         call put(u, "set title 'Dissipation per cycle (solid: friction contacts; dashed: "// &
                  "friction + viscous)'", stat, msg)
         call put(u, "set key top left", stat, msg)
@@ -236,24 +248,31 @@ contains
     end subroutine begin_script
 
     !> The axis label of a swept parameter, with its unit.
-    pure function parameter_label(parameter) result(label)
+    pure function parameter_label(parameter, units) result(label)
         character(len=*), intent(in) :: parameter
-        character(len=:), allocatable :: label
+        type(plot_units_t), intent(in) :: units
+        character(len=:), allocatable :: label, f
+        f = " ["//trim(units%force)//"]"
         select case (parameter)
         case ('omega')
-            label = "excitation frequency omega [rad/s]"
+            if (units%cycles) then
+                label = "excitation frequency f = omega / 2 pi ["//cycles_unit(units)//"]"
+            else
+                label = "excitation frequency omega [rad/"//trim(units%time)//"]"
+            end if
         case ('force_amplitude')
-            label = "force amplitude (first forcing term) [N]"
+            label = "force amplitude (first forcing term)"//f
         case ('mu')
             label = "friction coefficient mu [-]"
         case ('normal_load')
-            label = "normal load N [N]"
+            label = "normal load N"//f
         case ('preload')
-            label = "preload of the unilateral contacts [N]"
+            label = "preload of the unilateral contacts"//f
         case default
             label = parameter
         end select
     end function parameter_label
+
 
     !> Write `dir`/robustness.gp, the gnuplot script that draws robustness_cold.png and
     !> robustness_warm.png from robustness.csv: one panel per (rho, H), omega across and mu

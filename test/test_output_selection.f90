@@ -586,6 +586,21 @@ contains
         call check(t, index(script, "contacts [kN]'") > 0 .and. index(script, "[kN mm]'") > 0 &
                    .and. index(script, "using 1:(column('vib_4'))") > 0, &
                    "frc unit: a preload sweep in kN keeps the parameter on x")
+        ! without stability: no unstable points named; the key beside the plot; 1-2-5 labels
+        call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2], stability=.false.)
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "title 'unstable'") == 0 .and. &
+                   index(script, "(unstable(") == 0 .and. &
+                   index(script, "stability not computed") > 0 .and. &
+                   index(script, "outside right top") > 0 .and. &
+                   index(script, "set ytics add (sprintf('%g', v) v)") > 0 .and. &
+                   index(script, "set xtics add (sprintf('%g', v) v)") > 0, &
+                   "frc unit: without stability no unstable points; key outside; decade labels")
+        call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2])
+        script = slurp_file(frc_dir//"/frc.gp")
+        call check(t, index(script, "title 'unstable'") > 0 .and. &
+                   index(script, "stability not computed") == 0, &
+                   "frc unit: with stability the unstable points drawn and named")
         ! labels (a reduced model: reduced DOFs 4, 2 are full DOFs 70, 40)
         call write_frc_csv(frc_dir, res, error, [4, 2], [70, 40])
         call check_error(t, error, "frc unit, labels: written", .false.)

@@ -208,10 +208,11 @@ contains
         if (allocated(case%plot_amplitude)) then
             call write_frc_plot_script(dir, trim(case%sweep%parameter), &
                                        ncols, error, cols, selected_dofs(case), &
-                                       case%plot_amplitude, case%units)
+                                       case%plot_amplitude, case%units, case%sweep%stability)
         else
             call write_frc_plot_script(dir, trim(case%sweep%parameter), &
-                                       ncols, error, cols, selected_dofs(case), units=case%units)
+                                       ncols, error, cols, selected_dofs(case), &
+                                       units=case%units, stability=case%sweep%stability)
         end if
         if (allocated(error)) return
         call write_sweep_summary(dir, case, res, error)

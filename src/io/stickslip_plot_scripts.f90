@@ -30,7 +30,7 @@ contains
     !> "DOF <d>" and the axes carry their units; no text is read as gnuplot markup.
     !> Error: stat io.
     subroutine write_frc_plot_script(dir, parameter, ndof, error, dofs, labels, amplitude, &
-                                     units)
+                                     units, stability)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> Name of the swept parameter ('omega', 'force_amplitude', 'mu', 'normal_load',
@@ -50,7 +50,10 @@ contains
         character(len=*), intent(in), optional :: amplitude
         !> The units the labels name (default SI, omega in rad/s).
         type(plot_units_t), intent(in), optional :: units
+        !> Stability was computed (default .true.): the unstable points are drawn and named.
+        logical, intent(in), optional :: stability
         type(plot_units_t) :: un
+        logical :: floquet
         integer :: u, stat, k, nsel
         character(len=512) :: msg
         character(len=:), allocatable :: sep, dof_name, prefix, label, names, xcol, lu
@@ -67,6 +70,8 @@ contains
             if (any(labels /= dofs)) dof_name = "full-model DOF "
         end if
         if (present(units)) un = units
+        floquet = .true.
+        if (present(stability)) floquet = stability
         lu = " ["//trim(un%length)//"]"
         prefix = "vib_"
         label = "vibration amplitude (max_t x - min_t x) / 2"//lu
@@ -92,7 +97,7 @@ contains
                           "(frc.png, frc_dissipation.png)", u, stat, msg, error)
         if (allocated(error)) return
         call put(u, "set terminal pngcairo size 1100,700 noenhanced font ',11'", stat, msg)
-        call put(u, "set key autotitle columnhead top right box opaque", stat, msg)
+        call put(u, "set key autotitle columnhead outside right top box opaque", stat, msg)
         call put(u, "set grid lc rgb '#dddddd'", stat, msg)
         call put(u, "# the amplitude range: from the smallest amplitude, but at most four "// &
                  "decades below the largest (a contact stuck all period drives its DOF to "// &
@@ -110,11 +115,18 @@ contains
         call put(u, "set output 'frc.png'.suffix", stat, msg)
         call put(u, "set logscale y", stat, msg)
         call put(u, "if (ymax > 0) set yrange [alo:ahi]", stat, msg)
+        call put(u, "# labels at 1, 2 and 5 of each decade when the range spans fewer than "// &
+                 "three (gnuplot's own: one a decade)", stat, msg)
+        call put(u, decade_tics("y"), stat, msg)
         call put(u, "set xlabel '"//parameter_label(parameter, un)//"'", stat, msg)
         call put(u, "set ylabel '"//label//"'", stat, msg)
-        call put(u, "set title 'Forced-response curve (red crosses: unstable points, "// &
-                 "Floquet multipliers; orange circles: untrusted points, frc.csv column check)'", &
-                 stat, msg)
+        if (floquet) then
+            call put(u, "set title 'Forced-response curve (red crosses: unstable, Floquet; "// &
+                     "orange circles: untrusted, column check)'", stat, msg)
+        else
+            call put(u, "set title 'Forced-response curve (orange circles: untrusted, column "// &
+                     "check; stability not computed)'", stat, msg)
+        end if
         call put(u, "# the column 'stable' (1, 0 unstable, -1 unknown), the column 'trusted' "// &
                  "(0: a check distrusts the point)", stat, msg)
         call put(u, "unstable(name) = (column('stable') == 0 ? column(name) : 1/0)", stat, msg)
@@ -126,11 +138,14 @@ contains
                      "with lines lw 1.5 title '"//dof_name//itoa(sel(k))//"', \", stat, msg)
             call put(u, "     f using "//xcol//":(untrusted('"//prefix//itoa(sel(k))//"')) "// &
                      "with points pt 6 ps 1.0 lc rgb 'orange' "//merge("title 'untrusted'", &
-                     "notitle          ", k == nsel)//", \", stat, msg)
-            call put(u, "     f using "//xcol//":(unstable('"//prefix//itoa(sel(k))//"')) "// &
-                     "with points "// &
-                     "pt 2 ps 0.8 lc rgb 'red' "//merge("title 'unstable'", "notitle         ", &
-                     k == nsel)//trim(merge("   ", ", \", k == nsel)), stat, msg)
+                     "notitle          ", k == nsel)//trim(merge(", \", "   ", &
+                                                                floquet .or. k < nsel)), &
+                     stat, msg)
+            if (floquet) call put(u, "     f using "//xcol//":(unstable('"//prefix// &
+                                  itoa(sel(k))//"')) with points "// &
+                                  "pt 2 ps 0.8 lc rgb 'red' "//merge("title 'unstable'", &
+                                  "notitle         ", k == nsel)// &
+                                  trim(merge("   ", ", \", k == nsel)), stat, msg)
         end do
         call put(u, "", stat, msg)
         call put(u, "# frc_dissipation.png: friction dissipation per cycle against amplitude", &
@@ -144,12 +159,14 @@ contains
         call put(u, "if (STATS_max > 0) { set yrange [STATS_max*1e-5:STATS_max*2] } "// &
                  "else { unset yrange }", stat, msg)
         call put(u, "if (ymax > 0) set xrange [alo:ahi]", stat, msg)
+        call put(u, "set ytics autofreq; set format y '%g'", stat, msg)
+        call put(u, decade_tics("x"), stat, msg)
         call put(u, "set xlabel '"//label//"'", stat, msg)
         call put(u, "set ylabel 'energy dissipated per cycle ["//energy_unit(un)//"]'", stat, &
                  msg)
         call put(u, "set title 'Dissipation per cycle (solid: friction contacts; dashed: "// &
                  "friction + viscous)'", stat, msg)
-        call put(u, "set key top left", stat, msg)
+        call put(u, "set key outside right top", stat, msg)
         call put(u, "positive(y) = (y > 0 ? y : 1/0)", stat, msg)
         do k = 1, nsel
             sep = merge("plot ", "     ", k == 1)
@@ -248,6 +265,17 @@ contains
     end subroutine begin_script
 
     !> The axis label of a swept parameter, with its unit.
+    !> A gnuplot line that labels the log `axis` ('x' or 'y') over the amplitude range [alo,
+    !> ahi] at 1, 2 and 5 of each decade when it spans fewer than three decades.
+    pure function decade_tics(axis) result(line)
+        character(len=1), intent(in) :: axis
+        character(len=:), allocatable :: line
+        line = "if (ymax > 0 && ahi/alo < 1000) { set "//axis//"tics format '%g'; "// &
+               "do for [d=floor(log10(alo)):ceil(log10(ahi))] { do for [m=1:3] { "// &
+               "v = (m == 1 ? 1 : (m == 2 ? 2 : 5))*10.0**d; set "//axis// &
+               "tics add (sprintf('%g', v) v) } } }"
+    end function decade_tics
+
     pure function parameter_label(parameter, units) result(label)
         character(len=*), intent(in) :: parameter
         type(plot_units_t), intent(in) :: units

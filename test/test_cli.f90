@@ -4,6 +4,7 @@
 !> progress lines; result files of an earlier run removed; the directory lock; unique
 !> temporaries; a damaged sweep checkpoint; gnuplot started without a shell.
 module test_cli
+    use, intrinsic :: iso_fortran_env, only: output_unit, int64
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, stickslip_stat, itoa
     use stickslip_case, only: case_t, read_case
@@ -12,6 +13,7 @@ module test_cli
         process_id, process_alive, directory_lock_t, acquire_lock, release_lock, &
         process_start_time, remove_file
     use stickslip_signals, only: register_output_directory, remove_own_files
+    use stickslip_gnuplot, only: run_gnuplot
     use stickslip_diagnostics, only: level_note, level_warning, level_untrusted
     use stickslip_driver, only: run_result_t, run_method
     use stickslip_progress, only: progress_t
@@ -36,6 +38,7 @@ contains
         if (allocated(error)) return
         call test_version_line(t)
         call test_cli_examples(t)
+        call test_cli_figures(t)
         call test_methods_cli(t)
         call test_stale_results(t)
         call test_lock(t)
@@ -594,6 +597,43 @@ contains
         close (ui)
         close (uo)
     end function scratch_copy
+
+    !> The pictures of the examples that draw them (a sweep with stability, a backbone, the
+    !> designer's folded lift-off curve), rendered by gnuplot as the command line runs them:
+    !> each exists and is non-trivial (over 10 kB: a PNG of axes alone is about 6 kB). Skipped,
+    !> saying so, where gnuplot is not installed (status 127).
+    subroutine test_cli_figures(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=16), parameter :: examples(3) = [character(len=16) :: "seed_frc", &
+                                                        "seed_modes", "designer_damper"]
+        character(len=24), parameter :: pictures(2, 3) = reshape([character(len=24) :: &
+            "frc.png", "frc_dissipation.png", "modes.png", "", "frc.png", &
+            "frc_dissipation.png"], [2, 3])
+        character(len=:), allocatable :: out, err, dir
+        character(len=200) :: path
+        integer :: code, i, k
+        integer(int64) :: bytes
+        logical :: exists
+        if (run_gnuplot(scratch, "no_such_script.gp") == 127) then
+            write (output_unit, '(a)') "cli figures: gnuplot is not installed, the pictures "// &
+                "are not tested"
+            return
+        end if
+        do i = 1, size(examples)
+            path = scratch_copy(trim(examples(i)))
+            dir = scratch//"/out_"//trim(examples(i))
+            call cli([character(len=200) :: path], code, out, err)
+            call check(t, code == 0 .or. code == 2, "cli figures "//trim(examples(i))// &
+                       ": ran", err)
+            do k = 1, 2
+                if (len_trim(pictures(k, i)) == 0) cycle
+                inquire (file=dir//"/"//trim(pictures(k, i)), exist=exists, size=bytes)
+                call check(t, exists .and. bytes > 10000_int64, "cli figures "// &
+                           trim(examples(i))//": "//trim(pictures(k, i))//" drawn", &
+                           itoa(int(bytes))//" bytes")
+            end do
+        end do
+    end subroutine test_cli_figures
 
     subroutine test_cli_examples(t)
         type(test_counter_t), intent(inout) :: t

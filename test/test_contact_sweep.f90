@@ -229,7 +229,7 @@ contains
         call check(t, all(abs(half - [1.0_dp, 1.0_dp, 1.0_dp]) <= 2.0e-3_dp) .and. &
                    all(abs(first - [1.0_dp, 1.0_dp, 0.0_dp]) <= 1.0e-14_dp), &
                    "contact_sweep: vibration amplitudes of known series (half the "// &
-                   "peak-to-peak on 192 samples, the first harmonic exact)")
+                   "peak-to-peak on 128 samples, the first harmonic exact)")
         deallocate (p%xcoef)
         call p%vibration(half, first)
         call check(t, all(half /= half) .and. all(first /= first), &

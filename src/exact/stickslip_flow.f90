@@ -231,7 +231,8 @@ contains
                     call fail("the state is not finite (unbounded response)")
                     return
                 end if
-                call find_event(self, self%modes(im), t, yb, tb, ybb, found, te, yeb, hit)
+                call find_event(self, self%modes(im), t, yb, tb, ybb, found, te, yeb, hit, &
+                                t == tp)
                 if (.not. found) then
                     ! a whole grid step: the cached exponentials at the Gauss points serve
                     if (want_energy) then

@@ -233,7 +233,7 @@ contains
     !> estimate), each only when it is already non-positive at the earliest event located so
     !> far: with many contacts several rows cross in one step, and one or two of them need
     !> locating to roundoff instead of all.
-    subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, hit)
+    subroutine find_event(self, md, ta, ya, tb, yb, found, te, ye, hit, fresh)
         !> The dynamics md belongs to.
         class(flow_modes_t), intent(in) :: self
         !> The contact mode of the step.
@@ -246,6 +246,8 @@ contains
         real(dp), intent(out) :: te, ye(:)
         !> With found: the event.
         type(event_hit_t), intent(out) :: hit
+        !> The step starts the phase (row_crossing samples its rows at zero and flat).
+        logical, intent(in) :: fresh
         real(dp) :: tau, best, h, ga, gb, da, db, ytau(size(ya))
         real(dp), allocatable :: est(:)
         integer, allocatable :: cand(:)
@@ -269,7 +271,7 @@ contains
                 if (ga > 0.0_dp) est(k) = max(hermite_root(ga, da, gb, db, h), 0.0_dp)
             else
                 ! a dip below zero between two positive values, if any
-                tau = row_crossing(self, md, col, md%row_scale(col), ta, ya, tb, yb)
+                tau = row_crossing(self, md, col, md%row_scale(col), ta, ya, tb, yb, fresh)
                 if (tau < best) then
                     best = tau
                     found = .true.
@@ -439,9 +441,10 @@ contains
     !> The first time tau in (0, tb - ta] where event row `col` of mode md crosses zero from
     !> the balanced state ya at ta (yb the state at tb), or huge when it does not: a row
     !> that ends non-positive, or dips below zero between two positive values (a minimum
-    !> found when its slope changes sign by more than 1e-9 of gscale * omega). gscale is
-    !> the scale of the row's values.
-    real(dp) function row_crossing(self, md, col, gscale, ta, ya, tb, yb) result(tau)
+    !> found when its slope changes sign by more than 1e-9 of gscale * omega), or, in the
+    !> step that starts its phase at zero and flat, goes below zero at one of dip_samples.
+    !> gscale is the scale of the row's values.
+    real(dp) function row_crossing(self, md, col, gscale, ta, ya, tb, yb, fresh) result(tau)
         !> The dynamics md belongs to.
         class(flow_modes_t), intent(in) :: self
         !> The contact mode of the step.
@@ -452,7 +455,13 @@ contains
         real(dp), intent(in) :: gscale
         !> Start time [s] and state, end time [s] and state of the step.
         real(dp), intent(in) :: ta, ya(:), tb, yb(:)
-        real(dp) :: ga, gb, da, db, thr, tmin, h
+        !> The step starts the row's phase (a row at zero and flat there is sampled for a
+        !> dip, dip_samples).
+        logical, intent(in) :: fresh
+        real(dp) :: ga, gb, da, db, thr, tmin, h, lo, glo, hi, ghi, ylo(size(ya))
+        real(dp), allocatable :: ts(:), gs(:)
+        logical :: dips
+        integer :: k
         tau = huge(1.0_dp)
         associate (r => md%rows(:, col))
             h = tb - ta
@@ -463,6 +472,19 @@ contains
             thr = 1.0e-9_dp*gscale*self%omega
             if (gb <= 0.0_dp) then
                 tau = first_crossing(md, self%delta, ya, r, 0, h, yb)
+            else if (fresh .and. abs(ga) <= 1.0e-9_dp*gscale .and. abs(da) <= thr) then
+                ! at zero and flat where its phase starts: a hump then a dip leaves both
+                ! slopes of the step positive (the track's rule too, stickslip_flow_track)
+                ts = dip_samples(h)
+                gs = [(value_at(md, self%delta, ya, r, ts(k)), k=1, size(ts))]
+                call dip_bracket(ts, gs, ga, 1.0e-9_dp*gscale, dips, lo, glo, hi, ghi)
+                if (.not. dips) return
+                if (glo > 0.0_dp) then
+                    call propagate(md, self%delta, lo, ya, ylo)
+                    tau = lo + first_crossing(md, self%delta, ylo, r, 0, hi - lo)
+                else
+                    tau = hi
+                end if
             else if (ga > 0.0_dp .and. da < -thr .and. db > thr) then
                 ! a dip between two positive values: does its minimum go below zero?
                 tmin = first_crossing(md, self%delta, ya, -r, 1, h, yb)

@@ -17,6 +17,7 @@ module stickslip_cli
     use stickslip_driver, only: run_result_t, run_method
     use stickslip_robustness, only: robustness_row_t
     use stickslip_sweep, only: sweep_result_t
+    use stickslip_sweep_family, only: family_result_t
     use stickslip_checks, only: hbm_checks_t, sampling_notes
     use stickslip_euler, only: euler_result_t
     use stickslip_reference, only: reference_result_t
@@ -374,7 +375,11 @@ contains
             case ('study')
                 call print_study_summary(out_unit, case, result%study)
             case ('sweep')
-                call print_sweep_summary(out_unit, case, result%sweep)
+                if (allocated(result%family%values)) then
+                    call print_family_summary(out_unit, case, result%family, result%sweep)
+                else
+                    call print_sweep_summary(out_unit, case, result%sweep)
+                end if
             case ('robustness')
                 call print_robustness_summary(out_unit, case, result%robustness)
             case ('modes')
@@ -446,8 +451,13 @@ contains
             if (allocated(error)) then
                 if (error%stat /= stickslip_stat%numerical) return
             end if
-            call draw(case%directory, "frc.gp", &
-                      [character(len=20) :: "frc.png", "frc_dissipation.png"], err_unit)
+            if (allocated(result%family%values)) then
+                call draw(case%directory, "family.gp", &
+                          [character(len=20) :: "frc_family.png", "family.png"], err_unit)
+            else
+                call draw(case%directory, "frc.gp", &
+                          [character(len=20) :: "frc.png", "frc_dissipation.png"], err_unit)
+            end if
         case ('modes')
             if (.not. (case%modes%plot .and. result%modes%npoints > 1)) return
             if (allocated(error)) then
@@ -748,6 +758,39 @@ contains
             pictures(case%directory, [character(len=20) :: "frc.png", "frc_dissipation.png"])// &
             "summary.nml}"
     end subroutine print_sweep_summary
+
+    subroutine print_family_summary(u, case, fam, res)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        type(family_result_t), intent(in) :: fam
+        type(sweep_result_t), intent(in) :: res
+        integer :: k, n
+        n = size(fam%values)
+        write (u, '(a)') "stickslip "//stickslip_version//": "//case%path
+        write (u, '(a,i0,a,i0,a,g0.6,a,g0.6,a)') "  family of ", n, &
+            " forced-response curves in omega from ", n, " values of "// &
+            trim(fam%family_parameter)//", ", fam%values(1), " to ", fam%values(n), &
+            merge(" (complete)  ", " (incomplete)", fam%complete)
+        write (u, '(a,i0,a,i0,a,i0)') "  points ", res%npoints, ", resumed ", &
+            res%resumed_points, ", unstable ", count(res%points(1:res%npoints)%stable == 0)
+        if (size(fam%peaks, 1) > 0) then
+            write (u, '(a)') "  curve  value            peak (first observed DOF)  at omega"
+            do k = 1, n
+                if (fam%curves(k)%npoints == 0) then
+                    write (u, '(i7,2x,g15.6,a)') k, fam%values(k), "  no solution at the start"
+                else
+                    write (u, '(i7,2x,g15.6,2x,g15.6,12x,g15.6)') k, fam%values(k), &
+                        fam%peaks(1, k)%amplitude, fam%peaks(1, k)%omega
+                end if
+            end do
+        end if
+        write (u, '(a,f0.3,a,f0.3,a,i0,a)') "  CPU ", res%seconds, " s, wall ", &
+            fam%wall_seconds, " s on ", fam%threads, " thread(s)"
+        write (u, '(a)') "  wrote "//case%directory//"/{frc.csv, frc_harmonics.csv, "// &
+            "family.csv, family.gp, "// &
+            pictures(case%directory, [character(len=20) :: "frc_family.png", "family.png"])// &
+            "summary.nml}"
+    end subroutine print_family_summary
 
     subroutine print_modes_summary(u, case, res)
         integer, intent(in) :: u

@@ -26,7 +26,7 @@
 module stickslip_blas_threads
     use, intrinsic :: iso_c_binding, only: c_ptr, c_funptr, c_null_ptr, c_null_char, c_char, &
         c_int, c_associated, c_f_procpointer, c_f_pointer
-    !$ use omp_lib, only: omp_get_max_threads
+    !$ use omp_lib, only: omp_get_max_threads, omp_in_parallel
     implicit none
     private
     public :: blas_library, blas_thread_safe, limit_blas_threads, parallel_threads
@@ -130,10 +130,13 @@ contains
 
     !> Threads a parallel loop of stickslip may use: the OpenMP maximum
     !> (OMP_NUM_THREADS), or 1 when the linked BLAS is not thread-safe (see
-    !> blas_thread_safe) or the library is built without OpenMP. No errors.
+    !> blas_thread_safe), the library is built without OpenMP or the caller is already in a
+    !> parallel region (a nested one would get one thread). No errors.
     integer function parallel_threads()
         parallel_threads = 1
         !$ parallel_threads = omp_get_max_threads()
+        ! inside a parallel region (the curves of a family) a nested one gets one thread
+        !$ if (omp_in_parallel()) parallel_threads = 1
         if (parallel_threads > 1) then
             if (.not. blas_thread_safe()) parallel_threads = 1
         end if

@@ -66,7 +66,7 @@ contains
     !> neither the truncation estimate nor the stability is computed (opts%stability is
     !> then an input error).
     subroutine run_sweep(model, hbm, ref, opts, res, error, observer, resume, progress, &
-                         sparse, dofs)
+                         sparse, dofs, r_start)
         !> The model at the case's values (the parameter is overwritten along the curve).
         type(model_t), intent(in) :: model
         !> Weighted-residual options of every point.
@@ -90,6 +90,9 @@ contains
         !> With `sparse`: the DOFs whose amplitudes the points hold (then the contact and
         !> forced DOFs, kept_dofs); default none beyond those.
         integer, intent(in), optional :: dofs(:)
+        !> A start for the first point's solve: friction-force coefficients [N] on the basis
+        !> of `hbm` (a neighbouring curve's first point); default the solver's own start.
+        real(dp), intent(in), optional :: r_start(:, :)
         type(friction_family_t), target :: fam
         type(continuation_options_t) :: co
         type(continuation_report_t) :: rep
@@ -169,6 +172,12 @@ contains
             else
                 call solve_periodic_sparse(fam%sparse, ho, fam%kept, sol, error)
             end if
+        else if (present(r_start)) then
+            call solve_periodic(m0, ho, sol, error, r_start=r_start)
+            ! a start that leads nowhere: the solver's own
+            if (.not. allocated(error)) then
+                if (.not. sol%converged) call solve_periodic(m0, ho, sol, error)
+            end if
         else
             call solve_periodic(m0, ho, sol, error)
         end if
@@ -188,6 +197,7 @@ contains
         end if
         if (allocated(error)) return
         if (present(progress)) fam%progress = progress
+        res%rho = fam%prob%rho
         front = 1
         back = 0
         curve_done = .false.

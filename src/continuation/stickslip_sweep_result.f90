@@ -11,7 +11,7 @@ module stickslip_sweep_result
         reason_failures, reason_max_points, reason_left
     implicit none
     private
-    public :: frc_point_t, sweep_result_t, sweep_observer_t, reason_text
+    public :: frc_point_t, sweep_result_t, sweep_observer_t, reason_text, point_amplitudes
 
     !> One point of a forced-response curve.
     type :: frc_point_t
@@ -81,6 +81,9 @@ module stickslip_sweep_result
         real(dp) :: seconds = 0.0_dp, stability_seconds = 0.0_dp
         !> Turning points passed (sign changes of the parameter's tangent component).
         integer :: folds = 0
+        !> The weight rho of the friction equations along the curve (the start's: the
+        !> automatic one when &hbm rho = 0) [m/(N s)].
+        real(dp) :: rho = 0.0_dp
         !> Factorizations of the dynamic stiffnesses by the continuation of this run (see
         !> friction_family_t%factorizations; the points' own solves reuse them).
         integer :: factorizations = 0
@@ -173,6 +176,30 @@ contains
         u = matmul(basis, self%xcoef)
         half_range = 0.5_dp*(maxval(u, dim=1) - minval(u, dim=1))
     end subroutine point_vibration
+
+    !> The amplitudes of a point's observed displacements as `measure` asks:
+    !> 'half_peak_to_peak' (the vibration amplitude, (max_t x - min_t x) / 2),
+    !> 'first_harmonic' (the first harmonic's modulus) or 'max_abs' (max_t |x|, the static
+    !> offset included) [model length unit]. No errors (NaN for a point without
+    !> coefficients and a measure that needs them).
+    function point_amplitudes(pt, measure) result(a)
+        !> The point.
+        type(frc_point_t), intent(in) :: pt
+        !> The measure.
+        character(len=*), intent(in) :: measure
+        real(dp), allocatable :: a(:)
+        real(dp), allocatable :: half_range(:), first(:)
+        if (measure == 'max_abs') then
+            a = pt%amplitude
+            return
+        end if
+        call pt%vibration(half_range, first)
+        if (measure == 'first_harmonic') then
+            a = first
+        else
+            a = half_range
+        end if
+    end function point_amplitudes
 
     !> Words for a continuation_state_t%reason.
     pure function reason_text(reason) result(text)

@@ -31,6 +31,7 @@ module stickslip_driver
     use stickslip_side_by_side, only: side_by_side_t
     use stickslip_study, only: study_result_t
     use stickslip_sweep, only: sweep_result_t
+    use stickslip_sweep_family, only: family_result_t
     use stickslip_robustness, only: robustness_row_t
     use stickslip_run_findings, only: hbm_findings, side_by_side_findings, study_findings, &
         add_new
@@ -69,6 +70,9 @@ module stickslip_driver
         type(study_result_t) :: study
         !> method 'sweep'.
         type(sweep_result_t) :: sweep
+        !> method 'sweep' with a family (&sweep family_values; family%values unallocated
+        !> otherwise).
+        type(family_result_t) :: family
         !> method 'robustness': one row per run.
         type(robustness_row_t), allocatable :: robustness(:)
         !> method 'modes'.
@@ -139,7 +143,7 @@ contains
             result%diagnostics = study_findings(result%study)
             result%summary_written = allocated(result%study%reference%diagnosis)
         case ('sweep')
-            call run_sweep_case(case, result%sweep, error, progress)
+            call run_sweep_case(case, result%sweep, error, progress, result%family)
             result%diagnostics = result%sweep%diagnostics
             result%summary_written = result%sweep%npoints > 0
         case ('robustness')

@@ -29,6 +29,8 @@ module stickslip_run_studies
         write_modes_plot_script
     use stickslip_run_findings, only: study_findings
     use stickslip_case_messages, only: to_case_message
+    use stickslip_sweep_family, only: family_result_t
+    use stickslip_run_family, only: family_run, remove_family_checkpoints
     use stickslip_run_output, only: open_output, close_output, after_method, name_case_file, &
         write_reference_files, sparse_columns, recovers, output_columns, boundary_columns
     implicit none
@@ -102,33 +104,53 @@ contains
     !> before the end of the range is written too, and an error with stat numerical is
     !> returned with the diagnosis. Errors: stat input (invalid case, a checkpoint of
     !> another case or a damaged one), stat numerical (no solution at the start), stat io.
-    subroutine run_sweep_case(case, res, error, progress)
+    subroutine run_sweep_case(case, res, error, progress, family)
         !> The case (with its &sweep group).
         type(case_t), intent(in) :: case
-        !> The curve.
+        !> The curve (a family's: every curve's points, curve after curve).
         type(sweep_result_t), intent(out) :: res
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        !> Progress hook, told after every point of the curve.
+        !> Progress hook, told after every point of the curve (every curve of a family).
         type(progress_t), intent(inout), optional :: progress
+        !> The family, when &sweep gives one (family_values): frc.csv with the columns curve
+        !> and family_value, family.csv, family.gp; one checkpoint per curve.
+        type(family_result_t), intent(out), optional :: family
         type(directory_lock_t) :: lock
         character(len=:), allocatable :: stage
-        logical :: summary_written
+        logical :: summary_written, is_family
+        type(family_result_t) :: fam
+        is_family = allocated(case%sweep%family%family_values)
         call open_output(case, lock, error, stage)
         if (allocated(error)) return
-        call sweep_run(case, stage, res, summary_written, error, progress)
+        if (is_family) then
+            call family_run(case, stage, res, fam, summary_written, error, progress)
+            if (present(family)) family = fam
+        else
+            call sweep_run(case, stage, res, summary_written, error, progress)
+        end if
         call close_output(case, lock, error)
         ! the curve's files are in place: its checkpoint has served (a sweep stopped short
         ! has written what it computed, with exit code 2)
         if (summary_written) then
             if (.not. allocated(error)) then
-                call remove_checkpoint(case%directory)
+                call remove_done()
             else if (error%stat == stickslip_stat%numerical) then
-                call remove_checkpoint(case%directory)
+                call remove_done()
             end if
         end if
         call name_case_file(case, error, ['hbm  ', 'ref  ', 'opts ', 'basis'], &
                             ['hbm      ', 'reference', 'sweep    ', 'hbm      '])
+
+    contains
+
+        subroutine remove_done()
+            if (is_family) then
+                call remove_family_checkpoints(case)
+            else
+                call remove_checkpoint(case%directory)
+            end if
+        end subroutine remove_done
     end subroutine run_sweep_case
 
     subroutine sweep_run(case, dir, res, summary_written, error, progress)

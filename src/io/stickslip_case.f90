@@ -303,6 +303,13 @@ contains
             end if
             call check_sparse_methods(nml, case, error)
             if (allocated(error)) return
+            if (method == 'sweep' .and. allocated(case%sweep%family%family_values)) then
+                call group_error(nml, error, "&sweep family_values: a family of curves "// &
+                                 "needs a dense or reduced model (&reduction method = "// &
+                                 "'none' keeps this one sparse: reduce it, method = "// &
+                                 "'craig-bampton' or 'auto')")
+                return
+            end if
         end if
     end subroutine read_case
 
@@ -815,6 +822,12 @@ contains
                     call put(unit, "  truncation = "//ltoa(w%truncation), stat, msg)
                     call put(unit, "  resume = "//ltoa(w%resume), stat, msg)
                     call put(unit, "  plot = "//ltoa(w%plot), stat, msg)
+                    if (allocated(w%family%family_values)) then
+                        call put(unit, "  family_parameter = '"// &
+                                 trim(w%family%family_parameter)//"'", stat, msg)
+                        call put(unit, "  family_values = "//rlist(w%family%family_values), &
+                                 stat, msg)
+                    end if
                     call put(unit, "/", stat, msg)
                 end associate
             end if

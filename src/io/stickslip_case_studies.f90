@@ -14,6 +14,8 @@ module stickslip_case_studies
     use stickslip_robustness, only: robustness_options_t, default_robustness_options, &
         validate_robustness_options
     use stickslip_modes, only: modes_options_t, validate_modes_options
+    use stickslip_sweep_family, only: family_options_t, validate_family_options, &
+        max_family_curves
     use stickslip_namelist, only: nml_file_t, lower
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string, &
         get_integers, get_reals
@@ -31,6 +33,9 @@ module stickslip_case_studies
         logical :: resume = .true.
         !> Draw frc.png with gnuplot (the command-line program).
         logical :: plot = .true.
+        !> A family of curves (&sweep family_parameter, family_values): one curve per value
+        !> (family_parameter = '' when the sweep is one curve).
+        type(family_options_t) :: family
     end type sweep_run_options_t
 
     !> The &modes group of a case: the options of run_modes and whether the program draws
@@ -126,7 +131,8 @@ contains
 
     !> Read &sweep (optional; `given` tells whether it is present): parameter, start and stop
     !> (both required with the group), step, min_step, max_step, max_points, max_failures,
-    !> stability, truncation, resume, plot; validate against `model`.
+    !> stability, truncation, resume, plot, family_parameter and family_values (a family of
+    !> curves: both or neither); validate against `model`.
     subroutine read_sweep_group(nml, model, opts, given, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
@@ -138,14 +144,16 @@ contains
         logical, intent(out) :: given
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
-        character(len=:), allocatable :: parameter
+        character(len=:), allocatable :: parameter, family
+        real(dp), allocatable :: values(:)
         logical :: found
         character(len=*), parameter :: g = "sweep"
         given = nml%find(g) > 0
         if (.not. given) return
-        call check_names(nml, g, [character(len=12) :: "parameter", "start", "stop", "step", &
+        call check_names(nml, g, [character(len=16) :: "parameter", "start", "stop", "step", &
                              "min_step", "max_step", "max_points", "max_failures", &
-                             "stability", "truncation", "resume", "plot"], error)
+                             "stability", "truncation", "resume", "plot", &
+                             "family_parameter", "family_values"], error)
         if (allocated(error)) return
         parameter = trim(opts%parameter)
         call get_string(nml, g, "parameter", parameter, error)
@@ -190,7 +198,33 @@ contains
         call get_logical(nml, g, "plot", opts%plot, error)
         if (allocated(error)) return
         call validate_sweep_options(model, opts%sweep_options_t, error)
-        if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['sweep'])
+        if (allocated(error)) then
+            call to_case_message(error, nml%path, ['opts'], ['sweep'])
+            return
+        end if
+        ! a family: the second parameter and its values, both or neither
+        family = ''
+        call get_string(nml, g, "family_parameter", family, error)
+        if (allocated(error)) return
+        call get_reals(nml, g, "family_values", values, found, max_family_curves, error)
+        if (allocated(error)) return
+        if (len_trim(family) == 0 .and. .not. found) return
+        if (len_trim(family) == 0) then
+            call group_error(nml, error, "&sweep family_parameter: missing (family_values "// &
+                             "are the values of which parameter: 'normal_load', 'preload', "// &
+                             "'mu' or 'force_amplitude')")
+            return
+        end if
+        if (.not. found) then
+            call group_error(nml, error, "&sweep family_values: missing (the values of "// &
+                             "family_parameter, one curve each)")
+            return
+        end if
+        opts%family%family_parameter = lower(trim(family))
+        opts%family%family_values = values
+        call validate_family_options(model, opts%sweep_options_t, opts%family, error)
+        if (allocated(error)) call to_case_message(error, nml%path, ['family', 'sweep '], &
+                                                   ['sweep', 'sweep'])
     end subroutine read_sweep_group
 
     !> Read &robustness (optional): lists omegas, mus, rhos, harmonics, samples,

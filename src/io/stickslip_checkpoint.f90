@@ -20,7 +20,7 @@ module stickslip_checkpoint
     implicit none
     private
     public :: checkpoint_writer_t, case_fingerprint, read_checkpoint, remove_checkpoint
-    public :: checkpoint_name
+    public :: checkpoint_name, family_checkpoint_name
 
     !> File name of the checkpoint in the output directory.
     character(len=*), parameter :: checkpoint_name = "frc.checkpoint"
@@ -42,6 +42,8 @@ module stickslip_checkpoint
         character(len=:), allocatable :: directory
         !> Fingerprint of the case.
         character(len=16) :: fingerprint = ''
+        !> File name (default checkpoint_name; a family's curve k: family_checkpoint_name(k)).
+        character(len=:), allocatable :: name
         !> Shortest wall time between two writes [s] (0: after every point, whatever a write
         !> costs).
         real(dp) :: interval = 1.0_dp
@@ -180,7 +182,8 @@ contains
         self%last = now
         stat = 0
         msg = ''
-        call open_temporary(self%directory, checkpoint_name, u, error)
+        if (.not. allocated(self%name)) self%name = checkpoint_name
+        call open_temporary(self%directory, self%name, u, error)
         if (allocated(error)) return
         associate (st => res%state)
             n = size(st%y)
@@ -213,7 +216,7 @@ contains
                 if (stat == 0) write (u, rf, iostat=stat, iomsg=msg) p%xcoef, p%rcoef, p%ucoef
             end associate
         end do
-        call close_and_rename(self%directory, checkpoint_name, u, stat, msg, error)
+        call close_and_rename(self%directory, self%name, u, stat, msg, error)
         call system_clock(done)
         self%cost = done - now
     end subroutine write_checkpoint
@@ -225,7 +228,7 @@ contains
     !> it belongs to another case (fingerprint), is not a checkpoint or is damaged (a count
     !> out of bounds, an unreadable value: "delete it"), stat io when it cannot be opened.
     subroutine read_checkpoint(directory, fingerprint, ndof, ncontact, res, found, error, &
-                               laws)
+                               laws, name)
         !> Output directory.
         character(len=*), intent(in) :: directory
         !> Fingerprint of the case being run.
@@ -243,6 +246,8 @@ contains
         !> The case has contact laws: each point has its line of open shares and largest
         !> normal forces (default .false.).
         logical, intent(in), optional :: laws
+        !> File name (default checkpoint_name).
+        character(len=*), intent(in), optional :: name
         character(len=:), allocatable :: path, problem
         character(len=128) :: line
         logical :: with_laws
@@ -253,6 +258,7 @@ contains
         integer(int64) :: bytes
         type(frc_point_t) :: p
         path = directory//'/'//checkpoint_name
+        if (present(name)) path = directory//'/'//name
         with_laws = .false.
         if (present(laws)) with_laws = laws
         inquire (file=path, exist=found, size=bytes)
@@ -436,10 +442,25 @@ contains
         end subroutine read_coefficients
     end subroutine read_checkpoint
 
-    !> Delete <directory>/frc.checkpoint if present (the curve is finished).
-    subroutine remove_checkpoint(directory)
+    !> Delete <directory>/frc.checkpoint (or <directory>/`name`) if present (the curve is
+    !> finished).
+    subroutine remove_checkpoint(directory, name)
         !> Output directory.
         character(len=*), intent(in) :: directory
-        call remove_file(directory//'/'//checkpoint_name)
+        !> File name (default checkpoint_name).
+        character(len=*), intent(in), optional :: name
+        if (present(name)) then
+            call remove_file(directory//'/'//name)
+        else
+            call remove_file(directory//'/'//checkpoint_name)
+        end if
     end subroutine remove_checkpoint
+
+    !> The checkpoint file name of curve k of a family: frc_family_<k>.checkpoint.
+    pure function family_checkpoint_name(k) result(name)
+        !> The curve (1..).
+        integer, intent(in) :: k
+        character(len=:), allocatable :: name
+        name = "frc_family_"//itoa(k)//".checkpoint"
+    end function family_checkpoint_name
 end module stickslip_checkpoint

@@ -30,7 +30,7 @@ module stickslip_csv
     public :: write_study_csv, write_frc_csv, write_frc_harmonics_csv, write_robustness_csv
     public :: write_modes_csv, write_modes_harmonics_csv
     public :: real_fmt
-    public :: format_real, real_width, contact_columns
+    public :: format_real, real_width, contact_columns, columns, column_numbers, selection
 
     !> Edit descriptor of every real in the result files: full double precision.
     character(len=*), parameter :: real_fmt = 'es25.17e3'
@@ -326,7 +326,7 @@ contains
     !> vib_<d> (half the peak-to-peak, (max_t x - min_t x) / 2 [m]) and
     !> h1_<d> (the first harmonic's modulus [m]) of the same DOFs as amp_<d>
     !> (frc_point_t%vibration); last trusted and check. Error: stat io.
-    subroutine write_frc_csv(dir, res, error, dofs, labels)
+    subroutine write_frc_csv(dir, res, error, dofs, labels, curve, family_value)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The curve.
@@ -338,6 +338,10 @@ contains
         !> Column numbers of the selected DOFs (size of the selection; default: the DOF
         !> numbers themselves), e.g. full-model numbers of a reduced model's recovered DOFs.
         integer, intent(in), optional :: labels(:)
+        !> The curves of a family in one table: each point's curve (1..) and the value of the
+        !> family's parameter, columns curve,family_value before trusted,check.
+        integer, intent(in), optional :: curve(:)
+        real(dp), intent(in), optional :: family_value(:)
         integer :: u, k, i, stat, n, nc
         character(len=512) :: msg
         character(len=:), allocatable :: header
@@ -376,6 +380,7 @@ contains
         ! peak-to-peak and the first harmonic's modulus
         header = header//",omega,frequency"
         header = header//columns("vib_", numbers(1:n))//columns("h1_", numbers(1:n))
+        if (present(curve)) header = header//",curve,family_value"
         header = header//",trusted,check"
         write (vfmt, '(a,i0,a)') '(', max(1, 2*n), '(",",' // real_fmt // '))'
         write (fmt, '(a,i0,a)') '(', 2 + n + 2*nc, '(' // real_fmt // ',","),i0,",",' // &
@@ -409,6 +414,10 @@ contains
                                       iomsg=msg, advance='no') p%omega, p%omega/two_pi
                 if (stat == 0 .and. n > 0) write (u, vfmt, iostat=stat, iomsg=msg, &
                                                   advance='no') half_range(sel), first(sel)
+                if (stat == 0 .and. present(curve)) write (u, '(",",i0,",",' // real_fmt // &
+                                                           ')', iostat=stat, iomsg=msg, &
+                                                           advance='no') curve(k), &
+                    family_value(k)
                 ! the point's own verdict: 1 unless a check distrusts it, and that check
                 if (stat == 0) write (u, '(",",i0,",",a)', iostat=stat, iomsg=msg) &
                     merge(0, 1, p%check_level >= level_untrusted), trim(p%check)

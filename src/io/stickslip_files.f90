@@ -23,12 +23,17 @@ module stickslip_files
     !> Every result file stickslip writes into an output directory (doc/outputs.md):
     !> the files that a run removes when it does not write them itself. Never the case
     !> file, the sweep checkpoint or anything else.
-    character(len=*), parameter :: result_file_names(21) = [character(len=24) :: &
+    character(len=*), parameter :: result_file_names(25) = [character(len=24) :: &
         "hbm.csv", "coefficients.csv", "full_field.mtx", "euler.csv", "reference.csv", "events.csv", &
         "study.csv", "frc.csv", "frc_harmonics.csv", "frc.gp", "frc.png", &
         "frc_dissipation.png", &
         "robustness.csv", "robustness.gp", "robustness_cold.png", "robustness_warm.png", &
-        "modes.csv", "modes_harmonics.csv", "modes.gp", "modes.png", "summary.nml"]
+        "modes.csv", "modes_harmonics.csv", "modes.gp", "modes.png", &
+        "family.csv", "family.gp", "frc_family.png", "family.png", "summary.nml"]
+
+    !> Checkpoints of a family's curves, frc_family_<k>.checkpoint, k = 1 to this (the most
+    !> curves a family has, stickslip_sweep_family's max_family_curves).
+    integer, parameter :: family_checkpoints = 200
 
     !> The lock of an output directory, held from acquire_lock to release_lock.
     type :: directory_lock_t
@@ -496,6 +501,10 @@ contains
                                  itoa(n)//'.tmp')
             end do
             call remove_file(dir//'/frc.checkpoint.'//itoa(pid)//'.'//itoa(n)//'.tmp')
+            do k = 1, family_checkpoints
+                call remove_file(dir//'/frc_family_'//itoa(k)//'.checkpoint.'//itoa(pid)// &
+                                 '.'//itoa(n)//'.tmp')
+            end do
             call remove_file(dir//'/'//lock_name//'.'//itoa(pid)//'.'//itoa(n)//'.tmp')
         end do
     end subroutine remove_temporaries

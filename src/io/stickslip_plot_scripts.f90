@@ -1,7 +1,8 @@
 !> The gnuplot scripts of the pictures: frc.gp (frc.png, a forced-response curve, and
 !> frc_dissipation.png, the dissipation per cycle against amplitude) and
 !> robustness.gp (robustness_cold.png, robustness_warm.png, the robustness maps) and
-!> modes.gp (modes.png, the backbone of a nonlinear mode). Each
+!> modes.gp (modes.png, the backbone of a nonlinear mode) and family.gp (frc_family.png, the
+!> curves of a family coloured by its parameter, and family.png, their peaks against it). Each
 !> script reads its CSV file by a relative name, so it runs in the output directory
 !> (`cd DIR && gnuplot frc.gp`), and writes its PNGs with the name suffix held by the
 !> gnuplot variable `suffix` ('' unless given with -e). Writing a script starts nothing:
@@ -16,6 +17,7 @@ module stickslip_plot_scripts
     implicit none
     private
     public :: write_frc_plot_script, write_robustness_plot_script, write_modes_plot_script
+    public :: write_family_plot_script
 
 contains
 
@@ -182,6 +184,163 @@ contains
         call close_and_rename(dir, "frc.gp", u, stat, msg, error)
     end subroutine write_frc_plot_script
 
+    !> Write `dir`/family.gp, the gnuplot script that draws two pictures of a family of
+    !> forced-response curves: frc_family.png from frc.csv, the amplitude of the first DOF of
+    !> the selection against omega (or the frequency), one line per curve coloured by the
+    !> value of the family's parameter (a colour scale), untrusted points circled; and
+    !> family.png from family.csv, each selected DOF's peak against the parameter (log axis
+    !> when the values are positive and span more than a factor 20) with the stuck and
+    !> slipping linear limits' peaks as dashed and dotted lines (for a family in the forcing
+    !> amplitude, every peak divided by the amplitude: a receptance). `amplitude` and `units`
+    !> as write_frc_plot_script. Error: stat io.
+    subroutine write_family_plot_script(dir, parameter, values, ndof, error, dofs, labels, &
+                                        amplitude, units)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The family's parameter ('normal_load', 'preload', 'mu', 'force_amplitude').
+        character(len=*), intent(in) :: parameter
+        !> Its values.
+        real(dp), intent(in) :: values(:)
+        !> Number of DOFs (columns 1..ndof when `dofs` is absent).
+        integer, intent(in) :: ndof
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The DOFs of frc.csv and family.csv; absent: 1..ndof.
+        integer, intent(in), optional :: dofs(:)
+        !> Their numbers in the column titles (default: `dofs`).
+        integer, intent(in), optional :: labels(:)
+        !> The amplitude drawn (&output plot_amplitude).
+        character(len=*), intent(in), optional :: amplitude
+        !> The units the labels name.
+        type(plot_units_t), intent(in), optional :: units
+        type(plot_units_t) :: un
+        integer :: u, stat, k, nsel
+        character(len=512) :: msg
+        character(len=:), allocatable :: prefix, label, xcol, lu, dof_name, sep, scale, &
+                                         ylabel, d, names
+        integer, allocatable :: sel(:)
+        logical :: receptance
+        if (present(dofs)) then
+            sel = dofs
+        else
+            sel = [(k, k=1, ndof)]
+        end if
+        if (present(labels)) sel = labels
+        nsel = size(sel)
+        dof_name = "DOF "
+        if (present(labels) .and. present(dofs)) then
+            if (any(labels /= dofs)) dof_name = "full-model DOF "
+        end if
+        if (present(units)) un = units
+        lu = " ["//trim(un%length)//"]"
+        prefix = "vib_"
+        label = "vibration amplitude (max_t x - min_t x) / 2"
+        if (present(amplitude)) then
+            select case (amplitude)
+            case ('first_harmonic')
+                prefix = "h1_"
+                label = "first-harmonic amplitude |x_1|"
+            case ('max_abs')
+                prefix = "amp_"
+                label = "amplitude max_t |x(t)|"
+            end select
+        end if
+        xcol = "1"
+        if (un%cycles) xcol = "(column('frequency'))"
+        receptance = parameter == 'force_amplitude'
+        call begin_script(dir, "family", "A family of forced-response curves and their "// &
+                          "peaks (frc_family.png from frc.csv, family.png)", u, stat, msg, &
+                          error)
+        if (allocated(error)) return
+        call put(u, "g = f; f = 'frc.csv'", stat, msg)
+        call put(u, "set terminal pngcairo size 1100,700 noenhanced font ',11'", stat, msg)
+        call put(u, "set grid lc rgb '#dddddd'", stat, msg)
+        call put(u, "n = "//itoa(size(values)), stat, msg)
+        call put(u, "", stat, msg)
+        call put(u, "# frc_family.png: "//dof_name//itoa(sel(1))//" against the excitation "// &
+                 "frequency, one line per curve (column curve), coloured by family_value", &
+                 stat, msg)
+        call put(u, "set output 'frc_family.png'.suffix", stat, msg)
+        call put(u, "stats f using (column('"//prefix//itoa(sel(1))//"')) nooutput", stat, msg)
+        call put(u, "ymax = STATS_max; ymin = (STATS_min > 0 ? STATS_min : ymax*1e-4)", stat, &
+                 msg)
+        call put(u, "alo = (ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4); ahi = ymax*1.5", &
+                 stat, msg)
+        call put(u, "set logscale y", stat, msg)
+        call put(u, "if (ymax > 0) set yrange [alo:ahi]", stat, msg)
+        call put(u, decade_tics("y"), stat, msg)
+        call put(u, "set xlabel '"//parameter_label('omega', un)//"'", stat, msg)
+        call put(u, "set ylabel '"//label//lu//"'", stat, msg)
+        call put(u, "set cblabel '"//parameter_label(parameter, un)//"'", stat, msg)
+        call put(u, "set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', "// &
+                 "0.75 '#5ec962', 1 '#fde725')", stat, msg)
+        call put(u, "set title 'A family of forced-response curves, "//dof_name// &
+                 itoa(sel(1))//" (orange circles: untrusted, column check)'", stat, msg)
+        call put(u, "set key outside right top", stat, msg)
+        call put(u, "on(k, name) = (column('curve') == k ? column(name) : 1/0)", stat, msg)
+        call put(u, "untrusted(name) = (column('trusted') == 0 ? column(name) : 1/0)", stat, &
+                 msg)
+        call put(u, "plot for [k=1:n] f using "//xcol//":(on(k, '"//prefix//itoa(sel(1))// &
+                 "')):(column('family_value')) with lines lw 1.5 lc palette notitle, \", &
+                 stat, msg)
+        call put(u, "     f using "//xcol//":(untrusted('"//prefix//itoa(sel(1))// &
+                 "')) with points pt 6 ps 1.0 lc rgb 'orange' title 'untrusted'", stat, msg)
+        call put(u, "", stat, msg)
+        call put(u, "# family.png: the peaks against the parameter, with the linear limits "// &
+                 "(stuck: dashed, slipping: dotted)", stat, msg)
+        call put(u, "set output 'family.png'.suffix", stat, msg)
+        call put(u, "unset colorbox; unset cblabel; unset yrange; unset ytics; set ytics", &
+                 stat, msg)
+        if (all(values > 0.0_dp) .and. maxval(values) > 20.0_dp*minval(values)) &
+            call put(u, "set logscale x", stat, msg)
+        call put(u, "set xlabel '"//parameter_label(parameter, un)//"'", stat, msg)
+        if (receptance) then
+            scale = "/column('family_value')"
+            ylabel = "peak "//label//" / force amplitude ["//trim(un%length)//"/"// &
+                     trim(un%force)//"]"
+        else
+            scale = ""
+            ylabel = "peak "//label//lu
+        end if
+        call put(u, "set ylabel '"//ylabel//"'", stat, msg)
+        call put(u, "set title 'Resonance peak against the "//parameter_words(parameter)// &
+                 " (dashed: every contact stuck; dotted: every contact slipping; linear)'", &
+                 stat, msg)
+        ! the range: every peak and reference drawn, at most four decades below the largest
+        names = ""
+        do k = 1, nsel
+            d = itoa(sel(k))
+            names = names//" peak_"//d//" stuck_peak_"//d//" slipping_peak_"//d
+        end do
+        call put(u, "ymax = 0; ymin = 1e300", stat, msg)
+        call put(u, "do for [name in '"//trim(adjustl(names))//"'] { STATS_records = 0; "// &
+                 "stats g using (column(name)"//scale//") nooutput; if (STATS_records > 0) "// &
+                 "{ if (STATS_max > ymax) { ymax = STATS_max }; if (STATS_min > 0 && "// &
+                 "STATS_min < ymin) { ymin = STATS_min } } }", stat, msg)
+        call put(u, "alo = (ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4); ahi = ymax*1.5", &
+                 stat, msg)
+        call put(u, "set logscale y; if (ymax > 0) set yrange [alo:ahi]", stat, msg)
+        call put(u, decade_tics("y"), stat, msg)
+        call put(u, "set key outside right top", stat, msg)
+        do k = 1, nsel
+            d = itoa(sel(k))
+            sep = merge("plot ", "     ", k == 1)
+            call put(u, sep//"g using (column('family_value')):(column('peak_"//d//"')"// &
+                     scale//") with linespoints lw 1.5 pt 7 lc "//itoa(k)//" title 'peak, "// &
+                     dof_name//d//"', \", stat, msg)
+            call put(u, "     g using (column('family_value')):(untrusted('peak_"//d//"')"// &
+                     scale//") with points pt 6 ps 1.5 lc rgb 'orange' "// &
+                     merge("title 'untrusted'", "notitle          ", k == 1)//", \", stat, msg)
+            call put(u, "     g using (column('family_value')):(column('stuck_peak_"//d// &
+                     "')"//scale//") with lines dt 2 lc "//itoa(k)//" title 'stuck, "// &
+                     dof_name//d//"', \", stat, msg)
+            call put(u, "     g using (column('family_value')):(column('slipping_peak_"//d// &
+                     "')"//scale//") with lines dt 3 lc "//itoa(k)//" title 'slipping, "// &
+                     dof_name//d//"'"//trim(merge("   ", ", \", k == nsel)), stat, msg)
+        end do
+        call close_and_rename(dir, "family.gp", u, stat, msg, error)
+    end subroutine write_family_plot_script
+
     !> Write `dir`/modes.gp, the gnuplot script that draws modes.png from modes.csv: the
     !> backbone's frequency [rad/s] (upper panel) and modal damping ratio (lower panel)
     !> against the modal amplitude (log scale), with the linear limits of the contacts stuck
@@ -275,6 +434,22 @@ contains
                "v = (m == 1 ? 1 : (m == 2 ? 2 : 5))*10.0**d; set "//axis// &
                "tics add (sprintf('%g', v) v) } } }"
     end function decade_tics
+
+    !> A swept parameter in words ('normal load', 'friction coefficient').
+    pure function parameter_words(parameter) result(words)
+        character(len=*), intent(in) :: parameter
+        character(len=:), allocatable :: words
+        select case (parameter)
+        case ('force_amplitude')
+            words = "forcing amplitude"
+        case ('mu')
+            words = "friction coefficient"
+        case ('normal_load')
+            words = "normal load"
+        case default
+            words = parameter
+        end select
+    end function parameter_words
 
     pure function parameter_label(parameter, units) result(label)
         character(len=*), intent(in) :: parameter

@@ -18,6 +18,7 @@ module stickslip_summary
     use stickslip_study, only: study_result_t
     use stickslip_modes, only: modes_result_t
     use stickslip_sweep, only: sweep_result_t
+    use stickslip_sweep_family, only: family_result_t
     use stickslip_checks, only: hbm_checks_t
     use stickslip_robustness, only: robustness_row_t
     use stickslip_files, only: open_temporary, close_and_rename
@@ -25,7 +26,7 @@ module stickslip_summary
     private
     public :: write_summary, write_euler_summary, write_reference_summary
     public :: write_side_by_side_summary, write_study_summary, write_sweep_summary
-    public :: write_robustness_summary, write_modes_summary
+    public :: write_robustness_summary, write_modes_summary, write_family_summary
     public :: energy_balance_error, reference_balance_error
 
 contains
@@ -479,6 +480,80 @@ contains
         end if
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_sweep_summary
+
+    !> Write `dir`/summary.nml for a family of forced-response curves: &summary (method =
+    !> 'sweep', family_parameter, curves, curves_complete, complete, points (all curves),
+    !> resumed_points, unstable_points, unknown_stability_points, folds, the values and each
+    !> curve's points and completeness (family_values, curve_points, curve_complete), the
+    !> first selected observed DOF's peaks (peak_first_dof, peak_omega_first_dof), the
+    !> smallest of them and its value (best_peak, best_value), threads, cpu_seconds,
+    !> wall_seconds, diagnosis), then the effective case. Error: stat io.
+    subroutine write_family_summary(dir, case, fam, res, first, error)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The case.
+        type(case_t), intent(in) :: case
+        !> The family.
+        type(family_result_t), intent(in) :: fam
+        !> Every curve's points in one curve.
+        type(sweep_result_t), intent(in) :: res
+        !> The observed displacement of the first selected DOF (a row of fam%peaks).
+        integer, intent(in) :: first
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: u, stat, n, k, best
+        character(len=512) :: msg
+        real(dp), allocatable :: peak(:), where(:)
+        n = size(fam%values)
+        call begin_summary(dir, "sweep", case, res%diagnostics, u, stat, msg, error)
+        call put_reduction_keys(u, case, stat, msg)
+        if (allocated(error)) return
+        call put(u, "  family_parameter = '"//trim(fam%family_parameter)//"'", stat, msg)
+        call put(u, "  curves = "//itoa(n), stat, msg)
+        call put(u, "  curves_complete = "//itoa(count([(fam%curves(k)%complete, k=1, n)])), &
+                 stat, msg)
+        call put(u, "  complete = "//ltoa(fam%complete), stat, msg)
+        call put(u, "  points = "//itoa(res%npoints), stat, msg)
+        call put(u, "  resumed_points = "//itoa(res%resumed_points), stat, msg)
+        if (res%npoints > 0) then
+            call put(u, "  unstable_points = "//itoa(count(res%points(1:res%npoints)%stable == 0)), &
+                     stat, msg)
+            call put(u, "  unknown_stability_points = "// &
+                     itoa(count(res%points(1:res%npoints)%stable == -1)), stat, msg)
+        end if
+        call put(u, "  folds = "//itoa(res%folds), stat, msg)
+        call put(u, "  family_values = "//rlist(fam%values), stat, msg)
+        call put(u, "  curve_points = "//ilist([(fam%curves(k)%npoints, k=1, n)]), stat, msg)
+        call put(u, "  curve_complete = "//llist([(fam%curves(k)%complete, k=1, n)]), stat, msg)
+        if (size(fam%peaks, 1) >= first .and. first >= 1) then
+            ! the first DOF of the selection (family.csv's first peak column)
+            k = first
+            peak = fam%peaks(k, :)%amplitude
+            where = fam%peaks(k, :)%omega
+            do best = 1, n
+                if (fam%curves(best)%npoints == 0) then
+                    peak(best) = ieee_value(1.0_dp, ieee_quiet_nan)
+                    where(best) = peak(best)
+                end if
+            end do
+            call put(u, "  peak_first_dof = "//rlist(peak), stat, msg)
+            call put(u, "  peak_omega_first_dof = "//rlist(where), stat, msg)
+            best = minloc(peak, 1, mask=ieee_is_finite(peak))
+            if (best > 0) then
+                call put(u, "  best_peak = "//rtoa(peak(best)), stat, msg)
+                call put(u, "  best_value = "//rtoa(fam%values(best)), stat, msg)
+            end if
+        end if
+        call put(u, "  threads = "//itoa(fam%threads), stat, msg)
+        call put(u, "  cpu_seconds = "//rtoa(res%seconds), stat, msg)
+        call put(u, "  stability_cpu_seconds = "//rtoa(res%stability_seconds), stat, msg)
+        call put(u, "  wall_seconds = "//rtoa(fam%wall_seconds), stat, msg)
+        if (allocated(fam%diagnosis)) then
+            if (len(fam%diagnosis) > 0) call put(u, "  diagnosis = '"//quote(fam%diagnosis)// &
+                                                 "'", stat, msg)
+        end if
+        call end_summary(dir, case, u, stat, msg, error)
+    end subroutine write_family_summary
 
     !> Write `dir`/summary.nml for a nonlinear modal analysis: &summary (method = 'modes',
     !> complete, points, the linear limits omega_stuck and omega_slipping [rad/s], start,

@@ -19,7 +19,7 @@ module stickslip_linear_modes
     use stickslip_lapack, only: dsygv, dgeqrf, dorgqr
     implicit none
     private
-    public :: linear_modes
+    public :: linear_modes, limit_structure
 
 contains
 
@@ -40,11 +40,57 @@ contains
         real(dp), allocatable, intent(out) :: shapes(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        real(dp), allocatable :: kk(:, :), t(:, :), work(:), kr(:, :), mr(:, :), w(:)
+        real(dp) :: wq(1), scale
+        integer :: nfree, info, lwork, m, j
+        call limit_structure(model, stuck, kk, t, error)
+        if (allocated(error)) return
+        nfree = size(t, 2)
+        kr = matmul(transpose(t), matmul(kk, t))
+        mr = matmul(transpose(t), matmul(model%mass, t))
+        kr = 0.5_dp*(kr + transpose(kr))
+        mr = 0.5_dp*(mr + transpose(mr))
+        allocate (w(nfree))
+        call dsygv(1, 'V', 'U', nfree, kr, nfree, mr, nfree, w, wq, -1, info)
+        lwork = max(1, int(wq(1)), 3*nfree)
+        allocate (work(lwork))
+        call dsygv(1, 'V', 'U', nfree, kr, nfree, mr, nfree, w, work, lwork, info)
+        if (info /= 0) then
+            call fatal_error(error, "linear modes: the eigensolver failed (dsygv info "// &
+                             itoa(info)//"): the mass matrix is not positive definite on "// &
+                             "the motions the contacts allow", stickslip_stat%numerical)
+            return
+        end if
+        ! drop the zero-frequency (rigid-body) modes of a structure held only by friction
+        scale = max(maxval(abs(w)), tiny(1.0_dp))
+        m = count(w > 1.0e-10_dp*scale)
+        omegas = sqrt(pack(w, w > 1.0e-10_dp*scale))
+        shapes = matmul(t, kr(:, pack([(j, j=1, nfree)], w > 1.0e-10_dp*scale)))
+        do j = 1, m
+            if (shapes(maxloc(abs(shapes(:, j)), 1), j) < 0.0_dp) shapes(:, j) = -shapes(:, j)
+        end do
+    end subroutine linear_modes
+
+    !> The structure of `model` in a friction limit, every contact stuck (`stuck` = .true.)
+    !> or slipping (.false.): its stiffness `kk` (K plus the springs k d d^T of the elastic
+    !> channels) and an orthonormal basis `t` (N x nfree) of the motions the rigid channels'
+    !> constraints d^T x = 0 allow (the identity without constraints). Errors (stat
+    !> numerical): the QR of the constraints fails, the constraints leave no motion.
+    subroutine limit_structure(model, stuck, kk, t, error)
+        !> A validated model (dense M and K).
+        type(model_t), intent(in) :: model
+        !> Contacts stuck (.true.) or slipping (.false.).
+        logical, intent(in) :: stuck
+        !> Stiffness with the elastic channels' springs [N/m], N x N.
+        real(dp), allocatable, intent(out) :: kk(:, :)
+        !> Orthonormal basis of the allowed motions, N x nfree.
+        real(dp), allocatable, intent(out) :: t(:, :)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
         type(contact_set_t) :: cs
-        real(dp), allocatable :: d(:, :), kk(:, :), cons(:, :), q(:, :), tau(:), work(:), &
-                                 kr(:, :), mr(:, :), w(:), t(:, :)
-        real(dp) :: k, wq(1), scale
-        integer :: n, c, j, ncons, nfree, info, lwork, m
+        real(dp), allocatable :: d(:, :), cons(:, :), q(:, :), tau(:), work(:)
+        real(dp) :: k, wq(1)
+        integer :: n, c, j, ncons, nfree, info, lwork
         logical :: closed
         type(channel_t) :: ch
         n = model%ndof
@@ -103,29 +149,5 @@ contains
                              "freedom (no motion left)", stickslip_stat%numerical)
             return
         end if
-        kr = matmul(transpose(t), matmul(kk, t))
-        mr = matmul(transpose(t), matmul(model%mass, t))
-        kr = 0.5_dp*(kr + transpose(kr))
-        mr = 0.5_dp*(mr + transpose(mr))
-        allocate (w(nfree))
-        call dsygv(1, 'V', 'U', nfree, kr, nfree, mr, nfree, w, wq, -1, info)
-        lwork = max(1, int(wq(1)), 3*nfree)
-        if (allocated(work)) deallocate (work)
-        allocate (work(lwork))
-        call dsygv(1, 'V', 'U', nfree, kr, nfree, mr, nfree, w, work, lwork, info)
-        if (info /= 0) then
-            call fatal_error(error, "linear modes: the eigensolver failed (dsygv info "// &
-                             itoa(info)//"): the mass matrix is not positive definite on "// &
-                             "the motions the contacts allow", stickslip_stat%numerical)
-            return
-        end if
-        ! drop the zero-frequency (rigid-body) modes of a structure held only by friction
-        scale = max(maxval(abs(w)), tiny(1.0_dp))
-        m = count(w > 1.0e-10_dp*scale)
-        omegas = sqrt(pack(w, w > 1.0e-10_dp*scale))
-        shapes = matmul(t, kr(:, pack([(j, j=1, nfree)], w > 1.0e-10_dp*scale)))
-        do j = 1, m
-            if (shapes(maxloc(abs(shapes(:, j)), 1), j) < 0.0_dp) shapes(:, j) = -shapes(:, j)
-        end do
-    end subroutine linear_modes
+    end subroutine limit_structure
 end module stickslip_linear_modes

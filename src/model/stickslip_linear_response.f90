@@ -1,0 +1,211 @@
+!> The forced response of a model's structure in its two friction limits, every contact stuck
+!> or slipping freely (the structures of stickslip_linear_modes' limit_structure), harmonic
+!> by harmonic: X_h = T (T^T Z_h T)^-1 T^T F_h, Z_h = K_lim - (h omega)^2 M + i h omega C,
+!> and its peak over a range of omega. These are the horizontal references of a family of
+!> forced-response curves over a normal load or a friction coefficient: the curves' peaks
+!> tend to the slipping limit's as the friction limit goes to zero and to the stuck limit's
+!> as it grows. The static part (preload) is left out: the amplitudes are those of the
+!> vibration. Dense: for the models the weighted residual solves densely.
+module stickslip_linear_response
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
+    use stickslip_kinds, only: dp, two_pi
+    use stickslip_error, only: error_type
+    use stickslip_model, only: model_t, force_direction
+    use stickslip_linear_modes, only: limit_structure, linear_modes
+    use stickslip_lapack, only: zgetrf, zgetrs
+    use stickslip_golden, only: golden_search_t
+    implicit none
+    private
+    public :: limit_peak_t, linear_limit_peaks
+
+    !> The peak of one observed displacement's linear response over a range.
+    type :: limit_peak_t
+        !> The amplitude [model length unit] and the omega [rad/s] where it is reached (NaN:
+        !> unbounded, an undamped resonance in the range, or no forcing).
+        real(dp) :: amplitude = 0.0_dp, omega = 0.0_dp
+    end type limit_peak_t
+
+    !> Grid of omega values the peak search starts from (beside the limit's natural
+    !> frequencies in the range).
+    integer, parameter :: grid_points = 240
+
+contains
+
+    !> The peaks over omega in [lo, hi] of the vibration amplitudes of the observed
+    !> displacements of `model` (its forcing terms at their amplitudes; its omega is ignored)
+    !> with every contact stuck (`stuck`) or slipping, measured as `measure`:
+    !> 'half_peak_to_peak' or 'max_abs' (the same without the static part), or
+    !> 'first_harmonic'. Observed: the rows of `observe` (nobs x N), or every DOF. A grid of
+    !> omega values with the limit's natural frequencies in the range, then a golden-section
+    !> search around each DOF's largest value (to 1e-9 of the range). Undamped resonances in
+    !> the range give NaN. Errors: those of limit_structure (stat numerical).
+    subroutine linear_limit_peaks(model, stuck, lo, hi, measure, peaks, error, observe)
+        !> A validated model (dense M, K, C).
+        type(model_t), intent(in) :: model
+        !> Contacts stuck (.true.) or slipping (.false.).
+        logical, intent(in) :: stuck
+        !> The range of omega [rad/s], 0 < lo <= hi.
+        real(dp), intent(in) :: lo, hi
+        !> 'half_peak_to_peak', 'first_harmonic' or 'max_abs'.
+        character(len=*), intent(in) :: measure
+        !> The peak per observed displacement.
+        type(limit_peak_t), allocatable, intent(out) :: peaks(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Observed combinations of DOFs, nobs x N (default: every DOF).
+        real(dp), intent(in), optional :: observe(:, :)
+        real(dp), allocatable :: kk(:, :), t(:, :), obs(:, :), grid(:), values(:, :), &
+                                 wn(:), shapes(:, :), a(:)
+        type(error_type), allocatable :: modes_error
+        type(golden_search_t) :: search
+        integer :: nobs, i, j, k, ng
+        real(dp) :: x, best, best_x
+        call limit_structure(model, stuck, kk, t, error)
+        if (allocated(error)) return
+        if (present(observe)) then
+            obs = matmul(observe, t)
+        else
+            obs = t
+        end if
+        nobs = size(obs, 1)
+        allocate (peaks(nobs))
+        if (all(model%damping == 0.0_dp) .or. model%nforce() == 0) then
+            ! no viscous damping: an undamped resonance in the range has no finite peak
+            peaks%amplitude = ieee_value(1.0_dp, ieee_quiet_nan)
+            peaks%omega = peaks%amplitude
+            return
+        end if
+        ! the grid and the natural frequencies of the limit inside the range
+        grid = [(lo + (hi - lo)*real(j, dp)/real(grid_points - 1, dp), j=0, grid_points - 1)]
+        call linear_modes(model, stuck, wn, shapes, modes_error)
+        if (.not. allocated(modes_error)) then
+            do k = 1, size(model%force_harmonic)
+                if (model%force_harmonic(k) < 1) cycle
+                grid = [grid, pack(wn/model%force_harmonic(k), &
+                                   wn/model%force_harmonic(k) > lo .and. &
+                                   wn/model%force_harmonic(k) < hi)]
+            end do
+        end if
+        call sort(grid)
+        ng = size(grid)
+        allocate (values(nobs, ng))
+        do j = 1, ng
+            values(:, j) = response(grid(j))
+        end do
+        do i = 1, nobs
+            if (any(values(i, :) >= huge(1.0_dp))) then
+                peaks(i)%amplitude = ieee_value(1.0_dp, ieee_quiet_nan)
+                peaks(i)%omega = peaks(i)%amplitude
+                cycle
+            end if
+            k = maxloc(values(i, :), 1)
+            best = values(i, k)
+            best_x = grid(k)
+            if (hi > lo) then
+                call search%begin(grid(max(1, k - 1)), grid(min(ng, k + 1)), &
+                                  1.0e-9_dp*(hi - lo))
+                do while (.not. search%done())
+                    x = search%next()
+                    a = response(x)
+                    call search%tell(a(i))
+                    if (a(i) > best) then
+                        best = a(i)
+                        best_x = x
+                    end if
+                end do
+            end if
+            peaks(i)%amplitude = best
+            peaks(i)%omega = best_x
+        end do
+
+    contains
+
+        !> The measured amplitudes of the observed displacements at `w` (+huge where the
+        !> dynamic stiffness is singular).
+        function response(w) result(amp)
+            real(dp), intent(in) :: w
+            real(dp) :: amp(nobs)
+            complex(dp), allocatable :: z(:, :), f(:, :), xh(:, :)
+            integer, allocatable :: hs(:), ipiv(:)
+            integer :: nf, h, m, info, s, ns
+            real(dp), allocatable :: u(:, :)
+            real(dp) :: phase
+            nf = size(t, 2)
+            hs = unique_harmonics(model%force_harmonic)
+            allocate (xh(nobs, size(hs)), ipiv(nf))
+            do m = 1, size(hs)
+                h = hs(m)
+                z = matmul(transpose(t), matmul(cmplx(kk - (h*w)**2*model%mass, &
+                                                      h*w*model%damping, dp), t))
+                allocate (f(nf, 1))
+                f(:, 1) = (0.0_dp, 0.0_dp)
+                do k = 1, model%nforce()
+                    if (model%force_harmonic(k) == h) f(:, 1) = f(:, 1) + &
+                        model%force_amplitude(k)*exp(cmplx(0.0_dp, model%force_phase(k), dp))* &
+                        matmul(transpose(t), force_direction(model, k))
+                end do
+                call zgetrf(nf, nf, z, nf, ipiv, info)
+                if (info /= 0) then
+                    amp = huge(1.0_dp)
+                    return
+                end if
+                call zgetrs('N', nf, 1, z, nf, ipiv, f, nf, info)
+                xh(:, m) = matmul(obs, f(:, 1))
+                deallocate (f)
+            end do
+            if (measure == 'first_harmonic') then
+                amp = 0.0_dp
+                do m = 1, size(hs)
+                    if (hs(m) == 1) amp = abs(xh(:, m))
+                end do
+            else if (size(hs) == 1) then
+                amp = abs(xh(:, 1))
+            else
+                ! several harmonics: sample the period
+                ns = max(128, 16*maxval(hs))
+                allocate (u(nobs, ns))
+                do s = 1, ns
+                    phase = two_pi*real(s - 1, dp)/real(ns, dp)
+                    u(:, s) = 0.0_dp
+                    do m = 1, size(hs)
+                        u(:, s) = u(:, s) + real(xh(:, m)*exp(cmplx(0.0_dp, hs(m)*phase, dp)), dp)
+                    end do
+                end do
+                if (measure == 'max_abs') then
+                    amp = maxval(abs(u), dim=2)
+                else
+                    amp = 0.5_dp*(maxval(u, dim=2) - minval(u, dim=2))
+                end if
+            end if
+            where (.not. ieee_is_finite(amp)) amp = huge(1.0_dp)
+        end function response
+    end subroutine linear_limit_peaks
+
+    !> The distinct positive harmonics of a forcing, increasing.
+    pure function unique_harmonics(h) result(u)
+        integer, intent(in) :: h(:)
+        integer, allocatable :: u(:)
+        integer :: k
+        allocate (u(0))
+        do k = 1, size(h)
+            if (h(k) >= 1 .and. .not. any(u == h(k))) u = [u, h(k)]
+        end do
+    end function unique_harmonics
+
+    !> Sort in place, increasing (insertion: a few hundred values).
+    pure subroutine sort(x)
+        real(dp), intent(inout) :: x(:)
+        real(dp) :: v
+        integer :: i, j
+        do i = 2, size(x)
+            v = x(i)
+            j = i - 1
+            do while (j >= 1)
+                if (x(j) <= v) exit
+                x(j + 1) = x(j)
+                j = j - 1
+            end do
+            x(j + 1) = v
+        end do
+    end subroutine sort
+end module stickslip_linear_response

@@ -598,20 +598,30 @@ contains
         close (uo)
     end function scratch_copy
 
-    !> The pictures of the examples that draw them (a sweep with stability, a backbone, the
-    !> designer's folded lift-off curve), rendered by gnuplot as the command line runs them:
-    !> each exists and is non-trivial (over 10 kB: a PNG of axes alone is about 6 kB). Skipped,
-    !> saying so, where gnuplot is not installed (status 127).
+    !> The pictures of every example that draws (sweeps, families, backbones, the robustness
+    !> maps, the CalculiX strip's curve and backbone; and the example gnuplot scripts of
+    !> Figure 3 and the work-precision charts on the runs they draw), rendered by gnuplot as
+    !> the command line runs them: each exists and is non-trivial (over 10 kB: a PNG of axes
+    !> alone is about 6 kB). Skipped, saying so, where gnuplot is not installed (status 127).
     subroutine test_cli_figures(t)
         type(test_counter_t), intent(inout) :: t
-        character(len=16), parameter :: examples(3) = [character(len=16) :: "seed_frc", &
-                                                        "seed_modes", "designer_damper"]
-        character(len=24), parameter :: pictures(2, 3) = reshape([character(len=24) :: &
-            "frc.png", "frc_dissipation.png", "modes.png", "", "frc.png", &
-            "frc_dissipation.png"], [2, 3])
+        integer, parameter :: n = 11
+        character(len=24), parameter :: examples(n) = [character(len=24) :: "seed_frc", &
+            "seed_modes", "degenerate_modes", "designer_damper", "damper_family", &
+            "seed_robustness", "calculix_beam/case", "calculix_beam/modes", "seed", &
+            "seed_study", "chain4_study"]
+        ! the pictures of each, and the example script that draws them ('': the program)
+        character(len=24), parameter :: pictures(2, n) = reshape([character(len=24) :: &
+            "frc.png", "frc_dissipation.png", "modes.png", "", "modes.png", "", &
+            "frc.png", "frc_dissipation.png", "frc_family.png", "family.png", &
+            "robustness_cold.png", "robustness_warm.png", "frc.png", "frc_dissipation.png", &
+            "modes.png", "", "figure3.png", "", "work_precision.png", "", &
+            "work_precision.png", ""], [2, n])
+        character(len=24), parameter :: scripts(n) = [character(len=24) :: "", "", "", "", &
+            "", "", "", "", "figure3.gp", "work_precision.gp", "work_precision.gp"]
         character(len=:), allocatable :: out, err, dir
         character(len=200) :: path
-        integer :: code, i, k
+        integer :: code, i, k, u
         integer(int64) :: bytes
         logical :: exists
         if (run_gnuplot(scratch, "no_such_script.gp") == 127) then
@@ -619,12 +629,21 @@ contains
                 "are not tested"
             return
         end if
-        do i = 1, size(examples)
-            path = scratch_copy(trim(examples(i)))
-            dir = scratch//"/out_"//trim(examples(i))
+        do i = 1, n
+            path = figure_copy(trim(examples(i)))
+            dir = scratch//"/fig_"//flat(trim(examples(i)))
             call cli([character(len=200) :: path], code, out, err)
             call check(t, code == 0 .or. code == 2, "cli figures "//trim(examples(i))// &
                        ": ran", err)
+            if (len_trim(scripts(i)) > 0) then
+                ! the example script on this run: dir is the run's directory
+                open (newunit=u, file=dir//"/draw.gp", status='replace', action='write')
+                write (u, '(a)') "dir = '.'"
+                write (u, '(a)') "load '"//project_path("examples/"//trim(scripts(i)))//"'"
+                close (u)
+                call check(t, run_gnuplot(dir, "draw.gp") == 0, "cli figures "// &
+                           trim(examples(i))//": "//trim(scripts(i))//" ran")
+            end if
             do k = 1, 2
                 if (len_trim(pictures(k, i)) == 0) cycle
                 inquire (file=dir//"/"//trim(pictures(k, i)), exist=exists, size=bytes)
@@ -633,6 +652,51 @@ contains
                            itoa(int(bytes))//" bytes")
             end do
         end do
+
+    contains
+
+        !> An example's name as one path component (calculix_beam/case: calculix_beam_case).
+        pure function flat(name) result(f)
+            character(len=*), intent(in) :: name
+            character(len=len(name)) :: f
+            integer :: j
+            f = name
+            do j = 1, len(f)
+                if (f(j:j) == '/') f(j:j) = '_'
+            end do
+        end function flat
+
+        !> A copy of examples/<example>.nml in the scratch area: its output directory moved
+        !> there (fig_<flat name>), its matrix and direction files named by absolute paths.
+        function figure_copy(example) result(copy)
+            character(len=*), intent(in) :: example
+            character(len=:), allocatable :: copy, folder
+            integer :: ui, uo, stat, a, b
+            character(len=1000) :: line
+            copy = scratch//"/fig_"//flat(example)//".nml"
+            folder = ""
+            if (index(example, "/", back=.true.) > 0) &
+                folder = example(1:index(example, "/", back=.true.))
+            open (newunit=ui, file=project_path("examples/"//example//".nml"), status='old', &
+                  action='read')
+            open (newunit=uo, file=copy, status='replace', action='write')
+            do
+                read (ui, '(a)', iostat=stat) line
+                if (stat /= 0) exit
+                a = index(line, "directory = '")
+                if (a > 0) then
+                    b = index(line(a + 13:), "'") + a + 12
+                    line = line(1:a + 12)//scratch//"/fig_"//flat(example)//line(b:)
+                end if
+                a = index(line, "_file = '")
+                if (a > 0) then
+                    line = line(1:a + 8)//project_path("examples/"//folder)//line(a + 9:)
+                end if
+                write (uo, '(a)') trim(line)
+            end do
+            close (ui)
+            close (uo)
+        end function figure_copy
     end subroutine test_cli_figures
 
     subroutine test_cli_examples(t)

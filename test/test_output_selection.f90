@@ -17,7 +17,7 @@ module test_output_selection
     use stickslip_sparse, only: sparse_to_dense
     use stickslip_sweep, only: sweep_result_t
     use stickslip_csv, only: write_frc_csv
-    use stickslip_plot_scripts, only: write_frc_plot_script
+    use stickslip_plot_scripts, only: write_frc_plot_script, write_modes_plot_script
     use stickslip_plot_units, only: plot_units_t
     use stickslip_files, only: make_directory
     use test_cli, only: cli
@@ -586,6 +586,22 @@ contains
         call check(t, index(script, "contacts [kN]'") > 0 .and. index(script, "[kN mm]'") > 0 &
                    .and. index(script, "using 1:(column('vib_4'))") > 0, &
                    "frc unit: a preload sweep in kN keeps the parameter on x")
+        ! a backbone of an mm-t-s model on a Hz axis: modes.csv's frequency, the limits in Hz
+        call write_modes_plot_script(frc_dir, 1, 62.83185307179586_dp, 31.41592653589793_dp, &
+                                     error, plot_units_t(length='mm', force='N', time='s', &
+                                                         cycles=.true.))
+        script = slurp_file(frc_dir//"/modes.gp")
+        call check(t, index(script, "plot f using 1:3 ") > 0 .and. &
+                   index(script, "omega / 2 pi [Hz]'") > 0 .and. &
+                   index(script, "/(2*pi); w_slip") > 0 .and. &
+                   index(script, "[mm sqrt(t)]'") > 0 .and. index(script, "rad/s") == 0, &
+                   "modes unit: an mm-t-s backbone in Hz and mm sqrt(t)")
+        call write_modes_plot_script(frc_dir, 1, 62.83185307179586_dp, 31.41592653589793_dp, &
+                                     error)
+        script = slurp_file(frc_dir//"/modes.gp")
+        call check(t, index(script, "plot f using 1:2 ") > 0 .and. &
+                   index(script, "frequency omega [rad/s]'") > 0 .and. &
+                   index(script, "[m sqrt(kg)]'") > 0, "modes unit: SI by default, omega in rad/s")
         ! without stability: no unstable points named; the key beside the plot; 1-2-5 labels
         call write_frc_plot_script(frc_dir, "omega", 5, error, [4, 2], stability=.false.)
         script = slurp_file(frc_dir//"/frc.gp")

@@ -297,7 +297,7 @@ contains
         call write_modes_harmonics_csv(dir, res, error, cols, selected_dofs(case), contacts)
         if (allocated(error)) return
         call write_modes_plot_script(dir, case%modes%mode, res%omega_stuck, &
-                                     res%omega_slipping, error)
+                                     res%omega_slipping, error, case%units)
         if (allocated(error)) return
         call write_modes_summary(dir, case, res, error)
         if (allocated(error)) return

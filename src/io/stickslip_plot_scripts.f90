@@ -13,7 +13,7 @@ module stickslip_plot_scripts
     use stickslip_robustness, only: robustness_options_t
     use stickslip_case, only: put, rtoa
     use stickslip_files, only: open_temporary, close_and_rename
-    use stickslip_plot_units, only: plot_units_t, energy_unit, cycles_unit
+    use stickslip_plot_units, only: plot_units_t, energy_unit, cycles_unit, mass_unit
     implicit none
     private
     public :: write_frc_plot_script, write_robustness_plot_script, write_modes_plot_script
@@ -342,11 +342,12 @@ contains
     end subroutine write_family_plot_script
 
     !> Write `dir`/modes.gp, the gnuplot script that draws modes.png from modes.csv: the
-    !> backbone's frequency [rad/s] (upper panel) and modal damping ratio (lower panel)
-    !> against the modal amplitude (log scale), with the linear limits of the contacts stuck
-    !> and slipping (`omega_stuck`, `omega_slipping` [rad/s], 0: none) as dashed lines.
-    !> Error: stat io.
-    subroutine write_modes_plot_script(dir, mode, omega_stuck, omega_slipping, error)
+    !> backbone's frequency (upper panel: omega [rad/s], or with `units`%cycles the
+    !> frequency omega / 2 pi [Hz]) and modal damping ratio (lower panel) against the modal
+    !> amplitude (log scale, [length sqrt(mass)] in the units of `units`), with the linear
+    !> limits of the contacts stuck and slipping (`omega_stuck`, `omega_slipping` [rad/s],
+    !> 0: none) as dashed lines. Error: stat io.
+    subroutine write_modes_plot_script(dir, mode, omega_stuck, omega_slipping, error, units)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The mode's number (for the title).
@@ -355,8 +356,23 @@ contains
         real(dp), intent(in) :: omega_stuck, omega_slipping
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The units the labels name (default SI, the frequency in rad/s; with
+        !> units%cycles the frequency axis is modes.csv's frequency, omega / 2 pi).
+        type(plot_units_t), intent(in), optional :: units
+        type(plot_units_t) :: un
         integer :: u, stat
         character(len=512) :: msg
+        character(len=:), allocatable :: fcol, funit, scale
+        if (present(units)) un = units
+        if (un%cycles) then
+            fcol = "3"
+            funit = cycles_unit(un)
+            scale = "/(2*pi)"
+        else
+            fcol = "2"
+            funit = "rad/"//trim(un%time)
+            scale = ""
+        end if
         call begin_script(dir, "modes", "Backbone of a nonlinear mode (modes.png)", u, stat, &
                           msg, error)
         if (allocated(error)) return
@@ -365,27 +381,34 @@ contains
         call put(u, "set key autotitle columnhead", stat, msg)
         call put(u, "set grid lc rgb '#dddddd'", stat, msg)
         call put(u, "set logscale x", stat, msg)
-        call put(u, "w_stuck = "//rtoa(omega_stuck)//"; w_slip = "//rtoa(omega_slipping), &
-                 stat, msg)
+        call put(u, "w_stuck = "//rtoa(omega_stuck)//scale//"; w_slip = "// &
+                 rtoa(omega_slipping)//scale, stat, msg)
         call put(u, "set multiplot layout 2,1 title 'Nonlinear mode "//itoa(mode)// &
                  " (EPMC): frequency and damping against the modal amplitude'", stat, msg)
         call put(u, "# the frequency range: the backbone's (a linear limit far outside it is "// &
                  "named in the key, not drawn)", stat, msg)
-        call put(u, "stats f using 2 nooutput", stat, msg)
+        call put(u, "stats f using "//fcol//" nooutput", stat, msg)
         call put(u, "pad = (STATS_max - STATS_min)*0.08 + 1e-3*STATS_max", stat, msg)
         call put(u, "set yrange [STATS_min - pad:STATS_max + pad]", stat, msg)
-        call put(u, "set ylabel 'frequency omega [rad/s]'", stat, msg)
+        if (un%cycles) then
+            call put(u, "set ylabel 'frequency f = omega / 2 pi ["//funit//"]'", stat, msg)
+        else
+            call put(u, "set ylabel 'frequency omega ["//funit//"]'", stat, msg)
+        end if
         call put(u, "set format x ''", stat, msg)
         call put(u, "set key bottom right box opaque", stat, msg)
-        call put(u, "plot f using 1:2 with linespoints lw 1.5 pt 7 ps 0.4 title 'backbone', \", &
-                 stat, msg)
+        call put(u, "plot f using 1:"//fcol//" with linespoints lw 1.5 pt 7 ps 0.4 title "// &
+                 "'backbone', \", stat, msg)
         call put(u, "     (w_stuck > 0 ? w_stuck : 1/0) with lines dt 2 lc rgb 'gray40' "// &
-                 "title sprintf('contacts stuck (linear): %.6g rad/s', w_stuck), \", stat, msg)
+                 "title sprintf('contacts stuck (linear): %.6g "//funit//"', w_stuck), \", &
+                 stat, msg)
         call put(u, "     (w_slip > 0 ? w_slip : 1/0) with lines dt 3 lc rgb 'gray20' "// &
-                 "title sprintf('contacts slipping (linear): %.6g rad/s', w_slip)", stat, msg)
+                 "title sprintf('contacts slipping (linear): %.6g "//funit//"', w_slip)", &
+                 stat, msg)
         call put(u, "unset yrange", stat, msg)
         call put(u, "set format x '%g'", stat, msg)
-        call put(u, "set xlabel 'modal amplitude a = sqrt(x1^T M x1) [m sqrt(kg)]'", stat, msg)
+        call put(u, "set xlabel 'modal amplitude a = sqrt(x1^T M x1) ["//trim(un%length)// &
+                 " sqrt("//mass_unit(un)//")]'", stat, msg)
         call put(u, "set ylabel 'modal damping ratio D = xi / (2 omega) [-]'", stat, msg)
         call put(u, "set key top right box opaque", stat, msg)
         call put(u, "plot f using 1:5 with linespoints lw 1.5 pt 7 ps 0.4 lc rgb '#d62728' "// &

@@ -4,7 +4,7 @@
 module stickslip_plot_units
     implicit none
     private
-    public :: plot_units_t, energy_unit, cycles_unit
+    public :: plot_units_t, energy_unit, cycles_unit, mass_unit
 
     !> Units of length, force and time, and the frequency axis.
     type :: plot_units_t
@@ -38,4 +38,20 @@ contains
             unit = "1/"//trim(units%time)
         end if
     end function cycles_unit
+
+    !> The unit of mass of `units` (force time^2 / length): kg for N, s and m, t for N, s and
+    !> mm (the tonne of mm-t-s models), else 'N s^2/mm' written out.
+    pure function mass_unit(units) result(unit)
+        type(plot_units_t), intent(in) :: units
+        character(len=:), allocatable :: unit
+        if (trim(units%force) == 'N' .and. trim(units%time) == 's' .and. &
+            trim(units%length) == 'm') then
+            unit = 'kg'
+        else if (trim(units%force) == 'N' .and. trim(units%time) == 's' .and. &
+                 trim(units%length) == 'mm') then
+            unit = 't'
+        else
+            unit = trim(units%force)//" "//trim(units%time)//"^2/"//trim(units%length)
+        end if
+    end function mass_unit
 end module stickslip_plot_units

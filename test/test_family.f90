@@ -10,7 +10,8 @@ module test_family
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, real_text, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
-    use stickslip_solution, only: hbm_options_t
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
     use stickslip_case, only: case_t, read_case
     use stickslip_golden, only: golden_search_t
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
@@ -22,7 +23,7 @@ module test_family
         family_checkpoint_name
     use stickslip_files, only: make_directory
     use stickslip_driver, only: run_sweep_case
-    use fixtures, only: scratch, write_lines, enter_project_root
+    use fixtures, only: scratch, write_lines, enter_project_root, project_path
     use test_cli, only: cli, summary_value, count_lines
     use testing, only: test_counter_t, check, check_error
     implicit none
@@ -62,6 +63,8 @@ contains
         call test_family_resume(t)
         call test_family_cli(t)
         call test_family_input(t)
+        call test_family_laws(t)
+        call test_family_reduced(t)
     end subroutine run_family_tests
 
     !> The search finds the maximum of 1 - (x - 0.3)^2 on [0, 1] to its width, and a
@@ -348,6 +351,99 @@ contains
                    index(script, "friction coefficient mu") > 0, &
                    "family cli: family.gp draws frc_family.png and family.png")
     end subroutine test_family_cli
+
+    !> A family in the preload of a damper that lifts off (a contact law): each curve's
+    !> first point is the single solve of the model at that preload and the start's omega
+    !> (amplitudes to 1e-8), whichever neighbour it was started from.
+    subroutine test_family_laws(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(family_result_t) :: fam
+        type(model_t) :: m
+        type(hbm_solution_t) :: sol
+        type(hbm_options_t) :: ho
+        type(error_type), allocatable :: error
+        character(len=*), parameter :: path = scratch//"/family_laws.nml"
+        real(dp) :: worst, a
+        integer :: k
+        call write_lines(path, [character(len=300) :: &
+            "&system ndof = 2, mass = 1,0,0,1, stiffness = 1.3,-0.3,-0.3,1.8,", &
+            "  rayleigh_alpha = 0.02, rayleigh_beta = 0.002 /", &
+            "&forcing omega = 1.5, force_dof = 1, 2, force_amplitude = 1.0, 2.0, "// &
+            "force_phase = 0.0, 0.4 /", &
+            "&friction contact_dof = 1, mu = 0.5, normal_dof = 2, preload = 1.0, "// &
+            "normal_stiffness = 10.0 /", &
+            "&hbm harmonics = 20 /", &
+            "&run method = 'sweep' /", &
+            "&sweep start = 0.8, stop = 1.1, stability = .false., truncation = .false., "// &
+            "family_parameter = 'preload', family_values = 4, 2, 1 /", &
+            "&output directory = '"//scratch//"/family_laws' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "family laws: read case", .false.)
+        if (allocated(error)) return
+        call run_family(c%model, c%hbm, c%reference%reference_options_t, &
+                        c%sweep%sweep_options_t, c%sweep%family, fam, error)
+        call check_error(t, error, "family laws: run", .false.)
+        if (allocated(error)) return
+        worst = huge(1.0_dp)
+        if (all([(fam%curves(k)%npoints > 0, k=1, 3)])) then
+            worst = 0.0_dp
+            do k = 1, 3
+                m = c%model
+                call set_sweep_parameter(m, 'preload', fam%values(k), m%force_amplitude)
+                call set_sweep_parameter(m, 'omega', 0.8_dp, m%force_amplitude)
+                ho = c%hbm
+                ho%want_samples = .true.
+                call solve_periodic(m, ho, sol, error)
+                if (allocated(error)) exit
+                a = maxval(abs(sol%x(:, 1)))
+                worst = max(worst, abs(fam%curves(k)%points(1)%amplitude(1) - a)/a)
+            end do
+        end if
+        call check(t, .not. allocated(error) .and. worst < 1.0e-8_dp, &
+                   "family laws: each curve's first point = the single solve at its preload", &
+                   "largest relative difference "//real_text(worst))
+    end subroutine test_family_laws
+
+    !> A family on the reduced CalculiX strip (2412 DOFs, Craig-Bampton): both curves complete,
+    !> family.csv's peaks named by the full-model DOFs of &output dofs, each peak interior.
+    subroutine test_family_reduced(t)
+        type(test_counter_t), intent(inout) :: t
+        character(len=*), parameter :: dir = scratch//"/family_fe"
+        integer :: code, u, stat
+        character(len=:), allocatable :: out, err
+        character(len=4000) :: header, row1, row2
+        ! fixed-length lines first: a constructor of deferred-length results overruns
+        ! (gfortran 12)
+        character(len=300) :: mass_line, stiffness_line
+        mass_line = "&system mass_file = '"//project_path("examples/calculix_beam/mass.mtx")//"',"
+        stiffness_line = "  stiffness_file = '"// &
+                         project_path("examples/calculix_beam/stiffness.mtx")//"',"
+        call write_lines(dir//".nml", [character(len=300) :: mass_line, stiffness_line, &
+            "  rayleigh_alpha = 2.0 /", &
+            "&forcing omega = 534.7, force_dof = 2244, force_amplitude = 0.2 /", &
+            "&friction contact_dof = 2409, mu = 0.5, normal_load = 0.24 /", &
+            "&hbm harmonics = 7, odd_only = T, samples = 128 /", &
+            "&run method = 'sweep' /", &
+            "&sweep start = 500.0, stop = 570.0, max_step = 5.0, stability = F, truncation = F,", &
+            "  plot = F, family_parameter = 'normal_load', family_values = 0.12, 0.24 /", &
+            "&output directory = '"//dir//"', dofs = 2409, 2244 /"])
+        call cli([character(len=200) :: dir//".nml"], code, out, err)
+        call check(t, code == 0, "family fe: exit 0", err)
+        if (code /= 0) return
+        open (newunit=u, file=dir//"/family.csv", status='old', action='read', iostat=stat)
+        header = ''
+        row1 = ''
+        row2 = ''
+        if (stat == 0) read (u, '(a)', iostat=stat) header
+        if (stat == 0) read (u, '(a)', iostat=stat) row1
+        if (stat == 0) read (u, '(a)', iostat=stat) row2
+        if (stat == 0) close (u)
+        call check(t, index(header, "points,complete,peak_2409,peak_2244,") > 0 .and. &
+                   index(row1, ",1,1,") > 0 .and. index(row2, ",1,1,") > 0, &
+                   "family fe: full-model DOFs named, both curves complete, peaks refined", &
+                   trim(header)//new_line('a')//trim(row1)//new_line('a')//trim(row2))
+    end subroutine test_family_reduced
 
     !> Bad family input: one line naming &sweep and the variable, exit 1.
     subroutine test_family_input(t)

@@ -27,7 +27,7 @@ module stickslip_sweep_family
     use stickslip_sweep_options, only: sweep_options_t, validate_sweep_options, &
         set_sweep_parameter
     use stickslip_sweep_result, only: frc_point_t, sweep_result_t, sweep_observer_t, &
-        point_amplitudes
+        point_amplitudes, vibration_samples_t
     use stickslip_sweep, only: run_sweep
     use stickslip_sweep_point, only: keep_coefficients
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
@@ -505,6 +505,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         real(dp), allocatable :: a(:, :), best_r(:, :), ai(:)
         type(golden_search_t) :: search
+        type(vibration_samples_t) :: samples
         type(hbm_solution_t) :: ps
         type(hbm_options_t) :: ho
         type(model_t) :: m
@@ -519,7 +520,7 @@ contains
         nobs = size(curve%points(1)%amplitude)
         allocate (peaks(nobs), a(nobs, np))
         do k = 1, np
-            a(:, k) = point_amplitudes(curve%points(k), measure)
+            a(:, k) = point_amplitudes(curve%points(k), measure, samples)
         end do
         ho = hbm
         ho%start = 'direct'
@@ -596,7 +597,7 @@ contains
             else
                 allocate (pt%amplitude(size(pt%xcoef, 2)))
             end if
-            v = point_amplitudes(pt, measure)
+            v = point_amplitudes(pt, measure, samples)
         end function measured
     end subroutine curve_peaks
 end module stickslip_sweep_family

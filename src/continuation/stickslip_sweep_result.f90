@@ -12,6 +12,16 @@ module stickslip_sweep_result
     implicit none
     private
     public :: frc_point_t, sweep_result_t, sweep_observer_t, reason_text, point_amplitudes
+    public :: vibration_samples_t
+
+    !> The basis functions of a harmonic set at the samples of a period, kept between the
+    !> points of a curve that share it (point_vibration builds it when the set changes).
+    type :: vibration_samples_t
+        !> The harmonic of each basis function (frc_point_t%harmonic).
+        integer, allocatable :: harmonic(:)
+        !> The basis at the samples, samples x basis functions.
+        real(dp), allocatable :: basis(:, :)
+    end type vibration_samples_t
 
     !> One point of a forced-response curve.
     type :: frc_point_t
@@ -120,16 +130,18 @@ contains
     !> which max_t |x| includes), and the modulus sqrt(a_1^2 + b_1^2) of the first harmonic
     !> (0 when the basis has none) [m, the model's length unit]. NaN for a point without
     !> coefficients (read from an old checkpoint). No errors.
-    subroutine point_vibration(self, half_range, first)
+    subroutine point_vibration(self, half_range, first, samples)
         !> The point.
         class(frc_point_t), intent(in) :: self
         !> Half the peak-to-peak and the first harmonic's modulus, per observed displacement.
         real(dp), allocatable, intent(out) :: half_range(:), first(:)
-        real(dp), allocatable :: u(:, :), basis(:, :)
-        complex(dp), allocatable :: e(:)
-        real(dp) :: phase
-        integer :: nx, nrow, ns, j, k, hmax
-        logical, allocatable :: sine(:)
+        !> The basis at the samples, kept from the last point (rebuilt when this point's
+        !> harmonics differ); default: built for this point alone.
+        type(vibration_samples_t), intent(inout), optional, target :: samples
+        type(vibration_samples_t), target :: own
+        type(vibration_samples_t), pointer :: vs
+        real(dp), allocatable :: u(:, :)
+        integer :: nx, k
         nx = size(self%amplitude)
         allocate (half_range(nx), first(nx))
         if (.not. (allocated(self%harmonic) .and. allocated(self%xcoef))) then
@@ -137,63 +149,84 @@ contains
             first = half_range
             return
         end if
-        nrow = size(self%harmonic)
-        nx = size(self%xcoef, 2)
-        ! each harmonic's first row is its cosine, the second its sine
-        allocate (sine(nrow))
-        do k = 1, nrow
-            sine(k) = self%harmonic(k) > 0 .and. count(self%harmonic(1:k - 1) == &
-                                                      self%harmonic(k)) == 1
-        end do
         first = 0.0_dp
-        do k = 1, nrow
+        do k = 1, size(self%harmonic)
             if (self%harmonic(k) == 1) first = first + self%xcoef(k, :)**2
         end do
         first = sqrt(first)
-        hmax = max(1, maxval(self%harmonic))
-        ! 16 samples a period of the highest harmonic (the first's peak to 1e-3 or better)
+        vs => own
+        if (present(samples)) vs => samples
+        if (.not. allocated(vs%harmonic)) then
+            call build_samples(self%harmonic, vs)
+        else if (size(vs%harmonic) /= size(self%harmonic)) then
+            call build_samples(self%harmonic, vs)
+        else if (any(vs%harmonic /= self%harmonic)) then
+            call build_samples(self%harmonic, vs)
+        end if
+        u = matmul(vs%basis, self%xcoef)
+        half_range = 0.5_dp*(maxval(u, dim=1) - minval(u, dim=1))
+    end subroutine point_vibration
+
+    !> The basis of the harmonic set `harmonic` (each harmonic's first row its cosine, the
+    !> second its sine) at max(128, 16 H) samples of the period: 16 a period of the highest
+    !> harmonic, the first's peak to 1e-3 or better. exp(i h phase) by powers of
+    !> exp(i phase), one sin and one cos per sample.
+    subroutine build_samples(harmonic, vs)
+        integer, intent(in) :: harmonic(:)
+        type(vibration_samples_t), intent(inout) :: vs
+        complex(dp), allocatable :: e(:)
+        logical, allocatable :: sine(:)
+        real(dp) :: phase
+        integer :: nrow, ns, j, k, hmax
+        nrow = size(harmonic)
+        allocate (sine(nrow))
+        do k = 1, nrow
+            sine(k) = harmonic(k) > 0 .and. count(harmonic(1:k - 1) == harmonic(k)) == 1
+        end do
+        hmax = 1
+        if (nrow > 0) hmax = max(1, maxval(harmonic))
         ns = max(128, 16*hmax)
-        ! the basis at the samples: exp(i h phase) by powers of exp(i phase), one sin and one
-        ! cos per sample (a sin and a cos per row and sample made the sweep 1.6 times slower)
-        allocate (basis(ns, nrow), e(0:hmax))
+        vs%harmonic = harmonic
+        if (allocated(vs%basis)) deallocate (vs%basis)
+        allocate (vs%basis(ns, nrow), e(0:hmax))
         do j = 1, ns
             phase = two_pi*real(j - 1, dp)/real(ns, dp)
             e(0) = (1.0_dp, 0.0_dp)
-            if (hmax >= 1) e(1) = cmplx(cos(phase), sin(phase), dp)
+            e(1) = cmplx(cos(phase), sin(phase), dp)
             do k = 2, hmax
                 e(k) = e(k - 1)*e(1)
             end do
             do k = 1, nrow
-                if (self%harmonic(k) == 0) then
-                    basis(j, k) = 1.0_dp
+                if (harmonic(k) == 0) then
+                    vs%basis(j, k) = 1.0_dp
                 else if (sine(k)) then
-                    basis(j, k) = aimag(e(self%harmonic(k)))
+                    vs%basis(j, k) = aimag(e(harmonic(k)))
                 else
-                    basis(j, k) = real(e(self%harmonic(k)), dp)
+                    vs%basis(j, k) = real(e(harmonic(k)), dp)
                 end if
             end do
         end do
-        u = matmul(basis, self%xcoef)
-        half_range = 0.5_dp*(maxval(u, dim=1) - minval(u, dim=1))
-    end subroutine point_vibration
+    end subroutine build_samples
 
     !> The amplitudes of a point's observed displacements as `measure` asks:
     !> 'half_peak_to_peak' (the vibration amplitude, (max_t x - min_t x) / 2),
     !> 'first_harmonic' (the first harmonic's modulus) or 'max_abs' (max_t |x|, the static
     !> offset included) [model length unit]. No errors (NaN for a point without
     !> coefficients and a measure that needs them).
-    function point_amplitudes(pt, measure) result(a)
+    function point_amplitudes(pt, measure, samples) result(a)
         !> The point.
         type(frc_point_t), intent(in) :: pt
         !> The measure.
         character(len=*), intent(in) :: measure
+        !> The basis at the samples, kept between points (see point_vibration).
+        type(vibration_samples_t), intent(inout), optional :: samples
         real(dp), allocatable :: a(:)
         real(dp), allocatable :: half_range(:), first(:)
         if (measure == 'max_abs') then
             a = pt%amplitude
             return
         end if
-        call pt%vibration(half_range, first)
+        call pt%vibration(half_range, first, samples)
         if (measure == 'first_harmonic') then
             a = first
         else

@@ -18,6 +18,7 @@ module stickslip_csv
     use stickslip_compare, only: quantity_names
     use stickslip_study, only: study_result_t
     use stickslip_sweep, only: sweep_result_t, frc_point_t
+    use stickslip_sweep_result, only: vibration_samples_t
     use stickslip_modes, only: modes_result_t
     use stickslip_robustness, only: robustness_row_t
     use stickslip_case, only: ltoa
@@ -349,6 +350,7 @@ contains
         logical :: laws
         integer, allocatable :: sel(:), numbers(:)
         real(dp), allocatable :: half_range(:), first(:)
+        type(vibration_samples_t) :: samples
         stat = 0
         msg = ''
         n = 0
@@ -409,7 +411,7 @@ contains
                         p%floquet_max, p%stable, p%truncation, p%arclength, p%diss_friction, &
                         p%diss_damping, p%nfev
                 end if
-                call p%vibration(half_range, first)
+                call p%vibration(half_range, first, samples)
                 if (stat == 0) write (u, '(2(",",' // real_fmt // '))', iostat=stat, &
                                       iomsg=msg, advance='no') p%omega, p%omega/two_pi
                 if (stat == 0 .and. n > 0) write (u, vfmt, iostat=stat, iomsg=msg, &

@@ -19,6 +19,7 @@ module stickslip_dynamics
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_basis, only: basis_t
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
+    use stickslip_small_dense, only: small_zgetrf, small_zgetrs, small_zrcond, small_dense_max
     implicit none
     private
     public :: dynamics_t, new_dynamics, restrict_dynamics, check_harmonics_in_basis, &
@@ -136,8 +137,10 @@ contains
         complex(dp) :: ihw
         character(len=512) :: buf
         type(contact_set_t) :: cs
+        logical :: small
 
         n = model%ndof
+        small = n <= small_dense_max
         ! the force channels (the contacts of a plain model) and their directions
         call new_contact_set(cs, model)
         nc = cs%nchannel
@@ -182,14 +185,24 @@ contains
             z = cmplx(model%stiffness - (h*model%omega)**2*model%mass, &
                       h*model%omega*model%damping, dp)
             anorm = zlange('1', n, n, z, n, rwork)
-            call zgetrf(n, n, z, n, ipiv, info)
+            ! a small model in plain Fortran (stickslip_small_dense: OpenBLAS's calls on
+            ! tiny matrices serialize the threads of a family)
+            if (small) then
+                call small_zgetrf(n, z, ipiv, info)
+            else
+                call zgetrf(n, n, z, n, ipiv, info)
+            end if
             if (info < 0) then
                 call fatal_error(error, "zgetrf: illegal argument", stickslip_stat%lapack)
                 return
             end if
             rcond = 0.0_dp
             if (info == 0) then
-                call zgecon('1', n, z, n, anorm, rcond, work, rwork, info)
+                if (small) then
+                    rcond = small_zrcond(n, z, ipiv, anorm)
+                else
+                    call zgecon('1', n, z, n, anorm, rcond, work, rwork, info)
+                end if
             end if
             ! h > 0: the smallest singular value of Z_h relative to that of K + (h omega)^2 M
             ! (no cancellation): the distance to a resonance, not the mesh's conditioning
@@ -234,7 +247,11 @@ contains
             do j = 1, nc
                 rhs(:, j + 1) = d(:, j)
             end do
-            call zgetrs('N', n, nc + 1, z, n, ipiv, rhs, n, info)
+            if (small) then
+                call small_zgetrs(n, nc + 1, z, ipiv, rhs)
+            else
+                call zgetrs('N', n, nc + 1, z, n, ipiv, rhs, n, info)
+            end if
             if (h == 0) then
                 self%x0_static = real(rhs(:, 1), dp)
                 self%y_static = real(rhs(:, 2:), dp)
@@ -256,7 +273,11 @@ contains
                 ! Z^{-1} (dZ/domega) Z^{-1} [F, W]
                 drhs = matmul(cmplx(-2.0_dp*h*h*model%omega*model%mass, h*model%damping, dp), &
                               rhs)
-                call zgetrs('N', n, nc + 1, z, n, ipiv, drhs, n, info)
+                if (small) then
+                    call small_zgetrs(n, nc + 1, z, ipiv, drhs)
+                else
+                    call zgetrs('N', n, nc + 1, z, n, ipiv, drhs, n, info)
+                end if
                 do j = 1, nc
                     w = d(:, j)
                     self%dv0(j, ih) = cmplx(0.0_dp, real(h, dp), dp)*sum(w*rhs(:, 1)) &

@@ -16,6 +16,7 @@
 program bench_cli
     use, intrinsic :: iso_fortran_env, only: output_unit, int64
     use stickslip_kinds, only: dp
+    use stickslip_sorting, only: sort_ascending
     use stickslip_error, only: error_type
     use stickslip_fft, only: fft_plan_t
     use stickslip_case, only: case_t, read_case
@@ -149,19 +150,9 @@ contains
     function median(a) result(m)
         real(dp), intent(in) :: a(:)
         real(dp) :: m
-        real(dp) :: s(size(a)), v
-        integer :: i, j
+        real(dp) :: s(size(a))
         s = a
-        do i = 2, size(s)
-            v = s(i)
-            j = i - 1
-            do while (j >= 1)
-                if (s(j) <= v) exit
-                s(j + 1) = s(j)
-                j = j - 1
-            end do
-            s(j + 1) = v
-        end do
+        call sort_ascending(s)
         m = s((size(s) + 1)/2)
     end function median
 end program bench_cli

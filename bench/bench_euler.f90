@@ -14,6 +14,7 @@
 program bench_euler
     use, intrinsic :: iso_fortran_env, only: output_unit, int64
     use stickslip_kinds, only: dp, two_pi
+    use stickslip_sorting, only: sort_ascending
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t, contact_velocity_direction, force_direction
     use stickslip_lapack, only: dgetrf, dgetrs
@@ -233,19 +234,9 @@ contains
 
     real(dp) function median(a)
         real(dp), intent(in) :: a(:)
-        real(dp) :: b(size(a)), x
-        integer :: p, q
+        real(dp) :: b(size(a))
         b = a
-        do p = 2, size(b)
-            x = b(p)
-            q = p - 1
-            do while (q >= 1)
-                if (b(q) <= x) exit
-                b(q + 1) = b(q)
-                q = q - 1
-            end do
-            b(q + 1) = x
-        end do
+        call sort_ascending(b)
         median = b((size(b) + 1)/2)
     end function median
 

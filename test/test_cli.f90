@@ -24,7 +24,7 @@ module test_cli
         good_system, good_forcing, good_friction, sweep_case
     implicit none
     private
-    public :: run_cli_tests, cli, summary_value, count_lines
+    public :: run_cli_tests, cli, summary_value, count_lines, csv_rows
 
 
 contains
@@ -577,26 +577,52 @@ contains
         end do
     end function slurp
 
-    !> A copy of an example with its output directory moved to the scratch area.
-    function scratch_copy(example) result(path)
+    !> A copy of examples/<example>.nml in the scratch area, <tag><flat name>.nml (tag
+    !> default 'out_'; calculix_beam/case: calculix_beam_case): its output directory moved to
+    !> the scratch directory <tag><flat name>, its matrix and direction files named by
+    !> absolute paths.
+    function scratch_copy(example, tag) result(copy)
         character(len=*), intent(in) :: example
-        character(len=:), allocatable :: path
-        integer :: ui, uo, stat, k
+        character(len=*), intent(in), optional :: tag
+        character(len=:), allocatable :: copy, folder, name
+        integer :: ui, uo, stat, a, b
         character(len=1000) :: line
-        path = scratch//"/"//example//".nml"
+        name = "out_"
+        if (present(tag)) name = tag
+        name = name//flat(example)
+        copy = scratch//"/"//name//".nml"
+        folder = ""
+        if (index(example, "/", back=.true.) > 0) &
+            folder = example(1:index(example, "/", back=.true.))
         open (newunit=ui, file=project_path("examples/"//example//".nml"), status='old', &
               action='read')
-        open (newunit=uo, file=path, status='replace', action='write')
+        open (newunit=uo, file=copy, status='replace', action='write')
         do
             read (ui, '(a)', iostat=stat) line
             if (stat /= 0) exit
-            k = index(line, "&output")
-            if (k > 0) line = "&output directory = '"//scratch//"/out_"//example//"' /"
+            a = index(line, "directory = '")
+            if (a > 0) then
+                b = index(line(a + 13:), "'") + a + 12
+                line = line(1:a + 12)//scratch//"/"//name//line(b:)
+            end if
+            a = index(line, "_file = '")
+            if (a > 0) line = line(1:a + 8)//project_path("examples/"//folder)//line(a + 9:)
             write (uo, '(a)') trim(line)
         end do
         close (ui)
         close (uo)
     end function scratch_copy
+
+    !> An example's name as one path component (calculix_beam/case: calculix_beam_case).
+    pure function flat(name) result(f)
+        character(len=*), intent(in) :: name
+        character(len=len(name)) :: f
+        integer :: j
+        f = name
+        do j = 1, len(f)
+            if (f(j:j) == '/') f(j:j) = '_'
+        end do
+    end function flat
 
     !> The pictures of every example that draws (sweeps, families, backbones, the robustness
     !> maps, the CalculiX strip's curve and backbone; and the example gnuplot scripts of
@@ -630,7 +656,7 @@ contains
             return
         end if
         do i = 1, n
-            path = figure_copy(trim(examples(i)))
+            path = scratch_copy(trim(examples(i)), "fig_")
             dir = scratch//"/fig_"//flat(trim(examples(i)))
             call cli([character(len=200) :: path], code, out, err)
             call check(t, code == 0 .or. code == 2, "cli figures "//trim(examples(i))// &
@@ -653,50 +679,6 @@ contains
             end do
         end do
 
-    contains
-
-        !> An example's name as one path component (calculix_beam/case: calculix_beam_case).
-        pure function flat(name) result(f)
-            character(len=*), intent(in) :: name
-            character(len=len(name)) :: f
-            integer :: j
-            f = name
-            do j = 1, len(f)
-                if (f(j:j) == '/') f(j:j) = '_'
-            end do
-        end function flat
-
-        !> A copy of examples/<example>.nml in the scratch area: its output directory moved
-        !> there (fig_<flat name>), its matrix and direction files named by absolute paths.
-        function figure_copy(example) result(copy)
-            character(len=*), intent(in) :: example
-            character(len=:), allocatable :: copy, folder
-            integer :: ui, uo, stat, a, b
-            character(len=1000) :: line
-            copy = scratch//"/fig_"//flat(example)//".nml"
-            folder = ""
-            if (index(example, "/", back=.true.) > 0) &
-                folder = example(1:index(example, "/", back=.true.))
-            open (newunit=ui, file=project_path("examples/"//example//".nml"), status='old', &
-                  action='read')
-            open (newunit=uo, file=copy, status='replace', action='write')
-            do
-                read (ui, '(a)', iostat=stat) line
-                if (stat /= 0) exit
-                a = index(line, "directory = '")
-                if (a > 0) then
-                    b = index(line(a + 13:), "'") + a + 12
-                    line = line(1:a + 12)//scratch//"/fig_"//flat(example)//line(b:)
-                end if
-                a = index(line, "_file = '")
-                if (a > 0) then
-                    line = line(1:a + 8)//project_path("examples/"//folder)//line(a + 9:)
-                end if
-                write (uo, '(a)') trim(line)
-            end do
-            close (ui)
-            close (uo)
-        end function figure_copy
     end subroutine test_cli_figures
 
     subroutine test_cli_examples(t)

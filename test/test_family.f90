@@ -8,7 +8,7 @@
 !> curve and family_value columns, family.csv, family.gp) and bad &sweep family input.
 module test_family
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, real_text, fatal_error, stickslip_stat, itoa
+    use stickslip_error, only: error_type, real_text, itoa
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -24,19 +24,12 @@ module test_family
     use stickslip_files, only: make_directory
     use stickslip_driver, only: run_sweep_case
     use fixtures, only: scratch, write_lines, enter_project_root, project_path
-    use test_cli, only: cli, summary_value, count_lines
+    use test_cli, only: cli, summary_value, count_lines, csv_rows
     use testing, only: test_counter_t, check, check_error
+    use test_sweep_files, only: killed_writer_t
     implicit none
     private
     public :: run_family_tests
-
-    !> A checkpoint writer that stops its curve after `stop_after` points (a batch job
-    !> killed at its wall-time limit).
-    type, extends(checkpoint_writer_t) :: killed_writer_t
-        integer :: stop_after = 0
-    contains
-        procedure :: observe => killed_observe
-    end type killed_writer_t
 
     !> The friction damper: DOF 1 the blade (forced), DOF 2 the platform with a Coulomb
     !> contact (normal load swept by the family), DOF 3 coupled to it.
@@ -328,14 +321,33 @@ contains
                    > 0, "family cli: frc.csv ends with curve,family_value,trusted,check", &
                    trim(header))
         points = summary_integer(dir//"/summary.nml", "points")
-        call check(t, file_lines(dir//"/frc.csv") == points + 1 .and. points > 20 .and. &
-                   file_lines(dir//"/family.csv") == 3 .and. &
+        call check(t, csv_rows(dir//"/frc.csv") == points .and. points > 20 .and. &
+                   csv_rows(dir//"/family.csv") == 2 .and. &
                    summary_integer(dir//"/summary.nml", "curves") == 2, &
                    "family cli: frc.csv a row per point, family.csv a row per curve")
         open (newunit=u, file=dir//"/family.csv", status='old', action='read', iostat=stat)
         header = ''
         if (stat == 0) read (u, '(a)', iostat=stat) header
         if (stat == 0) close (u)
+        block
+            character(len=4000) :: row, first
+            open (newunit=u, file=dir//"/family.csv", status='old', action='read', iostat=stat)
+            row = ''
+            if (stat == 0) read (u, '(a)', iostat=stat) row
+            if (stat == 0) read (u, '(a)', iostat=stat) row
+            if (stat == 0) close (u)
+            call check(t, count_char(row, ',') == 19 .and. count_char(header, ',') == 19, &
+                       "family cli: family.csv's rows have the header's 20 fields", trim(row))
+            open (newunit=u, file=dir//"/frc.csv", status='old', action='read', iostat=stat)
+            first = ''
+            row = ''
+            if (stat == 0) read (u, '(a)', iostat=stat) first
+            if (stat == 0) read (u, '(a)', iostat=stat) row
+            if (stat == 0) close (u)
+            call check(t, count_char(row, ',') == count_char(first, ',') .and. &
+                       count_char(row, ',') > 20, &
+                       "family cli: frc.csv's rows have the header's fields", trim(row))
+        end block
         call check(t, trim(header) == "curve,family_value,points,complete,peak_1,peak_2,"// &
                    "peak_omega_1,peak_omega_2,peak_frequency_1,peak_frequency_2,"// &
                    "peak_dissipation_1,peak_dissipation_2,refined_1,refined_2,"// &
@@ -472,21 +484,16 @@ contains
         end do
     end subroutine test_family_input
 
-    !> Lines of a text file (0 when it cannot be read).
-    integer function file_lines(path)
-        character(len=*), intent(in) :: path
-        integer :: u, stat
-        character(len=1) :: c
-        file_lines = 0
-        open (newunit=u, file=path, status='old', action='read', iostat=stat)
-        if (stat /= 0) return
-        do
-            read (u, '(a)', iostat=stat) c
-            if (stat /= 0) exit
-            file_lines = file_lines + 1
+    !> How many times `c` occurs in `s` (trailing blanks ignored).
+    pure integer function count_char(s, c)
+        character(len=*), intent(in) :: s
+        character, intent(in) :: c
+        integer :: i
+        count_char = 0
+        do i = 1, len_trim(s)
+            if (s(i:i) == c) count_char = count_char + 1
         end do
-        close (u)
-    end function file_lines
+    end function count_char
 
     !> An integer value of summary.nml (-1 when absent or unreadable).
     integer function summary_integer(path, key)
@@ -498,12 +505,4 @@ contains
         if (len(v) > 0) read (v, *, iostat=stat) summary_integer
     end function summary_integer
 
-    subroutine killed_observe(self, res, error)
-        class(killed_writer_t), intent(inout) :: self
-        type(sweep_result_t), intent(in) :: res
-        type(error_type), allocatable, intent(out) :: error
-        call self%checkpoint_writer_t%observe(res, error)
-        if (allocated(error)) return
-        if (res%npoints >= self%stop_after) call fatal_error(error, "killed", stickslip_stat%io)
-    end subroutine killed_observe
 end module test_family

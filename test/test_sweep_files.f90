@@ -19,7 +19,7 @@ module test_sweep_files
     use testing, only: test_counter_t, check, check_close, check_error
     implicit none
     private
-    public :: run_sweep_file_tests
+    public :: run_sweep_file_tests, killed_writer_t
 
     !> A checkpoint writer that stops the sweep after `stop_after` points, like a batch job
     !> killed at its wall-time limit (the checkpoint of that point is on disk).

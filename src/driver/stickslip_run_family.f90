@@ -21,7 +21,7 @@ module stickslip_run_family
     use stickslip_plot_scripts, only: write_family_plot_script
     use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_summary, only: write_family_summary
-    use stickslip_run_output, only: after_method, recovers, output_columns
+    use stickslip_run_output, only: observed_sweep, after_method, output_columns
     implicit none
     private
     public :: family_run, remove_family_checkpoints
@@ -61,12 +61,7 @@ contains
         type(contact_set_t) :: contacts
         logical :: wanted
         summary_written = .false.
-        opts = case%sweep%sweep_options_t
-        namp = case%model%ndof
-        if (recovers(case)) then
-            opts%observe = case%reduction%output_rows
-            namp = size(opts%observe, 1)
-        end if
+        call observed_sweep(case, opts, namp)
         fopts = case%sweep%family
         if (allocated(case%plot_amplitude)) fopts%measure = case%plot_amplitude
         n = size(fopts%family_values)

@@ -14,12 +14,13 @@ module stickslip_run_output
     use stickslip_files, only: make_directory, directory_lock_t, acquire_lock, release_lock, &
         begin_staging, commit_staging, staging_name
     use stickslip_csv, only: write_samples_csv, write_events_csv
+    use stickslip_sweep, only: sweep_options_t
     implicit none
     private
     public :: open_output, close_output, after_method, name_case_file
     public :: write_reference_files
     public :: sparse_columns, recovers, output_columns, boundary_columns, output_values, &
-              output_solution
+              output_solution, observed_sweep
 
 contains
 
@@ -164,6 +165,24 @@ contains
         type(case_t), intent(in) :: case
         recovers = allocated(case%reduction%output_rows)
     end function recovers
+
+    !> The &sweep options of `case` as run_sweep and run_family take them, and the number of
+    !> amplitudes a point holds: one per DOF of the model, or with a reduction one per
+    !> selected full-model DOF (the rows of the recovery, opts%observe).
+    subroutine observed_sweep(case, opts, namp)
+        !> The case (its &sweep and reduction).
+        type(case_t), intent(in) :: case
+        !> The sweep options.
+        type(sweep_options_t), intent(out) :: opts
+        !> Amplitudes per point.
+        integer, intent(out) :: namp
+        opts = case%sweep%sweep_options_t
+        namp = case%model%ndof
+        if (recovers(case)) then
+            opts%observe = case%reduction%output_rows
+            namp = size(opts%observe, 1)
+        end if
+    end subroutine observed_sweep
 
     !> The columns of the values given to the writers that hold the selected DOFs: the DOF
     !> numbers themselves, or 1..nsel for recovered values (output_values).

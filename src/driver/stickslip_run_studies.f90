@@ -31,8 +31,8 @@ module stickslip_run_studies
     use stickslip_case_messages, only: to_case_message
     use stickslip_sweep_family, only: family_result_t
     use stickslip_run_family, only: family_run, remove_family_checkpoints
-    use stickslip_run_output, only: open_output, close_output, after_method, name_case_file, &
-        write_reference_files, sparse_columns, recovers, output_columns, boundary_columns
+    use stickslip_run_output, only: observed_sweep, open_output, close_output, after_method, &
+        name_case_file, write_reference_files, sparse_columns, recovers, output_columns, boundary_columns
     implicit none
     private
     public :: run_study_case, run_sweep_case, run_robustness_case, run_modes_case
@@ -174,12 +174,7 @@ contains
         integer :: namp
 
         ! a reduced model's amplitudes are those of the selected full-model DOFs
-        opts = case%sweep%sweep_options_t
-        namp = case%model%ndof
-        if (recovers(case)) then
-            opts%observe = case%reduction%output_rows
-            namp = size(opts%observe, 1)
-        end if
+        call observed_sweep(case, opts, namp)
         summary_written = .false.
         writer%directory = case%directory
         writer%fingerprint = case_fingerprint(case, error)

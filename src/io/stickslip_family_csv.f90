@@ -39,9 +39,8 @@ contains
         integer :: u, k, stat, n, level, i
         character(len=512) :: msg
         character(len=:), allocatable :: header, check
-        character(len=80) :: rf
         integer, allocatable :: sel(:), numbers(:)
-        real(dp), allocatable :: stuck(:), slipping(:)
+        real(dp), allocatable :: stuck(:), slipping(:), row(:)
         stat = 0
         msg = ''
         if (present(dofs)) then
@@ -56,7 +55,6 @@ contains
                  columns("peak_dissipation_", numbers)//columns("refined_", numbers)// &
                  columns("stuck_peak_", numbers)//columns("slipping_peak_", numbers)// &
                  ",trusted,check"
-        rf = '(",",' // real_fmt // ')'
         call open_temporary(dir, "family.csv", u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
@@ -80,35 +78,14 @@ contains
                     slipping = stuck
                 end if
                 associate (p => fam%peaks(sel, k))
-                    do i = 1, n
-                        if (stat == 0) write (u, rf, iostat=stat, iomsg=msg, advance='no') &
-                            p(i)%amplitude
-                    end do
-                    do i = 1, n
-                        if (stat == 0) write (u, rf, iostat=stat, iomsg=msg, advance='no') &
-                            p(i)%omega
-                    end do
-                    do i = 1, n
-                        if (stat == 0) write (u, rf, iostat=stat, iomsg=msg, advance='no') &
-                            p(i)%omega/two_pi
-                    end do
-                    do i = 1, n
-                        if (stat == 0) write (u, rf, iostat=stat, iomsg=msg, advance='no') &
-                            p(i)%dissipation
-                    end do
-                    do i = 1, n
-                        if (stat == 0) write (u, '(",",i0)', iostat=stat, iomsg=msg, &
-                                              advance='no') merge(1, 0, p(i)%refined)
-                    end do
-                    do i = 1, n
-                        if (stat == 0) write (u, rf, iostat=stat, iomsg=msg, advance='no') &
-                            stuck(i)
-                    end do
-                    do i = 1, n
-                        if (stat == 0) write (u, rf, iostat=stat, iomsg=msg, advance='no') &
-                            slipping(i)
-                    end do
-                    ! the row's verdict: its worst peak's
+                    ! the row's values in the header's order, then its verdict: its worst peak's
+                    row = [p%amplitude, p%omega, p%omega/two_pi, p%dissipation]
+                    if (stat == 0) write (u, '(*(:",",' // real_fmt // '))', iostat=stat, &
+                                          iomsg=msg, advance='no') row
+                    if (stat == 0) write (u, '(*(:",",i0))', iostat=stat, iomsg=msg, &
+                                          advance='no') merge(1, 0, p%refined)
+                    if (stat == 0) write (u, '(*(:",",' // real_fmt // '))', iostat=stat, &
+                                          iomsg=msg, advance='no') stuck, slipping
                     level = 0
                     check = ''
                     do i = 1, n

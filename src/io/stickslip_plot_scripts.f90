@@ -60,33 +60,14 @@ contains
         character(len=512) :: msg
         character(len=:), allocatable :: sep, dof_name, prefix, label, names, xcol, lu
         integer, allocatable :: sel(:)
-        if (present(dofs)) then
-            sel = dofs
-        else
-            sel = [(k, k=1, ndof)]
-        end if
-        if (present(labels)) sel = labels
+        call drawn_dofs(ndof, sel, dof_name, dofs, labels)
         nsel = size(sel)
-        dof_name = "DOF "
-        if (present(labels) .and. present(dofs)) then
-            if (any(labels /= dofs)) dof_name = "full-model DOF "
-        end if
         if (present(units)) un = units
         floquet = .true.
         if (present(stability)) floquet = stability
         lu = " ["//trim(un%length)//"]"
-        prefix = "vib_"
-        label = "vibration amplitude (max_t x - min_t x) / 2"//lu
-        if (present(amplitude)) then
-            select case (amplitude)
-            case ('first_harmonic')
-                prefix = "h1_"
-                label = "first-harmonic amplitude |x_1|"//lu
-            case ('max_abs')
-                prefix = "amp_"
-                label = "amplitude max_t |x(t)|"//lu
-            end select
-        end if
+        call amplitude_columns(amplitude, prefix, label)
+        label = label//lu
         ! the x column: the parameter, or for a sweep in omega on a cycles axis the frequency
         xcol = "1"
         if (parameter == 'omega' .and. un%cycles) xcol = "(column('frequency'))"
@@ -107,9 +88,12 @@ contains
         call put(u, "ymax = 0; ymin = 1e300", stat, msg)
         call put(u, "# the amplitude drawn (&output plot_amplitude): the columns "//names, &
                  stat, msg)
+        call put(u, "# (a column without a valid value, NaN throughout, leaves STATS_ undefined)", &
+                 stat, msg)
         call put(u, "do for [name in '"//names//"'] { stats f using (column(name)) nooutput; "// &
+                 "if (exists('STATS_records') && STATS_records > 0) { "// &
                  "if (STATS_max > ymax) { ymax = STATS_max }; "// &
-                 "if (STATS_min > 0 && STATS_min < ymin) { ymin = STATS_min } }", stat, msg)
+                 "if (STATS_min > 0 && STATS_min < ymin) { ymin = STATS_min } } }", stat, msg)
         call put(u, "alo = (ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4); ahi = ymax*1.5", &
                  stat, msg)
         call put(u, "", stat, msg)
@@ -220,31 +204,11 @@ contains
                                          ylabel, d, names
         integer, allocatable :: sel(:)
         logical :: receptance
-        if (present(dofs)) then
-            sel = dofs
-        else
-            sel = [(k, k=1, ndof)]
-        end if
-        if (present(labels)) sel = labels
+        call drawn_dofs(ndof, sel, dof_name, dofs, labels)
         nsel = size(sel)
-        dof_name = "DOF "
-        if (present(labels) .and. present(dofs)) then
-            if (any(labels /= dofs)) dof_name = "full-model DOF "
-        end if
         if (present(units)) un = units
         lu = " ["//trim(un%length)//"]"
-        prefix = "vib_"
-        label = "vibration amplitude (max_t x - min_t x) / 2"
-        if (present(amplitude)) then
-            select case (amplitude)
-            case ('first_harmonic')
-                prefix = "h1_"
-                label = "first-harmonic amplitude |x_1|"
-            case ('max_abs')
-                prefix = "amp_"
-                label = "amplitude max_t |x(t)|"
-            end select
-        end if
+        call amplitude_columns(amplitude, prefix, label)
         xcol = "1"
         if (un%cycles) xcol = "(column('frequency'))"
         receptance = parameter == 'force_amplitude'
@@ -261,9 +225,10 @@ contains
                  "frequency, one line per curve (column curve), coloured by family_value", &
                  stat, msg)
         call put(u, "set output 'frc_family.png'.suffix", stat, msg)
+        call put(u, "ymax = 0; ymin = 1e300", stat, msg)
         call put(u, "stats f using (column('"//prefix//itoa(sel(1))//"')) nooutput", stat, msg)
-        call put(u, "ymax = STATS_max; ymin = (STATS_min > 0 ? STATS_min : ymax*1e-4)", stat, &
-                 msg)
+        call put(u, "if (exists('STATS_records') && STATS_records > 0) { ymax = STATS_max; "// &
+                 "ymin = (STATS_min > 0 ? STATS_min : ymax*1e-4) }", stat, msg)
         call put(u, "alo = (ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4); ahi = ymax*1.5", &
                  stat, msg)
         call put(u, "set logscale y", stat, msg)
@@ -313,8 +278,9 @@ contains
             names = names//" peak_"//d//" stuck_peak_"//d//" slipping_peak_"//d
         end do
         call put(u, "ymax = 0; ymin = 1e300", stat, msg)
-        call put(u, "do for [name in '"//trim(adjustl(names))//"'] { STATS_records = 0; "// &
-                 "stats g using (column(name)"//scale//") nooutput; if (STATS_records > 0) "// &
+        call put(u, "do for [name in '"//trim(adjustl(names))//"'] { "// &
+                 "stats g using (column(name)"//scale//") nooutput; "// &
+                 "if (exists('STATS_records') && STATS_records > 0) "// &
                  "{ if (STATS_max > ymax) { ymax = STATS_max }; if (STATS_min > 0 && "// &
                  "STATS_min < ymin) { ymin = STATS_min } } }", stat, msg)
         call put(u, "alo = (ymin/1.5 > ymax*1e-4 ? ymin/1.5 : ymax*1e-4); ahi = ymax*1.5", &
@@ -457,6 +423,46 @@ contains
                "v = (m == 1 ? 1 : (m == 2 ? 2 : 5))*10.0**d; set "//axis// &
                "tics add (sprintf('%g', v) v) } } }"
     end function decade_tics
+
+    !> The DOF numbers a script's curves are named by (`labels`, else `dofs`, else 1..ndof)
+    !> and the word for them: 'full-model DOF ' when the labels are not the columns (a
+    !> reduced model's recovered DOFs), else 'DOF '.
+    pure subroutine drawn_dofs(ndof, sel, dof_name, dofs, labels)
+        integer, intent(in) :: ndof
+        integer, allocatable, intent(out) :: sel(:)
+        character(len=:), allocatable, intent(out) :: dof_name
+        integer, intent(in), optional :: dofs(:), labels(:)
+        integer :: k
+        if (present(dofs)) then
+            sel = dofs
+        else
+            sel = [(k, k=1, ndof)]
+        end if
+        if (present(labels)) sel = labels
+        dof_name = "DOF "
+        if (present(labels) .and. present(dofs)) then
+            if (any(labels /= dofs)) dof_name = "full-model DOF "
+        end if
+    end subroutine drawn_dofs
+
+    !> The columns and the axis label (without its unit) of an amplitude measure
+    !> (&output plot_amplitude): 'half_peak_to_peak' (vib_<d>, the default when absent),
+    !> 'first_harmonic' (h1_<d>) or 'max_abs' (amp_<d>).
+    pure subroutine amplitude_columns(amplitude, prefix, label)
+        character(len=*), intent(in), optional :: amplitude
+        character(len=:), allocatable, intent(out) :: prefix, label
+        prefix = "vib_"
+        label = "vibration amplitude (max_t x - min_t x) / 2"
+        if (.not. present(amplitude)) return
+        select case (amplitude)
+        case ('first_harmonic')
+            prefix = "h1_"
+            label = "first-harmonic amplitude |x_1|"
+        case ('max_abs')
+            prefix = "amp_"
+            label = "amplitude max_t |x(t)|"
+        end select
+    end subroutine amplitude_columns
 
     !> A swept parameter in words ('normal load', 'friction coefficient').
     pure function parameter_words(parameter) result(words)

@@ -14,6 +14,7 @@ module stickslip_linear_response
     use stickslip_linear_modes, only: limit_structure, linear_modes
     use stickslip_lapack, only: zgetrf, zgetrs
     use stickslip_golden, only: golden_search_t
+    use stickslip_sorting, only: sort_ascending
     implicit none
     private
     public :: limit_peak_t, linear_limit_peaks
@@ -86,7 +87,7 @@ contains
                                    wn/model%force_harmonic(k) < hi)]
             end do
         end if
-        call sort(grid)
+        call sort_ascending(grid)
         ng = size(grid)
         allocate (values(nobs, ng))
         do j = 1, ng
@@ -191,21 +192,4 @@ contains
             if (h(k) >= 1 .and. .not. any(u == h(k))) u = [u, h(k)]
         end do
     end function unique_harmonics
-
-    !> Sort in place, increasing (insertion: a few hundred values).
-    pure subroutine sort(x)
-        real(dp), intent(inout) :: x(:)
-        real(dp) :: v
-        integer :: i, j
-        do i = 2, size(x)
-            v = x(i)
-            j = i - 1
-            do while (j >= 1)
-                if (x(j) <= v) exit
-                x(j + 1) = x(j)
-                j = j - 1
-            end do
-            x(j + 1) = v
-        end do
-    end subroutine sort
 end module stickslip_linear_response

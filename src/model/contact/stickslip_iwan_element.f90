@@ -29,6 +29,7 @@ module stickslip_iwan_element
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa, real_text
     use stickslip_basis, only: basis_t
+    use stickslip_sorting, only: sort_ascending
     use stickslip_friction, only: psi, psi_stick
     use stickslip_contact_element, only: contact_element_t, channel_t, hb_work_t, &
         state_stick, state_slip, element_step_forces
@@ -422,7 +423,7 @@ contains
             bp(2*i - 1) = -q(i) - self%f(i)*c(i)
             bp(2*i) = -q(i) + self%f(i)*c(i)
         end do
-        call sort(bp)
+        call sort_ascending(bp)
         ! g at the breakpoints increases: bisect for the interval with the sign change
         if (g(bp(1)) >= 0.0_dp) then
             vhi = bp(1)
@@ -485,22 +486,6 @@ contains
                 m(j, j) = x(j)
             end do
         end function diag
-
-        pure subroutine sort(x)
-            real(dp), intent(inout) :: x(:)
-            real(dp) :: t
-            integer :: p, j
-            do p = 2, size(x)
-                t = x(p)
-                j = p - 1
-                do while (j >= 1)
-                    if (x(j) <= t) exit
-                    x(j + 1) = x(j)
-                    j = j - 1
-                end do
-                x(j + 1) = t
-            end do
-        end subroutine sort
     end subroutine iwan_step_forces
 
     !> Handled by the exact flow.

@@ -160,9 +160,10 @@ contains
 
     !> The family of the friction damper over 9 normal loads: complete; its peaks against
     !> separate sweeps at three loads (each traced from a cold start, its peak refined the
-    !> same way; one with a smaller largest step, on other points) to 1e-7; the optimum strictly inside the loads, below both linear limits;
-    !> the smallest load's peak within 3 % of the slipping limit's, the largest's within
-    !> 0.5 % of the stuck limit's; every peak refined.
+    !> same way; one with a smaller largest step, on other points) to 1e-7; the optimum
+    !> strictly inside the loads, below both linear limits; the smallest load's peak within
+    !> 3 % of the slipping limit's, the largest's within 0.5 % of the stuck limit's; every
+    !> peak refined.
     subroutine test_family_against_sweeps(t)
         type(test_counter_t), intent(inout) :: t
         type(case_t) :: c

@@ -6,7 +6,7 @@ module stickslip_lapack
     implicit none
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
-        zgesv, dsygv, dsyev, sgetrf, sgetrs, dgemm, dgemv
+        zgesv, dsygv, dsyev, sgetrf, sgetrs, dgemm, dgemv, zhegv
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -170,6 +170,21 @@ module stickslip_lapack
             real(dp), intent(out) :: work(*)
             integer, intent(out) :: info
         end subroutine dsygv
+        !> Generalized Hermitian-definite eigenproblem A x = lambda B x (itype = 1): w
+        !> ascending; with jobz = 'V' a holds the B-orthonormal eigenvectors. lwork = -1 is
+        !> a workspace query; rwork of size max(1, 3 n - 2).
+        subroutine zhegv(itype, jobz, uplo, n, a, lda, b, ldb, w, work, lwork, rwork, info)
+            import :: dp
+            integer, intent(in) :: itype
+            character(len=1), intent(in) :: jobz, uplo
+            integer, intent(in) :: n, lda, ldb, lwork
+            complex(dp), intent(inout) :: a(lda, *)
+            complex(dp), intent(inout) :: b(ldb, *)
+            real(dp), intent(out) :: w(*)
+            complex(dp), intent(out) :: work(*)
+            real(dp), intent(out) :: rwork(*)
+            integer, intent(out) :: info
+        end subroutine zhegv
         !> LU factorization of a general single-precision matrix with partial pivoting.
         subroutine sgetrf(m, n, a, lda, ipiv, info)
             import :: sp

@@ -516,8 +516,8 @@ contains
         call put(u, "  points = "//itoa(res%npoints), stat, msg)
         call put(u, "  resumed_points = "//itoa(res%resumed_points), stat, msg)
         if (res%npoints > 0) then
-            call put(u, "  unstable_points = "//itoa(count(res%points(1:res%npoints)%stable == 0)), &
-                     stat, msg)
+            call put(u, "  unstable_points = "// &
+                     itoa(count(res%points(1:res%npoints)%stable == 0)), stat, msg)
             call put(u, "  unknown_stability_points = "// &
                      itoa(count(res%points(1:res%npoints)%stable == -1)), stat, msg)
         end if

@@ -1,0 +1,367 @@
+!> Cyclic symmetry of a bladed disk: N identical sectors, the right boundary of sector s being
+!> the left boundary of sector s + 1 (DOF pairs of the sector model, in its own frame), forced
+!> in engine order EO: sector s is forced like sector 0 delayed by EO s / N of a period.
+!>
+!> Conventions (doc/cyclic.md). A forcing term amplitude cos(h omega t + phase) on sector 0
+!> is amplitude cos(h omega t + phase - h sigma s) on sector s, sigma = 2 pi EO / N: a wave
+!> travelling forward, towards increasing s. The tuned disk answers with the same wave, x_s(t)
+!> = x_0(t - s EO T / N), so at harmonic h every sector's complex amplitude is sector 0's
+!> times exp(-i h sigma s), and on the boundary X_right = exp(-i h sigma) X_left: the
+!> inter-sector phase of harmonic h is -h sigma, its nodal diameter the distance of h EO to
+!> the nearest multiple of N (aliasing: h EO and N - h EO are the same diameter, the wave
+!> travelling the other way). A contact of the sector may act against the next sector: its
+!> second side on DOF `next_dof` of sector s + 1 (slip velocity v_s(dof) - v_{s+1}(next_dof)),
+!> and likewise a normal against `next_normal_dof`; sector s then also receives the reaction
+!> of sector s - 1's contact.
+!>
+!> Here: the description and its checks (cyclic_t, validate_cyclic), the full disk assembled
+!> from the sector (assemble_disk: N copies, the boundaries merged, the forcing phased, every
+!> contact copied; an ordinary model for every method, e.g. mistuned by hand) and the linear
+!> cyclic modes of the sector per nodal diameter (cyclic_frequencies). Dense.
+module stickslip_cyclic
+    use stickslip_kinds, only: dp, two_pi
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_model, only: model_t, force_direction, contact_velocity_direction, &
+        contact_normal_direction, contact_tangent2_direction, is_unilateral, is_planar
+    use stickslip_lapack, only: zhegv
+    implicit none
+    private
+    public :: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
+        cyclic_frequencies, sector_phase
+
+    !> Most sectors of a disk.
+    integer, parameter, public :: max_sectors = 1000
+
+    !> A bladed disk of N identical sectors.
+    type :: cyclic_t
+        !> Number of sectors N (>= 2).
+        integer :: sectors = 0
+        !> Engine order of the forcing (>= 0).
+        integer :: engine_order = 0
+        !> Left and right boundary DOFs of the sector, paired: right(k) of sector s is
+        !> left(k) of sector s + 1.
+        integer, allocatable :: left(:), right(:)
+        !> Per contact (0 or absent: none): the DOF of the next sector its tangential
+        !> direction acts against, and the one its normal acts against.
+        integer, allocatable :: next_dof(:), next_normal_dof(:)
+    end type cyclic_t
+
+contains
+
+    !> Check `cyc` against the sector `model`. Errors (stat input) name the component:
+    !> cyc%sectors < 2, cyc%engine_order < 0, left and right of other sizes, a DOF out of
+    !> range, repeated, or on both boundaries, a contact's next DOF out of range or given to
+    !> a contact that has no such direction.
+    subroutine validate_cyclic(model, cyc, error)
+        !> The sector.
+        type(model_t), intent(in) :: model
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        character(len=300) :: buf
+        integer :: k, n
+        buf = ''
+        n = model%ndof
+        if (cyc%sectors < 2 .or. cyc%sectors > max_sectors) then
+            write (buf, '(a,i0,a,i0)') "cyc%sectors = ", cyc%sectors, ": must be 2 to ", &
+                max_sectors
+        else if (cyc%engine_order < 0) then
+            write (buf, '(a,i0,a)') "cyc%engine_order = ", cyc%engine_order, ": must be >= 0"
+        else if (.not. (allocated(cyc%left) .and. allocated(cyc%right))) then
+            buf = "cyc%left, cyc%right: missing (the boundary DOF pairs)"
+        else if (size(cyc%left) /= size(cyc%right)) then
+            write (buf, '(a,i0,a,i0,a)') "cyc%left, cyc%right: ", size(cyc%left), " and ", &
+                size(cyc%right), " DOFs: the boundaries must pair one to one"
+        else if (size(cyc%left) == 0) then
+            buf = "cyc%left, cyc%right: no DOF pair (the sectors would not be joined)"
+        end if
+        if (len_trim(buf) == 0) then
+            do k = 1, size(cyc%left)
+                if (cyc%left(k) < 1 .or. cyc%left(k) > n) then
+                    write (buf, '(a,i0,a,i0,a,i0,a)') "cyc%left(", k, ") = ", cyc%left(k), &
+                        ": not a DOF of the sector (1 to ", n, ")"
+                else if (cyc%right(k) < 1 .or. cyc%right(k) > n) then
+                    write (buf, '(a,i0,a,i0,a,i0,a)') "cyc%right(", k, ") = ", cyc%right(k), &
+                        ": not a DOF of the sector (1 to ", n, ")"
+                else if (any(cyc%left(1:k - 1) == cyc%left(k))) then
+                    write (buf, '(a,i0,a,i0,a)') "cyc%left(", k, ") = ", cyc%left(k), &
+                        ": repeated"
+                else if (any(cyc%right(1:k - 1) == cyc%right(k))) then
+                    write (buf, '(a,i0,a,i0,a)') "cyc%right(", k, ") = ", cyc%right(k), &
+                        ": repeated"
+                else if (any(cyc%left == cyc%right(k))) then
+                    write (buf, '(a,i0,a,i0,a)') "cyc%right(", k, ") = ", cyc%right(k), &
+                        ": also a left boundary DOF"
+                end if
+                if (len_trim(buf) > 0) exit
+            end do
+        end if
+        if (len_trim(buf) == 0) call check_next(cyc%next_dof, "next_dof", .false.)
+        if (len_trim(buf) == 0) call check_next(cyc%next_normal_dof, "next_normal_dof", .true.)
+        if (len_trim(buf) > 0) call fatal_error(error, trim(buf), stickslip_stat%input)
+
+    contains
+
+        subroutine check_next(next, name, normal)
+            integer, allocatable, intent(in) :: next(:)
+            character(len=*), intent(in) :: name
+            logical, intent(in) :: normal
+            integer :: j
+            if (.not. allocated(next)) return
+            if (size(next) > model%ncontact()) then
+                write (buf, '(a,i0,a,i0,a)') "cyc%"//name//": ", size(next), &
+                    " values for ", model%ncontact(), " contacts"
+                return
+            end if
+            do j = 1, size(next)
+                if (next(j) == 0) cycle
+                if (next(j) < 1 .or. next(j) > n) then
+                    write (buf, '(a,i0,a,i0,a,i0,a)') "cyc%"//name//"(", j, ") = ", next(j), &
+                        ": not a DOF of the next sector (1 to ", n, ")"
+                else if (any(cyc%right == next(j))) then
+                    write (buf, '(a,i0,a,i0,a)') "cyc%"//name//"(", j, ") = ", next(j), &
+                        ": a right boundary DOF (it belongs to the sector after the next: "// &
+                        "name that sector's left DOF instead)"
+                else if (normal .and. .not. is_unilateral(model, j)) then
+                    write (buf, '(a,i0,a)') "cyc%"//name//"(", j, &
+                        "): the contact has no normal direction (normal_dof)"
+                end if
+                if (len_trim(buf) > 0) return
+            end do
+        end subroutine check_next
+    end subroutine validate_cyclic
+
+    !> The nodal diameter of harmonic h under engine order eo on n sectors: h eo modulo n,
+    !> folded to 0..n/2 (h eo and n - h eo are the same diameter, travelling the other way).
+    pure integer function nodal_diameter(h, eo, n) result(nd)
+        !> Harmonic, engine order, sectors.
+        integer, intent(in) :: h, eo, n
+        nd = modulo(h*eo, n)
+        if (nd > n/2) nd = n - nd
+    end function nodal_diameter
+
+    !> The phase of harmonic h of sector s relative to sector 0 in a travelling wave of
+    !> engine order eo on n sectors: -h 2 pi eo s / n [rad] (X_s = X_0 exp(i phase)).
+    pure real(dp) function sector_phase(h, eo, n, s) result(phase)
+        !> Harmonic, engine order, sectors, sector (0-based).
+        integer, intent(in) :: h, eo, n, s
+        phase = -two_pi*real(modulo(h*eo*s, n), dp)/real(n, dp)
+    end function sector_phase
+
+    !> The DOF of the full disk that DOF j of sector s (0-based) is: the sector's DOFs other
+    !> than its right boundary, sector after sector, in their order; a right boundary DOF
+    !> is the paired left DOF of sector s + 1 (modulo N).
+    pure integer function disk_dof(cyc, n, j, s) result(g)
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> DOFs of the sector, the DOF and the sector.
+        integer, intent(in) :: n, j, s
+        integer :: k, kept, t
+        t = modulo(s, cyc%sectors)
+        do k = 1, size(cyc%right)
+            if (cyc%right(k) == j) then
+                g = disk_dof(cyc, n, cyc%left(k), t + 1)
+                return
+            end if
+        end do
+        kept = n - size(cyc%right)
+        g = t*kept + j - count(cyc%right < j)
+    end function disk_dof
+
+    !> The full disk of `sector`: N copies with their boundaries merged (M, K and C
+    !> assembled), every forcing term on every sector with its travelling-wave phase (a load
+    !> shape each), every contact on every sector (its directions scattered; one against
+    !> the next sector reaching into it), in sector order: contact j of sector s is contact
+    !> s n_c + j. Contact laws are copied. Errors: those of validate_cyclic.
+    subroutine assemble_disk(sector, cyc, disk, error)
+        !> The sector (a validated model).
+        type(model_t), intent(in) :: sector
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> The disk.
+        type(model_t), intent(out) :: disk
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer :: n, nd, ns, s, i, j, nc, nf, c
+        integer, allocatable :: g(:, :)
+        logical :: unilateral, planar
+        call validate_cyclic(sector, cyc, error)
+        if (allocated(error)) return
+        n = sector%ndof
+        ns = cyc%sectors
+        nd = ns*(n - size(cyc%right))
+        allocate (g(n, 0:ns - 1))
+        do s = 0, ns - 1
+            do j = 1, n
+                g(j, s) = disk_dof(cyc, n, j, s)
+            end do
+        end do
+        disk%ndof = nd
+        disk%omega = sector%omega
+        allocate (disk%mass(nd, nd), disk%stiffness(nd, nd), disk%damping(nd, nd))
+        disk%mass = 0.0_dp
+        disk%stiffness = 0.0_dp
+        disk%damping = 0.0_dp
+        do s = 0, ns - 1
+            do j = 1, n
+                do i = 1, n
+                    disk%mass(g(i, s), g(j, s)) = disk%mass(g(i, s), g(j, s)) + sector%mass(i, j)
+                    disk%stiffness(g(i, s), g(j, s)) = disk%stiffness(g(i, s), g(j, s)) + &
+                                                       sector%stiffness(i, j)
+                    disk%damping(g(i, s), g(j, s)) = disk%damping(g(i, s), g(j, s)) + &
+                                                     sector%damping(i, j)
+                end do
+            end do
+        end do
+        ! the forcing: each term on each sector, phased
+        nf = sector%nforce()
+        allocate (disk%force_shape(nd, nf*ns), disk%force_harmonic(nf*ns), &
+                  disk%force_amplitude(nf*ns), disk%force_phase(nf*ns), disk%force_dof(0))
+        disk%force_shape = 0.0_dp
+        do s = 0, ns - 1
+            do i = 1, nf
+                c = s*nf + i
+                disk%force_shape(:, c) = scatter(force_direction(sector, i), s)
+                disk%force_harmonic(c) = sector%force_harmonic(i)
+                disk%force_amplitude(c) = sector%force_amplitude(i)
+                disk%force_phase(c) = sector%force_phase(i) + &
+                                      sector_phase(sector%force_harmonic(i), cyc%engine_order, &
+                                                   ns, s)
+            end do
+        end do
+        ! the contacts: directions scattered, scalars copied, laws copied
+        nc = sector%ncontact()
+        unilateral = .false.
+        planar = .false.
+        do j = 1, nc
+            unilateral = unilateral .or. is_unilateral(sector, j)
+            planar = planar .or. is_planar(sector, j)
+        end do
+        allocate (disk%contact_direction(nd, nc*ns), disk%contact_dof(0), disk%contact_dof2(0))
+        if (unilateral) allocate (disk%normal_direction(nd, nc*ns))
+        if (planar) allocate (disk%tangent2_direction(nd, nc*ns))
+        disk%mu = [(sector%mu, s=1, ns)]
+        disk%normal_load = [(sector%normal_load, s=1, ns)]
+        call copy_scalars(sector%gap, disk%gap)
+        call copy_scalars(sector%preload, disk%preload)
+        call copy_scalars(sector%normal_stiffness, disk%normal_stiffness)
+        call copy_scalars(sector%tangential_stiffness, disk%tangential_stiffness)
+        if (allocated(sector%laws)) then
+            if (size(sector%laws) > 0) allocate (disk%laws(nc*ns))
+        end if
+        do s = 0, ns - 1
+            do j = 1, nc
+                c = s*nc + j
+                disk%contact_direction(:, c) = scatter(contact_velocity_direction(sector, j), s)
+                if (next_of(cyc%next_dof, j) > 0) then
+                    ! the second side on the next sector: slip velocity v_s(dof) - v_{s+1}(b)
+                    disk%contact_direction(g(next_of(cyc%next_dof, j), modulo(s + 1, ns)), c) = &
+                        disk%contact_direction(g(next_of(cyc%next_dof, j), &
+                                                 modulo(s + 1, ns)), c) - 1.0_dp
+                end if
+                if (unilateral) then
+                    disk%normal_direction(:, c) = scatter(contact_normal_direction(sector, j), s)
+                    if (next_of(cyc%next_normal_dof, j) > 0) &
+                        disk%normal_direction(g(next_of(cyc%next_normal_dof, j), &
+                                                modulo(s + 1, ns)), c) = &
+                        disk%normal_direction(g(next_of(cyc%next_normal_dof, j), &
+                                                modulo(s + 1, ns)), c) - 1.0_dp
+                end if
+                if (planar) disk%tangent2_direction(:, c) = &
+                    scatter(contact_tangent2_direction(sector, j), s)
+                if (allocated(disk%laws)) then
+                    if (allocated(sector%laws(j)%e)) &
+                        allocate (disk%laws(c)%e, source=sector%laws(j)%e)
+                end if
+            end do
+        end do
+
+    contains
+
+        !> A vector of the sector's DOFs on sector s of the disk.
+        function scatter(v, s) result(w)
+            real(dp), intent(in) :: v(:)
+            integer, intent(in) :: s
+            real(dp) :: w(nd)
+            integer :: k
+            w = 0.0_dp
+            do k = 1, n
+                w(g(k, s)) = w(g(k, s)) + v(k)
+            end do
+        end function scatter
+
+        pure integer function next_of(next, j)
+            integer, allocatable, intent(in) :: next(:)
+            integer, intent(in) :: j
+            next_of = 0
+            if (.not. allocated(next)) return
+            if (j <= size(next)) next_of = next(j)
+        end function next_of
+
+        subroutine copy_scalars(a, b)
+            real(dp), allocatable, intent(in) :: a(:)
+            real(dp), allocatable, intent(out) :: b(:)
+            integer :: k
+            if (allocated(a)) b = [(a, k=1, ns)]
+        end subroutine copy_scalars
+    end subroutine assemble_disk
+
+    !> The undamped natural frequencies [rad/s], increasing, of the sector's structure (M and
+    !> K, its contacts carrying nothing) in the cyclic modes of nodal diameter `nd`: sector
+    !> s moves as sector 0 times exp(i 2 pi nd s / N), so X_right = exp(i 2 pi nd / N)
+    !> X_left, and the sector's pencil is projected on those motions (Hermitian, LAPACK
+    !> zhegv). Each frequency of 0 < nd < N/2 is a double one of the disk (the waves
+    !> travelling either way). Errors: those of validate_cyclic; nd outside 0..N/2 (stat
+    !> input); the eigensolver failing (stat numerical).
+    subroutine cyclic_frequencies(sector, cyc, nd, omegas, error)
+        !> The sector (a validated model).
+        type(model_t), intent(in) :: sector
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> The nodal diameter.
+        integer, intent(in) :: nd
+        !> The natural frequencies [rad/s].
+        real(dp), allocatable, intent(out) :: omegas(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :), work(:)
+        real(dp), allocatable :: w(:), rwork(:)
+        complex(dp) :: query(1), e
+        integer :: n, m, j, k, col, info
+        call validate_cyclic(sector, cyc, error)
+        if (allocated(error)) return
+        if (nd < 0 .or. nd > cyc%sectors/2) then
+            call fatal_error(error, "nodal diameter "//itoa(nd)//": must be 0 to "// &
+                             itoa(cyc%sectors/2), stickslip_stat%input)
+            return
+        end if
+        n = sector%ndof
+        m = n - size(cyc%right)
+        e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
+        allocate (t(n, m))
+        t = (0.0_dp, 0.0_dp)
+        col = 0
+        do j = 1, n
+            if (any(cyc%right == j)) cycle
+            col = col + 1
+            t(j, col) = (1.0_dp, 0.0_dp)
+            do k = 1, size(cyc%left)
+                if (cyc%left(k) == j) t(cyc%right(k), col) = e
+            end do
+        end do
+        kc = matmul(conjg(transpose(t)), matmul(cmplx(sector%stiffness, 0.0_dp, dp), t))
+        mc = matmul(conjg(transpose(t)), matmul(cmplx(sector%mass, 0.0_dp, dp), t))
+        allocate (w(m), rwork(max(1, 3*m - 2)))
+        call zhegv(1, 'N', 'U', m, kc, m, mc, m, w, query, -1, rwork, info)
+        allocate (work(max(1, int(real(query(1), dp)), 2*m)))
+        call zhegv(1, 'N', 'U', m, kc, m, mc, m, w, work, size(work), rwork, info)
+        if (info /= 0) then
+            call fatal_error(error, "cyclic modes: the eigensolver failed (zhegv info "// &
+                             itoa(info)//"): the sector's mass is not positive definite on "// &
+                             "the cyclic motions", stickslip_stat%numerical)
+            return
+        end if
+        omegas = sqrt(max(w, 0.0_dp))
+    end subroutine cyclic_frequencies
+end module stickslip_cyclic

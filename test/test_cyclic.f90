@@ -1,0 +1,292 @@
+!> Cyclic symmetry against the full disk: a lumped 24-sector disk (a ring of disk masses, a
+!> blade on each) whose sector's cyclic frequencies over the nodal diameters 0..12 are the
+!> assembled disk's eigenfrequencies (dense dsygv), each diameter 1..11 twice; the travelling
+!> wave: the disk's linear forced response under engine order 3 (and 0, 12, 7 aliased to 17)
+!> is the sector's with the phased boundary, every sector the phased copy; contacts copied
+!> and reaching into the next sector; the checks of the description.
+module test_cyclic
+    use stickslip_kinds, only: dp, two_pi
+    use stickslip_error, only: error_type, real_text, itoa
+    use stickslip_model, only: model_t, validate_model, force_direction
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, &
+        assemble_disk, cyclic_frequencies, sector_phase
+    use stickslip_lapack, only: dsygv, zgesv
+    use testing, only: test_counter_t, check, check_error
+    implicit none
+    private
+    public :: run_cyclic_tests
+
+    integer, parameter :: ns = 24
+
+contains
+
+    subroutine run_cyclic_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call test_nodal_diameter(t)
+        call test_frequencies(t)
+        call test_forced_wave(t)
+        call test_disk_contacts(t)
+        call test_checks(t)
+    end subroutine run_cyclic_tests
+
+    !> The lumped sector: DOF 1 the left disk node, 2 the blade, 3 the right disk node, 4 the
+    !> disk's middle node; the ring k_r / 2 from each boundary node to the middle, the blade
+    !> on the middle (k_b), the middle on the shaft (k_g); half a boundary node's mass on each
+    !> side; Rayleigh damping 0.01 M + 0.002 K; the blade forced at harmonic 1.
+    function lumped_sector() result(m)
+        type(model_t) :: m
+        real(dp), parameter :: kr = 40.0_dp, kb = 3.0_dp, kg = 5.0_dp
+        m%ndof = 4
+        allocate (m%mass(4, 4), m%stiffness(4, 4))
+        m%mass = 0.0_dp
+        m%mass(1, 1) = 0.25_dp
+        m%mass(3, 3) = 0.25_dp
+        m%mass(2, 2) = 0.3_dp
+        m%mass(4, 4) = 1.0_dp
+        m%stiffness = 0.0_dp
+        call spring(1, 4, 0.5_dp*kr)
+        call spring(3, 4, 0.5_dp*kr)
+        call spring(2, 4, kb)
+        m%stiffness(4, 4) = m%stiffness(4, 4) + kg
+        m%damping = 0.01_dp*m%mass + 0.002_dp*m%stiffness
+        m%omega = 3.0_dp
+        m%force_dof = [2]
+        m%force_harmonic = [1]
+        m%force_amplitude = [1.0_dp]
+        m%force_phase = [0.3_dp]
+        allocate (m%contact_dof(0), m%contact_dof2(0), m%mu(0), m%normal_load(0))
+    contains
+        subroutine spring(a, b, k)
+            integer, intent(in) :: a, b
+            real(dp), intent(in) :: k
+            m%stiffness(a, a) = m%stiffness(a, a) + k
+            m%stiffness(b, b) = m%stiffness(b, b) + k
+            m%stiffness(a, b) = m%stiffness(a, b) - k
+            m%stiffness(b, a) = m%stiffness(b, a) - k
+        end subroutine spring
+    end function lumped_sector
+
+    function lumped_cyclic(eo) result(c)
+        integer, intent(in) :: eo
+        type(cyclic_t) :: c
+        c%sectors = ns
+        c%engine_order = eo
+        c%left = [1]
+        c%right = [3]
+    end function lumped_cyclic
+
+    !> Nodal diameters: h EO modulo N folded to 0..N/2.
+    subroutine test_nodal_diameter(t)
+        type(test_counter_t), intent(inout) :: t
+        call check(t, nodal_diameter(1, 3, 24) == 3 .and. nodal_diameter(1, 17, 24) == 7 .and. &
+                   nodal_diameter(3, 5, 24) == 9 .and. nodal_diameter(5, 5, 24) == 1 .and. &
+                   nodal_diameter(2, 12, 24) == 0 .and. nodal_diameter(1, 12, 24) == 12 .and. &
+                   nodal_diameter(1, 0, 24) == 0, &
+                   "cyclic: nodal diameters (aliasing above N/2, multiples of N)")
+    end subroutine test_nodal_diameter
+
+    !> The sector's cyclic frequencies for nd = 0..12 (1..11 twice) = the assembled disk's 72.
+    subroutine test_frequencies(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector, disk
+        type(cyclic_t) :: cyc
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: w(:), all(:), k(:, :), m(:, :), ev(:), work(:)
+        real(dp) :: q(1)
+        integer :: nd, info, i, j, v
+        sector = lumped_sector()
+        cyc = lumped_cyclic(3)
+        call assemble_disk(sector, cyc, disk, error)
+        call check_error(t, error, "cyclic frequencies: assemble", .false.)
+        if (allocated(error)) return
+        call validate_model(disk, error)
+        call check_error(t, error, "cyclic frequencies: the disk is a valid model", .false.)
+        if (allocated(error)) return
+        allocate (all(0))
+        do nd = 0, ns/2
+            call cyclic_frequencies(sector, cyc, nd, w, error)
+            if (allocated(error)) exit
+            all = [all, w]
+            if (nd > 0 .and. nd < ns/2) all = [all, w]
+        end do
+        call check_error(t, error, "cyclic frequencies: every nodal diameter", .false.)
+        if (allocated(error)) return
+        ! insertion sort
+        do i = 2, size(all)
+            v = i
+            do j = i - 1, 1, -1
+                if (all(j) <= all(v)) exit
+                call swap(all(j), all(v))
+                v = j
+            end do
+        end do
+        k = disk%stiffness
+        m = disk%mass
+        allocate (ev(disk%ndof))
+        call dsygv(1, 'N', 'U', disk%ndof, k, disk%ndof, m, disk%ndof, ev, q, -1, info)
+        allocate (work(int(q(1))))
+        call dsygv(1, 'N', 'U', disk%ndof, k, disk%ndof, m, disk%ndof, ev, work, size(work), &
+                   info)
+        ev = sqrt(ev)
+        call check(t, disk%ndof == 72 .and. size(all) == 72 .and. info == 0, &
+                   "cyclic frequencies: 72 of the sector (3 a diameter), 72 of the disk")
+        if (size(all) /= size(ev)) return
+        call check(t, maxval(abs(all - ev)/ev) < 1.0e-10_dp, &
+                   "cyclic frequencies: the sector's per nodal diameter = the disk's", &
+                   "largest relative difference "//real_text(maxval(abs(all - ev)/ev)))
+    contains
+        subroutine swap(a, b)
+            real(dp), intent(inout) :: a, b
+            real(dp) :: c
+            c = a
+            a = b
+            b = c
+        end subroutine swap
+    end subroutine test_frequencies
+
+    !> The disk's linear response at the forced harmonic (Z_disk X = F_disk from the
+    !> assembled, phased forcing) against the sector's: X_sector from the sector's pencil on
+    !> the motions with X_right = exp(-i h 2 pi EO / N) X_left, each sector s the copy times
+    !> exp(i sector_phase); for EO = 0, 3, 12 and 17 (aliased to 7, travelling backwards).
+    subroutine test_forced_wave(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector, disk
+        type(cyclic_t) :: cyc
+        type(error_type), allocatable :: error
+        complex(dp), allocatable :: zd(:, :), fd(:, :), tt(:, :), zs(:, :), fs(:, :), xs(:)
+        integer, allocatable :: ipiv(:)
+        integer :: info, s, j, e, eo
+        integer, parameter :: orders(4) = [0, 3, 12, 17]
+        real(dp) :: worst, w
+        complex(dp) :: ph
+        sector = lumped_sector()
+        w = sector%omega
+        worst = 0.0_dp
+        do e = 1, size(orders)
+            eo = orders(e)
+            cyc = lumped_cyclic(eo)
+            call assemble_disk(sector, cyc, disk, error)
+            if (allocated(error)) exit
+            ! the disk
+            zd = cmplx(disk%stiffness - w**2*disk%mass, w*disk%damping, dp)
+            allocate (fd(disk%ndof, 1), ipiv(disk%ndof))
+            fd = (0.0_dp, 0.0_dp)
+            do j = 1, disk%nforce()
+                fd(:, 1) = fd(:, 1) + disk%force_amplitude(j)* &
+                           exp(cmplx(0.0_dp, disk%force_phase(j), dp))*force_direction(disk, j)
+            end do
+            call zgesv(disk%ndof, 1, zd, disk%ndof, ipiv, fd, disk%ndof, info)
+            deallocate (ipiv)
+            ! the sector: DOFs 1, 2, 4 free, DOF 3 = exp(i phase) DOF 1
+            ph = exp(cmplx(0.0_dp, sector_phase(1, eo, ns, 1), dp))
+            allocate (tt(4, 3))
+            tt = (0.0_dp, 0.0_dp)
+            tt(1, 1) = 1.0_dp
+            tt(3, 1) = ph
+            tt(2, 2) = 1.0_dp
+            tt(4, 3) = 1.0_dp
+            zs = matmul(conjg(transpose(tt)), matmul(cmplx(sector%stiffness - &
+                        w**2*sector%mass, w*sector%damping, dp), tt))
+            allocate (fs(3, 1), ipiv(3))
+            fs(:, 1) = matmul(conjg(transpose(tt)), exp(cmplx(0.0_dp, 0.3_dp, dp))* &
+                              force_direction(sector, 1))
+            call zgesv(3, 1, zs, 3, ipiv, fs, 3, info)
+            xs = matmul(tt, fs(:, 1))
+            do s = 0, ns - 1
+                do j = 1, 4
+                    worst = max(worst, abs(fd(disk_dof(cyc, 4, j, s), 1) - xs(j)* &
+                                           exp(cmplx(0.0_dp, sector_phase(1, eo, ns, s), dp)))/ &
+                                maxval(abs(xs)))
+                end do
+            end do
+            deallocate (fd, ipiv, tt, fs)
+        end do
+        call check_error(t, error, "cyclic wave: assemble", .false.)
+        call check(t, worst < 1.0e-10_dp, "cyclic wave: the disk's response under EO = 0, 3, "// &
+                   "12, 17 = the sector's, each sector its phased copy", &
+                   "largest relative difference "//real_text(worst))
+    end subroutine test_forced_wave
+
+    !> A contact of the blade against the next sector's blade: on the disk, contact j of
+    !> sector s slips with v(blade_s) - v(blade_{s+1}), the last sector's against sector 0's;
+    !> its friction data copied.
+    subroutine test_disk_contacts(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector, disk
+        type(cyclic_t) :: cyc
+        type(error_type), allocatable :: error
+        logical :: ok
+        integer :: s, b0, b1
+        sector = lumped_sector()
+        sector%contact_dof = [2]
+        sector%contact_dof2 = [0]
+        sector%mu = [0.4_dp]
+        sector%normal_load = [2.0_dp]
+        cyc = lumped_cyclic(1)
+        cyc%next_dof = [2]
+        call assemble_disk(sector, cyc, disk, error)
+        call check_error(t, error, "cyclic contacts: assemble", .false.)
+        if (allocated(error)) return
+        call validate_model(disk, error)
+        call check_error(t, error, "cyclic contacts: the disk is a valid model", .false.)
+        ok = disk%ncontact() == ns .and. all(disk%mu == 0.4_dp) .and. &
+             all(disk%normal_load == 2.0_dp)
+        do s = 0, ns - 1
+            b0 = disk_dof(cyc, 4, 2, s)
+            b1 = disk_dof(cyc, 4, 2, s + 1)
+            ok = ok .and. disk%contact_direction(b0, s + 1) == 1.0_dp .and. &
+                 disk%contact_direction(b1, s + 1) == -1.0_dp .and. &
+                 count(disk%contact_direction(:, s + 1) /= 0.0_dp) == 2
+        end do
+        call check(t, ok, "cyclic contacts: blade s against blade s + 1, the last against "// &
+                   "the first")
+        call check(t, disk_dof(cyc, 4, 3, ns - 1) == disk_dof(cyc, 4, 1, 0) .and. &
+                   disk_dof(cyc, 4, 3, 0) == disk_dof(cyc, 4, 1, 1), &
+                   "cyclic contacts: the right boundary is the next sector's left")
+    end subroutine test_disk_contacts
+
+    !> The checks name the culprit.
+    subroutine test_checks(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector
+        type(cyclic_t) :: cyc
+        type(error_type), allocatable :: error
+        sector = lumped_sector()
+        cyc = lumped_cyclic(1)
+        cyc%sectors = 1
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: one sector", .true., ["cyc%sectors"])
+        cyc = lumped_cyclic(-2)
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: EO < 0", .true., ["cyc%engine_order"])
+        cyc = lumped_cyclic(1)
+        cyc%right = [3, 4]
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: unpaired", .true., ["pair one to one"])
+        cyc%left = [1, 1]
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: repeated", .true., ["cyc%left(2) = 1: repeated"])
+        cyc%left = [1, 3]
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: on both boundaries", .true., &
+                         ["also a left boundary DOF"])
+        cyc = lumped_cyclic(1)
+        cyc%right = [5]
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: out of range", .true., ["cyc%right(1) = 5"])
+        sector%contact_dof = [2]
+        sector%contact_dof2 = [0]
+        sector%mu = [0.4_dp]
+        sector%normal_load = [2.0_dp]
+        cyc = lumped_cyclic(1)
+        cyc%next_dof = [3]
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: next DOF on the right boundary", .true., &
+                         ["cyc%next_dof(1) = 3"])
+        cyc%next_dof = [2]
+        cyc%next_normal_dof = [2]
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic checks: a normal for a contact without one", .true., &
+                         ["cyc%next_normal_dof(1)"])
+    end subroutine test_checks
+end module test_cyclic

@@ -12,6 +12,10 @@ module test_cyclic
         assemble_disk, cyclic_frequencies, sector_phase
     use stickslip_lapack, only: dsygv, zgesv
     use testing, only: test_counter_t, check, check_error
+    use stickslip_case, only: case_t, read_case, write_case
+    use stickslip_solution, only: hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use fixtures, only: scratch, write_lines, project_path, enter_project_root
     implicit none
     private
     public :: run_cyclic_tests
@@ -22,12 +26,117 @@ contains
 
     subroutine run_cyclic_tests(t)
         type(test_counter_t), intent(inout) :: t
+        call enter_project_root()
         call test_nodal_diameter(t)
         call test_frequencies(t)
         call test_forced_wave(t)
         call test_disk_contacts(t)
         call test_checks(t)
+        call test_disk_wave(t)
+        call test_case_input(t)
     end subroutine run_cyclic_tests
+
+    !> examples/bladed_disk.nml (24 sectors, a shroud contact rubbing on the next blade, EO 3)
+    !> solved by the weighted residual on the assembled disk: the answer is a travelling
+    !> wave, every sector's harmonic h the first sector's times exp(-i h 2 pi 3 s / 24) (all
+    !> DOFs, all 15 harmonics, to 1e-8 of the largest amplitude); every contact slips alike.
+    subroutine test_disk_wave(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(hbm_solution_t) :: sol
+        type(error_type), allocatable :: error
+        complex(dp) :: x0, xs
+        real(dp) :: worst, scale
+        integer :: k, h, s, j
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        call check_error(t, error, "cyclic disk wave: read the example", .false.)
+        if (allocated(error)) return
+        call solve_periodic(c%model, c%hbm, sol, error)
+        call check_error(t, error, "cyclic disk wave: solve", .false.)
+        if (allocated(error)) return
+        call check(t, sol%converged .and. c%model%ndof == 72 .and. c%model%ncontact() == 24, &
+                   "cyclic disk wave: the 72-DOF disk with 24 contacts converged")
+        scale = maxval(abs(sol%xcoef))
+        worst = 0.0_dp
+        do k = 1, size(sol%harmonic) - 1
+            h = sol%harmonic(k)
+            if (h == 0 .or. sol%harmonic(k + 1) /= h) cycle
+            do j = 1, 4
+                x0 = cmplx(sol%xcoef(k, disk_dof(c%cyclic%cyc, 4, j, 0)), &
+                           -sol%xcoef(k + 1, disk_dof(c%cyclic%cyc, 4, j, 0)), dp)
+                do s = 1, ns - 1
+                    xs = cmplx(sol%xcoef(k, disk_dof(c%cyclic%cyc, 4, j, s)), &
+                               -sol%xcoef(k + 1, disk_dof(c%cyclic%cyc, 4, j, s)), dp)
+                    worst = max(worst, abs(xs - x0*exp(cmplx(0.0_dp, &
+                                                              sector_phase(h, 3, ns, s), dp))))
+                end do
+            end do
+        end do
+        call check(t, worst < 1.0e-8_dp*scale .and. &
+                   maxval(sol%stick_fraction) - minval(sol%stick_fraction) < 1.0e-9_dp, &
+                   "cyclic disk wave: every sector the phased copy of the first", &
+                   "largest difference "//real_text(worst/scale)//" of the largest amplitude")
+    end subroutine test_disk_wave
+
+    !> &cyclic in a case file: the model becomes the disk; its echo reads back to the same
+    !> disk; bad input names &cyclic and the variable.
+    subroutine test_case_input(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c, back
+        type(error_type), allocatable :: error
+        character(len=*), parameter :: path = scratch//"/cyclic_case.nml"
+        character(len=*), parameter :: echo = scratch//"/cyclic_echo.nml"
+        character(len=100), parameter :: head(4) = [character(len=100) :: &
+            "&system ndof = 4, mass = 0.25,0,0,0, 0,0.3,0,0, 0,0,0.25,0, 0,0,0,1.0,", &
+            "  stiffness = 20,0,0,-20, 0,3,0,-3, 0,0,20,-20, -20,-3,-20,48 /", &
+            "&forcing omega = 2.9, force_dof = 2, force_amplitude = 0.2 /", &
+            "&friction contact_dof = 2, mu = 0.3, normal_load = 0.5 /"]
+        character(len=120), parameter :: bad(7) = [character(len=120) :: &
+            "&cyclic engine_order = 3, left_dofs = 1, right_dofs = 3, model = 'disk' /", &
+            "&cyclic sectors = 24, engine_order = -1"// &
+            ", left_dofs = 1, right_dofs = 3, model = 'disk' /", &
+            "&cyclic sectors = 24, engine_order = 3"// &
+            ", left_dofs = 1, 4, right_dofs = 3, model = 'disk' /", &
+            "&cyclic sectors = 24, engine_order = 3"// &
+            ", left_dofs = 1, 1, right_dofs = 3, 2, model = 'disk' /", &
+            "&cyclic sectors = 1, engine_order = 3"// &
+            ", left_dofs = 1, right_dofs = 3, model = 'disk' /", &
+            "&cyclic sectors = 24, engine_order = 3"// &
+            ", left_dofs = 1, right_dofs = 3, next_dof = 3, model = 'disk' /", &
+            "&cyclic sectors = 24, engine_order = 3, left_dofs = 1, right_dofs = 3 /"]
+        character(len=*), parameter :: good = "&cyclic sectors = 24, engine_order = 3, "// &
+            "left_dofs = 1, right_dofs = 3, next_dof = 2, model = 'disk' /"
+        character(len=40), parameter :: named(7) = [character(len=40) :: &
+            "&cyclic sectors: missing", &
+            "&cyclic engine_order = -1", "&cyclic left_dofs, right_dofs", &
+            "&cyclic left_dofs(2) = 1: repeated", "&cyclic sectors = 1", &
+            "&cyclic next_dof(1) = 3", "&cyclic model = 'sector'"]
+        integer :: k, u
+        character(len=200) :: msg_buffer
+        msg_buffer = ''
+        call write_lines(path, [character(len=120) :: head, good, &
+                                "&output directory = '"//scratch//"/cyclic_case' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic case: read", .false.)
+        if (allocated(error)) return
+        open (newunit=u, file=echo, status='replace', action='write')
+        call write_case(u, c, k, msg_buffer)
+        close (u)
+        call read_case(echo, back, error)
+        call check_error(t, error, "cyclic case: the echo reads back", .false.)
+        if (allocated(error)) return
+        call check(t, back%model%ndof == 72 .and. c%model%ndof == 72 .and. &
+                   all(back%model%stiffness == c%model%stiffness) .and. &
+                   all(back%model%contact_direction == c%model%contact_direction) .and. &
+                   all(back%model%force_phase == c%model%force_phase), &
+                   "cyclic case: the disk from the echo = the disk")
+        do k = 1, size(bad)
+            call write_lines(path, [character(len=120) :: head, bad(k)])
+            call read_case(path, c, error)
+            call check_error(t, error, "cyclic case: "//trim(bad(k)), .true., &
+                             [named(k), "cyclic_case.nml                         "])
+        end do
+    end subroutine test_case_input
 
     !> The lumped sector: DOF 1 the left disk node, 2 the blade, 3 the right disk node, 4 the
     !> disk's middle node; the ring k_r / 2 from each boundary node to the middle, the blade

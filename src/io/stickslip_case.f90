@@ -33,6 +33,7 @@ module stickslip_case
     use stickslip_case_microslip, only: read_microslip_group
     use stickslip_iwan_element, only: iwan_element_t
     use stickslip_diagnostics, only: diagnostics_t, level_warning
+    use stickslip_case_cyclic, only: cyclic_case_t, read_cyclic_group
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t, read_modes_group, modes_run_options_t
     implicit none
@@ -45,9 +46,9 @@ module stickslip_case
     public :: selected_dofs, default_output_dofs
 
     !> The groups of a case file.
-    character(len=10), parameter :: known_groups(14) = [character(len=10) :: 'system', &
+    character(len=10), parameter :: known_groups(15) = [character(len=10) :: 'system', &
         'forcing', 'friction', 'microslip', 'hbm', 'output', 'run', 'euler', 'reference', &
-        'study', 'sweep', 'robustness', 'reduction', 'modes']
+        'study', 'sweep', 'robustness', 'reduction', 'modes', 'cyclic']
     !> Most doubles of the sampled results of one run (samples or steps per period times
     !> 2 ndof + 3 ncontact + 1): 2**27 doubles = 1 GiB.
     integer(int64), parameter :: max_sample_values = 2_int64**27
@@ -119,6 +120,9 @@ module stickslip_case
         !> &output length_unit, force_unit, time_unit, frequency_unit: the units the pictures
         !> name (labels only).
         type(plot_units_t) :: units
+        !> &cyclic: the model is a sector of a bladed disk (with model = 'disk', `model` is
+        !> the assembled disk and the sector is kept here).
+        type(cyclic_case_t) :: cyclic
     end type case_t
 
 contains
@@ -237,6 +241,15 @@ contains
             return
         end if
 
+        if (nml%find("cyclic") > 0 .and. sparse%read) then
+            call group_error(nml, error, "&cyclic: a sector from Matrix Market files is not "// &
+                             "supported in this version (its reduction must keep the cyclic "// &
+                             "boundary DOFs); give the sector's matrices inline in &system")
+            return
+        end if
+        ! a sector of a bladed disk: with &cyclic model = 'disk' the model becomes the disk
+        call read_cyclic_group(nml, case%model, case%cyclic, error)
+        if (allocated(error)) return
         if (.not. sparse%read) then
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &
                                    case%output_dofs_given, case%full_field, &
@@ -604,6 +617,18 @@ contains
         end if
     end function selected_dofs
 
+    !> The model a case file describes: the case's model, or with &cyclic model = 'disk' the
+    !> sector it was assembled from.
+    function echoed_model(case) result(m)
+        type(case_t), intent(in) :: case
+        type(model_t) :: m
+        if (case%cyclic%given .and. case%cyclic%model == 'disk') then
+            m = case%cyclic%sector
+        else
+            m = case%model
+        end if
+    end function echoed_model
+
     !> Write `case` as namelist text that read_case reads back (full precision), to `unit`.
     !> A model read from Matrix Market files is echoed as its file variables with ABSOLUTE
     !> paths (the echo is read from another folder: the output directory) and the Rayleigh
@@ -622,8 +647,11 @@ contains
         !> The iomsg of the first failed write.
         character(len=*), intent(inout) :: msg
         integer :: i
+        type(model_t) :: echo
         stat = 0
-        associate (m => case%model, o => case%hbm)
+        ! (a variable, not an associate-name on the function: gfortran 12 frees that twice)
+        echo = echoed_model(case)
+        associate (m => echo, o => case%hbm)
             call put(unit, "&system", stat, msg)
             if (case%reduction%report%method == 'craig-bampton') then
                 call put(unit, "  ndof = "//itoa(case%reduction%report%full_dof), stat, msg)
@@ -807,6 +835,21 @@ contains
                     call put(unit, "/", stat, msg)
                 end associate
             end if
+            if (case%cyclic%given) then
+                associate (c => case%cyclic%cyc)
+                    call put(unit, "&cyclic", stat, msg)
+                    call put(unit, "  sectors = "//itoa(c%sectors), stat, msg)
+                    call put(unit, "  engine_order = "//itoa(c%engine_order), stat, msg)
+                    call put(unit, "  left_dofs = "//ilist(c%left), stat, msg)
+                    call put(unit, "  right_dofs = "//ilist(c%right), stat, msg)
+                    if (allocated(c%next_dof)) call put(unit, "  next_dof = "// &
+                                                        ilist(c%next_dof), stat, msg)
+                    if (allocated(c%next_normal_dof)) call put(unit, "  next_normal_dof = "// &
+                                                               ilist(c%next_normal_dof), stat, msg)
+                    call put(unit, "  model = '"//trim(case%cyclic%model)//"'", stat, msg)
+                    call put(unit, "/", stat, msg)
+                end associate
+            end if
             if (case%has_sweep .and. case%method == 'sweep') then
                 associate (w => case%sweep)
                     call put(unit, "&sweep", stat, msg)
@@ -869,7 +912,7 @@ contains
             real(dp), allocatable :: kt(:), chi(:), beta(:), ks(:), fs(:)
             logical :: explicit
             integer :: jj
-            associate (m => case%model)
+            associate (m => echo)
                 if (.not. allocated(m%laws)) return
                 allocate (contact(0), sliders(0), kt(0), chi(0), beta(0), ks(0), fs(0))
                 explicit = .false.

@@ -22,6 +22,7 @@ module stickslip_summary
     use stickslip_checks, only: hbm_checks_t
     use stickslip_robustness, only: robustness_row_t
     use stickslip_files, only: open_temporary, close_and_rename
+    use stickslip_cyclic, only: nodal_diameter, cyclic_frequencies
     implicit none
     private
     public :: write_summary, write_euler_summary, write_reference_summary
@@ -708,6 +709,7 @@ contains
                 end associate
             end do
         end if
+        if (case%cyclic%given) call put_cyclic_keys(u, case, stat, msg)
 
     contains
 
@@ -722,6 +724,39 @@ contains
             end do
         end subroutine add_absent
     end subroutine begin_summary
+
+    !> The keys of a bladed disk (&cyclic): cyclic_model ('disk'), sectors, engine_order,
+    !> disk_dof, and for the forced harmonics h the nodal diameter (cyclic_nodal_diameters)
+    !> and the sector's linear frequencies in that diameter, contacts carrying nothing
+    !> (cyclic_frequencies_nd<k> [rad/s]).
+    subroutine put_cyclic_keys(u, case, stat, msg)
+        integer, intent(in) :: u
+        type(case_t), intent(in) :: case
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        integer, allocatable :: nds(:)
+        real(dp), allocatable :: w(:)
+        type(error_type), allocatable :: e
+        integer :: k, nd
+        associate (c => case%cyclic%cyc, sector => case%cyclic%sector)
+            call put(u, "  cyclic_model = '"//trim(case%cyclic%model)//"'", stat, msg)
+            call put(u, "  sectors = "//itoa(c%sectors), stat, msg)
+            call put(u, "  engine_order = "//itoa(c%engine_order), stat, msg)
+            call put(u, "  disk_dof = "//itoa(case%model%ndof), stat, msg)
+            allocate (nds(0))
+            do k = 1, sector%nforce()
+                nd = nodal_diameter(sector%force_harmonic(k), c%engine_order, c%sectors)
+                if (.not. any(nds == nd)) nds = [nds, nd]
+            end do
+            if (size(nds) == 0) return
+            call put(u, "  cyclic_nodal_diameters = "//ilist(nds), stat, msg)
+            do k = 1, size(nds)
+                call cyclic_frequencies(sector, c, nds(k), w, e)
+                if (allocated(e)) cycle
+                call put(u, "  cyclic_frequencies_nd"//itoa(nds(k))//" = "//rlist(w), stat, msg)
+            end do
+        end associate
+    end subroutine put_cyclic_keys
 
     !> The reduction keys of &summary (only when the model was reduced): reduction_method,
     !> reduced_dof, full_dof, reduction_modes, reduction_load_vectors (static load-correction

@@ -15,6 +15,8 @@ module test_cyclic
     use stickslip_case, only: case_t, read_case, write_case
     use stickslip_solution, only: hbm_solution_t
     use stickslip_hbm, only: solve_periodic
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
+    use stickslip_solution, only: hbm_options_t
     use fixtures, only: scratch, write_lines, project_path, enter_project_root
     implicit none
     private
@@ -34,7 +36,79 @@ contains
         call test_checks(t)
         call test_disk_wave(t)
         call test_case_input(t)
+        call test_sector_solve(t)
     end subroutine run_cyclic_tests
+
+    !> The weighted residual on one sector (the travelling wave, contacts rubbing on the next
+    !> blade) against the same solve on the assembled disk, for EO = 0, 1, 7 and 12 = N/2,
+    !> the shrouds slipping: sector 0's coefficients of every DOF and harmonic agree to
+    !> 1e-10 of the in-phase response (EO = 0), the friction and viscous dissipation per
+    !> period is the disk's divided by N, and the sector's energy balance holds (1e-10 of
+    !> the in-phase response's forcing work).
+    subroutine test_sector_solve(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(model_t) :: disk, sector
+        type(cyclic_t) :: cyc
+        type(hbm_solution_t) :: sec, full
+        type(hbm_options_t) :: ho
+        type(error_type), allocatable :: error
+        integer, parameter :: orders(4) = [0, 1, 7, 12]
+        integer :: e, j
+        real(dp) :: worst, worst_energy, scale, work0
+        logical :: converged
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        call check_error(t, error, "cyclic sector solve: read the example", .false.)
+        if (allocated(error)) return
+        ! a drive five times the example's: the shrouds slip in every wave (with 0.2 N the
+        ! waves of EO = 7 and 12 stick them, which holds every blade still)
+        sector = c%cyclic%sector
+        sector%force_amplitude = [1.0_dp]
+        ho = c%hbm
+        ho%rho = 0.5_dp
+        ! samples a multiple of N: the disk's contacts are sampled at the same instants of
+        ! their own cycles (a delay EO T / N is a whole number of samples), so that the
+        ! disk's discrete equations are the sector's exactly
+        ho%samples = 48*ns
+        ho%tol = 1.0e-12_dp
+        worst = 0.0_dp
+        worst_energy = 0.0_dp
+        converged = .true.
+        do e = 1, size(orders)
+            cyc = c%cyclic%cyc
+            cyc%engine_order = orders(e)
+            call solve_periodic_cyclic(sector, cyc, ho, sec, error)
+            if (allocated(error)) exit
+            call assemble_disk(sector, cyc, disk, error)
+            if (allocated(error)) exit
+            call solve_periodic(disk, ho, full, error)
+            if (allocated(error)) exit
+            converged = converged .and. sec%converged .and. full%converged
+            ! the scales: the response without shroud slip (EO = 0, the shrouds in phase,
+            ! first) and its forcing work
+            if (e == 1) then
+                scale = maxval(abs(full%xcoef))
+                work0 = full%work_forcing/ns
+            end if
+            do j = 1, 4
+                worst = max(worst, maxval(abs(sec%xcoef(:, j) - &
+                                              full%xcoef(:, disk_dof(cyc, 4, j, 0))))/scale)
+            end do
+            worst_energy = max(worst_energy, &
+                               abs(sec%diss_friction - full%diss_friction/ns)/work0, &
+                               abs(sec%diss_damping - full%diss_damping/ns)/work0, &
+                               abs(sec%work_forcing - sec%diss_friction - sec%diss_damping)/ &
+                               work0)
+        end do
+        call check_error(t, error, "cyclic sector solve: EO = 0, 1, 7, 12", .false.)
+        if (allocated(error)) return
+        call check(t, converged .and. worst < 1.0e-10_dp, &
+                   "cyclic sector solve: the sector's answer = the disk's sector 0", &
+                   "largest difference "//real_text(worst)//" of the largest amplitude")
+        call check(t, worst_energy < 1.0e-10_dp, &
+                   "cyclic sector solve: energies per sector = the disk's / N, balanced", &
+                   real_text(worst_energy))
+    end subroutine test_sector_solve
 
     !> examples/bladed_disk.nml (24 sectors, a shroud contact rubbing on the next blade, EO 3)
     !> solved by the weighted residual on the assembled disk: the answer is a travelling

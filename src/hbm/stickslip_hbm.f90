@@ -31,7 +31,7 @@ module stickslip_hbm
     implicit none
     private
     public :: solve_periodic, validate_options, convergence_scale, solution_from_forces
-    public :: condensed_structure_t, solve_condensed
+    public :: condensed_structure_t, solve_condensed, dense_structure
     public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns, newton_min_unknowns
     public :: energy_warning, energy_untrusted, dissipation_warning, dissipation_untrusted
     public :: force_excess_warning, force_excess_untrusted, rho_ratio_min, rho_ratio_max

@@ -123,6 +123,10 @@ contains
                     write (buf, '(a,i0,a,i0,a)') "cyc%"//name//"(", j, ") = ", next(j), &
                         ": a right boundary DOF (it belongs to the sector after the next: "// &
                         "name that sector's left DOF instead)"
+                else if (.not. normal .and. is_planar(model, j)) then
+                    write (buf, '(a,i0,a)') "cyc%"//name//"(", j, &
+                        "): 2D friction against the next sector is not supported (its "// &
+                        "second tangent would act against the ground)"
                 else if (normal .and. .not. is_unilateral(model, j)) then
                     write (buf, '(a,i0,a)') "cyc%"//name//"(", j, &
                         "): the contact has no normal direction (normal_dof)"

@@ -1,0 +1,72 @@
+!> The weighted residual on one sector of a tuned bladed disk in its travelling wave
+!> (stickslip_cyclic, stickslip_cyclic_dynamics): the friction equations of the sector's
+!> contacts (those against the next sector included) on the sector's cyclic condensation,
+!> solved by the same stages, fallbacks and checks as solve_periodic. The answer is sector
+!> 0's; sector s is its copy delayed by EO s / N of the period.
+module stickslip_hbm_cyclic
+    use, intrinsic :: iso_fortran_env, only: int64
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type
+    use stickslip_model, only: model_t, validate_model
+    use stickslip_basis, only: basis_t, new_basis
+    use stickslip_dynamics, only: dynamics_t
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic
+    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
+    use stickslip_hbm, only: validate_options, condensed_structure_t, solve_condensed, &
+        dense_structure
+    implicit none
+    private
+    public :: solve_periodic_cyclic
+
+contains
+
+    !> The periodic solution of the sector `model` of the disk `cyc` under its engine-order
+    !> forcing, with the options `opts` (rho = 0: the automatic weight of the sector's
+    !> contacts). sol holds sector 0: its coefficients, samples, contact forces and the
+    !> energies per period of one sector. Errors: as solve_periodic, and those of
+    !> validate_cyclic and new_cyclic_dynamics.
+    subroutine solve_periodic_cyclic(model, cyc, opts, sol, error, r_start)
+        !> The sector.
+        type(model_t), intent(in) :: model
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> Solver options.
+        type(hbm_options_t), intent(in) :: opts
+        !> The solution of sector 0.
+        type(hbm_solution_t), intent(out) :: sol
+        !> Set on invalid input or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        !> Optional start for the friction-force coefficients [N].
+        real(dp), intent(in), optional :: r_start(:, :)
+        type(condensed_structure_t) :: s
+        type(hbm_options_t) :: o
+        type(basis_t) :: basis
+        type(dynamics_t) :: dyn
+        type(hb_problem_t) :: prob
+        integer(int64) :: c0, c1, rate
+        call system_clock(c0, rate)
+        call validate_model(model, error)
+        if (allocated(error)) return
+        call validate_options(opts, error)
+        if (allocated(error)) return
+        call validate_cyclic(model, cyc, error)
+        if (allocated(error)) return
+        s = dense_structure(model)
+        o = opts
+        if (o%rho == 0.0_dp) o%rho = s%rho_auto
+        call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
+        if (allocated(error)) return
+        call new_cyclic_dynamics(dyn, model, cyc, basis, error)
+        call basis%destroy()
+        if (allocated(error)) return
+        call new_condensed_problem(prob, dyn, s%contacts, o%harmonics, o%odd_only, o%samples, &
+                                   o%rho, error, s%force_harmonic)
+        if (allocated(error)) return
+        call solve_condensed(s, prob, opts, o, sol, error, r_start)
+        if (allocated(error)) return
+        call system_clock(c1)
+        sol%seconds = real(c1 - c0, dp)/real(rate, dp)
+    end subroutine solve_periodic_cyclic
+end module stickslip_hbm_cyclic

@@ -1,0 +1,227 @@
+!> The condensation of one sector of a tuned bladed disk in its travelling wave
+!> (stickslip_cyclic): the same dynamics_t as new_dynamics gives a whole structure, so that
+!> the weighted residual solves the disk on one sector.
+!>
+!> At harmonic h the sector's motions are X = T_h q: its DOFs off the right boundary free,
+!> the right boundary the left one times e_h = exp(-i h 2 pi EO / N) (the next sector is
+!> this one delayed by EO / N of the period). The boundary forces of the neighbours drop out
+!> of the projection T_h^H Z_h T_h (they are equal and opposite with that phase). A channel
+!> against the next sector measures U = D^T X with D = d - e_h d_next (d on the sector, d_next
+!> the unit vector of the next sector's DOF) and is pushed by conj(D) R: +d R on this
+!> sector, and -d_next R from the previous sector's contact, which is this one's advanced by
+!> EO / N (exp(+i h 2 pi EO / N) R). So X0_h = T (T^H Z T)^-1 T^H F_h, Y_h = T (T^H Z T)^-1
+!> T^H conj(D), V0_h = i h omega D^T X0_h, G_h = i h omega D^T Y_h; the static term (h = 0)
+!> with e = 1. The Gram matrices of the sector's damping and forcing over its DOFs are set
+!> (damping_gram, forcing_gram): the energies per period are the sector's share of the
+!> disk's. Dense, LAPACK's zgesv on the projected pencil.
+module stickslip_cyclic_dynamics
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat
+    use stickslip_model, only: model_t, force_direction, preload_force
+    use stickslip_basis, only: basis_t
+    use stickslip_dynamics, only: dynamics_t, check_harmonics_in_basis, singular_threshold, &
+        static_singular_threshold
+    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
+    use stickslip_contact_element, only: along_tangent, along_normal
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase
+    use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
+    implicit none
+    private
+    public :: new_cyclic_dynamics
+
+contains
+
+    !> The condensed dynamics of the sector `model` of the disk `cyc` on `basis` (see the
+    !> module). With `with_omega_derivative`, dv0 and dg too (continuation in omega).
+    !> Errors: those of validate_cyclic and check_harmonics_in_basis (stat input); stat
+    !> numerical when the projected dynamic stiffness is singular (an undamped cyclic mode at
+    !> h omega) or K on the cyclic motions is (h = 0).
+    subroutine new_cyclic_dynamics(self, model, cyc, basis, error, with_omega_derivative)
+        !> The condensed dynamics (rows: the sector's DOFs).
+        type(dynamics_t), intent(out) :: self
+        !> The sector (a validated model).
+        type(model_t), intent(in) :: model
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> The harmonic basis.
+        type(basis_t), intent(in) :: basis
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Also dv0 and dg (default .false.).
+        logical, intent(in), optional :: with_omega_derivative
+        type(contact_set_t) :: cs
+        real(dp), allocatable :: d(:, :), rwork(:)
+        complex(dp), allocatable :: t(:, :), z(:, :), zc(:, :), rhs(:, :), x(:, :), &
+                                   dm(:, :), f(:), work(:), dx(:, :)
+        integer, allocatable :: ipiv(:), next(:)
+        integer :: n, m, nc, ih, h, j, c, k, col, info
+        real(dp) :: anorm, rcond, zscale, rel, smin_k, smin_m
+        complex(dp) :: e, ihw
+        logical :: deriv
+        character(len=300) :: buf
+
+        call validate_cyclic(model, cyc, error)
+        if (allocated(error)) return
+        call check_harmonics_in_basis(model%force_harmonic, basis, error)
+        if (allocated(error)) return
+        deriv = .false.
+        if (present(with_omega_derivative)) deriv = with_omega_derivative
+        n = model%ndof
+        m = n - size(cyc%right)
+        call new_contact_set(cs, model)
+        nc = cs%nchannel
+        d = channel_directions(model, cs)
+        ! each channel's DOF on the next sector (0: none)
+        allocate (next(nc))
+        next = 0
+        do c = 1, nc
+            j = cs%contact_of(c)
+            if (cs%along(c) == along_tangent) next(c) = next_of(cyc%next_dof, j)
+            if (cs%along(c) == along_normal) next(c) = next_of(cyc%next_normal_dof, j)
+        end do
+        self%ndof = n
+        self%ncontact = nc
+        self%omega = model%omega
+        self%harm = basis%harm(1:basis%nharm)
+        allocate (self%rel(basis%nharm), self%x0(n, basis%nharm), self%y(n, nc, basis%nharm), &
+                  self%v0(nc, basis%nharm), self%g(nc, nc, basis%nharm), &
+                  self%damping_gram(nc + 1, nc + 1, basis%nharm), &
+                  self%forcing_gram(nc + 1, basis%nharm))
+        if (deriv) allocate (self%dv0(nc, basis%nharm), self%dg(nc, nc, basis%nharm))
+        allocate (t(n, m), ipiv(m), work(2*m), rwork(2*m), dm(n, nc), f(n), rhs(m, nc + 1))
+        ! the smallest singular values of K and M of the sector (the scale of the distance
+        ! to a resonance, as new_dynamics)
+        smin_k = smallest(cmplx(model%stiffness, 0.0_dp, dp))
+        smin_m = smallest(cmplx(model%mass, 0.0_dp, dp))
+        self%smin_k = smin_k
+        self%smin_m = smin_m
+        self%relative_conditioning = 1.0_dp
+        do ih = 0, basis%nharm
+            if (ih == 0) then
+                if (.not. basis%has_zero) cycle
+                h = 0
+            else
+                h = basis%harm(ih)
+            end if
+            e = exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, 1), dp))
+            ! the cyclic motions: the right boundary is the left one times e
+            t = (0.0_dp, 0.0_dp)
+            col = 0
+            do j = 1, n
+                if (any(cyc%right == j)) cycle
+                col = col + 1
+                t(j, col) = (1.0_dp, 0.0_dp)
+                do k = 1, size(cyc%left)
+                    if (cyc%left(k) == j) t(cyc%right(k), col) = e
+                end do
+            end do
+            ! the measuring directions D = d - e d_next
+            dm = cmplx(d, 0.0_dp, dp)
+            do c = 1, nc
+                if (next(c) > 0) dm(next(c), c) = dm(next(c), c) - e
+            end do
+            z = cmplx(model%stiffness - (h*model%omega)**2*model%mass, &
+                      h*model%omega*model%damping, dp)
+            zc = matmul(conjg(transpose(t)), matmul(z, t))
+            anorm = zlange('1', m, m, zc, m, rwork)
+            call zgetrf(m, m, zc, m, ipiv, info)
+            rcond = 0.0_dp
+            if (info == 0) call zgecon('1', m, zc, m, anorm, rcond, work, rwork, info)
+            rel = rcond
+            if (h > 0) then
+                zscale = smin_k + (h*model%omega)**2*smin_m
+                rel = 0.0_dp
+                if (zscale > 0.0_dp) rel = rcond*anorm/zscale
+                self%rel(ih) = rel
+                if (rel < self%relative_conditioning) then
+                    self%relative_conditioning = rel
+                    self%worst_harmonic = h
+                end if
+            end if
+            if ((h == 0 .and. .not. (rcond >= static_singular_threshold)) .or. &
+                (h > 0 .and. .not. (rel >= singular_threshold))) then
+                if (h == 0) then
+                    buf = "the sector's stiffness on its cyclic motions is singular (a free "// &
+                          "disk): the static response is undetermined; restrain it or set "// &
+                          "&hbm odd_only = .true."
+                else
+                    write (buf, '(a,i0,a,g0.6,a)') "undamped cyclic resonance at harmonic h = ", &
+                        h, " (h omega = ", h*model%omega, " rad/s): the sector's dynamic "// &
+                        "stiffness on its travelling-wave motions is singular. Add damping "// &
+                        "or move omega"
+                end if
+                call fatal_error(error, trim(buf), stickslip_stat%numerical)
+                return
+            end if
+            ! the forcing of harmonic h on the sector
+            f = (0.0_dp, 0.0_dp)
+            do k = 1, model%nforce()
+                if (model%force_harmonic(k) == h) f = f + model%force_amplitude(k)* &
+                    exp(cmplx(0.0_dp, model%force_phase(k), dp))*force_direction(model, k)
+            end do
+            if (h == 0) f = f + preload_force(model)
+            rhs(:, 1) = matmul(conjg(transpose(t)), f)
+            rhs(:, 2:) = matmul(conjg(transpose(t)), conjg(dm))
+            call zgetrs('N', m, nc + 1, zc, m, ipiv, rhs, m, info)
+            x = matmul(t, rhs)
+            if (h == 0) then
+                self%x0_static = real(x(:, 1), dp)
+                self%y_static = real(x(:, 2:), dp)
+                self%g_static = matmul(transpose(real(dm, dp)), self%y_static)
+                self%u_static = matmul(self%x0_static, real(dm, dp))
+                cycle
+            end if
+            self%x0(:, ih) = x(:, 1)
+            self%y(:, :, ih) = x(:, 2:)
+            ihw = cmplx(0.0_dp, h*model%omega, dp)
+            self%v0(:, ih) = ihw*matmul(transpose(dm), x(:, 1))
+            self%g(:, :, ih) = ihw*matmul(transpose(dm), x(:, 2:))
+            self%damping_gram(:, :, ih) = matmul(conjg(transpose(x)), &
+                                                 matmul(cmplx(model%damping, 0.0_dp, dp), x))
+            self%forcing_gram(:, ih) = matmul(conjg(f), x)
+            if (deriv) then
+                ! d X / d omega = -T Zc^-1 T^H (dZ/domega) X
+                dx = matmul(conjg(transpose(t)), matmul(cmplx(-2.0_dp*h*h*model%omega* &
+                                                              model%mass, h*model%damping, &
+                                                              dp), x))
+                call zgetrs('N', m, nc + 1, zc, m, ipiv, dx, m, info)
+                dx = matmul(t, dx)
+                self%dv0(:, ih) = cmplx(0.0_dp, real(h, dp), dp)* &
+                                  matmul(transpose(dm), x(:, 1)) - &
+                                  ihw*matmul(transpose(dm), dx(:, 1))
+                self%dg(:, :, ih) = cmplx(0.0_dp, real(h, dp), dp)* &
+                                    matmul(transpose(dm), x(:, 2:)) - &
+                                    ihw*matmul(transpose(dm), dx(:, 2:))
+            end if
+        end do
+
+    contains
+
+        pure integer function next_of(list, jj)
+            integer, allocatable, intent(in) :: list(:)
+            integer, intent(in) :: jj
+            next_of = 0
+            if (.not. allocated(list)) return
+            if (jj <= size(list)) next_of = list(jj)
+        end function next_of
+
+        !> The smallest singular value of a square matrix, 1-norm estimate (0: singular).
+        real(dp) function smallest(a)
+            complex(dp), intent(in) :: a(:, :)
+            complex(dp), allocatable :: lu(:, :), w2(:)
+            real(dp), allocatable :: r2(:)
+            integer, allocatable :: p(:)
+            real(dp) :: an, rc
+            integer :: nn, inf
+            nn = size(a, 1)
+            smallest = 0.0_dp
+            allocate (lu(nn, nn), w2(2*nn), r2(2*nn), p(nn))
+            lu = a
+            an = zlange('1', nn, nn, lu, nn, r2)
+            call zgetrf(nn, nn, lu, nn, p, inf)
+            if (inf /= 0) return
+            call zgecon('1', nn, lu, nn, an, rc, w2, r2, inf)
+            if (inf == 0) smallest = rc*an
+        end function smallest
+    end subroutine new_cyclic_dynamics
+end module stickslip_cyclic_dynamics

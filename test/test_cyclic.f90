@@ -111,9 +111,10 @@ contains
     end subroutine test_sector_solve
 
     !> examples/bladed_disk.nml (24 sectors, a shroud contact rubbing on the next blade, EO 3)
-    !> solved by the weighted residual on the assembled disk: the answer is a travelling
-    !> wave, every sector's harmonic h the first sector's times exp(-i h 2 pi 3 s / 24) (all
-    !> DOFs, all 15 harmonics, to 1e-8 of the largest amplitude); every contact slips alike.
+    !> with &cyclic model = 'disk', solved by the weighted residual on the assembled disk:
+    !> the answer is a travelling wave, every sector's harmonic h the first sector's times
+    !> exp(-i h 2 pi 3 s / 24) (all DOFs, all 15 harmonics, to 1e-8 of the largest
+    !> amplitude); every contact slips alike.
     subroutine test_disk_wave(t)
         type(test_counter_t), intent(inout) :: t
         type(case_t) :: c
@@ -122,7 +123,22 @@ contains
         complex(dp) :: x0, xs
         real(dp) :: worst, scale
         integer :: k, h, s, j
-        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        character(len=300) :: lines(30)
+        integer :: u, nl, stat
+        ! the example with model = 'disk'
+        open (newunit=u, file=project_path("examples/bladed_disk.nml"), status='old', &
+              action='read')
+        nl = 0
+        do
+            read (u, '(a)', iostat=stat) lines(nl + 1)
+            if (stat /= 0) exit
+            nl = nl + 1
+            if (index(lines(nl), "&cyclic") == 1) lines(nl) = trim(lines(nl)(1:index( &
+                lines(nl), "/", back=.true.) - 1))//", model = 'disk' /"
+        end do
+        close (u)
+        call write_lines(scratch//"/cyclic_disk.nml", lines(1:nl))
+        call read_case(scratch//"/cyclic_disk.nml", c, error)
         call check_error(t, error, "cyclic disk wave: read the example", .false.)
         if (allocated(error)) return
         call solve_periodic(c%model, c%hbm, sol, error)
@@ -177,14 +193,15 @@ contains
             ", left_dofs = 1, right_dofs = 3, model = 'disk' /", &
             "&cyclic sectors = 24, engine_order = 3"// &
             ", left_dofs = 1, right_dofs = 3, next_dof = 3, model = 'disk' /", &
-            "&cyclic sectors = 24, engine_order = 3, left_dofs = 1, right_dofs = 3 /"]
+            "&cyclic sectors = 24, engine_order = 3"// &
+            ", left_dofs = 1, right_dofs = 3, model = 'ring' /"]
         character(len=*), parameter :: good = "&cyclic sectors = 24, engine_order = 3, "// &
             "left_dofs = 1, right_dofs = 3, next_dof = 2, model = 'disk' /"
         character(len=40), parameter :: named(7) = [character(len=40) :: &
             "&cyclic sectors: missing", &
             "&cyclic engine_order = -1", "&cyclic left_dofs, right_dofs", &
             "&cyclic left_dofs(2) = 1: repeated", "&cyclic sectors = 1", &
-            "&cyclic next_dof(1) = 3", "&cyclic model = 'sector'"]
+            "&cyclic next_dof(1) = 3", "&cyclic model = 'ring'"]
         integer :: k, u
         character(len=200) :: msg_buffer
         msg_buffer = ''
@@ -210,6 +227,13 @@ contains
             call check_error(t, error, "cyclic case: "//trim(bad(k)), .true., &
                              [named(k), "cyclic_case.nml                         "])
         end do
+        ! one sector runs the weighted residual alone
+        call write_lines(path, [character(len=120) :: head, &
+            "&cyclic sectors = 24, engine_order = 3, left_dofs = 1, right_dofs = 3 /", &
+            "&run method = 'euler' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic case: euler on one sector", .true., &
+                         [character(len=40) :: "&run method = 'euler'", "model = 'disk'"])
     end subroutine test_case_input
 
     !> The lumped sector: DOF 1 the left disk node, 2 the blade, 3 the right disk node, 4 the

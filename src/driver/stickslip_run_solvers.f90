@@ -12,6 +12,7 @@ module stickslip_run_solvers
     use stickslip_case_reduction, only: recover_full_field
     use stickslip_full_field, only: write_full_field
     use stickslip_solution, only: hbm_solution_t
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     use stickslip_checks, only: hbm_checks_t, solve_and_check, sampling_notes, &
         sampling_diagnostics
     use stickslip_hbm_sparse, only: solve_periodic_sparse
@@ -92,6 +93,14 @@ contains
             call sampling_diagnostics(case%hbm%samples, ch%diagnostics)
             ch%truncation%note = "not estimated for &reduction method = 'none' on a sparse "// &
                                  "model"
+        else if (case%cyclic%given .and. case%cyclic%model == 'sector') then
+            ! one sector of a tuned disk: its travelling wave
+            call solve_periodic_cyclic(case%model, case%cyclic%cyc, case%hbm, sol, error)
+            ch%notes = sampling_notes(case%hbm%samples, case%hbm%harmonics)
+            call sampling_diagnostics(case%hbm%samples, ch%diagnostics)
+            ch%truncation%note = "not estimated on a sector of a disk (&cyclic model = "// &
+                                 "'sector') in this version: compare another harmonics, or "// &
+                                 "model = 'disk'"
         else
             call solve_and_check(case%model, case%hbm, case%checks, &
                                  case%reference%reference_options_t, sol, ch, error)

@@ -295,6 +295,10 @@ contains
         end if
         call check_sizes(nml, case, error)
         if (allocated(error)) return
+        if (case%cyclic%given .and. case%cyclic%model == 'sector') then
+            call check_sector_methods(nml, case, error)
+            if (allocated(error)) return
+        end if
         if (case%full_field .and. method /= 'hbm') then
             call group_error(nml, error, "&output full_field = T: only method = 'hbm' "// &
                              "writes full_field.mtx (this case runs method = '"//method//"')")
@@ -369,6 +373,32 @@ contains
                          "verify_periods, harmonics_tol; 'sweep' with &sweep stability = "// &
                          ".false.); use &reduction method = 'craig-bampton' (or 'auto')")
     end subroutine check_sparse_methods
+
+    !> What runs on one sector of a disk (&cyclic model = 'sector'): the weighted residual
+    !> alone (method 'hbm' without stability, verify_periods, harmonics_tol); anything else is
+    !> an input error naming what asked for it and the remedy, model = 'disk'.
+    subroutine check_sector_methods(nml, case, error)
+        type(nml_file_t), intent(in) :: nml
+        type(case_t), intent(in) :: case
+        type(error_type), allocatable, intent(out) :: error
+        character(len=:), allocatable :: what
+        what = ""
+        if (case%method /= 'hbm') then
+            what = "&run method = '"//trim(case%method)//"'"
+        else if (case%checks%stability) then
+            what = "&hbm stability = .true."
+        else if (case%checks%verify_periods > 0) then
+            what = "&hbm verify_periods = "//itoa(case%checks%verify_periods)
+        else if (case%checks%harmonics_tol > 0.0_dp) then
+            what = "&hbm harmonics_tol = "//rtoa(case%checks%harmonics_tol)
+        end if
+        if (len(what) == 0) return
+        call group_error(nml, error, what//": on one sector of a disk (&cyclic model = "// &
+                         "'sector') only the weighted residual runs in this version "// &
+                         "(&run method = 'hbm' without stability, verify_periods, "// &
+                         "harmonics_tol); set &cyclic model = 'disk' to run it on the "// &
+                         "assembled full disk")
+    end subroutine check_sector_methods
 
     !> `text` with its first `old` replaced by `new`.
     pure function replace_prefix(text, old, new) result(out)
@@ -622,7 +652,7 @@ contains
     function echoed_model(case) result(m)
         type(case_t), intent(in) :: case
         type(model_t) :: m
-        if (case%cyclic%given .and. case%cyclic%model == 'disk') then
+        if (case%cyclic%given) then
             m = case%cyclic%sector
         else
             m = case%model

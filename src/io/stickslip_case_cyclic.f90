@@ -11,10 +11,12 @@
 !>                      contact slips against (v(contact_dof) - v_next(next_dof))
 !>     next_normal_dof  per contact (0: none): the DOF of the next sector its normal
 !>                      (normal_dof) acts against
-!>     model            'disk': every method runs on the full disk assembled from the sector
-!>                      (N copies, the boundaries merged, the forcing phased, the contacts
-!>                      copied); 'sector' (the default): the travelling wave on one sector,
-!>                      not available in this version (an error saying so)
+!>     model            'sector' (the default): the weighted residual on one sector, the tuned
+!>                      disk's travelling wave (method 'hbm' only, without the truncation
+!>                      estimate, stability or periodicity checks in this version); 'disk':
+!>                      every method runs on the full disk assembled from the sector (N
+!>                      copies, the boundaries merged, the forcing phased, the contacts
+!>                      copied)
 !> Every message names the case file, &cyclic and the variable.
 module stickslip_case_cyclic
     use stickslip_error, only: error_type
@@ -27,7 +29,8 @@ module stickslip_case_cyclic
     private
     public :: cyclic_case_t, read_cyclic_group
 
-    !> &cyclic as read, and the sector when the case's model is the assembled disk.
+    !> &cyclic as read, and the sector (with model = 'disk' the case's model is the assembled
+    !> disk; with 'sector' it is the sector itself).
     type :: cyclic_case_t
         !> The group was given.
         logical :: given = .false.
@@ -44,12 +47,12 @@ module stickslip_case_cyclic
 
 contains
 
-    !> Read &cyclic (optional). With model = 'disk', `model` (the sector, validated) is
-    !> replaced by the full disk and kept in cc%sector. Errors (stat input) name the file,
+    !> Read &cyclic (optional). The sector (`model`, validated) is kept in cc%sector; with
+    !> model = 'disk' `model` is replaced by the full disk. Errors (stat input) name the file,
     !> &cyclic and the variable: unknown variables, sectors or engine_order missing or out of
     !> range, the boundaries missing, of other sizes, with a DOF out of range, repeated or on
     !> both sides, a next DOF out of range, on the right boundary or for a contact without
-    !> that direction, model other than 'disk' or 'sector' (or 'sector', not available).
+    !> that direction, model other than 'disk' or 'sector'.
     subroutine read_cyclic_group(nml, model, cc, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
@@ -114,13 +117,7 @@ contains
             return
         end if
         select case (kind)
-        case ('disk')
-        case ('sector')
-            call group_error(nml, error, "&cyclic model = 'sector': the travelling-wave "// &
-                             "solve on one sector is not available in this version; model = "// &
-                             "'disk' runs every method on the full disk assembled from the "// &
-                             "sector")
-            return
+        case ('disk', 'sector')
         case default
             call group_error(nml, error, "&cyclic model = '"//kind//"': must be 'disk' or "// &
                              "'sector'")
@@ -128,6 +125,7 @@ contains
         end select
         cc%model = kind
         cc%sector = model
+        if (kind == 'sector') return
         call assemble_disk(cc%sector, cc%cyc, model, error)
         if (allocated(error)) then
             error%message = nml%path//": &cyclic: "//error%message

@@ -742,7 +742,8 @@ contains
             call put(u, "  cyclic_model = '"//trim(case%cyclic%model)//"'", stat, msg)
             call put(u, "  sectors = "//itoa(c%sectors), stat, msg)
             call put(u, "  engine_order = "//itoa(c%engine_order), stat, msg)
-            call put(u, "  disk_dof = "//itoa(case%model%ndof), stat, msg)
+            call put(u, "  disk_dof = "//itoa(c%sectors*(sector%ndof - size(c%right))), &
+                     stat, msg)
             allocate (nds(0))
             do k = 1, sector%nforce()
                 nd = nodal_diameter(sector%force_harmonic(k), c%engine_order, c%sectors)

@@ -46,6 +46,9 @@ module stickslip
     use stickslip_sweep_family, only: family_options_t, family_peak_t, family_result_t, &
         observer_slot_t, run_family, curve_peaks
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, &
+        assemble_disk, cyclic_frequencies, sector_phase
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     ! nonlinear modes
     use stickslip_modes, only: modes_options_t, mode_point_t, modes_result_t, run_modes
     use stickslip_linear_modes, only: linear_modes
@@ -79,6 +82,8 @@ module stickslip
     public :: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, run_sweep
     public :: family_options_t, family_peak_t, family_result_t, observer_slot_t, run_family, &
         curve_peaks, limit_peak_t, linear_limit_peaks
+    public :: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
+        cyclic_frequencies, sector_phase, solve_periodic_cyclic
     public :: modes_options_t, mode_point_t, modes_result_t, run_modes, linear_modes
     public :: side_by_side_t, solve_side_by_side
     public :: study_options_t, study_row_t, study_result_t, run_study, default_study_options

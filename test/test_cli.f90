@@ -686,8 +686,9 @@ contains
         integer :: code, i, nrows, u, stat
         character(len=:), allocatable :: out, err
         character(len=200) :: path, dir
-        character(len=20), parameter :: examples(5) = [character(len=20) :: "seed", "mirrored", &
-                                                        "chain4", "seed_euler", "many_sticks"]
+        character(len=20), parameter :: examples(6) = [character(len=20) :: "seed", "mirrored", &
+                                                        "chain4", "seed_euler", "many_sticks", &
+                                                        "bladed_disk"]
         character(len=20) :: samples_file
         character(len=4000) :: line
         type(case_t) :: c

@@ -37,7 +37,98 @@ contains
         call test_disk_wave(t)
         call test_case_input(t)
         call test_sector_solve(t)
+        call test_sector_laws(t)
     end subroutine run_cyclic_tests
+
+    !> The sector's weighted residual against the disk's with contact laws: a shroud against
+    !> the next blade that lifts off (an elastic unilateral normal on the blade's normal DOF
+    !> 5 against the next blade's, preloaded), and a 2D friction contact of the disk on the
+    !> ground; EO = 0, 1, 7, 12; sector 0 to 1e-10 of the in-phase response, energies per
+    !> sector, and the shroud open part of the period in some wave.
+    subroutine test_sector_laws(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector, disk
+        type(cyclic_t) :: cyc
+        type(hbm_solution_t) :: sec, full
+        type(hbm_options_t) :: ho
+        type(error_type), allocatable :: error
+        integer, parameter :: orders(4) = [0, 1, 7, 12]
+        integer :: e, j
+        real(dp) :: worst, worst_energy, scale, work0, opened
+        logical :: converged
+        sector = lumped_sector()
+        ! DOF 5: the blade's normal motion
+        sector%ndof = 5
+        sector%mass = reshape([sector%mass(:, 1), 0.0_dp, sector%mass(:, 2), 0.0_dp, &
+                               sector%mass(:, 3), 0.0_dp, sector%mass(:, 4), 0.0_dp, &
+                               0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.3_dp], [5, 5])
+        sector%stiffness = reshape([sector%stiffness(:, 1), 0.0_dp, sector%stiffness(:, 2), &
+                                    0.0_dp, sector%stiffness(:, 3), 0.0_dp, &
+                                    sector%stiffness(:, 4), 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, &
+                                    0.0_dp, 6.0_dp], [5, 5])
+        sector%damping = 0.01_dp*sector%mass + 0.002_dp*sector%stiffness
+        sector%force_dof = [2, 5]
+        sector%force_harmonic = [1, 1]
+        sector%force_amplitude = [1.0_dp, 0.6_dp]
+        sector%force_phase = [0.3_dp, 1.1_dp]
+        ! contact 1: the shroud (tangential DOF 2, normal DOF 5, against the next blade);
+        ! contact 2: the disk's middle on the ground in 2D (DOF 4, second tangent DOF 1)
+        deallocate (sector%contact_dof, sector%contact_dof2, sector%mu, sector%normal_load)
+        sector%contact_dof = [2, 4]
+        sector%contact_dof2 = [0, 0]
+        sector%mu = [0.3_dp, 0.2_dp]
+        sector%normal_load = [0.0_dp, 2.0_dp]
+        allocate (sector%normal_direction(5, 2), sector%tangent2_direction(5, 2))
+        sector%normal_direction = 0.0_dp
+        sector%normal_direction(5, 1) = 1.0_dp
+        sector%tangent2_direction = 0.0_dp
+        sector%tangent2_direction(1, 2) = 1.0_dp
+        sector%gap = [0.0_dp, 0.0_dp]
+        sector%preload = [0.3_dp, 0.0_dp]
+        sector%normal_stiffness = [20.0_dp, 0.0_dp]
+        call validate_model(sector, error)
+        call check_error(t, error, "cyclic laws: the sector is a valid model", .false.)
+        if (allocated(error)) return
+        ho%harmonics = 12
+        ho%rho = 0.5_dp
+        ho%samples = 48*ns
+        ho%tol = 1.0e-12_dp
+        worst = 0.0_dp
+        worst_energy = 0.0_dp
+        opened = 0.0_dp
+        converged = .true.
+        do e = 1, size(orders)
+            cyc = lumped_cyclic(orders(e))
+            cyc%next_dof = [2, 0]
+            cyc%next_normal_dof = [5, 0]
+            call solve_periodic_cyclic(sector, cyc, ho, sec, error)
+            if (allocated(error)) exit
+            call assemble_disk(sector, cyc, disk, error)
+            if (allocated(error)) exit
+            call solve_periodic(disk, ho, full, error)
+            if (allocated(error)) exit
+            converged = converged .and. sec%converged .and. full%converged
+            if (e == 1) then
+                scale = maxval(abs(full%xcoef))
+                work0 = full%work_forcing/ns
+            end if
+            do j = 1, 5
+                worst = max(worst, maxval(abs(sec%xcoef(:, j) - &
+                                              full%xcoef(:, disk_dof(cyc, 5, j, 0))))/scale)
+            end do
+            worst_energy = max(worst_energy, &
+                               abs(sec%diss_friction - full%diss_friction/ns)/work0, &
+                               abs(sec%diss_damping - full%diss_damping/ns)/work0)
+            opened = max(opened, sec%open_fraction(1))
+        end do
+        call check_error(t, error, "cyclic laws: EO = 0, 1, 7, 12", .false.)
+        if (allocated(error)) return
+        call check(t, converged .and. worst < 1.0e-10_dp .and. worst_energy < 1.0e-10_dp .and. &
+                   opened > 0.05_dp, "cyclic laws: lift-off against the next blade and 2D "// &
+                   "friction, the sector's answer = the disk's sector 0", &
+                   "largest difference "//real_text(worst)//", energies "// &
+                   real_text(worst_energy)//", largest open share "//real_text(opened))
+    end subroutine test_sector_laws
 
     !> The weighted residual on one sector (the travelling wave, contacts rubbing on the next
     !> blade) against the same solve on the assembled disk, for EO = 0, 1, 7 and 12 = N/2,

@@ -159,7 +159,19 @@ contains
                 if (model%force_harmonic(k) == h) f = f + model%force_amplitude(k)* &
                     exp(cmplx(0.0_dp, model%force_phase(k), dp))*force_direction(model, k)
             end do
-            if (h == 0) f = f + preload_force(model)
+            if (h == 0) then
+                ! the preloads, along the normals' D: a contact against the next sector
+                ! presses its next DOF back (its reaction from the previous sector's contact
+                ! cancels the pair on a tuned disk)
+                f = f + preload_force(model)
+                if (allocated(model%preload)) then
+                    do k = 1, size(model%preload)
+                        if (next_of(cyc%next_normal_dof, k) > 0) &
+                            f(next_of(cyc%next_normal_dof, k)) = &
+                            f(next_of(cyc%next_normal_dof, k)) + model%preload(k)
+                    end do
+                end if
+            end if
             rhs(:, 1) = matmul(conjg(transpose(t)), f)
             rhs(:, 2:) = matmul(conjg(transpose(t)), conjg(dm))
             call zgetrs('N', m, nc + 1, zc, m, ipiv, rhs, m, info)

@@ -16,6 +16,7 @@ module test_cyclic
     use stickslip_solution, only: hbm_solution_t
     use stickslip_hbm, only: solve_periodic
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic
+    use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
     use stickslip_solution, only: hbm_options_t
     use fixtures, only: scratch, write_lines, project_path, enter_project_root
     implicit none
@@ -38,7 +39,71 @@ contains
         call test_case_input(t)
         call test_sector_solve(t)
         call test_sector_laws(t)
+        call test_sector_sweep(t)
     end subroutine run_cyclic_tests
+
+    !> A sweep in omega on one sector (EO 3): complete; three of its points (the first, the
+    !> middle, the last) against the assembled disk solved at their omega with the curve's
+    !> rho: sector 0's coefficients to 1e-8 of the largest, and the shroud's relative
+    !> displacement coefficients (the point's ucoef) = blade 0 minus blade 1 of the disk.
+    subroutine test_sector_sweep(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(model_t) :: disk, m
+        type(sweep_options_t) :: so
+        type(sweep_result_t) :: res
+        type(hbm_solution_t) :: full
+        type(hbm_options_t) :: ho
+        type(error_type), allocatable :: error
+        real(dp) :: worst, worst_u, scale
+        integer :: k, j, q
+        integer :: picks(3)
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        call check_error(t, error, "cyclic sweep: read the example", .false.)
+        if (allocated(error)) return
+        ho = c%hbm
+        ho%rho = 0.5_dp
+        ho%samples = 48*ns
+        so%parameter = 'omega'
+        so%start = 2.6_dp
+        so%stop = 3.2_dp
+        so%stability = .false.
+        so%truncation = .false.
+        call run_sweep(c%model, ho, c%reference%reference_options_t, so, res, error, &
+                       cyclic=c%cyclic%cyc)
+        call check_error(t, error, "cyclic sweep: run", .false.)
+        if (allocated(error)) return
+        call check(t, res%complete .and. res%npoints > 5, "cyclic sweep: complete")
+        picks = [1, res%npoints/2, res%npoints]
+        worst = 0.0_dp
+        worst_u = 0.0_dp
+        do q = 1, 3
+            k = picks(q)
+            m = c%model
+            m%omega = res%points(k)%omega
+            call assemble_disk(m, c%cyclic%cyc, disk, error)
+            if (allocated(error)) exit
+            ho%rho = res%rho
+            call solve_periodic(disk, ho, full, error)
+            if (allocated(error)) exit
+            scale = maxval(abs(full%xcoef))
+            do j = 1, 4
+                worst = max(worst, maxval(abs(res%points(k)%xcoef(:, j) - &
+                                              full%xcoef(:, disk_dof(c%cyclic%cyc, 4, j, 0))))/ &
+                            scale)
+            end do
+            worst_u = max(worst_u, maxval(abs(res%points(k)%ucoef(:, 1) - &
+                                              (full%xcoef(:, disk_dof(c%cyclic%cyc, 4, 2, 0)) - &
+                                               full%xcoef(:, disk_dof(c%cyclic%cyc, 4, 2, 1)))))/ &
+                          scale)
+        end do
+        call check_error(t, error, "cyclic sweep: the disk at three points", .false.)
+        if (allocated(error)) return
+        call check(t, worst < 1.0e-8_dp .and. worst_u < 1.0e-8_dp, &
+                   "cyclic sweep: points = the disk's solves, the shroud's relative motion", &
+                   "largest difference "//real_text(worst)//", relative displacement "// &
+                   real_text(worst_u))
+    end subroutine test_sector_sweep
 
     !> The sector's weighted residual against the disk's with contact laws: a shroud against
     !> the next blade that lifts off (an elastic unilateral normal on the blade's normal DOF

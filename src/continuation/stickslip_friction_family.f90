@@ -34,6 +34,9 @@ module stickslip_friction_family
     use stickslip_umfpack, only: sparse_zlu_t
     use stickslip_progress, only: progress_t
     use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
+    use stickslip_cyclic, only: cyclic_t
+    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     use stickslip_friction, only: psi_limit_derivative
     use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_contact_element, only: state_stick
@@ -94,6 +97,9 @@ module stickslip_friction_family
         !> Progress of the sparse condensations (per harmonic; unit off by default).
         type(progress_t) :: progress
         integer, allocatable :: kept(:)
+        !> One sector of a tuned bladed disk (its travelling wave: stickslip_cyclic_dynamics
+        !> condenses it), when allocated.
+        type(cyclic_t), allocatable :: cyclic
         !> Rows of the tangential channels' mean forces, and the point they are pinned to
         !> (empty until the continuation anchors the family).
         integer, allocatable :: mean_rows(:)
@@ -117,7 +123,7 @@ contains
     !> With `sparse` (and `dofs`, see run_sweep), the dynamics are the exact sparse
     !> condensation; `build` = .false. only sets the family's data (no dynamics, no basis).
     subroutine new_friction_family(fam, model, hbm, parameter, p, rho, error, sparse, dofs, &
-                                   build)
+                                   build, cyclic)
         !> The family.
         type(friction_family_t), intent(out) :: fam
         !> A validated model with friction contacts.
@@ -138,6 +144,8 @@ contains
         integer, intent(in), optional :: dofs(:)
         !> Build the problem (default .true.).
         logical, intent(in), optional :: build
+        !> `model` is one sector of this disk (its travelling wave).
+        type(cyclic_t), intent(in), optional :: cyclic
         integer :: nb, nc, stat
         fam%model = model
         fam%opts = hbm
@@ -145,6 +153,7 @@ contains
         fam%parameter = parameter
         fam%amplitude0 = model%force_amplitude
         call set_sweep_parameter(fam%model, parameter, p, fam%amplitude0)
+        if (present(cyclic)) fam%cyclic = cyclic
         if (present(sparse)) then
             fam%sparse = sparse
             fam%sparse%model = fam%model
@@ -158,15 +167,19 @@ contains
         if (present(build)) then
             if (.not. build) return
         end if
-        if (allocated(fam%sparse)) then
+        if (allocated(fam%sparse) .or. allocated(fam%cyclic)) then
             block
                 type(basis_t) :: basis
                 type(dynamics_t) :: dyn
                 type(contact_set_t) :: cs
                 call new_basis(basis, hbm%harmonics, hbm%odd_only, hbm%samples, error)
                 if (allocated(error)) return
-                call new_sparse_dynamics(dyn, fam%sparse, basis, fam%kept, error, &
-                                         analysis=fam%analysis, progress=fam%progress)
+                if (allocated(fam%cyclic)) then
+                    call new_cyclic_dynamics(dyn, fam%model, fam%cyclic, basis, error)
+                else
+                    call new_sparse_dynamics(dyn, fam%sparse, basis, fam%kept, error, &
+                                             analysis=fam%analysis, progress=fam%progress)
+                end if
                 call basis%destroy()
                 if (allocated(error)) return
                 call new_contact_set(cs, fam%model)
@@ -190,7 +203,9 @@ contains
                 type(model_t) :: m1
                 m1 = fam%model
                 m1%force_amplitude = fam%amplitude0/fam%amplitude0(1)
-                if (allocated(fam%sparse)) then
+                if (allocated(fam%cyclic)) then
+                    call new_cyclic_dynamics(fam%unit, m1, fam%cyclic, fam%prob%basis, error)
+                else if (allocated(fam%sparse)) then
                     fam%sparse%model = m1
                     call new_sparse_dynamics(fam%unit, fam%sparse, fam%prob%basis, fam%kept, &
                                              error, analysis=fam%analysis, &
@@ -296,7 +311,10 @@ contains
             end if
         end do
         ! K and M do not change along the family: their smallest singular values neither
-        if (allocated(self%sparse)) then
+        if (allocated(self%cyclic)) then
+            call new_cyclic_dynamics(self%prob%dyn, self%model, self%cyclic, self%prob%basis, &
+                                     error, with_omega_derivative=.true.)
+        else if (allocated(self%sparse)) then
             self%sparse%model = self%model
             if (self%singular_values(1) >= 0.0_dp) then
                 call new_sparse_dynamics(self%prob%dyn, self%sparse, self%prob%basis, &
@@ -510,7 +528,10 @@ contains
         o = self%opts
         o%start = 'ladder'
         o%want_samples = .false.
-        if (allocated(self%sparse)) then
+        if (allocated(self%cyclic)) then
+            call solve_periodic_cyclic(m, self%cyclic, o, s, error, &
+                                       r_start=reshape(y, [self%prob%basis%nb, self%prob%nc]))
+        else if (allocated(self%sparse)) then
             self%sparse%model = m
             call solve_periodic_sparse(self%sparse, o, self%kept, s, error, &
                                        r_start=reshape(y, [self%prob%basis%nb, self%prob%nc]))

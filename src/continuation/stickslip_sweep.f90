@@ -40,6 +40,8 @@ module stickslip_sweep
     use stickslip_sweep_point, only: point_tally_t, evaluate_point, stability_block
     use stickslip_blas_threads, only: parallel_threads
     use stickslip_sweep_retrace, only: fold_watch_t, new_fold_watch
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     implicit none
     private
     public :: sweep_options_t, frc_point_t, sweep_result_t, sweep_observer_t, run_sweep
@@ -66,7 +68,7 @@ contains
     !> neither the truncation estimate nor the stability is computed (opts%stability is
     !> then an input error).
     subroutine run_sweep(model, hbm, ref, opts, res, error, observer, resume, progress, &
-                         sparse, dofs, r_start)
+                         sparse, dofs, r_start, cyclic)
         !> The model at the case's values (the parameter is overwritten along the curve).
         type(model_t), intent(in) :: model
         !> Weighted-residual options of every point.
@@ -93,6 +95,10 @@ contains
         !> A start for the first point's solve: friction-force coefficients [N] on the basis
         !> of `hbm` (a neighbouring curve's first point); default the solver's own start.
         real(dp), intent(in), optional :: r_start(:, :)
+        !> `model` is one sector of this tuned disk: the curve of its travelling wave
+        !> (stickslip_cyclic_dynamics); neither the stability (an input error) nor the
+        !> truncation estimate (NaN) is computed.
+        type(cyclic_t), intent(in), optional :: cyclic
         type(friction_family_t), target :: fam
         type(continuation_options_t) :: co
         type(continuation_report_t) :: rep
@@ -138,6 +144,16 @@ contains
             call validate_model(model, error)
             if (allocated(error)) return
         end if
+        if (present(cyclic)) then
+            call validate_cyclic(model, cyclic, error)
+            if (allocated(error)) return
+            if (opts%stability .or. present(sparse)) then
+                call fatal_error(error, "opts%stability: the Floquet multipliers of a sector's "// &
+                                 "travelling wave are not computed in this version (run the "// &
+                                 "assembled disk)", stickslip_stat%input)
+                return
+            end if
+        end if
         call validate_options(hbm, error)
         if (allocated(error)) return
         call validate_sweep_options(model, opts, error)
@@ -172,6 +188,8 @@ contains
             else
                 call solve_periodic_sparse(fam%sparse, ho, fam%kept, sol, error)
             end if
+        else if (present(cyclic)) then
+            call solve_periodic_cyclic(m0, cyclic, ho, sol, error, r_start=r_start)
         else if (present(r_start)) then
             call solve_periodic(m0, ho, sol, error, r_start=r_start)
             ! a start that leads nowhere: the solver's own
@@ -192,6 +210,9 @@ contains
         if (present(sparse)) then
             call new_friction_family(fam, model, hbm, opts%parameter, opts%start, sol%rho, &
                                      error, sparse, dofs)
+        else if (present(cyclic)) then
+            call new_friction_family(fam, model, hbm, opts%parameter, opts%start, sol%rho, &
+                                     error, cyclic=cyclic)
         else
             call new_friction_family(fam, model, hbm, opts%parameter, opts%start, sol%rho, error)
         end if
@@ -317,7 +338,8 @@ contains
         res%factorizations = fam%factorizations
         if (allocated(error)) return
         res%complete = res%state%reason == reason_end
-        if (opts%parameter == 'omega' .and. .not. present(sparse)) then
+        if (opts%parameter == 'omega' .and. .not. present(sparse) .and. &
+            .not. present(cyclic)) then
             res%notes = undamped_resonance_notes(model, opts%start, opts%stop)
         else
             res%notes = ""

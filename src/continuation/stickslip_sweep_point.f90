@@ -21,6 +21,8 @@ module stickslip_sweep_point
     use stickslip_sweep_result, only: frc_point_t
     use stickslip_friction_family, only: friction_family_t
     use stickslip_contact_set, only: channel_directions
+    use stickslip_cyclic, only: cyclic_t, channel_displacements
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     implicit none
     private
     public :: point_tally_t, evaluate_point, keep_coefficients, contact_point_values
@@ -131,7 +133,10 @@ contains
         ! the family's dynamics are at this parameter (the tangent was just computed
         ! there): the point and its truncation estimate need no new factorization
         at_point = fam%have_current .and. fam%current == state%lambda
-        if (allocated(fam%sparse)) then
+        if (allocated(fam%cyclic)) then
+            call solve_periodic_cyclic(m, fam%cyclic, po, ps, error, &
+                                       r_start=reshape(state%y, [nb, nc]))
+        else if (allocated(fam%sparse)) then
             fam%sparse%model = m
             if (at_point) then
                 call solve_periodic_sparse(fam%sparse, po, fam%kept, ps, error, &
@@ -161,7 +166,7 @@ contains
         pt%dissipation = ps%diss_friction + ps%diss_damping
         call contact_point_values(ps, pt)
         pt%stick = ps%stick_fraction
-        call keep_coefficients(m, ps, opts, pt)
+        call keep_coefficients(m, ps, opts, pt, fam%cyclic)
         pt%harmonics = ps%harmonics
         pt%residual = ps%fnorm/max(ps%fscale, tiny(1.0_dp))
         pt%status = status
@@ -169,7 +174,8 @@ contains
         pt%floquet_max = ieee_value(1.0_dp, ieee_quiet_nan)
         pt%stable = -1
         pt%truncation = ieee_value(1.0_dp, ieee_quiet_nan)
-        if (opts%truncation .and. .not. allocated(fam%sparse)) then
+        if (opts%truncation .and. .not. allocated(fam%sparse) .and. &
+            .not. allocated(fam%cyclic)) then
             if (at_point) then
                 call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn, &
                                          observe=opts%observe)
@@ -311,7 +317,7 @@ contains
     !> ucoef, omega) from its solution `ps` of `model`: the displacements observed as the
     !> amplitudes are (opts%observe, or the solution's columns), every force channel, and
     !> the displacement along each channel's direction.
-    subroutine keep_coefficients(model, ps, opts, pt)
+    subroutine keep_coefficients(model, ps, opts, pt, cyclic)
         !> The model at the point's parameter.
         type(model_t), intent(in) :: model
         !> The point's solution.
@@ -320,6 +326,9 @@ contains
         type(sweep_options_t), intent(in) :: opts
         !> The point.
         type(frc_point_t), intent(inout) :: pt
+        !> `model` is one sector of this disk: a channel against the next sector measures
+        !> the relative displacement (stickslip_cyclic's channel_displacements).
+        type(cyclic_t), intent(in), optional :: cyclic
         real(dp), allocatable :: d(:, :)
         pt%omega = ps%omega
         pt%harmonic = ps%harmonic
@@ -329,6 +338,11 @@ contains
             pt%xcoef = ps%xcoef
         end if
         pt%rcoef = ps%rcoef
+        if (present(cyclic)) then
+            pt%ucoef = channel_displacements(model, cyclic, ps%contacts, ps%harmonic, &
+                                             ps%xcoef)
+            return
+        end if
         d = channel_directions(model, ps%contacts)
         ! the exact sparse condensation keeps some DOFs only, the contact DOFs among them
         if (allocated(ps%dofs)) d = d(ps%dofs, :)

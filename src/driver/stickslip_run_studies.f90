@@ -208,6 +208,17 @@ contains
                                progress=progress, sparse=case%sparse_model, &
                                dofs=selected_dofs(case))
             end if
+        else if (case%cyclic%given .and. case%cyclic%model == 'sector') then
+            ! one sector of a tuned disk: the curve of its travelling wave
+            if (found) then
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               opts, res, error, observer=writer, resume=saved, &
+                               progress=progress, cyclic=case%cyclic%cyc)
+            else
+                call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
+                               opts, res, error, observer=writer, progress=progress, &
+                               cyclic=case%cyclic%cyc)
+            end if
         else if (found) then
             call run_sweep(case%model, case%hbm, case%reference%reference_options_t, &
                            opts, res, error, observer=writer, resume=saved, progress=progress)

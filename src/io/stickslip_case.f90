@@ -375,15 +375,22 @@ contains
     end subroutine check_sparse_methods
 
     !> What runs on one sector of a disk (&cyclic model = 'sector'): the weighted residual
-    !> alone (method 'hbm' without stability, verify_periods, harmonics_tol); anything else is
-    !> an input error naming what asked for it and the remedy, model = 'disk'.
+    !> (method 'hbm' without stability, verify_periods, harmonics_tol; 'sweep' without
+    !> stability or a family); anything else is an input error naming what asked for it and
+    !> the remedy, model = 'disk'.
     subroutine check_sector_methods(nml, case, error)
         type(nml_file_t), intent(in) :: nml
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: what
         what = ""
-        if (case%method /= 'hbm') then
+        if (case%method == 'sweep') then
+            if (case%sweep%stability) then
+                what = "&sweep stability = .true."
+            else if (allocated(case%sweep%family%family_values)) then
+                what = "&sweep family_values"
+            end if
+        else if (case%method /= 'hbm') then
             what = "&run method = '"//trim(case%method)//"'"
         else if (case%checks%stability) then
             what = "&hbm stability = .true."
@@ -396,8 +403,9 @@ contains
         call group_error(nml, error, what//": on one sector of a disk (&cyclic model = "// &
                          "'sector') only the weighted residual runs in this version "// &
                          "(&run method = 'hbm' without stability, verify_periods, "// &
-                         "harmonics_tol); set &cyclic model = 'disk' to run it on the "// &
-                         "assembled full disk")
+                         "harmonics_tol; 'sweep' with &sweep stability = .false., no "// &
+                         "family); set &cyclic model = 'disk' to run it on the assembled "// &
+                         "full disk")
     end subroutine check_sector_methods
 
     !> `text` with its first `old` replaced by `new`.

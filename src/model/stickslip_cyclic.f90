@@ -24,10 +24,12 @@ module stickslip_cyclic
     use stickslip_model, only: model_t, force_direction, contact_velocity_direction, &
         contact_normal_direction, contact_tangent2_direction, is_unilateral, is_planar
     use stickslip_lapack, only: zhegv
+    use stickslip_contact_set, only: contact_set_t, channel_directions
+    use stickslip_contact_element, only: along_tangent, along_normal
     implicit none
     private
     public :: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
-        cyclic_frequencies, sector_phase
+        cyclic_frequencies, sector_phase, channel_displacements
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -310,6 +312,62 @@ contains
             if (allocated(a)) b = [(a, k=1, ns)]
         end subroutine copy_scalars
     end subroutine assemble_disk
+
+    !> The Fourier coefficients of the displacement along each force channel of the sector
+    !> `model` (nb x channels [m]) from its DOFs' coefficients `xcoef` (nb x N, rows of
+    !> harmonics `harmonic`: cos then sin): d^T x, and for a channel against the next sector
+    !> d^T x - x_next(b), the next sector's motion being this one's delayed by EO / N of the
+    !> period (harmonic h: times exp(-i h 2 pi EO / N)). No errors.
+    function channel_displacements(model, cyc, contacts, harmonic, xcoef) result(u)
+        !> The sector.
+        type(model_t), intent(in) :: model
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> The sector's contacts.
+        type(contact_set_t), intent(in) :: contacts
+        !> Harmonic of each row.
+        integer, intent(in) :: harmonic(:)
+        !> Coefficients of the DOFs.
+        real(dp), intent(in) :: xcoef(:, :)
+        real(dp), allocatable :: u(:, :)
+        real(dp), allocatable :: d(:, :)
+        integer :: c, k, b, h
+        complex(dp) :: e, x
+        d = channel_directions(model, contacts)
+        u = matmul(xcoef, d)
+        do c = 1, contacts%nchannel
+            b = 0
+            if (contacts%along(c) == along_tangent) b = next_of(cyc%next_dof, contacts%contact_of(c))
+            if (contacts%along(c) == along_normal) &
+                b = next_of(cyc%next_normal_dof, contacts%contact_of(c))
+            if (b == 0) cycle
+            k = 1
+            do while (k <= size(harmonic))
+                h = harmonic(k)
+                if (h == 0) then
+                    u(k, c) = u(k, c) - xcoef(k, b)
+                    k = k + 1
+                    cycle
+                end if
+                ! rows k, k + 1: a cos + b sin = Re((a - i b) exp(i h omega t))
+                e = exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, 1), dp))
+                x = e*cmplx(xcoef(k, b), -xcoef(k + 1, b), dp)
+                u(k, c) = u(k, c) - real(x, dp)
+                u(k + 1, c) = u(k + 1, c) + aimag(x)
+                k = k + 2
+            end do
+        end do
+
+    contains
+
+        pure integer function next_of(list, j)
+            integer, allocatable, intent(in) :: list(:)
+            integer, intent(in) :: j
+            next_of = 0
+            if (.not. allocated(list)) return
+            if (j <= size(list)) next_of = list(j)
+        end function next_of
+    end function channel_displacements
 
     !> The undamped natural frequencies [rad/s], increasing, of the sector's structure (M and
     !> K, its contacts carrying nothing) in the cyclic modes of nodal diameter `nd`: sector

@@ -17,6 +17,7 @@ module test_cyclic
     use stickslip_hbm, only: solve_periodic
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
+    use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_solution, only: hbm_options_t
     use fixtures, only: scratch, write_lines, project_path, enter_project_root
     implicit none
@@ -213,6 +214,7 @@ contains
         integer :: e, j
         real(dp) :: worst, worst_energy, scale, work0
         logical :: converged
+        type(truncation_t) :: est_sector, est_disk
         call read_case(project_path("examples/bladed_disk.nml"), c, error)
         call check_error(t, error, "cyclic sector solve: read the example", .false.)
         if (allocated(error)) return
@@ -264,6 +266,23 @@ contains
         call check(t, worst_energy < 1.0e-10_dp, &
                    "cyclic sector solve: energies per sector = the disk's / N, balanced", &
                    real_text(worst_energy))
+        ! the truncation estimate of the sector (its coarse solve on the sector, the shroud's
+        ! Coulomb defect on the relative motion) = the disk's, at EO = 1
+        cyc = c%cyclic%cyc
+        cyc%engine_order = 1
+        call solve_periodic_cyclic(sector, cyc, ho, sec, error)
+        if (.not. allocated(error)) call estimate_truncation(sector, ho, sec, est_sector, error, &
+                                                              cyclic=cyc)
+        if (.not. allocated(error)) call assemble_disk(sector, cyc, disk, error)
+        if (.not. allocated(error)) call solve_periodic(disk, ho, full, error)
+        if (.not. allocated(error)) call estimate_truncation(disk, ho, full, est_disk, error)
+        call check_error(t, error, "cyclic sector solve: truncation estimates", .false.)
+        if (allocated(error)) return
+        call check(t, est_sector%available .and. est_disk%available .and. &
+                   abs(est_sector%estimate - est_disk%estimate) < 1.0e-8_dp*est_disk%estimate &
+                   .and. abs(est_sector%psi_rms - est_disk%psi_rms) < 1.0e-8_dp*est_disk%psi_rms, &
+                   "cyclic sector solve: the sector's truncation estimate = the disk's", &
+                   real_text(est_sector%estimate)//" vs "//real_text(est_disk%estimate))
     end subroutine test_sector_solve
 
     !> examples/bladed_disk.nml (24 sectors, a shroud contact rubbing on the next blade, EO 3)

@@ -17,7 +17,7 @@ module stickslip_checks
     use stickslip_stability, only: floquet_t, periodic_stability, verify_periodicity
     implicit none
     private
-    public :: check_options_t, validate_check_options, hbm_checks_t, solve_and_check, &
+    public :: check_options_t, validate_check_options, hbm_checks_t, solve_and_check, truncation_findings, &
         sampling_notes, sampling_diagnostics
 
     !> A truncation estimate above this makes the stick-phase count a lower bound (the
@@ -140,6 +140,26 @@ contains
         checks%notes = sampling_notes(sol%samples, sol%harmonics)
         call sampling_diagnostics(sol%samples, checks%diagnostics)
         if (.not. sol%converged) return
+        call truncation_findings(checks)
+        if (copts%stability) then
+            checks%stability = .true.
+            call periodic_stability(model, sol, ref, checks%floquet, error)
+            if (allocated(error)) return
+        end if
+        if (copts%verify_periods > 0) then
+            call verify_periodicity(model, sol, copts%verify_periods, checks%defect, error)
+            if (allocated(error)) return
+        end if
+    end subroutine solve_and_check
+
+    !> The notes and findings of a solution's truncation estimate (checks%truncation): a
+    !> note above 5 % (stick phases shorter than T/H unresolved), a warning 'truncation'
+    !> above truncation_warning, distrust above truncation_untrusted. No errors.
+    subroutine truncation_findings(checks)
+        !> The checks, their truncation estimate set.
+        type(hbm_checks_t), intent(inout) :: checks
+        character(len=200) :: buf
+        if (.not. allocated(checks%notes)) checks%notes = ""
         if (checks%truncation%available .and. checks%truncation%estimate > coarse_estimate) then
             if (len(checks%notes) > 0) checks%notes = checks%notes//"; "
             checks%notes = checks%notes//"truncation estimate above 5%: stick phases "// &
@@ -160,16 +180,7 @@ contains
                 call checks%diagnostics%add(level_warning, "truncation", trim(buf))
             end if
         end if
-        if (copts%stability) then
-            checks%stability = .true.
-            call periodic_stability(model, sol, ref, checks%floquet, error)
-            if (allocated(error)) return
-        end if
-        if (copts%verify_periods > 0) then
-            call verify_periodicity(model, sol, copts%verify_periods, checks%defect, error)
-            if (allocated(error)) return
-        end if
-    end subroutine solve_and_check
+    end subroutine truncation_findings
 
     !> The sampling check as a diagnostics item: an odd number of samples is a warning
     !> (key 'odd_samples', prefixed with `prefix` when given): the mean friction force of a

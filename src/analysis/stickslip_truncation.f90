@@ -39,6 +39,8 @@ module stickslip_truncation
     use stickslip_hbm, only: solve_periodic
     use stickslip_dynamics, only: dynamics_t
     use stickslip_contact_set, only: channel_directions
+    use stickslip_cyclic, only: cyclic_t, channel_displacements
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     use stickslip_contact_element, only: channel_t, kinematics_gap, along_normal, state_stick, &
         state_open
     implicit none
@@ -219,7 +221,7 @@ contains
     !> observe x (e.g. the full-model DOFs of a reduced model, rows of its basis: the
     !> amplitudes of its tiny high-mode coordinates would otherwise decide the estimate),
     !> one per row, instead of one per DOF.
-    subroutine estimate_truncation(model, opts, sol, est, error, dyn, observe)
+    subroutine estimate_truncation(model, opts, sol, est, error, dyn, observe, cyclic)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> The options sol was solved with.
@@ -234,6 +236,10 @@ contains
         type(dynamics_t), intent(in), optional :: dyn
         !> Observed combinations of DOFs, nobs x ndof.
         real(dp), intent(in), optional :: observe(:, :)
+        !> `model` is one sector of this tuned disk (sol its travelling wave): the channels
+        !> against the next sector measure relative motion, the coarse solve is the
+        !> sector's.
+        type(cyclic_t), intent(in), optional :: cyclic
         type(hbm_options_t) :: copts
         type(hbm_solution_t) :: coarse
         integer(int64) :: c0, c1, rate
@@ -244,7 +250,7 @@ contains
         if (allocated(error)) return
         call check_observe(model, error, observe)
         if (allocated(error)) return
-        call diagnose(model, opts, sol, est, error, observe)
+        call diagnose(model, opts, sol, est, error, observe, cyclic)
         if (allocated(error)) return
         hc = coarse_harmonics(model, sol%harmonics, sol%odd_only)
         if (est%available .and. hc > 0) then
@@ -253,8 +259,13 @@ contains
             copts%rho = sol%rho      ! the same weight as the fine solution
             copts%want_samples = .false.
             nbc = count(sol%harmonic <= hc)
-            call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :), &
-                                dyn=dyn)
+            if (present(cyclic)) then
+                call solve_periodic_cyclic(model, cyclic, copts, coarse, error, &
+                                           r_start=sol%rcoef(1:nbc, :))
+            else
+                call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :), &
+                                    dyn=dyn)
+            end if
             if (allocated(error)) then
                 error%message = "truncation estimate, coarse solve at H = "//itoa(hc)// &
                                 ": "//error%message
@@ -391,13 +402,14 @@ contains
 
     !> The parts of the estimate that need only the solution: sizes, amplitudes and the
     !> Coulomb defect; the estimate is the defect until a coarse comparison is added.
-    subroutine diagnose(model, opts, sol, est, error, observe)
+    subroutine diagnose(model, opts, sol, est, error, observe, cyclic)
         type(model_t), intent(in) :: model
         type(hbm_options_t), intent(in) :: opts
         type(hbm_solution_t), intent(in) :: sol
         type(truncation_t), intent(out) :: est
         type(error_type), allocatable, intent(out) :: error
         real(dp), intent(in), optional :: observe(:, :)
+        type(cyclic_t), intent(in), optional :: cyclic
         type(basis_t) :: fb
         type(fine_grid_t) :: grid
         real(dp), allocatable :: rt(:), vt(:), pt(:), st(:), vc(:), xt(:)
@@ -438,7 +450,8 @@ contains
         ! the weight the solution was solved with (opts%rho = 0 asks for the automatic one)
         rho = sol%rho
         if (.not. (rho > 0.0_dp)) rho = opts%rho
-        if (model%ncontact() > 0) call coulomb_defect(model, sol, fb, grid, rho, vfloor, est)
+        if (model%ncontact() > 0) call coulomb_defect(model, sol, fb, grid, rho, vfloor, est, &
+                                                      cyclic)
         call fb%destroy()
         est%available = sol%converged
         if (est%available) then
@@ -455,15 +468,17 @@ contains
     !> (or at a closed normal) divided by the channel's peak kinematic quantity, one in slip
     !> (open) by rho times the contact's force scale (its largest normal force when it has a
     !> normal channel); psi_rms and psi_max of `est` set.
-    subroutine coulomb_defect(model, sol, fb, grid, rho, vfloor, est)
+    subroutine coulomb_defect(model, sol, fb, grid, rho, vfloor, est, cyclic)
         type(model_t), intent(in) :: model
         type(hbm_solution_t), intent(in) :: sol
         type(basis_t), intent(in) :: fb
         type(fine_grid_t), intent(inout) :: grid
         real(dp), intent(in) :: rho, vfloor
         type(truncation_t), intent(inout) :: est
+        !> One sector of a disk: channels against the next sector measure relative motion.
+        type(cyclic_t), intent(in), optional :: cyclic
         real(dp), allocatable :: d(:, :), r(:, :), u(:, :), p(:, :), coef(:), dr(:), &
-                                 uscale(:), gmax(:)
+                                 uscale(:), gmax(:), ux(:, :), uv(:, :)
         integer, allocatable :: state(:)
         integer :: j, c, k, m, c0, nf
         real(dp) :: q
@@ -471,17 +486,25 @@ contains
         associate (cs => sol%contacts)
             nf = est%fine_samples
             d = channel_directions(model, cs)
+            ! the channels' displacement and velocity coefficients
+            if (present(cyclic)) then
+                ux = channel_displacements(model, cyclic, cs, sol%harmonic, sol%xcoef)
+                uv = channel_displacements(model, cyclic, cs, sol%harmonic, sol%vcoef)
+            else
+                ux = matmul(sol%xcoef, d)
+                uv = matmul(sol%vcoef, d)
+            end if
             allocate (r(nf, cs%nchannel), u(nf, cs%nchannel), coef(sol%nb), dr(sol%nb), &
                       uscale(cs%nchannel), gmax(cs%ncontact), state(nf))
             do c = 1, cs%nchannel
                 ch = cs%channel(c)
                 if (ch%kinematics == kinematics_gap) then
-                    coef = model%omega*matmul(sol%xcoef, d(:, c))
+                    coef = model%omega*ux(:, c)
                     if (fb%has_zero) coef(fb%i0) = coef(fb%i0) + model%omega*ch%gap
                     if (ch%compliance > 0.0_dp) coef = coef + model%omega*ch%compliance* &
                                                        sol%rcoef(:, c)
                 else
-                    coef = matmul(sol%vcoef, d(:, c))
+                    coef = uv(:, c)
                     if (ch%compliance > 0.0_dp) then
                         call fb%derivative(sol%rcoef(:, c), model%omega, dr)
                         coef = coef + ch%compliance*dr

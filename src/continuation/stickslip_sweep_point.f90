@@ -174,13 +174,13 @@ contains
         pt%floquet_max = ieee_value(1.0_dp, ieee_quiet_nan)
         pt%stable = -1
         pt%truncation = ieee_value(1.0_dp, ieee_quiet_nan)
-        if (opts%truncation .and. .not. allocated(fam%sparse) .and. &
-            .not. allocated(fam%cyclic)) then
-            if (at_point) then
+        if (opts%truncation .and. .not. allocated(fam%sparse)) then
+            if (at_point .and. .not. allocated(fam%cyclic)) then
                 call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn, &
                                          observe=opts%observe)
             else
-                call estimate_truncation(m, po, ps, est, error, observe=opts%observe)
+                call estimate_truncation(m, po, ps, est, error, observe=opts%observe, &
+                                         cyclic=fam%cyclic)
             end if
             if (allocated(error)) return
             if (est%available) pt%truncation = est%estimate

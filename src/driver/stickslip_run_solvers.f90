@@ -13,7 +13,9 @@ module stickslip_run_solvers
     use stickslip_full_field, only: write_full_field
     use stickslip_solution, only: hbm_solution_t
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic
+    use stickslip_truncation, only: estimate_truncation
     use stickslip_checks, only: hbm_checks_t, solve_and_check, sampling_notes, &
+        truncation_findings, &
         sampling_diagnostics
     use stickslip_hbm_sparse, only: solve_periodic_sparse
     use stickslip_euler, only: euler_result_t, integrate_euler
@@ -98,9 +100,13 @@ contains
             call solve_periodic_cyclic(case%model, case%cyclic%cyc, case%hbm, sol, error)
             ch%notes = sampling_notes(case%hbm%samples, case%hbm%harmonics)
             call sampling_diagnostics(case%hbm%samples, ch%diagnostics)
-            ch%truncation%note = "not estimated on a sector of a disk (&cyclic model = "// &
-                                 "'sector') in this version: compare another harmonics, or "// &
-                                 "model = 'disk'"
+            if (.not. allocated(error)) then
+                if (sol%converged) then
+                    call estimate_truncation(case%model, case%hbm, sol, ch%truncation, error, &
+                                             cyclic=case%cyclic%cyc)
+                    if (.not. allocated(error)) call truncation_findings(ch)
+                end if
+            end if
         else
             call solve_and_check(case%model, case%hbm, case%checks, &
                                  case%reference%reference_options_t, sol, ch, error)

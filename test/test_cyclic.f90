@@ -15,7 +15,8 @@ module test_cyclic
     use stickslip_case, only: case_t, read_case, write_case
     use stickslip_solution, only: hbm_solution_t
     use stickslip_hbm, only: solve_periodic
-    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
+    use stickslip_stability, only: floquet_t, periodic_stability
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
     use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_solution, only: hbm_options_t
@@ -41,7 +42,45 @@ contains
         call test_sector_solve(t)
         call test_sector_laws(t)
         call test_sector_sweep(t)
+        call test_sector_stability(t)
     end subroutine run_cyclic_tests
+
+    !> The stability of a sector's travelling wave is the assembled disk's: the Floquet
+    !> multipliers of the disk expanded from the sector's solution (disk_solution) against
+    !> those of the disk's own weighted residual, at the example's omega (largest modulus
+    !> to 1e-8), and the disk solution's energies are N times the sector's.
+    subroutine test_sector_stability(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(model_t) :: disk
+        type(hbm_solution_t) :: sec, dsol, full
+        type(hbm_options_t) :: ho
+        type(floquet_t) :: f1, f2
+        type(error_type), allocatable :: error
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        call check_error(t, error, "cyclic stability: read the example", .false.)
+        if (allocated(error)) return
+        ho = c%hbm
+        ho%rho = 0.5_dp
+        ho%samples = 48*ns
+        call solve_periodic_cyclic(c%model, c%cyclic%cyc, ho, sec, error)
+        if (.not. allocated(error)) call disk_solution(c%model, c%cyclic%cyc, ho, sec, disk, &
+                                                       dsol, error)
+        if (.not. allocated(error)) call periodic_stability(disk, dsol, &
+                                                            c%reference%reference_options_t, &
+                                                            f1, error)
+        if (.not. allocated(error)) call solve_periodic(disk, ho, full, error)
+        if (.not. allocated(error)) call periodic_stability(disk, full, &
+                                                            c%reference%reference_options_t, &
+                                                            f2, error)
+        call check_error(t, error, "cyclic stability: the multipliers", .false.)
+        if (allocated(error)) return
+        call check(t, allocated(f1%multipliers) .and. allocated(f2%multipliers) .and. &
+                   abs(f1%max_modulus - f2%max_modulus) < 1.0e-8_dp .and. &
+                   abs(dsol%diss_friction - ns*sec%diss_friction) < 1.0e-10_dp*dsol%work_forcing, &
+                   "cyclic stability: the sector's wave on the disk = the disk's own", &
+                   real_text(f1%max_modulus)//" vs "//real_text(f2%max_modulus))
+    end subroutine test_sector_stability
 
     !> A sweep in omega on one sector (EO 3): complete; three of its points (the first, the
     !> middle, the last) against the assembled disk solved at their omega with the curve's

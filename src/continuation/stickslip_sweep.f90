@@ -96,8 +96,8 @@ contains
         !> of `hbm` (a neighbouring curve's first point); default the solver's own start.
         real(dp), intent(in), optional :: r_start(:, :)
         !> `model` is one sector of this tuned disk: the curve of its travelling wave
-        !> (stickslip_cyclic_dynamics); neither the stability (an input error) nor the
-        !> truncation estimate (NaN) is computed.
+        !> (stickslip_cyclic_dynamics); with opts%stability the Floquet multipliers are the
+        !> assembled disk's (every perturbation, not only the wave's symmetry), point by point.
         type(cyclic_t), intent(in), optional :: cyclic
         type(friction_family_t), target :: fam
         type(continuation_options_t) :: co
@@ -147,10 +147,9 @@ contains
         if (present(cyclic)) then
             call validate_cyclic(model, cyclic, error)
             if (allocated(error)) return
-            if (opts%stability .or. present(sparse)) then
-                call fatal_error(error, "opts%stability: the Floquet multipliers of a sector's "// &
-                                 "travelling wave are not computed in this version (run the "// &
-                                 "assembled disk)", stickslip_stat%input)
+            if (present(sparse)) then
+                call fatal_error(error, "cyclic: a sector is dense, not a sparse "// &
+                                 "condensation", stickslip_stat%input)
                 return
             end if
         end if
@@ -162,7 +161,9 @@ contains
         ! with several threads the stability of the points runs on the other threads while
         ! the curve is traced (stability_worker); with one, point by point as they come
         nthreads = parallel_threads()
-        defer = opts%stability .and. nthreads > 1 .and. .not. present(sparse)
+        ! (a sector's multipliers are its disk's, point by point: stickslip_sweep_point)
+        defer = opts%stability .and. nthreads > 1 .and. .not. present(sparse) .and. &
+                .not. present(cyclic)
         nc = model%ncontact()
         if (nc == 0) then
             call fatal_error(error, "sweep: the model has no friction contact (nothing to "// &

@@ -22,7 +22,7 @@ module stickslip_sweep_point
     use stickslip_friction_family, only: friction_family_t
     use stickslip_contact_set, only: channel_directions
     use stickslip_cyclic, only: cyclic_t, channel_displacements
-    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
     implicit none
     private
     public :: point_tally_t, evaluate_point, keep_coefficients, contact_point_values
@@ -189,8 +189,22 @@ contains
                              pt%check)
         defer = .false.
         if (present(defer_stability)) defer = defer_stability
-        if (opts%stability .and. .not. defer) &
-            call stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache, fam%opts)
+        if (opts%stability .and. .not. defer) then
+            if (allocated(fam%cyclic)) then
+                ! a sector's travelling wave: the multipliers of the whole disk
+                block
+                    type(model_t) :: disk
+                    type(hbm_solution_t) :: dps
+                    call disk_solution(m, fam%cyclic, po, ps, disk, dps, error)
+                    if (allocated(error)) return
+                    call stability_from(disk, dps, opts, ref, pt, stability_seconds, error, &
+                                        cache, fam%opts)
+                end block
+            else
+                call stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache, &
+                                    fam%opts)
+            end if
+        end if
     end subroutine evaluate_point
 
     !> The Floquet multipliers of the point `pt` from its weighted-residual solution `ps` of

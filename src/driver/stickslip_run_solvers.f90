@@ -12,7 +12,9 @@ module stickslip_run_solvers
     use stickslip_case_reduction, only: recover_full_field
     use stickslip_full_field, only: write_full_field
     use stickslip_solution, only: hbm_solution_t
-    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
+    use stickslip_stability, only: periodic_stability
+    use stickslip_model, only: model_t
     use stickslip_truncation, only: estimate_truncation
     use stickslip_checks, only: hbm_checks_t, solve_and_check, sampling_notes, &
         truncation_findings, &
@@ -105,6 +107,21 @@ contains
                     call estimate_truncation(case%model, case%hbm, sol, ch%truncation, error, &
                                              cyclic=case%cyclic%cyc)
                     if (.not. allocated(error)) call truncation_findings(ch)
+                    if (.not. allocated(error) .and. case%checks%stability) then
+                        ! the multipliers of the whole disk (every perturbation)
+                        block
+                            type(model_t) :: disk
+                            type(hbm_solution_t) :: dsol
+                            call disk_solution(case%model, case%cyclic%cyc, case%hbm, sol, &
+                                               disk, dsol, error)
+                            if (.not. allocated(error)) then
+                                ch%stability = .true.
+                                call periodic_stability(disk, dsol, &
+                                                        case%reference%reference_options_t, &
+                                                        ch%floquet, error)
+                            end if
+                        end block
+                    end if
                 end if
             end if
         else

@@ -10,15 +10,15 @@ module stickslip_hbm_cyclic
     use stickslip_model, only: model_t, validate_model
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, assemble_disk, sector_phase
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
     use stickslip_hbm, only: validate_options, condensed_structure_t, solve_condensed, &
-        dense_structure
+        dense_structure, solution_from_forces
     implicit none
     private
-    public :: solve_periodic_cyclic
+    public :: solve_periodic_cyclic, disk_solution
 
 contains
 
@@ -69,4 +69,60 @@ contains
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine solve_periodic_cyclic
+
+    !> The whole disk's weighted-residual solution of a sector's travelling wave `sol`
+    !> (solved with `opts` and sol%rho): the disk assembled (assemble_disk) and its solution
+    !> from the friction forces of every sector, each sector's the phased copy of sector 0's
+    !> (harmonic h of sector s times exp(-i h 2 pi EO s / N)); no solve (solution_from_forces:
+    !> samples, energies, recovery as solve_periodic gives them). For what needs the disk
+    !> itself, e.g. its Floquet multipliers, which cover every perturbation and not only
+    !> those of the wave's symmetry. Errors: those of assemble_disk and solution_from_forces.
+    subroutine disk_solution(sector, cyc, opts, sol, disk, dsol, error)
+        !> The sector.
+        type(model_t), intent(in) :: sector
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> The options `sol` was solved with.
+        type(hbm_options_t), intent(in) :: opts
+        !> The sector's solution (converged).
+        type(hbm_solution_t), intent(in) :: sol
+        !> The assembled disk.
+        type(model_t), intent(out) :: disk
+        !> Its solution.
+        type(hbm_solution_t), intent(out) :: dsol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        type(hbm_options_t) :: o
+        real(dp), allocatable :: r(:, :)
+        complex(dp) :: z
+        integer :: nb, nch, s, c, k, h
+        call assemble_disk(sector, cyc, disk, error)
+        if (allocated(error)) return
+        nb = size(sol%rcoef, 1)
+        nch = size(sol%rcoef, 2)
+        allocate (r(nb, nch*cyc%sectors))
+        do s = 0, cyc%sectors - 1
+            do c = 1, nch
+                k = 1
+                do while (k <= nb)
+                    h = sol%harmonic(k)
+                    if (h == 0) then
+                        r(k, s*nch + c) = sol%rcoef(k, c)
+                        k = k + 1
+                        cycle
+                    end if
+                    ! rows k, k + 1: a cos + b sin = Re((a - i b) exp(i h omega t))
+                    z = cmplx(sol%rcoef(k, c), -sol%rcoef(k + 1, c), dp)* &
+                        exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, s), dp))
+                    r(k, s*nch + c) = real(z, dp)
+                    r(k + 1, s*nch + c) = -aimag(z)
+                    k = k + 2
+                end do
+            end do
+        end do
+        o = opts
+        o%rho = sol%rho
+        o%want_samples = .true.
+        call solution_from_forces(disk, o, r, dsol, error)
+    end subroutine disk_solution
 end module stickslip_hbm_cyclic

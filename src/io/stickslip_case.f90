@@ -375,9 +375,9 @@ contains
     end subroutine check_sparse_methods
 
     !> What runs on one sector of a disk (&cyclic model = 'sector'): the weighted residual
-    !> (method 'hbm' without stability, verify_periods, harmonics_tol; 'sweep' without
-    !> stability or a family); anything else is an input error naming what asked for it and
-    !> the remedy, model = 'disk'.
+    !> (method 'hbm' without verify_periods, harmonics_tol; 'sweep' without a family; the
+    !> stability of either is the assembled disk's); anything else is an input error naming
+    !> what asked for it and the remedy, model = 'disk'.
     subroutine check_sector_methods(nml, case, error)
         type(nml_file_t), intent(in) :: nml
         type(case_t), intent(in) :: case
@@ -385,15 +385,9 @@ contains
         character(len=:), allocatable :: what
         what = ""
         if (case%method == 'sweep') then
-            if (case%sweep%stability) then
-                what = "&sweep stability = .true."
-            else if (allocated(case%sweep%family%family_values)) then
-                what = "&sweep family_values"
-            end if
+            if (allocated(case%sweep%family%family_values)) what = "&sweep family_values"
         else if (case%method /= 'hbm') then
             what = "&run method = '"//trim(case%method)//"'"
-        else if (case%checks%stability) then
-            what = "&hbm stability = .true."
         else if (case%checks%verify_periods > 0) then
             what = "&hbm verify_periods = "//itoa(case%checks%verify_periods)
         else if (case%checks%harmonics_tol > 0.0_dp) then
@@ -402,9 +396,9 @@ contains
         if (len(what) == 0) return
         call group_error(nml, error, what//": on one sector of a disk (&cyclic model = "// &
                          "'sector') only the weighted residual runs in this version "// &
-                         "(&run method = 'hbm' without stability, verify_periods, "// &
-                         "harmonics_tol; 'sweep' with &sweep stability = .false., no "// &
-                         "family); set &cyclic model = 'disk' to run it on the assembled "// &
+                         "(&run method = 'hbm' without verify_periods, harmonics_tol; "// &
+                         "'sweep' without a family; their stability is the assembled "// &
+                         "disk's); set &cyclic model = 'disk' to run it on the assembled "// &
                          "full disk")
     end subroutine check_sector_methods
 

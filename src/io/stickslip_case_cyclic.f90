@@ -12,8 +12,8 @@
 !>     next_normal_dof  per contact (0: none): the DOF of the next sector its normal
 !>                      (normal_dof) acts against
 !>     model            'sector' (the default): the weighted residual on one sector, the tuned
-!>                      disk's travelling wave (methods 'hbm' and 'sweep' without stability
-!>                      in this version); 'disk':
+!>                      disk's travelling wave (methods 'hbm' and 'sweep'; their stability is
+!>                      the assembled disk's); 'disk':
 !>                      every method runs on the full disk assembled from the sector (N
 !>                      copies, the boundaries merged, the forcing phased, the contacts
 !>                      copied)

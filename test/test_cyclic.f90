@@ -19,6 +19,8 @@ module test_cyclic
     use stickslip_stability, only: floquet_t, periodic_stability
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
     use stickslip_truncation, only: truncation_t, estimate_truncation
+    use stickslip_sweep_family, only: family_options_t, family_result_t, family_peak_t, &
+        run_family, curve_peaks
     use stickslip_solution, only: hbm_options_t
     use fixtures, only: scratch, write_lines, project_path, enter_project_root
     implicit none
@@ -43,7 +45,54 @@ contains
         call test_sector_laws(t)
         call test_sector_sweep(t)
         call test_sector_stability(t)
+        call test_sector_family(t)
     end subroutine run_cyclic_tests
+
+    !> A family over the shrouds' normal load on one sector: both curves complete, their
+    !> blade peak refined, and equal to the peak of a separate sweep on the sector at that
+    !> load (1e-8); the linear limits not computed (NaN).
+    subroutine test_sector_family(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(model_t) :: m
+        type(sweep_options_t) :: so
+        type(family_options_t) :: fo
+        type(family_result_t) :: fam
+        type(sweep_result_t) :: single
+        type(family_peak_t), allocatable :: peaks(:)
+        type(hbm_options_t) :: ho
+        type(error_type), allocatable :: error
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        call check_error(t, error, "cyclic family: read the example", .false.)
+        if (allocated(error)) return
+        so%parameter = 'omega'
+        so%start = 2.0_dp
+        so%stop = 2.6_dp
+        so%stability = .false.
+        so%truncation = .false.
+        fo%family_parameter = 'normal_load'
+        fo%family_values = [0.05_dp, 0.2_dp]
+        call run_family(c%model, c%hbm, c%reference%reference_options_t, so, fo, fam, error, &
+                        cyclic=c%cyclic%cyc)
+        call check_error(t, error, "cyclic family: run", .false.)
+        if (allocated(error)) return
+        m = c%model
+        m%normal_load = [0.2_dp]
+        call run_sweep(m, c%hbm, c%reference%reference_options_t, so, single, error, &
+                       cyclic=c%cyclic%cyc)
+        ho = c%hbm
+        ho%rho = single%rho
+        if (.not. allocated(error)) call curve_peaks(m, ho, so, 'half_peak_to_peak', single, &
+                                                     peaks, error, c%cyclic%cyc)
+        call check_error(t, error, "cyclic family: the separate sweep", .false.)
+        if (allocated(error)) return
+        call check(t, fam%complete .and. all(fam%peaks(2, :)%refined) .and. &
+                   abs(fam%peaks(2, 2)%amplitude - peaks(2)%amplitude) < &
+                   1.0e-8_dp*peaks(2)%amplitude .and. &
+                   fam%stuck(2, 1)%amplitude /= fam%stuck(2, 1)%amplitude, &
+                   "cyclic family: the blade's peaks refined, = a separate sweep's", &
+                   real_text(fam%peaks(2, 2)%amplitude)//" vs "//real_text(peaks(2)%amplitude))
+    end subroutine test_sector_family
 
     !> The stability of a sector's travelling wave is the assembled disk's: the Floquet
     !> multipliers of the disk expanded from the sector's solution (disk_solution) against

@@ -32,6 +32,8 @@ module stickslip_sweep_family
     use stickslip_sweep_point, only: keep_coefficients
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
     use stickslip_golden, only: golden_search_t
+    use stickslip_cyclic, only: cyclic_t
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     use stickslip_blas_threads, only: parallel_threads
     implicit none
     private
@@ -212,7 +214,7 @@ contains
     !> res%diagnosis), not an error. Errors: stat input (invalid model or options, a
     !> resume of another size), the observers' errors, stat numerical (a NaN).
     subroutine run_family(model, hbm, ref, sweep, family, res, error, observers, resumes, &
-                          resumed, progress)
+                          resumed, progress, cyclic)
         !> The model at the case's values.
         type(model_t), intent(in) :: model
         !> Weighted-residual options of every point.
@@ -235,6 +237,9 @@ contains
         logical, intent(in), optional :: resumed(:)
         !> Progress hook: told after every curve.
         type(progress_t), intent(inout), optional :: progress
+        !> `model` is one sector of this tuned disk: every curve is its travelling wave
+        !> (run_sweep's cyclic); the linear limits are not computed (NaN).
+        type(cyclic_t), intent(in), optional :: cyclic
         type(model_t), allocatable :: models(:)
         type(hbm_options_t) :: ho
         type(hbm_solution_t) :: sol
@@ -292,7 +297,18 @@ contains
                 type(model_t) :: m
                 m = models(k)
                 call set_sweep_parameter(m, 'omega', sweep%start, m%force_amplitude)
-                if (last > 0) then
+                if (present(cyclic)) then
+                    if (last > 0) then
+                        call solve_periodic_cyclic(m, cyclic, ho, sol, e, &
+                                                   r_start=starts(:, :, last))
+                        if (.not. allocated(e)) then
+                            if (.not. sol%converged) &
+                                call solve_periodic_cyclic(m, cyclic, ho, sol, e)
+                        end if
+                    else
+                        call solve_periodic_cyclic(m, cyclic, ho, sol, e)
+                    end if
+                else if (last > 0) then
                     call solve_periodic(m, ho, sol, e, r_start=starts(:, :, last))
                     if (.not. allocated(e)) then
                         if (.not. sol%converged) call solve_periodic(m, ho, sol, e)
@@ -438,12 +454,12 @@ contains
             hk = hbm
             hk%rho = res%curves(k)%rho
             call curve_peaks(models(k), hk, sweep, family%measure, res%curves(k), &
-                             found(k)%peaks, ek)
+                             found(k)%peaks, ek, cyclic)
             if (allocated(ek)) then
                 errors(k) = ek
                 return
             end if
-            if (.not. family%references) return
+            if (.not. family%references .or. present(cyclic)) return
             ! the linear limits; a limit without motion (every DOF held) has no peak
             call linear_limit_peaks(models(k), .true., min(sweep%start, sweep%stop), &
                                     max(sweep%start, sweep%stop), family%measure, &
@@ -468,15 +484,17 @@ contains
             if (observed) observed = allocated(observers(k)%observer)
             if (observed .and. resume_k) then
                 call run_sweep(models(k), hbm, ref, sweep, res%curves(k), ek, &
-                               observer=observers(k)%observer, resume=resumes(k), r_start=r)
+                               observer=observers(k)%observer, resume=resumes(k), r_start=r, &
+                               cyclic=cyclic)
             else if (observed) then
                 call run_sweep(models(k), hbm, ref, sweep, res%curves(k), ek, &
-                               observer=observers(k)%observer, r_start=r)
+                               observer=observers(k)%observer, r_start=r, cyclic=cyclic)
             else if (resume_k) then
                 call run_sweep(models(k), hbm, ref, sweep, res%curves(k), ek, &
-                               resume=resumes(k), r_start=r)
+                               resume=resumes(k), r_start=r, cyclic=cyclic)
             else
-                call run_sweep(models(k), hbm, ref, sweep, res%curves(k), ek, r_start=r)
+                call run_sweep(models(k), hbm, ref, sweep, res%curves(k), ek, r_start=r, &
+                               cyclic=cyclic)
             end if
         end subroutine trace_curve
     end subroutine run_family
@@ -488,7 +506,7 @@ contains
     !> curve's rho) started from the best solution so far, to 1e-5 of that interval (the
     !> value to about 1e-10 relative where the peak is smooth). `interior`, `refined` and
     !> the check say which. Errors: those of solve_periodic (stat input).
-    subroutine curve_peaks(model, hbm, sweep, measure, curve, peaks, error)
+    subroutine curve_peaks(model, hbm, sweep, measure, curve, peaks, error, cyclic)
         !> The model of the curve (omega is set per solve).
         type(model_t), intent(in) :: model
         !> Weighted-residual options with the curve's rho.
@@ -503,6 +521,8 @@ contains
         type(family_peak_t), allocatable, intent(out) :: peaks(:)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> `model` is one sector of this disk (the curve its travelling wave).
+        type(cyclic_t), intent(in), optional :: cyclic
         real(dp), allocatable :: a(:, :), best_r(:, :), ai(:)
         type(golden_search_t) :: search
         type(vibration_samples_t) :: samples
@@ -553,7 +573,11 @@ contains
                     do while (.not. search%done())
                         w = search%next()
                         call set_sweep_parameter(m, 'omega', w, model%force_amplitude)
-                        call solve_periodic(m, ho, ps, error, r_start=best_r)
+                        if (present(cyclic)) then
+                            call solve_periodic_cyclic(m, cyclic, ho, ps, error, r_start=best_r)
+                        else
+                            call solve_periodic(m, ho, ps, error, r_start=best_r)
+                        end if
                         if (allocated(error)) return
                         p%solves = p%solves + 1
                         if (.not. ps%converged) then
@@ -587,7 +611,7 @@ contains
             real(dp), allocatable :: v(:)
             type(frc_point_t) :: pt
             integer :: j
-            call keep_coefficients(m, s, sweep, pt)
+            call keep_coefficients(m, s, sweep, pt, cyclic)
             if (measure == 'max_abs') then
                 if (allocated(sweep%observe)) then
                     pt%amplitude = maxval(abs(matmul(s%x, transpose(sweep%observe))), dim=1)

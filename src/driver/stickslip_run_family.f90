@@ -82,9 +82,16 @@ contains
             end if
             allocate (slots(k)%observer, source=writers(k))
         end do
-        call run_family(case%model, case%hbm, case%reference%reference_options_t, opts, &
-                        fopts, fam, error, observers=slots, resumes=saved, resumed=found, &
-                        progress=progress)
+        if (case%cyclic%given .and. case%cyclic%model == 'sector') then
+            ! one sector of a tuned disk: every curve its travelling wave
+            call run_family(case%model, case%hbm, case%reference%reference_options_t, opts, &
+                            fopts, fam, error, observers=slots, resumes=saved, resumed=found, &
+                            progress=progress, cyclic=case%cyclic%cyc)
+        else
+            call run_family(case%model, case%hbm, case%reference%reference_options_t, opts, &
+                            fopts, fam, error, observers=slots, resumes=saved, resumed=found, &
+                            progress=progress)
+        end if
         call after_method(error, wanted)
         if (.not. wanted) return
         ! every curve's points in one table

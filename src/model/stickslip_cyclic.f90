@@ -29,7 +29,7 @@ module stickslip_cyclic
     implicit none
     private
     public :: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
-        cyclic_frequencies, sector_phase, channel_displacements
+        cyclic_frequencies, sector_phase, channel_displacements, next_of
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -137,6 +137,18 @@ contains
             end do
         end subroutine check_next
     end subroutine validate_cyclic
+
+    !> Entry j of a per-contact list of next-sector DOFs (cyclic_t%next_dof,
+    !> next_normal_dof): 0 when the list is absent or shorter.
+    pure integer function next_of(list, j)
+        !> The list.
+        integer, allocatable, intent(in) :: list(:)
+        !> The contact.
+        integer, intent(in) :: j
+        next_of = 0
+        if (.not. allocated(list)) return
+        if (j <= size(list)) next_of = list(j)
+    end function next_of
 
     !> The nodal diameter of harmonic h under engine order eo on n sectors: h eo modulo n,
     !> folded to 0..n/2 (h eo and n - h eo are the same diameter, travelling the other way).
@@ -297,14 +309,6 @@ contains
             end do
         end function scatter
 
-        pure integer function next_of(next, j)
-            integer, allocatable, intent(in) :: next(:)
-            integer, intent(in) :: j
-            next_of = 0
-            if (.not. allocated(next)) return
-            if (j <= size(next)) next_of = next(j)
-        end function next_of
-
         subroutine copy_scalars(a, b)
             real(dp), allocatable, intent(in) :: a(:)
             real(dp), allocatable, intent(out) :: b(:)
@@ -357,16 +361,6 @@ contains
                 k = k + 2
             end do
         end do
-
-    contains
-
-        pure integer function next_of(list, j)
-            integer, allocatable, intent(in) :: list(:)
-            integer, intent(in) :: j
-            next_of = 0
-            if (.not. allocated(list)) return
-            if (j <= size(list)) next_of = list(j)
-        end function next_of
     end function channel_displacements
 
     !> The undamped natural frequencies [rad/s], increasing, of the sector's structure (M and

@@ -23,7 +23,7 @@ module stickslip_cyclic_dynamics
         static_singular_threshold
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: along_tangent, along_normal
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     implicit none
     private
@@ -208,14 +208,6 @@ contains
         end do
 
     contains
-
-        pure integer function next_of(list, jj)
-            integer, allocatable, intent(in) :: list(:)
-            integer, intent(in) :: jj
-            next_of = 0
-            if (.not. allocated(list)) return
-            if (jj <= size(list)) next_of = list(jj)
-        end function next_of
 
         !> The smallest singular value of a square matrix, 1-norm estimate (0: singular).
         real(dp) function smallest(a)

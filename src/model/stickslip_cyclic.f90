@@ -29,7 +29,7 @@ module stickslip_cyclic
     implicit none
     private
     public :: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
-        cyclic_frequencies, sector_phase, channel_displacements, next_of
+        cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -149,6 +149,30 @@ contains
         if (.not. allocated(list)) return
         if (j <= size(list)) next_of = list(j)
     end function next_of
+
+    !> The sector's cyclic motions for the boundary phase e, n x (n - boundary pairs): the
+    !> DOFs off the right boundary free (an identity column each, in their order), the right
+    !> boundary the paired left DOF times e (X_right = e X_left). No errors.
+    pure function cyclic_basis(cyc, n, e) result(t)
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> DOFs of the sector.
+        integer, intent(in) :: n
+        !> The phase factor of the right boundary.
+        complex(dp), intent(in) :: e
+        complex(dp) :: t(n, n - size(cyc%right))
+        integer :: j, k, col
+        t = (0.0_dp, 0.0_dp)
+        col = 0
+        do j = 1, n
+            if (any(cyc%right == j)) cycle
+            col = col + 1
+            t(j, col) = (1.0_dp, 0.0_dp)
+            do k = 1, size(cyc%left)
+                if (cyc%left(k) == j) t(cyc%right(k), col) = e
+            end do
+        end do
+    end function cyclic_basis
 
     !> The nodal diameter of harmonic h under engine order eo on n sectors: h eo modulo n,
     !> folded to 0..n/2 (h eo and n - h eo are the same diameter, travelling the other way).
@@ -384,7 +408,7 @@ contains
         complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :), work(:)
         real(dp), allocatable :: w(:), rwork(:)
         complex(dp) :: query(1), e
-        integer :: n, m, j, k, col, info
+        integer :: n, m, info
         call validate_cyclic(sector, cyc, error)
         if (allocated(error)) return
         if (nd < 0 .or. nd > cyc%sectors/2) then
@@ -395,17 +419,7 @@ contains
         n = sector%ndof
         m = n - size(cyc%right)
         e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
-        allocate (t(n, m))
-        t = (0.0_dp, 0.0_dp)
-        col = 0
-        do j = 1, n
-            if (any(cyc%right == j)) cycle
-            col = col + 1
-            t(j, col) = (1.0_dp, 0.0_dp)
-            do k = 1, size(cyc%left)
-                if (cyc%left(k) == j) t(cyc%right(k), col) = e
-            end do
-        end do
+        t = cyclic_basis(cyc, n, e)
         kc = matmul(conjg(transpose(t)), matmul(cmplx(sector%stiffness, 0.0_dp, dp), t))
         mc = matmul(conjg(transpose(t)), matmul(cmplx(sector%mass, 0.0_dp, dp), t))
         allocate (w(m), rwork(max(1, 3*m - 2)))

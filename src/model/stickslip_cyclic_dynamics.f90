@@ -23,7 +23,7 @@ module stickslip_cyclic_dynamics
         static_singular_threshold
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: along_tangent, along_normal
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of, cyclic_basis
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     implicit none
     private
@@ -54,7 +54,7 @@ contains
         complex(dp), allocatable :: t(:, :), z(:, :), zc(:, :), rhs(:, :), x(:, :), &
                                    dm(:, :), f(:), work(:), dx(:, :)
         integer, allocatable :: ipiv(:), next(:)
-        integer :: n, m, nc, ih, h, j, c, k, col, info
+        integer :: n, m, nc, ih, h, j, c, k, info
         real(dp) :: anorm, rcond, zscale, rel, smin_k, smin_m
         complex(dp) :: e, ihw
         logical :: deriv
@@ -105,16 +105,7 @@ contains
             end if
             e = exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, 1), dp))
             ! the cyclic motions: the right boundary is the left one times e
-            t = (0.0_dp, 0.0_dp)
-            col = 0
-            do j = 1, n
-                if (any(cyc%right == j)) cycle
-                col = col + 1
-                t(j, col) = (1.0_dp, 0.0_dp)
-                do k = 1, size(cyc%left)
-                    if (cyc%left(k) == j) t(cyc%right(k), col) = e
-                end do
-            end do
+            t = cyclic_basis(cyc, n, e)
             ! the measuring directions D = d - e d_next
             dm = cmplx(d, 0.0_dp, dp)
             do c = 1, nc

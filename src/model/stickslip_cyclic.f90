@@ -199,16 +199,20 @@ contains
         type(cyclic_t), intent(in) :: cyc
         !> DOFs of the sector, the DOF and the sector.
         integer, intent(in) :: n, j, s
-        integer :: k, kept, t
+        integer :: k, kept, t, jj
+        ! a right boundary DOF is its left partner one sector on (never itself on the
+        ! right: validate_cyclic refuses a two-sided DOF)
         t = modulo(s, cyc%sectors)
+        jj = j
         do k = 1, size(cyc%right)
             if (cyc%right(k) == j) then
-                g = disk_dof(cyc, n, cyc%left(k), t + 1)
-                return
+                jj = cyc%left(k)
+                t = modulo(t + 1, cyc%sectors)
+                exit
             end if
         end do
         kept = n - size(cyc%right)
-        g = t*kept + j - count(cyc%right < j)
+        g = t*kept + jj - count(cyc%right < jj)
     end function disk_dof
 
     !> The full disk of `sector`: N copies with their boundaries merged (M, K and C

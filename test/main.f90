@@ -65,6 +65,7 @@ program tester
     use test_fallback, only: run_fallback_tests
     use test_family, only: run_family_tests
     use test_cyclic, only: run_cyclic_tests
+    use test_cyclic_fe, only: run_cyclic_fe_tests
     use stickslip_blas_threads, only: limit_blas_threads
     implicit none
 
@@ -113,6 +114,7 @@ program tester
         suite_t("contact_sweep", run_contact_sweep_tests),&
         suite_t("family", run_family_tests),&
         suite_t("cyclic", run_cyclic_tests),&
+        suite_t("cyclic_fe", run_cyclic_fe_tests),&
         suite_t("modes", run_modes_tests),&
         suite_t("file_faults", run_file_faults_tests),&
         suite_t("fft", run_fft_tests),&

@@ -24,7 +24,7 @@ module test_cli
         good_system, good_forcing, good_friction, sweep_case
     implicit none
     private
-    public :: run_cli_tests, cli, summary_value, count_lines, csv_rows
+    public :: run_cli_tests, cli, summary_value, count_lines, csv_rows, scratch_copy
 
 
 contains

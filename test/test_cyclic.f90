@@ -23,6 +23,10 @@ module test_cyclic
         run_family, curve_peaks
     use stickslip_solution, only: hbm_options_t
     use fixtures, only: scratch, write_lines, project_path, enter_project_root
+    use stickslip_basis, only: basis_t, new_basis
+    use stickslip_dynamics, only: dynamics_t
+    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
+    use stickslip_cyclic_modal, only: prepare_cyclic_modes
     implicit none
     private
     public :: run_cyclic_tests
@@ -46,7 +50,85 @@ contains
         call test_sector_sweep(t)
         call test_sector_stability(t)
         call test_sector_family(t)
+        call test_modal_condensation(t)
     end subroutine run_cyclic_tests
+
+    !> The sector's condensation as a modal sum over its prepared cyclic modes (a case file
+    !> prepares them; Rayleigh damping) against the dense LU of the projected pencil (the
+    !> modes dropped), on the underplatform damper example (8 DOFs, contacts against the
+    !> next sector, EO 3 and 17 = 7 backwards, every harmonic 0..15): X0, Y, V0, G and their
+    !> omega derivatives agree to 1e-10 of their largest entry. A non-proportional damping
+    !> is not prepared (the dense path stays), nor are another sector's modes used.
+    subroutine test_modal_condensation(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(cyclic_t) :: plain, modal
+        type(model_t) :: other
+        type(basis_t) :: basis
+        type(dynamics_t) :: dm, dd
+        type(error_type), allocatable :: error
+        integer, parameter :: orders(2) = [3, 17]
+        real(dp) :: worst
+        integer :: e
+        logical :: prepared, ok
+        call read_case(project_path("examples/bladed_disk_damper.nml"), c, error)
+        call check_error(t, error, "cyclic modal: read the example", .false.)
+        if (allocated(error)) return
+        call check(t, allocated(c%cyclic%cyc%modes), "cyclic modal: the case prepared the "// &
+                   "sector's cyclic modes")
+        call new_basis(basis, 15, .false., 64, error)
+        worst = 0.0_dp
+        do e = 1, size(orders)
+            modal = c%cyclic%cyc
+            modal%engine_order = orders(e)
+            call prepare_cyclic_modes(c%cyclic%sector, modal, 15, error, prepared)
+            if (allocated(error)) exit
+            plain = modal
+            deallocate (plain%modes)
+            call new_cyclic_dynamics(dm, c%cyclic%sector, modal, basis, error, .true.)
+            if (allocated(error)) exit
+            call new_cyclic_dynamics(dd, c%cyclic%sector, plain, basis, error, .true.)
+            if (allocated(error)) exit
+            worst = max(worst, differ(dm%x0, dd%x0), differ(dm%v0, dd%v0), &
+                        differ(dm%dv0, dd%dv0), &
+                        maxval(abs(dm%dg - dd%dg))/maxval(abs(dd%dg)), &
+                        maxval(abs(dm%y - dd%y))/maxval(abs(dd%y)), &
+                        maxval(abs(dm%g - dd%g))/maxval(abs(dd%g)), &
+                        maxval(abs(dm%x0_static - dd%x0_static))/ &
+                        max(maxval(abs(dd%x0_static)), tiny(1.0_dp)), &
+                        maxval(abs(dm%y_static - dd%y_static))/maxval(abs(dd%y_static)))
+        end do
+        call check_error(t, error, "cyclic modal: the condensations", .false.)
+        if (allocated(error)) return
+        call check(t, prepared .and. worst < 1.0e-10_dp, "cyclic modal: the modal sum = "// &
+                   "the dense LU (EO 3 and 17, harmonics 0..15, omega derivatives)", &
+                   "largest difference "//real_text(worst))
+        ! a damping that is not proportional: not prepared
+        other = c%cyclic%sector
+        other%damping(1, 1) = other%damping(1, 1) + 0.05_dp
+        modal = c%cyclic%cyc
+        call prepare_cyclic_modes(other, modal, 15, error, prepared)
+        call check(t, .not. allocated(error) .and. .not. prepared .and. &
+                   .not. allocated(modal%modes), "cyclic modal: non-proportional damping "// &
+                   "keeps the dense condensation")
+        ! another sector with the first one's modes: they are ignored
+        plain = c%cyclic%cyc
+        deallocate (plain%modes)
+        call new_cyclic_dynamics(dm, other, c%cyclic%cyc, basis, error)
+        ok = .not. allocated(error)
+        if (ok) then
+            call new_cyclic_dynamics(dd, other, plain, basis, error)
+            ok = .not. allocated(error)
+        end if
+        if (ok) ok = differ(dm%x0, dd%x0) == 0.0_dp
+        call check(t, ok, "cyclic modal: another sector's modes are not used")
+        call basis%destroy()
+    contains
+        real(dp) function differ(a, b)
+            complex(dp), intent(in) :: a(:, :), b(:, :)
+            differ = maxval(abs(a - b))/max(maxval(abs(b)), tiny(1.0_dp))
+        end function differ
+    end subroutine test_modal_condensation
 
     !> A family over the shrouds' normal load on one sector: both curves complete, their
     !> blade peak refined, and equal to the peak of a separate sweep on the sector at that

@@ -33,7 +33,10 @@ module stickslip_case
     use stickslip_case_microslip, only: read_microslip_group
     use stickslip_iwan_element, only: iwan_element_t
     use stickslip_diagnostics, only: diagnostics_t, level_warning
-    use stickslip_case_cyclic, only: cyclic_case_t, read_cyclic_group
+    use stickslip_case_cyclic, only: cyclic_case_t, read_cyclic_group, cyclic_case_model, &
+        cyclic_boundary_dofs, set_cyclic_boundary_dofs, measure_diameter_errors, &
+        diameter_findings
+    use stickslip_cyclic, only: cyclic_t
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t, read_modes_group, modes_run_options_t
     implicit none
@@ -156,6 +159,9 @@ contains
         logical :: method_given
         type(sparse_system_t) :: sparse
         integer :: k, j
+        integer, allocatable :: keep(:)
+        type(cyclic_t) :: cyc_full
+        real(dp) :: band
 
         case%path = path
         call read_namelist_file(path, nml, error)
@@ -195,7 +201,13 @@ contains
                                    case%output_dofs_given, case%full_field, &
                                    case%plot_amplitude, case%units, error)
             if (allocated(error)) return
-            if (case%reduction%method == 'none') then
+            if (case%reduction%method == 'none' .and. nml%find("cyclic") > 0) then
+                call group_error(nml, error, "&reduction method = 'none': a sector of a "// &
+                                 "bladed disk (&cyclic) from Matrix Market files of more "// &
+                                 "than 2000 DOFs is reduced (Craig-Bampton keeping its "// &
+                                 "cyclic boundaries): use method = 'craig-bampton' or 'auto'")
+                return
+            else if (case%reduction%method == 'none') then
                 ! the exact sparse condensation: no reduction, the matrices kept sparse
                 call load_sparse_system(nml, case%system_files, case%model%ndof, sparse, error)
                 if (allocated(error)) return
@@ -206,15 +218,44 @@ contains
                 if (sparse%has_damping) case%sparse_model%damping = sparse%damping
                 case%reduction%report%full_dof = case%model%ndof
                 case%reduction%report%reduced_dof = case%model%ndof
+            else if (nml%find("cyclic") > 0) then
+                ! a sector of a bladed disk: its cyclic boundaries and next-sector DOFs kept
+                ! by the reduction, then renumbered
+                call read_cyclic_group(nml, case%model, case%cyclic, case%hbm%harmonics, &
+                                       error, defer=.true.)
+                if (allocated(error)) return
+                keep = cyclic_boundary_dofs(case%cyclic%cyc)
+                case%reduction%keep_basis = case%full_field
+                call reduce_case_model(nml, case%reduction, sparse, case%system_files, &
+                                       case%hbm%harmonics, case%model, case%output_dofs, &
+                                       case%output_dofs_given, case%directory, error, &
+                                       progress, keep)
+                if (allocated(error)) return
+                cyc_full = case%cyclic%cyc
+                call set_cyclic_boundary_dofs(case%cyclic%cyc, keep)
+                ! the reduction's error per nodal diameter (the full matrices are at hand
+                ! unless the reduced model came from the cache)
+                if (case%reduction%error_estimate .and. sparse%loaded) then
+                    band = abs(case%model%omega)*case%hbm%harmonics
+                    if (allocated(case%reduction%report%error_frequencies)) band = &
+                        max(band, maxval(case%reduction%report%error_frequencies))
+                    call measure_diameter_errors(nml, case%cyclic, sparse%stiffness, &
+                                                 sparse%mass, cyc_full, case%model, &
+                                                 case%hbm%harmonics, case%hbm%odd_only, &
+                                                 band, error)
+                    if (allocated(error)) return
+                    call diameter_findings(case%cyclic, case%reduction%diagnostics)
+                end if
             else
                 case%reduction%keep_basis = case%full_field
                 call reduce_case_model(nml, case%reduction, sparse, case%system_files, &
                                        case%hbm%harmonics, case%model, case%output_dofs, &
                                        case%output_dofs_given, case%directory, error, progress)
                 if (allocated(error)) return
+            end if
+            if (allocated(case%reduction%output_rows)) then
                 ! the truncation estimate judges the output DOFs, not modal coordinates
-                if (allocated(case%reduction%output_rows)) &
-                    case%checks%observe = case%reduction%output_rows
+                case%checks%observe = case%reduction%output_rows
             end if
         end if
         if (allocated(case%sparse_model)) then
@@ -241,14 +282,12 @@ contains
             return
         end if
 
-        if (nml%find("cyclic") > 0 .and. sparse%read) then
-            call group_error(nml, error, "&cyclic: a sector from Matrix Market files is not "// &
-                             "supported in this version (its reduction must keep the cyclic "// &
-                             "boundary DOFs); give the sector's matrices inline in &system")
-            return
-        end if
         ! a sector of a bladed disk: with &cyclic model = 'disk' the model becomes the disk
-        call read_cyclic_group(nml, case%model, case%cyclic, error)
+        if (case%cyclic%given) then
+            call cyclic_case_model(nml, case%model, case%cyclic, case%hbm%harmonics, error)
+        else
+            call read_cyclic_group(nml, case%model, case%cyclic, case%hbm%harmonics, error)
+        end if
         if (allocated(error)) return
         if (.not. sparse%read) then
             call read_output_group(nml, case%model, case%directory, case%output_dofs, &

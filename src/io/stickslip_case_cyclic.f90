@@ -19,15 +19,22 @@
 !>                      copied)
 !> Every message names the case file, &cyclic and the variable.
 module stickslip_case_cyclic
-    use stickslip_error, only: error_type
+    use, intrinsic :: iso_fortran_env, only: int64
+    use stickslip_error, only: error_type, itoa
     use stickslip_model, only: model_t
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, assemble_disk
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, assemble_disk, nodal_diameter
+    use stickslip_cyclic_modal, only: prepare_cyclic_modes
+    use stickslip_sparse, only: max_dense_entries, sparse_matrix_t
+    use stickslip_cyclic_sparse, only: diameter_frequency_errors
+    use stickslip_kinds, only: dp
+    use stickslip_diagnostics, only: diagnostics_t, level_warning
     use stickslip_namelist, only: nml_file_t, lower
     use stickslip_namelist_values, only: check_names, get_integer, get_integers, get_string
     use stickslip_case_model, only: group_error, max_terms
     implicit none
     private
-    public :: cyclic_case_t, read_cyclic_group
+    public :: cyclic_case_t, read_cyclic_group, cyclic_case_model, cyclic_boundary_dofs, &
+        set_cyclic_boundary_dofs, measure_diameter_errors, forced_diameters, diameter_findings
 
     !> &cyclic as read, and the sector (with model = 'disk' the case's model is the assembled
     !> disk; with 'sector' it is the sector itself).
@@ -40,7 +47,17 @@ module stickslip_case_cyclic
         type(cyclic_t) :: cyc
         !> The sector's model (with model = 'disk': the case's model is the disk).
         type(model_t) :: sector
+        !> A reduced FE sector: the nodal diameters its harmonics reach, and per diameter
+        !> the largest relative error of the reduced sector's natural frequencies (up to
+        !> the run's highest harmonic frequency) and the full sector's lowest one [rad/s]
+        !> (measure_diameter_errors; unallocated when not measured).
+        integer, allocatable :: diameters(:)
+        real(dp), allocatable :: diameter_errors(:), diameter_lowest(:)
     end type cyclic_case_t
+
+    !> The largest relative error of a reduced sector's natural frequencies per nodal
+    !> diameter (up to the run's highest harmonic frequency) that passes without a warning.
+    real(dp), parameter, public :: diameter_error_warning = 1.0e-2_dp
 
     !> Most DOF pairs of a boundary.
     integer, parameter :: max_boundary = 100000
@@ -53,15 +70,20 @@ contains
     !> range, the boundaries missing, of other sizes, with a DOF out of range, repeated or on
     !> both sides, a next DOF out of range, on the right boundary or for a contact without
     !> that direction, model other than 'disk' or 'sector'.
-    subroutine read_cyclic_group(nml, model, cc, error)
+    subroutine read_cyclic_group(nml, model, cc, hmax, error, defer)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The sector; the disk on return with model = 'disk'.
         type(model_t), intent(inout) :: model
         !> The group as read.
         type(cyclic_case_t), intent(out) :: cc
+        !> Highest harmonic of the runs (&hbm harmonics).
+        integer, intent(in) :: hmax
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
+        !> Read and check only (the sector of Matrix Market files, still to be reduced):
+        !> cyclic_case_model finishes.
+        logical, intent(in), optional :: defer
         character(len=*), parameter :: g = "cyclic"
         character(len=:), allocatable :: kind
         logical :: found
@@ -124,14 +146,166 @@ contains
             return
         end select
         cc%model = kind
+        if (present(defer)) then
+            if (defer) return
+        end if
+        call cyclic_case_model(nml, model, cc, hmax, error)
+    end subroutine read_cyclic_group
+
+    !> The nodal diameters, increasing, that the harmonics of a run reach: 1..harmonics
+    !> (odd ones only with odd_only) and 0 (the static term) unless odd_only.
+    pure function forced_diameters(cyc, harmonics, odd_only) result(nds)
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> &hbm harmonics and odd_only.
+        integer, intent(in) :: harmonics
+        logical, intent(in) :: odd_only
+        integer, allocatable :: nds(:)
+        logical :: hit(0:cyc%sectors/2)
+        integer :: h, k
+        hit = .false.
+        do h = merge(1, 0, odd_only), harmonics
+            if (odd_only .and. mod(h, 2) == 0) cycle
+            hit(nodal_diameter(h, cyc%engine_order, cyc%sectors)) = .true.
+        end do
+        nds = pack([(k, k=0, cyc%sectors/2)], hit)
+    end function forced_diameters
+
+    !> The error of a reduced FE sector per nodal diameter (stickslip_cyclic_sparse,
+    !> diameter_frequency_errors) into cc: the diameters of forced_diameters, the
+    !> frequencies up to `band` [rad/s]. `kmat`, `mmat`: the full sector; `cyc_full` its
+    !> boundaries in full numbers; cc%cyc and `reduced` the reduced sector. Errors: those
+    !> of the eigensolvers, prefixed with the file and &cyclic.
+    subroutine measure_diameter_errors(nml, cc, kmat, mmat, cyc_full, reduced, harmonics, &
+                                       odd_only, band, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The &cyclic group read, in reduced numbers; the errors on return.
+        type(cyclic_case_t), intent(inout) :: cc
+        !> The full sector's stiffness and mass.
+        type(sparse_matrix_t), intent(in) :: kmat, mmat
+        !> Its symmetry in full numbers.
+        type(cyclic_t), intent(in) :: cyc_full
+        !> The reduced sector.
+        type(model_t), intent(in) :: reduced
+        !> &hbm harmonics and odd_only.
+        integer, intent(in) :: harmonics
+        logical, intent(in) :: odd_only
+        !> The highest frequency compared [rad/s].
+        real(dp), intent(in) :: band
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        cc%diameters = forced_diameters(cc%cyc, harmonics, odd_only)
+        call diameter_frequency_errors(kmat, mmat, cyc_full, reduced, cc%cyc, cc%diameters, &
+                                       band, cc%diameter_errors, cc%diameter_lowest, error)
+        if (allocated(error)) then
+            error%message = nml%path//": &cyclic: the reduction's error per nodal "// &
+                            "diameter: "//error%message
+            deallocate (cc%diameters)
+        end if
+    end subroutine measure_diameter_errors
+
+    !> A warning 'reduction_error_nd' into `diagnostics` when a measured error per nodal
+    !> diameter (measure_diameter_errors) exceeds diameter_error_warning.
+    subroutine diameter_findings(cc, diagnostics)
+        !> The &cyclic case, measured.
+        type(cyclic_case_t), intent(in) :: cc
+        !> Where the finding goes.
+        type(diagnostics_t), intent(inout) :: diagnostics
+        character(len=300) :: buf
+        integer :: k
+        if (.not. allocated(cc%diameters)) return
+        k = maxloc(cc%diameter_errors, 1)
+        if (cc%diameter_errors(k) <= diameter_error_warning) return
+        write (buf, '(a,i0,a,es10.3,a,i0,a)') "reduction: at nodal diameter ", &
+            cc%diameters(k), " the reduced sector's natural frequencies are off by ", &
+            cc%diameter_errors(k), " > ", nint(100*diameter_error_warning), "% (relative, "// &
+            "up to the run's highest harmonic frequency): keep more modes (&reduction modes, "// &
+            "max_frequency)"
+        call diagnostics%add(level_warning, "reduction_error_nd", trim(buf))
+    end subroutine diameter_findings
+
+    !> The DOFs of `cyc` a reduction must keep: the left and right boundaries, then the
+    !> nonzero next_dof and next_normal_dof entries (set_cyclic_boundary_dofs puts them
+    !> back in that order).
+    pure function cyclic_boundary_dofs(cyc) result(dofs)
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        integer, allocatable :: dofs(:)
+        dofs = [cyc%left, cyc%right]
+        if (allocated(cyc%next_dof)) dofs = [dofs, pack(cyc%next_dof, cyc%next_dof > 0)]
+        if (allocated(cyc%next_normal_dof)) dofs = [dofs, pack(cyc%next_normal_dof, &
+                                                            cyc%next_normal_dof > 0)]
+    end function cyclic_boundary_dofs
+
+    !> Put renumbered cyclic_boundary_dofs back into `cyc`.
+    pure subroutine set_cyclic_boundary_dofs(cyc, dofs)
+        !> The symmetry.
+        type(cyclic_t), intent(inout) :: cyc
+        !> cyclic_boundary_dofs(cyc), renumbered.
+        integer, intent(in) :: dofs(:)
+        integer :: k, j
+        k = size(cyc%left)
+        cyc%left = dofs(1:k)
+        cyc%right = dofs(k + 1:2*k)
+        k = 2*k
+        if (allocated(cyc%next_dof)) then
+            do j = 1, size(cyc%next_dof)
+                if (cyc%next_dof(j) <= 0) cycle
+                k = k + 1
+                cyc%next_dof(j) = dofs(k)
+            end do
+        end if
+        if (allocated(cyc%next_normal_dof)) then
+            do j = 1, size(cyc%next_normal_dof)
+                if (cyc%next_normal_dof(j) <= 0) cycle
+                k = k + 1
+                cyc%next_normal_dof(j) = dofs(k)
+            end do
+        end if
+    end subroutine set_cyclic_boundary_dofs
+
+    !> The models of a &cyclic case read by read_cyclic_group, `model` being the final
+    !> sector (e.g. reduced, cc%cyc in its numbers): cc%sector is the sector, with its
+    !> cyclic modes prepared for the harmonics 0..hmax (stickslip_cyclic_modal), and with
+    !> model = 'disk' `model` becomes the assembled disk. Errors (stat input): the disk too
+    !> large for a dense model; those of validate_cyclic and assemble_disk, prefixed with
+    !> the file and &cyclic.
+    subroutine cyclic_case_model(nml, model, cc, hmax, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The sector; the disk on return with model = 'disk'.
+        type(model_t), intent(inout) :: model
+        !> The &cyclic group read.
+        type(cyclic_case_t), intent(inout) :: cc
+        !> Highest harmonic of the runs (&hbm harmonics).
+        integer, intent(in) :: hmax
+        !> Set on the first problem found.
+        type(error_type), allocatable, intent(out) :: error
+        integer(int64) :: disk_dofs
+        call validate_cyclic(model, cc%cyc, error)
+        if (allocated(error)) then
+            error%message = nml%path//": "//cyclic_words(error%message)
+            return
+        end if
         cc%sector = model
-        if (kind == 'sector') return
+        if (cc%model == 'sector') then
+            call prepare_cyclic_modes(cc%sector, cc%cyc, hmax, error)
+            if (allocated(error)) error%message = nml%path//": &cyclic: "//error%message
+            return
+        end if
+        disk_dofs = int(cc%cyc%sectors, int64)*(model%ndof - size(cc%cyc%right))
+        if (disk_dofs**2 > max_dense_entries) then
+            call group_error(nml, error, "&cyclic model = 'disk': the assembled disk would "// &
+                             "have "//itoa(int(disk_dofs))//" DOFs, too many for a dense "// &
+                             "model; run it on one sector (model = 'sector')")
+            return
+        end if
         call assemble_disk(cc%sector, cc%cyc, model, error)
         if (allocated(error)) then
             error%message = nml%path//": &cyclic: "//error%message
         end if
-
-    end subroutine read_cyclic_group
+    end subroutine cyclic_case_model
 
     !> A message of validate_cyclic in the case file's words (&cyclic left_dofs, ...).
     function cyclic_words(message) result(words)

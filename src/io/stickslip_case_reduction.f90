@@ -207,7 +207,7 @@ contains
     !> DOFs. `directory` is the &output directory (the default cache's folder); `progress`
     !> reports the phases that take a second or more.
     subroutine reduce_case_model(nml, red, sparse, files, harmonics, model, output_dofs, &
-                                 output_given, directory, error, progress)
+                                 output_given, directory, error, progress, keep_dofs)
         !> The parsed case file (its path, and &sweep for the frequency range).
         type(nml_file_t), intent(in) :: nml
         !> The options; on return the report and the full-model DOF numbers.
@@ -230,6 +230,9 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Where the phases are reported (optional).
         type(progress_t), intent(inout), optional :: progress
+        !> More DOFs kept as boundary DOFs (full numbers, checked in 1..N by the caller;
+        !> e.g. a sector's cyclic boundaries); on return their reduced numbers.
+        integer, intent(inout), optional :: keep_dofs(:)
         type(reduction_options_t) :: opts
         real(dp), allocatable :: unit_q(:), column(:)
         type(reduced_model_t) :: rm
@@ -263,6 +266,7 @@ contains
             pack([(i, i=1, n)], any(model%normal_direction /= 0.0_dp, dim=2))]
         if (allocated(model%tangent2_direction)) bset = [bset, &
             pack([(i, i=1, n)], any(model%tangent2_direction /= 0.0_dp, dim=2))]
+        if (present(keep_dofs)) bset = [bset, keep_dofs]
         ! the DOFs the user asks for are boundary DOFs too: exact static response there
         if (output_given) then
             call check_range("&output dofs", output_dofs)
@@ -447,6 +451,11 @@ contains
         do k = 1, size(model%force_dof)
             model%force_dof(k) = reduced_dof_of(rm, model%force_dof(k))
         end do
+        if (present(keep_dofs)) then
+            do k = 1, size(keep_dofs)
+                keep_dofs(k) = reduced_dof_of(rm, keep_dofs(k))
+            end do
+        end if
         ! directions and load shapes: T^T W (the boundary rows of W), T^T F
         if (allocated(model%contact_direction)) then
             call reduce_vectors(rm, model%contact_direction, reduced_shape, error)

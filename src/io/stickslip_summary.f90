@@ -727,9 +727,13 @@ contains
 
     !> The keys of a bladed disk (&cyclic): cyclic_model ('disk'), sectors, engine_order,
     !> disk_dof, and for the forced harmonics h the nodal diameter (cyclic_nodal_diameters)
-    !> and the sector's linear frequencies in that diameter, contacts carrying nothing
-    !> (cyclic_frequencies_nd<k> [rad/s]).
+    !> and the sector's lowest linear frequencies in that diameter (at most
+    !> max_cyclic_frequencies), contacts carrying nothing (cyclic_frequencies_nd<k>
+    !> [rad/s]); for a reduced FE sector the diameters its run's harmonics reach
+    !> (reduction_error_diameters) and its frequencies' largest relative error in each
+    !> (reduction_error_nd<k>, stickslip_cyclic_sparse).
     subroutine put_cyclic_keys(u, case, stat, msg)
+        integer, parameter :: max_cyclic_frequencies = 20
         integer, intent(in) :: u
         type(case_t), intent(in) :: case
         integer, intent(inout) :: stat
@@ -754,9 +758,19 @@ contains
             do k = 1, size(nds)
                 call cyclic_frequencies(sector, c, nds(k), w, e)
                 if (allocated(e)) cycle
-                call put(u, "  cyclic_frequencies_nd"//itoa(nds(k))//" = "//rlist(w), stat, msg)
+                call put(u, "  cyclic_frequencies_nd"//itoa(nds(k))//" = "// &
+                         rlist(w(1:min(size(w), max_cyclic_frequencies))), stat, msg)
             end do
         end associate
+        ! a reduced FE sector: its error per nodal diameter
+        if (allocated(case%cyclic%diameters)) then
+            call put(u, "  reduction_error_diameters = "//ilist(case%cyclic%diameters), &
+                     stat, msg)
+            do k = 1, size(case%cyclic%diameters)
+                call put(u, "  reduction_error_nd"//itoa(case%cyclic%diameters(k))//" = "// &
+                         rtoa(case%cyclic%diameter_errors(k)), stat, msg)
+            end do
+        end if
     end subroutine put_cyclic_keys
 
     !> The reduction keys of &summary (only when the model was reduced): reduction_method,

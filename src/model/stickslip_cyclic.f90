@@ -19,7 +19,9 @@
 !> contact copied; an ordinary model for every method, e.g. mistuned by hand) and the linear
 !> cyclic modes of the sector per nodal diameter (cyclic_frequencies). Dense.
 module stickslip_cyclic
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp, two_pi
+    use stickslip_hash, only: hash_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, force_direction, contact_velocity_direction, &
         contact_normal_direction, contact_tangent2_direction, is_unilateral, is_planar
@@ -28,11 +30,26 @@ module stickslip_cyclic
     use stickslip_contact_element, only: along_tangent, along_normal
     implicit none
     private
-    public :: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
-        cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis
+    public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
+        cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis, &
+        structure_key
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
+
+    !> The sector's cyclic modes at one nodal diameter nd (stickslip_cyclic_modal): the
+    !> pencil of K and M on the motions with X_right = exp(i 2 pi nd / N) X_left, its
+    !> eigenvectors M-orthonormal, the damping diagonal on them (proportional damping).
+    type :: cyclic_modes_t
+        !> The nodal diameter; -1 when not prepared (new_cyclic_dynamics then solves).
+        integer :: nd = -1
+        !> Eigenvalues lambda_j = omega_j^2 [rad^2/s^2], increasing.
+        real(dp), allocatable :: lambda(:)
+        !> Modal damping phi_j^H C phi_j [1/s].
+        real(dp), allocatable :: damping(:)
+        !> The mode shapes on all the sector's DOFs (n x m, the right boundary included).
+        complex(dp), allocatable :: shapes(:, :)
+    end type cyclic_modes_t
 
     !> A bladed disk of N identical sectors.
     type :: cyclic_t
@@ -46,6 +63,15 @@ module stickslip_cyclic
         !> Per contact (0 or absent: none): the DOF of the next sector its tangential
         !> direction acts against, and the one its normal acts against.
         integer, allocatable :: next_dof(:), next_normal_dof(:)
+        !> Optional, per nodal diameter 0 .. N/2: the sector's cyclic modes
+        !> (prepare_cyclic_modes), which make the condensation per harmonic a modal sum.
+        !> Valid for the sector they were prepared from only.
+        type(cyclic_modes_t), allocatable :: modes(:)
+        !> With `modes`: the smallest singular values of the sector's K and M.
+        real(dp) :: smin_k = -1.0_dp, smin_m = -1.0_dp
+        !> With `modes`: structure_key of the sector they belong to (another sector's
+        !> condensation ignores them).
+        integer(int64) :: modes_key = 0
     end type cyclic_t
 
 contains
@@ -137,6 +163,19 @@ contains
             end do
         end subroutine check_next
     end subroutine validate_cyclic
+
+    !> A hash of the sector's structure (ndof, M, K, C): what its cyclic modes depend on.
+    pure integer(int64) function structure_key(model) result(key)
+        !> The sector.
+        type(model_t), intent(in) :: model
+        type(hash_t) :: hk
+        call hk%add(model%ndof)
+        call hk%add(model%mass)
+        call hk%add(model%stiffness)
+        call hk%add(allocated(model%damping))
+        if (allocated(model%damping)) call hk%add(model%damping)
+        key = hk%value()
+    end function structure_key
 
     !> Entry j of a per-contact list of next-sector DOFs (cyclic_t%next_dof,
     !> next_normal_dof): 0 when the list is absent or shorter.

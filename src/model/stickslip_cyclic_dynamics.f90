@@ -13,17 +13,20 @@
 !> T^H conj(D), V0_h = i h omega D^T X0_h, G_h = i h omega D^T Y_h; the static term (h = 0)
 !> with e = 1. The Gram matrices of the sector's damping and forcing over its DOFs are set
 !> (damping_gram, forcing_gram): the energies per period are the sector's share of the
-!> disk's. Dense, LAPACK's zgesv on the projected pencil.
+!> disk's. With the sector's cyclic modes prepared (cyc%modes, stickslip_cyclic_modal:
+!> proportional damping) (T^H Z T)^-1 is their modal sum, exact, O(n m) per harmonic;
+!> otherwise a dense LU of the projected pencil per harmonic (LAPACK), O(n^2 m).
 module stickslip_cyclic_dynamics
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, force_direction, preload_force
     use stickslip_basis, only: basis_t
     use stickslip_dynamics, only: dynamics_t, check_harmonics_in_basis, singular_threshold, &
-        static_singular_threshold
+        static_singular_threshold, smallest_singular
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: along_tangent, along_normal
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of, cyclic_basis
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of, cyclic_basis, &
+        nodal_diameter, structure_key
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     implicit none
     private
@@ -51,14 +54,13 @@ contains
         logical, intent(in), optional :: with_omega_derivative
         type(contact_set_t) :: cs
         real(dp), allocatable :: d(:, :), rwork(:)
-        complex(dp), allocatable :: t(:, :), z(:, :), zc(:, :), rhs(:, :), x(:, :), &
-                                   dm(:, :), f(:), work(:), dx(:, :)
+        complex(dp), allocatable :: t(:, :), rhs(:, :), x(:, :), dm(:, :), f(:), work(:), &
+                                    dx(:, :), g(:, :)
         integer, allocatable :: ipiv(:), next(:)
         integer :: n, m, nc, ih, h, j, c, k, info
         real(dp) :: anorm, rcond, zscale, rel, smin_k, smin_m
         complex(dp) :: e, ihw
-        logical :: deriv
-        character(len=300) :: buf
+        logical :: deriv, modal
 
         call validate_cyclic(model, cyc, error)
         if (allocated(error)) return
@@ -88,11 +90,18 @@ contains
                   self%damping_gram(nc + 1, nc + 1, basis%nharm), &
                   self%forcing_gram(nc + 1, basis%nharm))
         if (deriv) allocate (self%dv0(nc, basis%nharm), self%dg(nc, nc, basis%nharm))
-        allocate (t(n, m), ipiv(m), work(2*m), rwork(2*m), dm(n, nc), f(n), rhs(m, nc + 1))
+        allocate (ipiv(m), work(2*m), rwork(2*m), dm(n, nc), f(n), rhs(n, nc + 1))
         ! the smallest singular values of K and M of the sector (the scale of the distance
-        ! to a resonance, as new_dynamics)
-        smin_k = smallest(cmplx(model%stiffness, 0.0_dp, dp))
-        smin_m = smallest(cmplx(model%mass, 0.0_dp, dp))
+        ! to a resonance, as new_dynamics); prepared with the modes
+        modal = .false.
+        if (allocated(cyc%modes)) modal = cyc%modes_key == structure_key(model)
+        if (modal) then
+            smin_k = cyc%smin_k
+            smin_m = cyc%smin_m
+        else
+            smin_k = smallest_singular(model%stiffness, maxval(sum(abs(model%stiffness), 1)))
+            smin_m = smallest_singular(model%mass, maxval(sum(abs(model%mass), 1)))
+        end if
         self%smin_k = smin_k
         self%smin_m = smin_m
         self%relative_conditioning = 1.0_dp
@@ -104,46 +113,11 @@ contains
                 h = basis%harm(ih)
             end if
             e = exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, 1), dp))
-            ! the cyclic motions: the right boundary is the left one times e
-            t = cyclic_basis(cyc, n, e)
             ! the measuring directions D = d - e d_next
             dm = cmplx(d, 0.0_dp, dp)
             do c = 1, nc
                 if (next(c) > 0) dm(next(c), c) = dm(next(c), c) - e
             end do
-            z = cmplx(model%stiffness - (h*model%omega)**2*model%mass, &
-                      h*model%omega*model%damping, dp)
-            zc = matmul(conjg(transpose(t)), matmul(z, t))
-            anorm = zlange('1', m, m, zc, m, rwork)
-            call zgetrf(m, m, zc, m, ipiv, info)
-            rcond = 0.0_dp
-            if (info == 0) call zgecon('1', m, zc, m, anorm, rcond, work, rwork, info)
-            rel = rcond
-            if (h > 0) then
-                zscale = smin_k + (h*model%omega)**2*smin_m
-                rel = 0.0_dp
-                if (zscale > 0.0_dp) rel = rcond*anorm/zscale
-                self%rel(ih) = rel
-                if (rel < self%relative_conditioning) then
-                    self%relative_conditioning = rel
-                    self%worst_harmonic = h
-                end if
-            end if
-            if ((h == 0 .and. .not. (rcond >= static_singular_threshold)) .or. &
-                (h > 0 .and. .not. (rel >= singular_threshold))) then
-                if (h == 0) then
-                    buf = "the sector's stiffness on its cyclic motions is singular (a free "// &
-                          "disk): the static response is undetermined; restrain it or set "// &
-                          "&hbm odd_only = .true."
-                else
-                    write (buf, '(a,i0,a,g0.6,a)') "undamped cyclic resonance at harmonic h = ", &
-                        h, " (h omega = ", h*model%omega, " rad/s): the sector's dynamic "// &
-                        "stiffness on its travelling-wave motions is singular. Add damping "// &
-                        "or move omega"
-                end if
-                call fatal_error(error, trim(buf), stickslip_stat%numerical)
-                return
-            end if
             ! the forcing of harmonic h on the sector
             f = (0.0_dp, 0.0_dp)
             do k = 1, model%nforce()
@@ -163,10 +137,14 @@ contains
                     end do
                 end if
             end if
-            rhs(:, 1) = matmul(conjg(transpose(t)), f)
-            rhs(:, 2:) = matmul(conjg(transpose(t)), conjg(dm))
-            call zgetrs('N', m, nc + 1, zc, m, ipiv, rhs, m, info)
-            x = matmul(t, rhs)
+            rhs(:, 1) = f
+            rhs(:, 2:) = conj_dm(dm)
+            if (modal_harmonic(h, g)) then
+                call modal_solve(h)
+            else
+                call direct_solve(h)
+            end if
+            if (allocated(error)) return
             if (h == 0) then
                 self%x0_static = real(x(:, 1), dp)
                 self%y_static = real(x(:, 2:), dp)
@@ -183,12 +161,7 @@ contains
                                                  matmul(cmplx(model%damping, 0.0_dp, dp), x))
             self%forcing_gram(:, ih) = matmul(conjg(f), x)
             if (deriv) then
-                ! d X / d omega = -T Zc^-1 T^H (dZ/domega) X
-                dx = matmul(conjg(transpose(t)), matmul(cmplx(-2.0_dp*h*h*model%omega* &
-                                                              model%mass, h*model%damping, &
-                                                              dp), x))
-                call zgetrs('N', m, nc + 1, zc, m, ipiv, dx, m, info)
-                dx = matmul(t, dx)
+                ! dx = T Zc^-1 T^H (dZ/domega) X: d X / d omega = -dx
                 self%dv0(:, ih) = cmplx(0.0_dp, real(h, dp), dp)* &
                                   matmul(transpose(dm), x(:, 1)) - &
                                   ihw*matmul(transpose(dm), dx(:, 1))
@@ -200,23 +173,129 @@ contains
 
     contains
 
-        !> The smallest singular value of a square matrix, 1-norm estimate (0: singular).
-        real(dp) function smallest(a)
+        !> conj(D), a copy.
+        pure function conj_dm(a) result(b)
             complex(dp), intent(in) :: a(:, :)
-            complex(dp), allocatable :: lu(:, :), w2(:)
-            real(dp), allocatable :: r2(:)
-            integer, allocatable :: p(:)
-            real(dp) :: an, rc
-            integer :: nn, inf
-            nn = size(a, 1)
-            smallest = 0.0_dp
-            allocate (lu(nn, nn), w2(2*nn), r2(2*nn), p(nn))
-            lu = a
-            an = zlange('1', nn, nn, lu, nn, r2)
-            call zgetrf(nn, nn, lu, nn, p, inf)
-            if (inf /= 0) return
-            call zgecon('1', nn, lu, nn, an, rc, w2, r2, inf)
-            if (inf == 0) smallest = rc*an
-        end function smallest
+            complex(dp) :: b(size(a, 1), size(a, 2))
+            b = conjg(a)
+        end function conj_dm
+
+        !> Whether harmonic h has prepared modes; then `shapes` are its T Phi (the
+        !> prepared ones, or their conjugates for a phase p <= N/2, see
+        !> stickslip_cyclic_modal).
+        logical function modal_harmonic(h, shapes)
+            integer, intent(in) :: h
+            complex(dp), allocatable, intent(inout) :: shapes(:, :)
+            integer :: p, nd
+            modal_harmonic = .false.
+            if (.not. modal) return
+            p = modulo(h*cyc%engine_order, cyc%sectors)
+            nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
+            if (cyc%modes(nd)%nd /= nd) return
+            if (size(cyc%modes(nd)%shapes, 1) /= n) return
+            if (p == nd) then
+                shapes = conjg(cyc%modes(nd)%shapes)
+            else
+                shapes = cyc%modes(nd)%shapes
+            end if
+            modal_harmonic = .true.
+        end function modal_harmonic
+
+        !> x (and dx) at harmonic h as the modal sum G diag(1 / D) G^H rhs, D_j = lambda_j
+        !> - (h w)^2 + i h w c_j; the conditioning min |D_j| / (lambda_1 + (h w)^2).
+        subroutine modal_solve(h)
+            integer, intent(in) :: h
+            complex(dp), allocatable :: dd(:), gr(:, :)
+            real(dp) :: hw
+            integer :: nd, jj
+            nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
+            hw = h*model%omega
+            associate (md => cyc%modes(nd))
+                dd = cmplx(md%lambda - hw**2, hw*md%damping, dp)
+                if (h == 0) then
+                    rel = minval(abs(md%lambda))/max(maxval(abs(md%lambda)), tiny(1.0_dp))
+                else
+                    rel = minval(abs(dd))/max(md%lambda(1) + hw**2, tiny(1.0_dp))
+                end if
+            end associate
+            if (.not. check_conditioning(h, rel)) return
+            gr = matmul(conjg(transpose(g)), rhs)
+            do jj = 1, size(dd)
+                gr(jj, :) = gr(jj, :)/dd(jj)
+            end do
+            x = matmul(g, gr)
+            if (deriv .and. h > 0) then
+                associate (md => cyc%modes(nd))
+                    do jj = 1, size(dd)
+                        gr(jj, :) = gr(jj, :)*cmplx(-2.0_dp*h*h*model%omega, &
+                                                    h*md%damping(jj), dp)/dd(jj)
+                    end do
+                end associate
+                dx = matmul(g, gr)
+            end if
+        end subroutine modal_solve
+
+        !> x (and dx) at harmonic h by LAPACK's LU of the projected pencil T^H Z T.
+        subroutine direct_solve(h)
+            integer, intent(in) :: h
+            complex(dp), allocatable :: z(:, :), zc(:, :), r(:, :)
+            ! the cyclic motions: the right boundary is the left one times e
+            t = cyclic_basis(cyc, n, e)
+            z = cmplx(model%stiffness - (h*model%omega)**2*model%mass, &
+                      h*model%omega*model%damping, dp)
+            zc = matmul(conjg(transpose(t)), matmul(z, t))
+            anorm = zlange('1', m, m, zc, m, rwork)
+            call zgetrf(m, m, zc, m, ipiv, info)
+            rcond = 0.0_dp
+            if (info == 0) call zgecon('1', m, zc, m, anorm, rcond, work, rwork, info)
+            rel = rcond
+            if (h > 0) then
+                zscale = smin_k + (h*model%omega)**2*smin_m
+                rel = 0.0_dp
+                if (zscale > 0.0_dp) rel = rcond*anorm/zscale
+            end if
+            if (.not. check_conditioning(h, rel)) return
+            r = matmul(conjg(transpose(t)), rhs)
+            call zgetrs('N', m, nc + 1, zc, m, ipiv, r, m, info)
+            x = matmul(t, r)
+            if (deriv .and. h > 0) then
+                r = matmul(conjg(transpose(t)), matmul(cmplx(-2.0_dp*h*h*model%omega* &
+                                                             model%mass, h*model%damping, &
+                                                             dp), x))
+                call zgetrs('N', m, nc + 1, zc, m, ipiv, r, m, info)
+                dx = matmul(t, r)
+            end if
+        end subroutine direct_solve
+
+        !> Record the conditioning `rel` of harmonic h; false (and the error set) when the
+        !> projected dynamic stiffness is singular.
+        logical function check_conditioning(h, rel)
+            integer, intent(in) :: h
+            real(dp), intent(in) :: rel
+            character(len=300) :: buf
+            check_conditioning = .true.
+            if (h > 0) then
+                self%rel(ih) = rel
+                if (rel < self%relative_conditioning) then
+                    self%relative_conditioning = rel
+                    self%worst_harmonic = h
+                end if
+            end if
+            if ((h == 0 .and. .not. (rel >= static_singular_threshold)) .or. &
+                (h > 0 .and. .not. (rel >= singular_threshold))) then
+                if (h == 0) then
+                    buf = "the sector's stiffness on its cyclic motions is singular (a free "// &
+                          "disk): the static response is undetermined; restrain it or set "// &
+                          "&hbm odd_only = .true."
+                else
+                    write (buf, '(a,i0,a,g0.6,a)') "undamped cyclic resonance at harmonic h = ", &
+                        h, " (h omega = ", h*model%omega, " rad/s): the sector's dynamic "// &
+                        "stiffness on its travelling-wave motions is singular. Add damping "// &
+                        "or move omega"
+                end if
+                call fatal_error(error, trim(buf), stickslip_stat%numerical)
+                check_conditioning = .false.
+            end if
+        end function check_conditioning
     end subroutine new_cyclic_dynamics
 end module stickslip_cyclic_dynamics

@@ -23,6 +23,7 @@ module stickslip_dynamics
     implicit none
     private
     public :: dynamics_t, new_dynamics, restrict_dynamics, check_harmonics_in_basis, &
+        smallest_singular, &
         restrict_to_basis
 
     !> Condensed linear dynamics on a basis.

@@ -104,23 +104,27 @@ def write_mesh(path, ids, nodes, elements):
     return drive
 
 
-def run_ccx(job, work):
+def run_ccx(job, work, folder=HERE, mesh="blade_mesh.inp", env=None, caller="make_model.py"):
+    """Run `ccx -i job` in the scratch folder work on copies of folder's mesh and job.inp (the
+    deck that includes the mesh), with the environment env (None: this process's); exit with
+    ccx's last output, the message starting with caller, if ccx is missing or fails."""
     ccx = shutil.which("ccx")
     if ccx is None:
-        sys.exit("make_model.py: CalculiX's ccx is not on the PATH (Debian: apt-get install "
+        sys.exit(f"{caller}: CalculiX's ccx is not on the PATH (Debian: apt-get install "
                  "calculix-ccx)")
-    for name in ("blade_mesh.inp", job + ".inp"):
-        shutil.copy(os.path.join(HERE, name), work)
-    run = subprocess.run([ccx, "-i", job], cwd=work, capture_output=True, text=True)
+    for name in (mesh, job + ".inp"):
+        shutil.copy(os.path.join(folder, name), work)
+    run = subprocess.run([ccx, "-i", job], cwd=work, capture_output=True, text=True, env=env)
     if run.returncode != 0 or "Job finished" not in run.stdout:
-        sys.exit(f"make_model.py: ccx {job} failed:\n{run.stdout[-2000:]}{run.stderr}")
+        sys.exit(f"{caller}: ccx {job} failed:\n{run.stdout[-2000:]}{run.stderr}")
 
 
 def convert(source, target, unit, dofs):
-    """CalculiX's "i j value" upper-triangle lines to a Matrix Market symmetric file. An
-    off-diagonal entry below 1e-12 sqrt(|A_ii A_jj|) is dropped: CalculiX stores every entry
-    of the sparsity pattern, and those are zeros or the roundoff of the element integration
-    (1e-17 of the diagonal in K here), a fifth of K's entries."""
+    """CalculiX's "i j value" upper-triangle lines to a Matrix Market symmetric file, the
+    values copied digit for digit; returns the number of entries written. An off-diagonal
+    entry below 1e-12 sqrt(|A_ii A_jj|) is dropped (write_triangle): CalculiX stores every
+    entry of the sparsity pattern, and those are zeros or the roundoff of the element
+    integration (1e-17 of the diagonal in K here), a fifth of K's entries."""
     raw = []
     with open(source) as f:
         for number, line in enumerate(f, start=1):
@@ -131,23 +135,34 @@ def convert(source, target, unit, dofs):
             if not (1 <= i <= j <= dofs):
                 sys.exit(f"make_model.py: {source}:{number}: ({i},{j}) not in the upper "
                          f"triangle of a {dofs} x {dofs} matrix")
-            raw.append((i, j, text))
+            raw.append((i, j, float(text), text))
+    return write_triangle(target, raw, dofs,
+                          f"{unit} of the CalculiX model blade_matrices.inp (*FREQUENCY, "
+                          "SOLVER=MATRIXSTORAGE),\nconverted by make_model.py: upper triangle, "
+                          "row k = line k of dofs.csv")
+
+
+def write_triangle(path, entries, dofs, header):
+    """Matrix Market coordinate real symmetric file of a dofs x dofs matrix from its upper
+    triangle entries [(i, j, value, text)] (1-based, i <= j; text: how value is written),
+    column by column, without the off-diagonal entries below 1e-12 sqrt(|A_ii A_jj|). header:
+    the comment lines after the banner, each written after "% ". Returns the number of
+    entries written."""
     diag = [0.0] * (dofs + 1)
-    for (i, j, text) in raw:
+    for (i, j, value, _) in entries:
         if i == j:
-            diag[i] = abs(float(text))
-    entries = [(i, j, text) for (i, j, text) in raw
-               if i == j or abs(float(text)) > 1e-12 * (diag[i] * diag[j]) ** 0.5]
-    entries.sort(key=lambda e: (e[1], e[0]))
-    with open(target, "w") as f:
+            diag[i] = abs(value)
+    kept = sorted(((i, j, text) for (i, j, value, text) in entries
+                   if i == j or abs(value) > 1e-12 * (diag[i] * diag[j]) ** 0.5),
+                  key=lambda e: (e[1], e[0]))
+    with open(path, "w") as f:
         f.write("%%MatrixMarket matrix coordinate real symmetric\n")
-        f.write(f"% {unit} of the CalculiX model blade_matrices.inp (*FREQUENCY, "
-                "SOLVER=MATRIXSTORAGE),\n")
-        f.write("% converted by make_model.py: upper triangle, row k = line k of dofs.csv\n")
-        f.write(f"{dofs} {dofs} {len(entries)}\n")
-        for (i, j, text) in entries:
+        for comment in header.split("\n"):
+            f.write(f"% {comment}\n")
+        f.write(f"{dofs} {dofs} {len(kept)}\n")
+        for (i, j, text) in kept:
             f.write(f"{i} {j} {text}\n")
-    return len(entries)
+    return len(kept)
 
 
 def frequencies(dat):

@@ -2,9 +2,9 @@
 """Mesh one sector of a tuned bladed disk, export its matrices with CalculiX, write a case.
 
 Standard library only; needs CalculiX's solver `ccx` on the PATH (Debian: apt-get install
-calculix-ccx) for the export, not for stickslip. Reuses the reading of CalculiX's matrices
-and the Matrix Market conventions of ../calculix_beam/make_model.py. Units SI throughout: m,
-kg, s, N, Pa.
+calculix-ccx) for the export, not for stickslip. Reuses the running of ccx, the reading of
+CalculiX's matrices and the Matrix Market writer of ../calculix_beam/make_model.py. Units SI
+throughout: m, kg, s, N, Pa.
 
 The structure: one of N = 24 sectors (15 degrees, theta from -pi/N to +pi/N about the z axis)
 of a steel bladed disk, E = 210 GPa, nu = 0.3, rho = 7800 kg/m^3, meshed with twenty-node
@@ -54,7 +54,8 @@ What it does:
                                 coordinates [m];
       case.nml                  the stickslip case: the sector with its &cyclic boundary
                                 (left_dofs, right_dofs in pairs), the platform contact
-                                against the next sector, engine order 3;
+                                against the next sector, engine order 3, the sector
+                                reduced by Craig-Bampton;
       calculix_frequencies.txt  the natural frequencies of sector_modes.dat per nodal
                                 diameter (nd, mode, rad/s, Hz);
     and prints the DOF counts, the checks and the DOF numbers of the contact and the drive.
@@ -64,8 +65,6 @@ Usage: python3 make_sector.py   (about 6 s: 4 s the cyclic modes in ccx, 1.5 s t
 import math
 import os
 import re
-import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -73,7 +72,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.dont_write_bytecode = True        # no __pycache__ left in ../calculix_beam
 sys.path.insert(0, os.path.join(HERE, "..", "calculix_beam"))
-import make_model  # noqa: E402  (convert: CalculiX's "i j value" files, validated)
+import make_model  # noqa: E402  (run_ccx, convert, write_triangle)
 
 SECTORS = 24
 EDGE = math.pi / SECTORS                              # half the sector angle [rad]
@@ -195,21 +194,6 @@ def write_mesh(path, cyl, elements, sets, refs):
                 f.write(", ".join(map(str, members[a:a + 10])) + "\n")
 
 
-def run_ccx(job, work):
-    """Run `ccx -i job` in the folder work on copies of sector_mesh.inp and job.inp, on one
-    core (OMP_NUM_THREADS=1); exit with ccx's last output if it fails."""
-    ccx = shutil.which("ccx")
-    if ccx is None:
-        sys.exit("make_sector.py: CalculiX's ccx is not on the PATH (Debian: apt-get "
-                 "install calculix-ccx)")
-    for name in ("sector_mesh.inp", job + ".inp"):
-        shutil.copy(os.path.join(HERE, name), work)
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    run = subprocess.run([ccx, "-i", job], cwd=work, capture_output=True, text=True, env=env)
-    if run.returncode != 0 or "Job finished" not in run.stdout:
-        sys.exit(f"make_sector.py: ccx {job} failed:\n{run.stdout[-2000:]}{run.stderr}")
-
-
 def read_triangle(path):
     """{(i, j): value} of a Matrix Market upper triangle written by make_model.convert."""
     entries = {}
@@ -246,26 +230,6 @@ def rotate(entries, rows, angle):
                 if p <= q:
                     result[(p, q)] = sum(qa[k][c] * bq[k][d] for k in range(3))
     return result
-
-
-def write_triangle(path, entries, dofs, unit):
-    """Matrix Market symmetric file of an upper triangle, without the exact zeros and the
-    off-diagonal entries below 1e-12 sqrt(|A_ii A_jj|) (make_model.convert's rule: here also
-    the roundoff of the rotation). Returns the number of entries written."""
-    diag = {i: abs(v) for (i, j), v in entries.items() if i == j}
-    kept = sorted(((i, j, v) for (i, j), v in entries.items()
-                   if i == j or abs(v) > 1e-12 * (diag[i] * diag[j]) ** 0.5),
-                  key=lambda e: (e[1], e[0]))
-    with open(path, "w") as f:
-        f.write("%%MatrixMarket matrix coordinate real symmetric\n")
-        f.write(f"% {unit} of the CalculiX model sector_matrices.inp (*FREQUENCY, "
-                "SOLVER=MATRIXSTORAGE),\n")
-        f.write("% turned into the nodes' cylindrical frames (r, theta, z) by "
-                "make_sector.py:\n% upper triangle, row k = line k of dofs.csv\n")
-        f.write(f"{dofs} {dofs} {len(kept)}\n")
-        for (i, j, v) in kept:
-            f.write(f"{i} {j} {v:.15g}\n")
-    return len(kept)
 
 
 def cyclic_frequencies(dat):
@@ -322,10 +286,12 @@ def write_case(path, dofs, cyclic, contact, drive, modes):
 ! Not the first family ({first:.1f} rad/s, the blades bending tangentially): the sector is
 ! symmetric about z = 0 and that family moves in-plane, so the platforms' z stays exactly
 ! still (the contact sticks with zero force); its platforms' r and theta move 5e-5 of the tip.
-! NEW: stickslip is only now getting cyclic sectors from Matrix Market files (and their
-! Craig-Bampton reduction, doc/cyclic.md): this case may not run yet. normal_load is a first
-! guess: in CalculiX's mode the platforms' relative z motion is 0.8 % of the drive's, so an
-! energy balance puts lock-up near mu N = 100 N per N of drive.
+! The reduction (Craig-Bampton, &reduction method = 'craig-bampton': {dofs} DOFs is below the
+! 2000 at which 'auto' reduces) keeps the cyclic faces, the contact, its partner and the
+! drive as boundary DOFs; summary.nml reports its error per nodal diameter the harmonics
+! reach (reduction_error_nd3, _nd9). normal_load: in CalculiX's mode the platforms'
+! relative z motion is 0.8 % of the drive's, so an energy balance puts lock-up near mu N =
+! 100 N per N of drive; with mu N = 30 N the platforms stick over part of the period.
 ! Run: fpm run -- examples/calculix_sector/case.nml   (writes out/calculix_sector/)
 &system
 """)
@@ -348,7 +314,9 @@ def write_case(path, dofs, cyclic, contact, drive, modes):
                      "sector s + 1, z"))
         f.write(namelist_list("left_dofs", cyclic[0]) + "\n")
         f.write(namelist_list("right_dofs", cyclic[1]) + "\n")
-        f.write("/\n&hbm\n  harmonics = 15\n")
+        f.write("/\n&reduction method = 'craig-bampton' /  ! keeps the cyclic faces, the contact "
+                "and the drive\n")
+        f.write("&hbm\n  harmonics = 15\n")
         f.write(line("odd_only = T", "no static load: half-wave symmetric response"))
         f.write(line("samples = 384", f"a multiple of {SECTORS}: the sector is exact "
                      "(doc/cyclic.md)"))
@@ -373,9 +341,10 @@ def main():
     cyl.update(refs)
     write_mesh(os.path.join(HERE, "sector_mesh.inp"), cyl, elements, sets, refs)
     angle = {n: cyl[n][1] for n in cyl}
+    one_core = dict(os.environ, OMP_NUM_THREADS="1")   # ccx on one core
     with tempfile.TemporaryDirectory(prefix="ccx_") as work:
-        run_ccx("sector_matrices", work)
-        run_ccx("sector_modes", work)
+        for job in ("sector_matrices", "sector_modes"):
+            make_model.run_ccx(job, work, HERE, "sector_mesh.inp", one_core, "make_sector.py")
         with open(os.path.join(work, "sector_matrices.dof")) as f:
             rows = [tuple(map(int, line.split("."))) for line in f.read().split()]
         dofs = len(rows)
@@ -390,9 +359,16 @@ def main():
         sys.exit("make_sector.py: a node without all three directions in the .dof file")
     cylm = {name: rotate(cart[name], rows, angle) for name in cart}
     nnz = {}
+    # write_triangle drops the off-diagonal entries below 1e-12 sqrt(|A_ii A_jj|) (convert's
+    # rule): here also the roundoff of the rotation
     for name, unit, file in (("K", "stiffness K [N/m]", "stiffness.mtx"),
                              ("M", "mass M [kg]", "mass.mtx")):
-        nnz[name] = write_triangle(os.path.join(HERE, file), cylm[name], dofs, unit)
+        nnz[name] = make_model.write_triangle(
+            os.path.join(HERE, file),
+            [(i, j, v, f"{v:.15g}") for (i, j), v in cylm[name].items()], dofs,
+            f"{unit} of the CalculiX model sector_matrices.inp (*FREQUENCY, "
+            "SOLVER=MATRIXSTORAGE),\nturned into the nodes' cylindrical frames (r, theta, z) "
+            "by make_sector.py:\nupper triangle, row k = line k of dofs.csv")
     # checks: the trace of each node's diagonal block is kept by the rotation; a left DOF
     # and its right partner (mirror images) have the same diagonal
     trace, match = 0.0, {"K": 0.0, "M": 0.0}

@@ -5,10 +5,10 @@
 !> of its stability time (doc/benchmarks.md). Knows nothing of the model; no state.
 module stickslip_dense_products
     use stickslip_kinds, only: dp
-    use stickslip_lapack, only: dgemm, dgemv
+    use stickslip_lapack, only: dgemm, dgemv, zgemm
     implicit none
     private
-    public :: mat_mul, mat_vec
+    public :: mat_mul, mat_vec, cmat_mul
 
     !> Below this many multiply-adds (m n k; (m n)^(3/2) for a matrix-vector product) the
     !> intrinsic matmul is used: the call into BLAS costs more than it saves on the small
@@ -59,4 +59,26 @@ contains
         end if
         call dgemv('N', m, n, 1.0_dp, a, m, x, 1, 0.0_dp, y, 1)
     end function mat_vec
+
+    !> The complex product A B (BLAS zgemm; Fortran's matmul for small products). No
+    !> errors (the sizes must conform).
+    function cmat_mul(a, b) result(c)
+        !> The factors, m x k and k x n.
+        complex(dp), intent(in) :: a(:, :), b(:, :)
+        complex(dp) :: c(size(a, 1), size(b, 2))
+        integer :: m, n, k
+        m = size(a, 1)
+        n = size(b, 2)
+        k = size(a, 2)
+        if (m == 0 .or. n == 0) return
+        if (k == 0) then
+            c = (0.0_dp, 0.0_dp)
+            return
+        end if
+        if (real(m, dp)*real(n, dp)*real(k, dp) < small_product/4) then
+            c = matmul(a, b)
+            return
+        end if
+        call zgemm('N', 'N', m, n, k, (1.0_dp, 0.0_dp), a, m, b, k, (0.0_dp, 0.0_dp), c, m)
+    end function cmat_mul
 end module stickslip_dense_products

@@ -5,7 +5,7 @@ module stickslip_lapack
     use stickslip_kinds, only: dp, sp
     implicit none
     private
-    public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgecon, zlange, dgeev, dgesv, &
+    public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgemm, zgecon, zlange, dgeev, dgesv, &
         zgesv, dsygv, dsyev, sgetrf, sgetrs, dgemm, dgemv, zhegv
 
     interface
@@ -46,6 +46,16 @@ module stickslip_lapack
             real(dp), intent(in) :: a(lda, *), b(ldb, *)
             real(dp), intent(inout) :: c(ldc, *)
         end subroutine dgemm
+
+        !> C <- alpha op(A) op(B) + beta C, complex (BLAS).
+        subroutine zgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
+            import :: dp
+            character(len=1), intent(in) :: transa, transb
+            integer, intent(in) :: m, n, k, lda, ldb, ldc
+            complex(dp), intent(in) :: alpha, beta
+            complex(dp), intent(in) :: a(lda, *), b(ldb, *)
+            complex(dp), intent(inout) :: c(ldc, *)
+        end subroutine zgemm
 
         !> y <- alpha op(A) x + beta y (BLAS).
         subroutine dgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)

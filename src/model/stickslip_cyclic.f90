@@ -47,8 +47,9 @@ module stickslip_cyclic
         real(dp), allocatable :: lambda(:)
         !> Modal damping phi_j^H C phi_j [1/s].
         real(dp), allocatable :: damping(:)
-        !> The mode shapes on all the sector's DOFs (n x m, the right boundary included).
-        complex(dp), allocatable :: shapes(:, :)
+        !> The mode shapes on all the sector's DOFs (n x m, the right boundary included),
+        !> and their conjugate transpose.
+        complex(dp), allocatable :: shapes(:, :), shapes_h(:, :)
     end type cyclic_modes_t
 
     !> A bladed disk of N identical sectors.
@@ -164,16 +165,23 @@ contains
         end subroutine check_next
     end subroutine validate_cyclic
 
-    !> A hash of the sector's structure (ndof, M, K, C): what its cyclic modes depend on.
+    !> A fingerprint of the sector's structure (ndof, M, K, C), what its cyclic modes
+    !> depend on: a hash of the sums of |A| and of the quadratic forms v^T A v with v_i = i
+    !> / n for each matrix (O(n^2), cheap beside a condensation; another sector gives
+    !> another key but for a coincidence of all six).
     pure integer(int64) function structure_key(model) result(key)
         !> The sector.
         type(model_t), intent(in) :: model
         type(hash_t) :: hk
+        real(dp), allocatable :: v(:)
+        integer :: i
+        v = [(real(i, dp)/real(max(model%ndof, 1), dp), i=1, model%ndof)]
         call hk%add(model%ndof)
-        call hk%add(model%mass)
-        call hk%add(model%stiffness)
+        call hk%add([sum(abs(model%mass)), dot_product(v, matmul(model%mass, v)), &
+                     sum(abs(model%stiffness)), dot_product(v, matmul(model%stiffness, v))])
         call hk%add(allocated(model%damping))
-        if (allocated(model%damping)) call hk%add(model%damping)
+        if (allocated(model%damping)) call hk%add([sum(abs(model%damping)), &
+                                                  dot_product(v, matmul(model%damping, v))])
         key = hk%value()
     end function structure_key
 

@@ -28,6 +28,7 @@ module stickslip_cyclic_dynamics
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of, cyclic_basis, &
         nodal_diameter, structure_key
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
+    use stickslip_dense_products, only: cmat_mul
     implicit none
     private
     public :: new_cyclic_dynamics
@@ -55,12 +56,12 @@ contains
         type(contact_set_t) :: cs
         real(dp), allocatable :: d(:, :), rwork(:)
         complex(dp), allocatable :: t(:, :), rhs(:, :), x(:, :), dm(:, :), f(:), work(:), &
-                                    dx(:, :), g(:, :)
+                                    dx(:, :), cx(:, :)
         integer, allocatable :: ipiv(:), next(:)
         integer :: n, m, nc, ih, h, j, c, k, info
         real(dp) :: anorm, rcond, zscale, rel, smin_k, smin_m
         complex(dp) :: e, ihw
-        logical :: deriv, modal
+        logical :: deriv, modal, modal_gram, conj_shapes
 
         call validate_cyclic(model, cyc, error)
         if (allocated(error)) return
@@ -139,8 +140,9 @@ contains
             end if
             rhs(:, 1) = f
             rhs(:, 2:) = conj_dm(dm)
-            if (modal_harmonic(h, g)) then
-                call modal_solve(h)
+            modal_gram = .false.
+            if (modal_harmonic(h, conj_shapes)) then
+                call modal_solve(h, conj_shapes)
             else
                 call direct_solve(h)
             end if
@@ -157,8 +159,11 @@ contains
             ihw = cmplx(0.0_dp, h*model%omega, dp)
             self%v0(:, ih) = ihw*matmul(transpose(dm), x(:, 1))
             self%g(:, :, ih) = ihw*matmul(transpose(dm), x(:, 2:))
-            self%damping_gram(:, :, ih) = matmul(conjg(transpose(x)), &
-                                                 matmul(cmplx(model%damping, 0.0_dp, dp), x))
+            if (.not. modal_gram) then
+                cx = cmplx(matmul(model%damping, real(x, dp)), &
+                           matmul(model%damping, aimag(x)), dp)
+                self%damping_gram(:, :, ih) = matmul(conjg(transpose(x)), cx)
+            end if
             self%forcing_gram(:, ih) = matmul(conjg(f), x)
             if (deriv) then
                 ! dx = T Zc^-1 T^H (dZ/domega) X: d X / d omega = -dx
@@ -180,32 +185,32 @@ contains
             b = conjg(a)
         end function conj_dm
 
-        !> Whether harmonic h has prepared modes; then `shapes` are its T Phi (the
-        !> prepared ones, or their conjugates for a phase p <= N/2, see
+        !> Whether harmonic h has prepared modes; then its T Phi are the prepared shapes S,
+        !> or with `conj_shapes` their conjugates (a phase p <= N/2, see
         !> stickslip_cyclic_modal).
-        logical function modal_harmonic(h, shapes)
+        logical function modal_harmonic(h, conj_shapes)
             integer, intent(in) :: h
-            complex(dp), allocatable, intent(inout) :: shapes(:, :)
+            logical, intent(out) :: conj_shapes
             integer :: p, nd
             modal_harmonic = .false.
+            conj_shapes = .false.
             if (.not. modal) return
             p = modulo(h*cyc%engine_order, cyc%sectors)
             nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
             if (cyc%modes(nd)%nd /= nd) return
             if (size(cyc%modes(nd)%shapes, 1) /= n) return
-            if (p == nd) then
-                shapes = conjg(cyc%modes(nd)%shapes)
-            else
-                shapes = cyc%modes(nd)%shapes
-            end if
+            conj_shapes = p == nd
             modal_harmonic = .true.
         end function modal_harmonic
 
         !> x (and dx) at harmonic h as the modal sum G diag(1 / D) G^H rhs, D_j = lambda_j
-        !> - (h w)^2 + i h w c_j; the conditioning min |D_j| / (lambda_1 + (h w)^2).
-        subroutine modal_solve(h)
+        !> - (h w)^2 + i h w c_j, G = S or conj(S) (G^H b = conj(S^H conj(b)), G a =
+        !> conj(S conj(a))); the conditioning min |D_j| / (lambda_1 + (h w)^2); the damping
+        !> Gram matrix x^H C x = q^H diag(c) q, q = D^-1 G^H rhs.
+        subroutine modal_solve(h, conj_shapes)
             integer, intent(in) :: h
-            complex(dp), allocatable :: dd(:), gr(:, :)
+            logical, intent(in) :: conj_shapes
+            complex(dp), allocatable :: dd(:), gr(:, :), gq(:, :)
             real(dp) :: hw
             integer :: nd, jj
             nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
@@ -219,21 +224,47 @@ contains
                 end if
             end associate
             if (.not. check_conditioning(h, rel)) return
-            gr = matmul(conjg(transpose(g)), rhs)
-            do jj = 1, size(dd)
-                gr(jj, :) = gr(jj, :)/dd(jj)
-            end do
-            x = matmul(g, gr)
-            if (deriv .and. h > 0) then
-                associate (md => cyc%modes(nd))
+            associate (md => cyc%modes(nd))
+                if (conj_shapes) then
+                    gr = conjg(cmat_mul(md%shapes_h, conjg(rhs)))
+                else
+                    gr = cmat_mul(md%shapes_h, rhs)
+                end if
+                do jj = 1, size(dd)
+                    gr(jj, :) = gr(jj, :)/dd(jj)
+                end do
+                x = shapes_times(gr, nd, conj_shapes)
+                if (h > 0) then
+                    modal_gram = .true.
+                    gq = gr
+                    do jj = 1, size(dd)
+                        gq(jj, :) = md%damping(jj)*gr(jj, :)
+                    end do
+                    self%damping_gram(:, :, ih) = matmul(conjg(transpose(gr)), gq)
+                end if
+                if (deriv .and. h > 0) then
                     do jj = 1, size(dd)
                         gr(jj, :) = gr(jj, :)*cmplx(-2.0_dp*h*h*model%omega, &
                                                     h*md%damping(jj), dp)/dd(jj)
                     end do
-                end associate
-                dx = matmul(g, gr)
-            end if
+                    dx = shapes_times(gr, nd, conj_shapes)
+                end if
+            end associate
         end subroutine modal_solve
+
+        !> S a, or conj(S conj(a)) with `conj_shapes`, S the prepared shapes of the
+        !> diameter nd.
+        function shapes_times(a, nd, conj_shapes) result(b)
+            complex(dp), intent(in) :: a(:, :)
+            integer, intent(in) :: nd
+            logical, intent(in) :: conj_shapes
+            complex(dp), allocatable :: b(:, :)
+            if (conj_shapes) then
+                b = conjg(cmat_mul(cyc%modes(nd)%shapes, conjg(a)))
+            else
+                b = cmat_mul(cyc%modes(nd)%shapes, a)
+            end if
+        end function shapes_times
 
         !> x (and dx) at harmonic h by LAPACK's LU of the projected pencil T^H Z T.
         subroutine direct_solve(h)

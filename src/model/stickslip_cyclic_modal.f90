@@ -105,6 +105,7 @@ contains
             cyc%modes(nd)%nd = nd
             cyc%modes(nd)%lambda = w
             cyc%modes(nd)%shapes = matmul(t, kc)
+            cyc%modes(nd)%shapes_h = conjg(transpose(cyc%modes(nd)%shapes))
         end do
         if (.not. ok) then
             deallocate (cyc%modes)

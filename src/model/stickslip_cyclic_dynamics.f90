@@ -22,7 +22,7 @@ module stickslip_cyclic_dynamics
     use stickslip_model, only: model_t, force_direction, preload_force
     use stickslip_basis, only: basis_t
     use stickslip_dynamics, only: dynamics_t, check_harmonics_in_basis, singular_threshold, &
-        static_singular_threshold, smallest_singular
+        static_singular_threshold, smallest_singular, note_conditioning
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: along_tangent, along_normal
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of, cyclic_basis, &
@@ -305,13 +305,7 @@ contains
             real(dp), intent(in) :: rel
             character(len=300) :: buf
             check_conditioning = .true.
-            if (h > 0) then
-                self%rel(ih) = rel
-                if (rel < self%relative_conditioning) then
-                    self%relative_conditioning = rel
-                    self%worst_harmonic = h
-                end if
-            end if
+            if (h > 0) call note_conditioning(self, ih, h, rel)
             if ((h == 0 .and. .not. (rel >= static_singular_threshold)) .or. &
                 (h > 0 .and. .not. (rel >= singular_threshold))) then
                 if (h == 0) then

@@ -23,7 +23,7 @@ module stickslip_dynamics
     implicit none
     private
     public :: dynamics_t, new_dynamics, restrict_dynamics, check_harmonics_in_basis, &
-        smallest_singular, &
+        smallest_singular, note_conditioning, &
         restrict_to_basis
 
     !> Condensed linear dynamics on a basis.
@@ -212,11 +212,7 @@ contains
                 zscale = smin_k + (h*model%omega)**2*smin_m
                 rel = 0.0_dp
                 if (zscale > 0.0_dp) rel = rcond*anorm/zscale
-                self%rel(ih) = rel
-                if (rel < self%relative_conditioning) then
-                    self%relative_conditioning = rel
-                    self%worst_harmonic = h
-                end if
+                call note_conditioning(self, ih, h, rel)
             end if
             if ((h == 0 .and. .not. (rcond >= static_singular_threshold)) .or. &
                 (h > 0 .and. .not. (rel >= singular_threshold))) then
@@ -491,6 +487,22 @@ contains
             xcoef(k + 1, :) = -aimag(x)
         end do
     end subroutine displacement
+
+    !> Record the relative conditioning `rel` of harmonic h > 0 (entry ih of the basis):
+    !> self%rel(ih), and the worst so far (relative_conditioning, worst_harmonic).
+    pure subroutine note_conditioning(self, ih, h, rel)
+        !> The dynamics being built.
+        type(dynamics_t), intent(inout) :: self
+        !> Entry of the basis and its harmonic.
+        integer, intent(in) :: ih, h
+        !> The relative conditioning of Z_h.
+        real(dp), intent(in) :: rel
+        self%rel(ih) = rel
+        if (rel < self%relative_conditioning) then
+            self%relative_conditioning = rel
+            self%worst_harmonic = h
+        end if
+    end subroutine note_conditioning
 
     !> 1 / ||A^-1||_1 of a real square matrix (LAPACK's estimate, through the complex
     !> routines used for Z_h), `anorm` = ||A||_1; 0 when A is singular.

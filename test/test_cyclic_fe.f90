@@ -23,7 +23,7 @@ module test_cyclic_fe
     use stickslip_case, only: case_t, read_case
     use stickslip_sorting, only: sort_ascending
     use testing, only: test_counter_t, check, check_error
-    use fixtures, only: project_path
+    use fixtures, only: project_path, scratch, write_lines, enter_project_root
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
@@ -49,7 +49,42 @@ contains
         call test_calculix_diameters(t, kmat, mmat, cyc)
         call test_full_disk(t, kmat, mmat, cyc)
         call test_reduced_sector(t, kmat, mmat, cyc)
+        call test_sparse_sector_refused(t)
     end subroutine run_cyclic_fe_tests
+
+    !> A sector of more than 2000 DOFs from Matrix Market files with &reduction method =
+    !> 'none' (kept sparse) is refused in one line naming &reduction method.
+    subroutine test_sparse_sector_refused(t)
+        type(test_counter_t), intent(inout) :: t
+        integer, parameter :: n = 2001
+        type(case_t) :: c
+        type(error_type), allocatable :: error
+        integer :: u, i
+        call enter_project_root()
+        open (newunit=u, file=scratch//"/big_sector_k.mtx", status='replace', action='write')
+        write (u, '(a)') "%%MatrixMarket matrix coordinate real symmetric"
+        write (u, '(3i6)') n, n, n
+        do i = 1, n
+            write (u, '(2i6,a)') i, i, " 1000.0"
+        end do
+        close (u)
+        open (newunit=u, file=scratch//"/big_sector_m.mtx", status='replace', action='write')
+        write (u, '(a)') "%%MatrixMarket matrix coordinate real symmetric"
+        write (u, '(3i6)') n, n, n
+        do i = 1, n
+            write (u, '(2i6,a)') i, i, " 1.0"
+        end do
+        close (u)
+        call write_lines(scratch//"/big_sector.nml", [character(len=100) :: &
+            "&system mass_file = 'big_sector_m.mtx', stiffness_file = 'big_sector_k.mtx' /", &
+            "&forcing omega = 10.0, force_dof = 3, force_amplitude = 1.0 /", &
+            "&friction contact_dof = 3, mu = 0.3, normal_load = 1.0 /", &
+            "&cyclic sectors = 24, engine_order = 3, left_dofs = 1, right_dofs = 2 /", &
+            "&reduction method = 'none' /", "&output directory = 'big_sector' /"])
+        call read_case(scratch//"/big_sector.nml", c, error)
+        call check_error(t, error, "cyclic FE: a sector kept sparse", .true., &
+                         ["&reduction method = 'none'", "big_sector.nml            "])
+    end subroutine test_sparse_sector_refused
 
     !> The sector's frequencies per nodal diameter 0..12 (the 3 lowest, distinct) against
     !> CalculiX's (modes 1, 3, 5 of each diameter: it lists each twice).

@@ -31,7 +31,7 @@ module stickslip_hbm
     implicit none
     private
     public :: solve_periodic, validate_options, convergence_scale, solution_from_forces
-    public :: condensed_structure_t, solve_condensed, dense_structure
+    public :: condensed_structure_t, solve_condensed, solve_setup
     public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns, newton_min_unknowns
     public :: energy_warning, energy_untrusted, dissipation_warning, dissipation_untrusted
     public :: force_excess_warning, force_excess_untrusted, rho_ratio_min, rho_ratio_max
@@ -124,14 +124,8 @@ contains
         integer(int64) :: c0, c1, rate
 
         call system_clock(c0, rate)
-        call validate_model(model, error)
+        call solve_setup(model, opts, s, o, error)
         if (allocated(error)) return
-        call validate_options(opts, error)
-        if (allocated(error)) return
-        s = dense_structure(model)
-        ! the options in effect: rho = 0 asks for the automatic weight
-        o = opts
-        if (o%rho == 0.0_dp) o%rho = s%rho_auto
         call new_hb_problem(prob, model, o%harmonics, o%odd_only, o%samples, o%rho, error, &
                             dyn)
         if (allocated(error)) return
@@ -140,6 +134,29 @@ contains
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine solve_periodic
+
+    !> What a dense solve of `model` with `opts` starts from: both validated, the condensed
+    !> structure `s` and the options in effect `o` (rho = 0 asks for the automatic weight,
+    !> s%rho_auto). Errors: those of validate_model and validate_options (stat input).
+    subroutine solve_setup(model, opts, s, o, error)
+        !> The structure, its contacts and forcing.
+        type(model_t), intent(in) :: model
+        !> Solver options as given.
+        type(hbm_options_t), intent(in) :: opts
+        !> The condensed structure.
+        type(condensed_structure_t), intent(out) :: s
+        !> The options in effect.
+        type(hbm_options_t), intent(out) :: o
+        !> Set on invalid input.
+        type(error_type), allocatable, intent(out) :: error
+        call validate_model(model, error)
+        if (allocated(error)) return
+        call validate_options(opts, error)
+        if (allocated(error)) return
+        s = dense_structure(model)
+        o = opts
+        if (o%rho == 0.0_dp) o%rho = s%rho_auto
+    end subroutine solve_setup
 
     !> The weighted-residual solution of `model` whose friction-force coefficients `rcoef`
     !> (nb x channels, on the basis of `opts` with its weight rho > 0) were found elsewhere

@@ -7,15 +7,15 @@ module stickslip_hbm_cyclic
     use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type
-    use stickslip_model, only: model_t, validate_model
+    use stickslip_model, only: model_t
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, assemble_disk, sector_phase
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
-    use stickslip_hbm, only: validate_options, condensed_structure_t, solve_condensed, &
-        dense_structure, solution_from_forces
+    use stickslip_hbm, only: condensed_structure_t, solve_condensed, solve_setup, &
+        solution_from_forces
     implicit none
     private
     public :: solve_periodic_cyclic, disk_solution
@@ -47,15 +47,10 @@ contains
         type(hb_problem_t) :: prob
         integer(int64) :: c0, c1, rate
         call system_clock(c0, rate)
-        call validate_model(model, error)
-        if (allocated(error)) return
-        call validate_options(opts, error)
+        call solve_setup(model, opts, s, o, error)
         if (allocated(error)) return
         call validate_cyclic(model, cyc, error)
         if (allocated(error)) return
-        s = dense_structure(model)
-        o = opts
-        if (o%rho == 0.0_dp) o%rho = s%rho_auto
         call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
         if (allocated(error)) return
         call new_cyclic_dynamics(dyn, model, cyc, basis, error)

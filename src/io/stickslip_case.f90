@@ -391,18 +391,7 @@ contains
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: what
-        what = ""
-        if (case%method == 'sweep') then
-            if (case%sweep%stability) what = "&sweep stability = .true."
-        else if (case%method /= 'hbm') then
-            what = "&run method = '"//trim(case%method)//"'"
-        else if (case%checks%stability) then
-            what = "&hbm stability = .true."
-        else if (case%checks%verify_periods > 0) then
-            what = "&hbm verify_periods = "//itoa(case%checks%verify_periods)
-        else if (case%checks%harmonics_tol > 0.0_dp) then
-            what = "&hbm harmonics_tol = "//rtoa(case%checks%harmonics_tol)
-        end if
+        what = weighted_residual_only(case, .true.)
         if (len(what) == 0) return
         call group_error(nml, error, what//": needs the dense matrices of a small or "// &
                          "reduced model, but &reduction method = 'none' keeps this model "// &
@@ -422,16 +411,7 @@ contains
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: what
-        what = ""
-        if (case%method == 'sweep') then
-            continue
-        else if (case%method /= 'hbm') then
-            what = "&run method = '"//trim(case%method)//"'"
-        else if (case%checks%verify_periods > 0) then
-            what = "&hbm verify_periods = "//itoa(case%checks%verify_periods)
-        else if (case%checks%harmonics_tol > 0.0_dp) then
-            what = "&hbm harmonics_tol = "//rtoa(case%checks%harmonics_tol)
-        end if
+        what = weighted_residual_only(case, .false.)
         if (len(what) == 0) return
         call group_error(nml, error, what//": on one sector of a disk (&cyclic model = "// &
                          "'sector') only the weighted residual runs in this version "// &
@@ -440,6 +420,28 @@ contains
                          "disk's); set &cyclic model = 'disk' to run it on the assembled "// &
                          "full disk")
     end subroutine check_sector_methods
+
+    !> For a model on which only the weighted residual runs (&run method 'hbm' or 'sweep',
+    !> no &hbm verify_periods or harmonics_tol, and with `no_stability` no &hbm or &sweep
+    !> stability): the first setting of `case` asking for more, as the case file writes it
+    !> ('' when none).
+    function weighted_residual_only(case, no_stability) result(what)
+        type(case_t), intent(in) :: case
+        logical, intent(in) :: no_stability
+        character(len=:), allocatable :: what
+        what = ""
+        if (case%method == 'sweep') then
+            if (no_stability .and. case%sweep%stability) what = "&sweep stability = .true."
+        else if (case%method /= 'hbm') then
+            what = "&run method = '"//trim(case%method)//"'"
+        else if (no_stability .and. case%checks%stability) then
+            what = "&hbm stability = .true."
+        else if (case%checks%verify_periods > 0) then
+            what = "&hbm verify_periods = "//itoa(case%checks%verify_periods)
+        else if (case%checks%harmonics_tol > 0.0_dp) then
+            what = "&hbm harmonics_tol = "//rtoa(case%checks%harmonics_tol)
+        end if
+    end function weighted_residual_only
 
     !> `text` with its first `old` replaced by `new`.
     pure function replace_prefix(text, old, new) result(out)

@@ -239,30 +239,29 @@ contains
     end function cyclic_boundary_dofs
 
     !> Put renumbered cyclic_boundary_dofs back into `cyc`.
-    pure subroutine set_cyclic_boundary_dofs(cyc, dofs)
+    subroutine set_cyclic_boundary_dofs(cyc, dofs)
         !> The symmetry.
         type(cyclic_t), intent(inout) :: cyc
         !> cyclic_boundary_dofs(cyc), renumbered.
         integer, intent(in) :: dofs(:)
-        integer :: k, j
+        integer :: k
         k = size(cyc%left)
         cyc%left = dofs(1:k)
         cyc%right = dofs(k + 1:2*k)
         k = 2*k
-        if (allocated(cyc%next_dof)) then
-            do j = 1, size(cyc%next_dof)
-                if (cyc%next_dof(j) <= 0) cycle
+        if (allocated(cyc%next_dof)) call take(cyc%next_dof)
+        if (allocated(cyc%next_normal_dof)) call take(cyc%next_normal_dof)
+    contains
+        !> The positive entries of `list` from the next ones of `dofs`.
+        subroutine take(list)
+            integer, intent(inout) :: list(:)
+            integer :: j
+            do j = 1, size(list)
+                if (list(j) <= 0) cycle
                 k = k + 1
-                cyc%next_dof(j) = dofs(k)
+                list(j) = dofs(k)
             end do
-        end if
-        if (allocated(cyc%next_normal_dof)) then
-            do j = 1, size(cyc%next_normal_dof)
-                if (cyc%next_normal_dof(j) <= 0) cycle
-                k = k + 1
-                cyc%next_normal_dof(j) = dofs(k)
-            end do
-        end if
+        end subroutine take
     end subroutine set_cyclic_boundary_dofs
 
     !> The models of a &cyclic case read by read_cyclic_group, `model` being the final

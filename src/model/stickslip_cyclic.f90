@@ -32,7 +32,7 @@ module stickslip_cyclic
     private
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
         cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis, &
-        structure_key
+        structure_key, disk_dof_table
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -262,6 +262,22 @@ contains
         g = t*kept + jj - count(cyc%right < jj)
     end function disk_dof
 
+    !> disk_dof for every DOF of every sector: g(j, s), n x (0 .. N - 1) (assign it to an
+    !> array allocated with those bounds: an expression's lower bounds are 1).
+    pure function disk_dof_table(cyc, n) result(g)
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> DOFs of the sector.
+        integer, intent(in) :: n
+        integer :: g(n, 0:cyc%sectors - 1)
+        integer :: j, s
+        do s = 0, cyc%sectors - 1
+            do j = 1, n
+                g(j, s) = disk_dof(cyc, n, j, s)
+            end do
+        end do
+    end function disk_dof_table
+
     !> The full disk of `sector`: N copies with their boundaries merged (M, K and C
     !> assembled), every forcing term on every sector with its travelling-wave phase (a load
     !> shape each), every contact on every sector (its directions scattered; one against
@@ -285,11 +301,7 @@ contains
         ns = cyc%sectors
         nd = ns*(n - size(cyc%right))
         allocate (g(n, 0:ns - 1))
-        do s = 0, ns - 1
-            do j = 1, n
-                g(j, s) = disk_dof(cyc, n, j, s)
-            end do
-        end do
+        g = disk_dof_table(cyc, n)
         disk%ndof = nd
         disk%omega = sector%omega
         allocate (disk%mass(nd, nd), disk%stiffness(nd, nd), disk%damping(nd, nd))

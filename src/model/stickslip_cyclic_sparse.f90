@@ -16,7 +16,7 @@ module stickslip_cyclic_sparse
     use stickslip_arpack, only: eigen_options_t, eigen_report_t
     use stickslip_sparse_eigen, only: sparse_eigenpairs
     use stickslip_model, only: model_t
-    use stickslip_cyclic, only: cyclic_t, disk_dof, cyclic_frequencies
+    use stickslip_cyclic, only: cyclic_t, disk_dof_table, cyclic_frequencies
     implicit none
     private
     public :: cyclic_sparse_frequencies, sparse_disk, diameter_frequency_errors
@@ -126,21 +126,19 @@ contains
         type(sparse_matrix_t), intent(out) :: disk
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer, allocatable :: rows(:), cols(:), g(:)
+        integer, allocatable :: rows(:), cols(:), g(:, :)
         integer :: n, nt, s, i, k, p
         n = a%nrows
         nt = cyc%sectors*a%nnz()
-        allocate (rows(nt), cols(nt), g(n))
+        allocate (rows(nt), cols(nt), g(n, 0:cyc%sectors - 1))
+        g = disk_dof_table(cyc, n)
         p = 0
         do s = 0, cyc%sectors - 1
             do i = 1, n
-                g(i) = disk_dof(cyc, n, i, s)
-            end do
-            do i = 1, n
                 do k = a%row_start(i), a%row_start(i + 1) - 1
                     p = p + 1
-                    rows(p) = g(i)
-                    cols(p) = g(a%col(k))
+                    rows(p) = g(i, s)
+                    cols(p) = g(a%col(k), s)
                 end do
             end do
         end do

@@ -802,9 +802,16 @@ contains
         write (u, '(a,i0,a,i0,a,g0.6,a,g0.6,a)') "  nonlinear mode ", case%modes%mode, ": ", &
             n, " points, modal amplitude ", res%points(1)%p%parameter, " to ", &
             res%points(n)%p%parameter, merge(" (complete)  ", " (incomplete)", res%complete)
-        write (u, '(a,g0.7,a,g0.7,a,a,a)') "  linear limits: contacts stuck ", &
-            res%omega_stuck, " rad/s, slipping ", res%omega_slipping, " rad/s (the free "// &
-            "structure's mode most like the stuck one; started ", trim(res%start), ")"
+        if (any(res%points(1:n)%nodal_diameter >= 0)) then
+            ! the backbones of a disk's sector: one per nodal diameter
+            write (u, '(a)') "  nodal diameters (one backbone each, on the sector; their "// &
+                "linear limits per diameter in summary.nml): "// &
+                diameter_list(res%points(1:n)%nodal_diameter)
+        else
+            write (u, '(a,g0.7,a,g0.7,a,a,a)') "  linear limits: contacts stuck ", &
+                res%omega_stuck, " rad/s, slipping ", res%omega_slipping, " rad/s (the "// &
+                "free structure's mode most like the stuck one; started ", trim(res%start), ")"
+        end if
         k = maxloc(res%points(1:n)%damping_ratio, 1)
         write (u, '(a,g0.7,a,g0.7,a,g0.5,a,g0.5)') "  frequency ", &
             minval(res%points(1:n)%p%omega), " .. ", maxval(res%points(1:n)%p%omega), &
@@ -824,6 +831,23 @@ contains
             "modes.gp, "//pictures(case%directory, [character(len=20) :: "modes.png"])// &
             "summary.nml}"
     end subroutine print_modes_summary
+
+    !> The distinct values of `nd` in their order (runs of equal values), as a list.
+    function diameter_list(nd) result(text)
+        integer, intent(in) :: nd(:)
+        character(len=:), allocatable :: text
+        character(len=12) :: buf
+        integer :: k
+        text = ""
+        do k = 1, size(nd)
+            if (k > 1) then
+                if (nd(k) == nd(k - 1)) cycle
+            end if
+            write (buf, '(i0)') nd(k)
+            text = text//merge(", ", "  ", len(text) > 0)//trim(buf)
+        end do
+        text = trim(adjustl(text))
+    end function diameter_list
 
     !> The largest finite entry of x (NaN when none is).
     real(dp) function max_finite(x) result(m)

@@ -5,7 +5,8 @@
 #     forced-response curves of seed_frc.nml and designer_damper.nml, the family of
 #     damper_family.nml (doc/family_damper.png, doc/frc_family_damper.png) and the robustness
 #     maps of seed_robustness.nml; examples/calculix_beam/frc.png (doc/fe-models.md) and
-#     examples/calculix_sector/frc.png (doc/cyclic.md);
+#     examples/calculix_sector/frc.png and modes.png, doc/modes_bladed_disk.png and
+#     doc/modes_bladed_disk_damper.png (doc/cyclic.md);
 #   - every figure between markers in README.md and doc/*.md: an inline figure is written
 #     <!--fig:KEY-->value<!--/fig-->, a block (a program's output) sits between the lines
 #     <!--fig:KEY:begin--> and <!--fig:KEY:end-->. The keys: machine (this machine, e.g.
@@ -57,7 +58,9 @@ examples = sorted({k.split(":", 1)[1] for k in wanted if ":" in k and
 for e in ["examples/seed.nml", "examples/seed_study.nml", "examples/chain4_study.nml",
           "examples/seed_frc.nml", "examples/designer_damper.nml",
           "examples/damper_family.nml", "examples/seed_robustness.nml",
-          "examples/calculix_beam/case.nml", "examples/calculix_sector/case.nml"]:
+          "examples/calculix_beam/case.nml", "examples/calculix_sector/case.nml",
+          "examples/calculix_sector/modes.nml", "examples/bladed_disk_modes.nml",
+          "examples/bladed_disk_damper_modes.nml"]:
     if e not in examples:
         examples.append(e)
 
@@ -151,6 +154,14 @@ values["calculix_sector:points"] = s["points"]
 values["calculix_sector:reduced_dof"] = s["reduced_dof"]
 values["calculix_sector:error_nd3"] = sci(float(s["reduction_error_nd3"]))
 values["calculix_sector:error_nd9"] = sci(float(s["reduction_error_nd9"]))
+# the backbones per nodal diameter: points, and the largest damping ratio of each example
+for name, out in [("bladed_disk_modes", "out/bladed_disk_modes"),
+                  ("bladed_disk_damper_modes", "out/bladed_disk_damper_modes"),
+                  ("calculix_sector_modes", "out/calculix_sector_modes")]:
+    s = summary(out)
+    values[name + ":points"] = s["points"]
+    values[name + ":damping_max"] = f"{float(s['damping_ratio_max']):.3g}"
+    values[name + ":cpu"] = sig(float(s["cpu_seconds"])) + " s"
 # the convergence table: answers converged at H = 10..150 on its cases, impact left out
 converged = total = 0
 for line in open("doc/convergence_table.txt"):
@@ -192,12 +203,17 @@ done
 cp out/seed_frc/frc.png doc/frc_seed.png
 cp out/calculix_beam/frc.png examples/calculix_beam/frc.png
 cp out/calculix_sector/frc.png examples/calculix_sector/frc.png
+cp out/calculix_sector_modes/modes.png examples/calculix_sector/modes.png
+cp out/bladed_disk_modes/modes.png doc/modes_bladed_disk.png
+cp out/bladed_disk_damper_modes/modes.png doc/modes_bladed_disk_damper.png
 cp out/designer_damper/frc.png doc/frc_designer.png
 cp out/damper_family/family.png doc/family_damper.png
 cp out/damper_family/frc_family.png doc/frc_family_damper.png
 cp out/seed_robustness/robustness_cold.png doc/robustness_cold.png
 cp out/seed_robustness/robustness_warm.png doc/robustness_warm.png
 echo "make_figures: wrote examples/calculix_beam/frc.png examples/calculix_sector/frc.png" \
+     "examples/calculix_sector/modes.png doc/modes_bladed_disk.png" \
+     "doc/modes_bladed_disk_damper.png" \
      "doc/figure3.png doc/work_precision_seed.png" \
      "doc/work_precision_chain4.png doc/frc_seed.png doc/frc_designer.png" \
      "doc/family_damper.png doc/frc_family_damper.png doc/robustness_cold.png" \

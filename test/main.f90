@@ -66,6 +66,7 @@ program tester
     use test_family, only: run_family_tests
     use test_cyclic, only: run_cyclic_tests
     use test_cyclic_fe, only: run_cyclic_fe_tests
+    use test_cyclic_modes, only: run_cyclic_modes_tests
     use stickslip_blas_threads, only: limit_blas_threads
     implicit none
 
@@ -115,6 +116,7 @@ program tester
         suite_t("family", run_family_tests),&
         suite_t("cyclic", run_cyclic_tests),&
         suite_t("cyclic_fe", run_cyclic_fe_tests),&
+        suite_t("cyclic_modes", run_cyclic_modes_tests),&
         suite_t("modes", run_modes_tests),&
         suite_t("file_faults", run_file_faults_tests),&
         suite_t("fft", run_fft_tests),&

@@ -626,26 +626,30 @@ contains
 
     !> The pictures of every example that draws (sweeps, families, backbones, the robustness
     !> maps, the CalculiX strip's curve and backbone, the CalculiX
-    !> bladed-disk sector's curve; and the example gnuplot scripts of
+    !> bladed-disk sector's curve and backbones per nodal diameter, the lumped bladed disks'
+    !> underplatform-damper curve and shroud backbones; and the example gnuplot scripts of
     !> Figure 3 and the work-precision charts on the runs they draw), rendered by gnuplot as
     !> the command line runs them: each exists and is non-trivial (over 10 kB: a PNG of axes
     !> alone is about 6 kB). Skipped, saying so, where gnuplot is not installed (status 127).
     subroutine test_cli_figures(t)
         type(test_counter_t), intent(inout) :: t
-        integer, parameter :: n = 12
+        integer, parameter :: n = 15
         character(len=24), parameter :: examples(n) = [character(len=24) :: "seed_frc", &
             "seed_modes", "degenerate_modes", "designer_damper", "damper_family", &
             "seed_robustness", "calculix_beam/case", "calculix_beam/modes", "seed", &
-            "seed_study", "chain4_study", "calculix_sector/case"]
+            "seed_study", "chain4_study", "calculix_sector/case", "calculix_sector/modes", &
+            "bladed_disk_damper", "bladed_disk_modes"]
         ! the pictures of each, and the example script that draws them ('': the program)
         character(len=24), parameter :: pictures(2, n) = reshape([character(len=24) :: &
             "frc.png", "frc_dissipation.png", "modes.png", "", "modes.png", "", &
             "frc.png", "frc_dissipation.png", "frc_family.png", "family.png", &
             "robustness_cold.png", "robustness_warm.png", "frc.png", "frc_dissipation.png", &
             "modes.png", "", "figure3.png", "", "work_precision.png", "", &
-            "work_precision.png", "", "frc.png", "frc_dissipation.png"], [2, n])
+            "work_precision.png", "", "frc.png", "frc_dissipation.png", "modes.png", "", &
+            "frc.png", "frc_dissipation.png", "modes.png", ""], [2, n])
         character(len=24), parameter :: scripts(n) = [character(len=24) :: "", "", "", "", &
-            "", "", "", "", "figure3.gp", "work_precision.gp", "work_precision.gp", ""]
+            "", "", "", "", "figure3.gp", "work_precision.gp", "work_precision.gp", "", "", &
+            "", ""]
         character(len=:), allocatable :: out, err, dir
         character(len=200) :: path
         integer :: code, i, k, u

@@ -27,6 +27,7 @@ module test_cyclic
     use stickslip_dynamics, only: dynamics_t
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
     use stickslip_cyclic_modal, only: prepare_cyclic_modes
+    use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
     implicit none
     private
     public :: run_cyclic_tests
@@ -132,7 +133,9 @@ contains
 
     !> A family over the shrouds' normal load on one sector: both curves complete, their
     !> blade peak refined, and equal to the peak of a separate sweep on the sector at that
-    !> load (1e-8); the linear limits not computed (NaN).
+    !> load (1e-8); the linear limits (the shrouds stuck to the next blade, and slipping) of
+    !> every DOF of the sector equal the assembled disk's for sector 0's DOFs (1e-8 of the
+    !> largest slipping peak; stuck, the blades tied into a ring do not move in a wave).
     subroutine test_sector_family(t)
         type(test_counter_t), intent(inout) :: t
         type(case_t) :: c
@@ -144,6 +147,11 @@ contains
         type(family_peak_t), allocatable :: peaks(:)
         type(hbm_options_t) :: ho
         type(error_type), allocatable :: error
+        type(model_t) :: disk
+        type(limit_peak_t), allocatable :: dstuck(:), dslip(:)
+        real(dp), allocatable :: rows(:, :)
+        real(dp) :: worst
+        integer :: j
         call read_case(project_path("examples/bladed_disk.nml"), c, error)
         call check_error(t, error, "cyclic family: read the example", .false.)
         if (allocated(error)) return
@@ -170,10 +178,41 @@ contains
         if (allocated(error)) return
         call check(t, fam%complete .and. all(fam%peaks(2, :)%refined) .and. &
                    abs(fam%peaks(2, 2)%amplitude - peaks(2)%amplitude) < &
-                   1.0e-8_dp*peaks(2)%amplitude .and. &
-                   fam%stuck(2, 1)%amplitude /= fam%stuck(2, 1)%amplitude, &
+                   1.0e-8_dp*peaks(2)%amplitude, &
                    "cyclic family: the blade's peaks refined, = a separate sweep's", &
                    real_text(fam%peaks(2, 2)%amplitude)//" vs "//real_text(peaks(2)%amplitude))
+        ! the linear limits against the assembled disk's, observed on sector 0's DOFs
+        call assemble_disk(m, c%cyclic%cyc, disk, error)
+        if (.not. allocated(error)) then
+            allocate (rows(m%ndof, disk%ndof))
+            rows = 0.0_dp
+            do j = 1, m%ndof
+                rows(j, disk_dof(c%cyclic%cyc, m%ndof, j, 0)) = 1.0_dp
+            end do
+            call linear_limit_peaks(disk, .true., so%start, so%stop, 'half_peak_to_peak', &
+                                    dstuck, error, observe=rows)
+        end if
+        if (.not. allocated(error)) call linear_limit_peaks(disk, .false., so%start, so%stop, &
+                                                            'half_peak_to_peak', dslip, error, &
+                                                            observe=rows)
+        call check_error(t, error, "cyclic family: the disk's linear limits", .false.)
+        if (allocated(error)) return
+        ! relative to the largest slipping response: with the shrouds stuck the blades are
+        ! tied into a ring that a travelling wave's forces cannot move (every DOF 0 in both)
+        worst = 0.0_dp
+        do j = 1, m%ndof
+            worst = max(worst, abs(fam%stuck(j, 1)%amplitude - dstuck(j)%amplitude)/ &
+                        maxval(dslip%amplitude), abs(fam%slipping(j, 1)%amplitude - &
+                        dslip(j)%amplitude)/maxval(dslip%amplitude))
+        end do
+        ! (a NaN anywhere fails)
+        if (any(fam%stuck(:, 1)%amplitude /= fam%stuck(:, 1)%amplitude) .or. &
+            any(fam%slipping(:, 1)%amplitude /= fam%slipping(:, 1)%amplitude) .or. &
+            any(dstuck%amplitude /= dstuck%amplitude)) worst = huge(1.0_dp)
+        call check(t, worst < 1.0e-8_dp, "cyclic family: the sector's linear limits = the "// &
+                   "assembled disk's", "largest relative difference "//real_text(worst)// &
+                   ", stuck at most "//real_text(maxval(dstuck%amplitude))//", blade "// &
+                   "slipping "//real_text(fam%slipping(2, 1)%amplitude))
     end subroutine test_sector_family
 
     !> The stability of a sector's travelling wave is the assembled disk's: the Floquet

@@ -377,7 +377,7 @@ contains
         call linear_modes(free, .true., ws, phis, error)
         if (allocated(error)) return
         ho%rho = res%rho
-        call new_modes_family(fam, free, ho, phis(:, 1), ws(1), error)
+        call new_modes_family(fam, free, ho, cmplx(phis(:, 1), 0.0_dp, dp), ws(1), error)
         if (allocated(error)) return
         ! a stuck point, one that sticks part of the period, one that slips all period
         which = [1, minloc([(abs(res%points(i)%p%stick(1) - 0.5_dp), i=1, res%npoints)], 1), &

@@ -5,8 +5,9 @@ module stickslip_lapack
     use stickslip_kinds, only: dp, sp
     implicit none
     private
-    public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgetrf, zgetrs, zgemm, zgecon, zlange, dgeev, dgesv, &
-        zgesv, dsygv, dsyev, sgetrf, sgetrs, dgemm, dgemv, zhegv
+    public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgeqrf, zungqr, &
+        zgetrf, zgetrs, zgemm, zgecon, zlange, dgeev, dgesv, zgesv, dsygv, dsyev, sgetrf, sgetrs, &
+        dgemm, dgemv, zhegv
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -257,5 +258,25 @@ module stickslip_lapack
             real(dp), intent(inout) :: work(*)
             integer, intent(out) :: info
         end subroutine dorgqr
+
+        !> Blocked QR factorization of a complex matrix (Householder reflectors).
+        subroutine zgeqrf(m, n, a, lda, tau, work, lwork, info)
+            import :: dp
+            integer, intent(in) :: m, n, lda, lwork
+            complex(dp), intent(inout) :: a(lda, *)
+            complex(dp), intent(out) :: tau(*)
+            complex(dp), intent(inout) :: work(*)
+            integer, intent(out) :: info
+        end subroutine zgeqrf
+
+        !> Form the unitary factor Q of zgeqrf explicitly (blocked).
+        subroutine zungqr(m, n, k, a, lda, tau, work, lwork, info)
+            import :: dp
+            integer, intent(in) :: m, n, k, lda, lwork
+            complex(dp), intent(inout) :: a(lda, *)
+            complex(dp), intent(in) :: tau(*)
+            complex(dp), intent(inout) :: work(*)
+            integer, intent(out) :: info
+        end subroutine zungqr
     end interface
 end module stickslip_lapack

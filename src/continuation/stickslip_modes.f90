@@ -23,11 +23,16 @@ module stickslip_modes
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
     use stickslip_progress, only: progress_t
     use stickslip_thread_clock, only: thread_cpu_seconds
-    use stickslip_model, only: model_t, validate_model, preload_force
-    use stickslip_lapack, only: dgesv, dsygv
+    use stickslip_model, only: model_t, validate_model, preload_force, force_direction
+    use stickslip_lapack, only: dgesv, dsygv, zgesv
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: validate_options, solution_from_forces, energy_warning, &
         energy_untrusted, force_excess_warning, force_excess_untrusted
+    use stickslip_hbm_cyclic, only: cyclic_solution_from_forces
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, cyclic_basis, &
+        cyclic_directions, cyclic_preload_force
+    use stickslip_cyclic_limits, only: cyclic_limit_modes
+    use stickslip_cyclic_modal, only: prepare_cyclic_modes
     use stickslip_rho, only: automatic_rho
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: channel_t, kinematics_gap, along_normal
@@ -86,6 +91,9 @@ module stickslip_modes
         !> (NaN when not estimated or when the point was not found on half the harmonics;
         !> evaluate_mode_point sets them).
         real(dp) :: omega_error = 0.0_dp, damping_error = 0.0_dp
+        !> On a sector of a disk: the nodal diameter of the point's backbone (-1: a whole
+        !> structure; set by the caller that gathers several backbones).
+        integer :: nodal_diameter = -1
     end type mode_point_t
 
     !> A backbone.
@@ -100,6 +108,9 @@ module stickslip_modes
         !> ('stuck' or 'slipping').
         real(dp) :: omega_stuck = 0.0_dp, omega_slipping = 0.0_dp
         character(len=8) :: start = ''
+        !> The mode neither moves nor loads a contact (the error then says so): its backbone
+        !> is the linear mode at every amplitude.
+        logical :: unloaded = .false.
         !> Weight rho in effect, harmonics of the family (odd only for plain contacts).
         real(dp) :: rho = 0.0_dp
         logical :: odd_only = .false.
@@ -142,9 +153,14 @@ contains
     !> reduced FE model is dense) on the basis of `hbm` (rho = 0: automatic, at the mode's
     !> linear frequency), from amplitude_start to amplitude_stop. A backbone that stops
     !> early (the continuation failed) is returned with complete = .false. and a
-    !> diagnosis. Errors: stat input (bad options, no contact, no such mode), stat
-    !> numerical (no solution at the start, singular dynamics at the linear frequency).
-    subroutine run_modes(model, hbm, opts, res, error, progress)
+    !> diagnosis. With `cyclic`, `model` is one sector of that tuned disk and the backbone is
+    !> the travelling wave of nodal diameter cyclic%engine_order (0 .. N/2, its fundamental's
+    !> inter-sector phase exp(-i 2 pi nd / N)), started from the sector's cyclic modes with
+    !> its contacts stuck or slipping (stickslip_cyclic_limits); amplitudes, energies and
+    !> shapes are the sector's (sector 0's). Errors: stat input (bad options, no contact, no
+    !> such mode, a diameter outside 0 .. N/2), stat numerical (no solution at the start,
+    !> singular dynamics at the linear frequency).
+    subroutine run_modes(model, hbm, opts, res, error, progress, cyclic)
         !> A validated model with contacts.
         type(model_t), intent(in) :: model
         !> Basis and tolerance options.
@@ -157,6 +173,9 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Progress hook, told after every point.
         type(progress_t), intent(inout), optional :: progress
+        !> The disk of which `model` is a sector (engine order: the nodal diameter).
+        type(cyclic_t), intent(in), optional :: cyclic
+        type(cyclic_t) :: cyc
         type(modes_family_t) :: fam, low
         type(continuation_options_t) :: copts
         logical :: have_low
@@ -165,8 +184,8 @@ contains
         type(hbm_options_t) :: ho
         type(model_t) :: free
         type(point_tally_t) :: tally
-        real(dp), allocatable :: ws(:), phis(:, :), phif(:, :), wfv(:), guess(:, :)
-        real(dp), allocatable :: phi(:), phi_slip(:)
+        real(dp), allocatable :: ws(:), rphis(:, :), rphif(:, :), wfv(:), guess(:, :)
+        complex(dp), allocatable :: phis(:, :), phif(:, :), phi(:), phi_slip(:)
         logical, allocatable :: unloaded(:)
         real(dp), allocatable :: c_orig(:, :)
         real(dp) :: omega_ref, c0, fscale, last_tl
@@ -200,22 +219,44 @@ contains
         end if
         ! the linear limits: mode `mode` of the stuck structure, and the slipping mode most
         ! like it (largest |phi_f^T M phi_s|)
-        call linear_modes(free, .true., ws, phis, err_stuck)
-        call linear_modes(free, .false., wfv, phif, err_slip)
-        if (allocated(err_stuck)) allocate (ws(0), phis(model%ndof, 0))
-        if (allocated(err_slip)) allocate (wfv(0), phif(model%ndof, 0))
-        ! the free structure's modes that neither move nor load a contact: the contact forces
-        ! never excite them, but where one has the frequency (and damping) of the backbone
-        ! the dynamic stiffness is singular; and a stuck frequency shared by such a mode is
-        ! a double one, whose loaded combinations come first
-        unloaded = unloaded_free_modes(free, phif)
-        if (size(ws) >= opts%mode) call loaded_first(free, ws, phis, opts%mode)
+        if (present(cyclic)) then
+            call validate_cyclic(model, cyclic, error)
+            if (allocated(error)) return
+            if (cyclic%engine_order > cyclic%sectors/2) then
+                call fatal_error(error, "nonlinear modes: nodal diameter "// &
+                                 itoa(cyclic%engine_order)//": must be 0 to "// &
+                                 itoa(cyclic%sectors/2), stickslip_stat%input)
+                return
+            end if
+            ! the sector's cyclic modes of the diameter, its contacts stuck and slipping
+            call cyclic_limit_modes(free, cyclic, fundamental_phase(cyclic), .true., ws, phis, &
+                                    err_stuck)
+            call cyclic_limit_modes(free, cyclic, fundamental_phase(cyclic), .false., wfv, &
+                                    phif, err_slip)
+            if (allocated(err_stuck)) allocate (ws(0), phis(model%ndof, 0))
+            if (allocated(err_slip)) allocate (wfv(0), phif(model%ndof, 0))
+            allocate (unloaded(size(wfv)))
+            unloaded = .false.
+        else
+            call linear_modes(free, .true., ws, rphis, err_stuck)
+            call linear_modes(free, .false., wfv, rphif, err_slip)
+            if (allocated(err_stuck)) allocate (ws(0), rphis(model%ndof, 0))
+            if (allocated(err_slip)) allocate (wfv(0), rphif(model%ndof, 0))
+            ! the free structure's modes that neither move nor load a contact: the contact
+            ! forces never excite them, but where one has the frequency (and damping) of the
+            ! backbone the dynamic stiffness is singular; and a stuck frequency shared by such
+            ! a mode is a double one, whose loaded combinations come first
+            unloaded = unloaded_free_modes(free, rphif)
+            if (size(ws) >= opts%mode) call loaded_first(free, ws, rphis, opts%mode)
+            phis = cmplx(rphis, 0.0_dp, dp)
+            phif = cmplx(rphif, 0.0_dp, dp)
+        end if
         if (size(ws) >= opts%mode) then
             phi = phis(:, opts%mode)
             omega_ref = ws(opts%mode)
             res%omega_stuck = omega_ref
             if (count(.not. unloaded) > 0) then
-                k = maxloc(abs(matmul(transpose(phif), matmul(free%mass, phi))), 1, &
+                k = maxloc(abs(matmul(conjg(transpose(phif)), matmul(free%mass, phi))), 1, &
                            mask=.not. unloaded)
                 phi_slip = phif(:, k)
                 res%omega_slipping = wfv(k)
@@ -239,9 +280,18 @@ contains
         ! the structure's own damping: the energies of the points (the added one acts on
         ! modes the points do not move)
         c_orig = free%damping
-        if (any(unloaded)) call damp_unloaded(free, phif(:, pack([(k, k=1, size(wfv))], &
-                                                                unloaded)), omega_ref)
-        call new_modes_family(fam, free, ho, phi, omega_ref, error)
+        if (any(unloaded)) call damp_unloaded(free, rphif(:, pack([(k, k=1, size(wfv))], &
+                                                                 unloaded)), omega_ref)
+        if (present(cyclic)) then
+            ! the sector's cyclic modes of the diameters the harmonics reach: each omega and
+            ! xi then costs a modal sum (C - xi M stays proportional), not a factorization
+            cyc = cyclic
+            call prepare_cyclic_modes(free, cyc, ho%harmonics, error)
+            if (allocated(error)) return
+            call new_modes_family(fam, free, ho, phi, omega_ref, error, cyc)
+        else
+            call new_modes_family(fam, free, ho, phi, omega_ref, error)
+        end if
         if (allocated(error)) return
         res%rho = ho%rho
         res%odd_only = fam%opts%odd_only
@@ -274,7 +324,11 @@ contains
                 ! then holds the quadrature's error (stick-slip instants on the grid of
                 ! samples) with the truncation's
                 if (hl%samples/2 > 4*hl%harmonics) hl%samples = hl%samples/2
-                call new_modes_family(low, free, hl, phi, omega_ref, error)
+                if (present(cyclic)) then
+                    call new_modes_family(low, free, hl, phi, omega_ref, error, cyc)
+                else
+                    call new_modes_family(low, free, hl, phi, omega_ref, error)
+                end if
             end block
             if (allocated(error)) then
                 call fam%destroy()
@@ -288,19 +342,20 @@ contains
         nguess = 0
         if (res%omega_stuck > 0.0_dp) then
             guess = reshape([guess, stuck_guess(fam, free, phi, omega_ref, &
-                                                opts%amplitude_start)], [fam%n + 2, 1])
+                                                opts%amplitude_start, cyclic)], [fam%n + 2, 1])
             names(1) = 'stuck'
             nguess = 1
         end if
         if (allocated(phi_slip)) then
             if (res%omega_stuck > 0.0_dp .and. .not. stuck_holds(free, phi, omega_ref, &
-                                                                opts%amplitude_start)) then
+                                                                opts%amplitude_start, cyclic)) then
                 guess = reshape([slip_guess(fam, free, phi_slip, res%omega_slipping, &
-                                            opts%amplitude_start), guess], [fam%n + 2, 2])
+                                            opts%amplitude_start, cyclic), guess], &
+                                [fam%n + 2, 2])
                 names = [character(len=16) :: 'slipping', 'stuck']
             else
                 guess = reshape([guess, slip_guess(fam, free, phi_slip, res%omega_slipping, &
-                                                   opts%amplitude_start)], &
+                                                   opts%amplitude_start, cyclic)], &
                                 [fam%n + 2, nguess + 1])
                 names(nguess + 1) = 'slipping'
             end if
@@ -320,7 +375,8 @@ contains
         if (.not. rep%accepted) then
             call fam%destroy()
             write (buf, '(es12.4e3)') opts%amplitude_start
-            if (unloaded_mode(free, phi, omega_ref)) then
+            if (unloaded_mode(free, phi, omega_ref, cyclic)) then
+                res%unloaded = .true.
                 ! the contacts neither move nor carry a force in this mode: it is a mode of
                 ! the structure with and without them (its stuck and free frequencies
                 ! coincide), which the equations, driven by the contact forces, cannot reach
@@ -505,22 +561,24 @@ contains
         model%damping = model%damping + gamma*matmul(mu, transpose(mu))
     end subroutine damp_unloaded
 
-    !> Whether the linear mode `phi` (frequency `omega` [rad/s]) of `model` leaves every
-    !> contact channel still and unloaded: d^T phi = 0 and d^T (K - omega^2 M) phi = 0 for
-    !> every channel direction d, relative to the mode's own size (1e-8).
-    logical function unloaded_mode(model, phi, omega) result(unloaded)
+    !> Whether the linear mode `phi` (frequency `omega` [rad/s]) of `model` (a sector of
+    !> `cyclic`) leaves every contact channel still and unloaded: D^T phi = 0 and the
+    !> reactions that hold it (reactions) 0, relative to the mode's own size (1e-8).
+    logical function unloaded_mode(model, phi, omega, cyclic) result(unloaded)
         type(model_t), intent(in) :: model
-        real(dp), intent(in) :: phi(:), omega
+        complex(dp), intent(in) :: phi(:)
+        real(dp), intent(in) :: omega
+        type(cyclic_t), intent(in), optional :: cyclic
         type(contact_set_t) :: cs
-        real(dp), allocatable :: d(:, :), f(:)
+        complex(dp), allocatable :: dm(:, :), r(:)
         real(dp) :: scale
         call new_contact_set(cs, model)
-        d = channel_directions(model, cs)
-        f = matmul(model%stiffness, phi) - omega**2*matmul(model%mass, phi)
-        scale = maxval(abs(matmul(model%stiffness, phi)))*maxval(abs(d))
-        unloaded = maxval(abs(matmul(transpose(d), f))) <= 1.0e-8_dp*scale .and. &
-                   maxval(abs(matmul(transpose(d), phi))) <= 1.0e-8_dp*maxval(abs(phi))* &
-                   maxval(abs(d))
+        dm = directions(model, cs, cyclic)
+        r = reactions(model, cs, phi, omega, 1.0_dp, cyclic)
+        scale = maxval(abs(matmul(model%stiffness, phi)))
+        unloaded = maxval(abs(r)) <= 1.0e-8_dp*scale .and. &
+                   maxval(abs(matmul(transpose(dm), phi))) <= 1.0e-8_dp*maxval(abs(phi))* &
+                   maxval(abs(dm))
     end function unloaded_mode
 
     !> The outputs of the continuation's point `state`: the weighted-residual solution of
@@ -558,8 +616,16 @@ contains
         m = fam%model
         m%omega = omega
         m%damping = m%damping - xi*m%mass
-        call solution_from_forces(m, fam%opts, reshape(state%y(1:n), [nb, fam%prob%nc]), ps, &
-                                  error)
+        if (allocated(fam%cyclic)) then
+            ! C - xi M through the prepared modes (m's damping is C)
+            m%damping = fam%model%damping
+            call cyclic_solution_from_forces(m, fam%cyclic, fam%opts, &
+                                             reshape(state%y(1:n), [nb, fam%prob%nc]), ps, &
+                                             error, mass_damping=xi)
+        else
+            call solution_from_forces(m, fam%opts, reshape(state%y(1:n), [nb, fam%prob%nc]), &
+                                      ps, error)
+        end if
         if (allocated(error)) return
         associate (p => mp%p)
             p%parameter = exp(state%lambda)
@@ -576,7 +642,7 @@ contains
             call contact_point_values(ps, p)
             p%stick = ps%stick_fraction
             if (allocated(opts%observe)) so%observe = opts%observe
-            call keep_coefficients(m, ps, so, p)
+            call keep_coefficients(m, ps, so, p, fam%cyclic)
             ! the energies per cycle: viscous (C) and the input of -xi M, from the velocity
             ! coefficients (the integral of v^T A v over a period)
             period = 2.0_dp*pi/omega
@@ -692,17 +758,19 @@ contains
         if (.not. (s > 0.0_dp)) s = 1.0_dp
     end function force_scale
 
-    !> Whether the stuck contacts hold the linear stuck motion a phi cos(omega t): every
-    !> tangential reaction within its friction limit mu N (mu times the preload for a
-    !> unilateral contact).
-    logical function stuck_holds(model, phi, omega, a) result(holds)
+    !> Whether the stuck contacts hold the linear stuck motion Re(a phi exp(i omega t)):
+    !> every tangential reaction within its friction limit mu N (mu times the preload for a
+    !> unilateral contact); with `cyclic` on the sector `model` of that disk.
+    logical function stuck_holds(model, phi, omega, a, cyclic) result(holds)
         type(model_t), intent(in) :: model
-        real(dp), intent(in) :: phi(:), omega, a
-        real(dp), allocatable :: r(:)
+        complex(dp), intent(in) :: phi(:)
+        real(dp), intent(in) :: omega, a
+        type(cyclic_t), intent(in), optional :: cyclic
+        complex(dp), allocatable :: r(:)
         type(contact_set_t) :: cs
         integer :: c, j
         call new_contact_set(cs, model)
-        r = reactions(model, cs, phi, omega, a)
+        r = reactions(model, cs, phi, omega, a, cyclic)
         holds = .true.
         do c = 1, cs%nchannel
             if (cs%along(c) == along_normal) cycle
@@ -711,39 +779,68 @@ contains
         end do
     end function stuck_holds
 
-    !> The channel forces that hold the stuck linear motion a phi cos(omega t): the least-
-    !> squares solution r of D r = (K - omega^2 M) a phi (exact when phi is a stuck mode).
-    function reactions(model, cs, phi, omega, a) result(r)
+    !> The channel forces (complex amplitudes R, r(t) = Re(R exp(i omega t))) that hold the
+    !> stuck linear motion Re(a phi exp(i omega t)): the least-squares solution of D R = (K -
+    !> omega^2 M) a phi (exact when phi is a stuck mode); on a sector (`cyclic`) of T^H
+    !> conj(D) R = T^H (K - omega^2 M) a phi on its cyclic motions T, D = d - e d_next.
+    function reactions(model, cs, phi, omega, a, cyclic) result(r)
         type(model_t), intent(in) :: model
         type(contact_set_t), intent(in) :: cs
-        real(dp), intent(in) :: phi(:), omega, a
-        real(dp), allocatable :: r(:), d(:, :), g(:, :)
+        complex(dp), intent(in) :: phi(:)
+        real(dp), intent(in) :: omega, a
+        type(cyclic_t), intent(in), optional :: cyclic
+        complex(dp), allocatable :: r(:), dm(:, :), b(:), g(:, :), t(:, :)
         integer, allocatable :: ipiv(:)
         integer :: info
-        d = channel_directions(model, cs)
-        r = matmul(transpose(d), a*(matmul(model%stiffness, phi) - omega**2* &
-                                   matmul(model%mass, phi)))
-        g = matmul(transpose(d), d)
+        dm = directions(model, cs, cyclic)
+        b = a*(matmul(model%stiffness, phi) - omega**2*matmul(model%mass, phi))
+        dm = conjg(dm)
+        if (present(cyclic)) then
+            t = cyclic_basis(cyclic, model%ndof, fundamental_phase(cyclic))
+            dm = matmul(conjg(transpose(t)), dm)
+            b = matmul(conjg(transpose(t)), b)
+        end if
+        r = matmul(conjg(transpose(dm)), b)
+        g = matmul(conjg(transpose(dm)), dm)
         allocate (ipiv(cs%nchannel))
-        call dgesv(cs%nchannel, 1, g, cs%nchannel, ipiv, r, cs%nchannel, info)
-        if (info /= 0 .or. .not. all(ieee_is_finite(r))) r = 0.0_dp
+        call zgesv(cs%nchannel, 1, g, cs%nchannel, ipiv, r, cs%nchannel, info)
+        if (info /= 0 .or. .not. (all(ieee_is_finite(real(r, dp))) .and. &
+                                  all(ieee_is_finite(aimag(r))))) r = (0.0_dp, 0.0_dp)
     end function reactions
 
     !> The static normal force of every channel (0 for a tangential one) [N]: the linear
-    !> statics of the structure under its preloads with every closed unilateral contact a
+    !> statics of the structure under its preloads and static loads with every closed unilateral contact a
     !> spring k_n (an elastic one: lambda = -k_n (gap + n^T x)) or a constraint n^T x =
     !> -gap (a rigid one: lambda its reaction); the tangential channels carry no mean force.
-    function static_normal_forces(model, cs) result(lambda)
+    !> On a sector (`cyclic`) on its in-phase motions (the static pattern of the disk).
+    function static_normal_forces(model, cs, cyclic) result(lambda)
         type(model_t), intent(in) :: model
         type(contact_set_t), intent(in) :: cs
+        type(cyclic_t), intent(in), optional :: cyclic
         real(dp) :: lambda(cs%nchannel)
-        real(dp), allocatable :: d(:, :), a(:, :), b(:)
+        real(dp), allocatable :: d(:, :), a(:, :), b(:), kk(:, :), f0(:), t(:, :)
         integer, allocatable :: ipiv(:), rigid(:)
         integer :: n, c, nr, info, k
         type(channel_t) :: ch
-        n = model%ndof
         lambda = 0.0_dp
-        d = channel_directions(model, cs)
+        ! the static loads (force_harmonic = 0) beside the preloads
+        f0 = 0.0_dp*preload_force(model)
+        do k = 1, model%nforce()
+            if (model%force_harmonic(k) == 0) f0 = f0 + model%force_amplitude(k)* &
+                cos(model%force_phase(k))*force_direction(model, k)
+        end do
+        if (present(cyclic)) then
+            t = real(cyclic_basis(cyclic, model%ndof, (1.0_dp, 0.0_dp)), dp)
+            kk = matmul(transpose(t), matmul(model%stiffness, t))
+            d = matmul(transpose(t), real(cyclic_directions(model, cyclic, cs, &
+                                                            (1.0_dp, 0.0_dp)), dp))
+            f0 = matmul(transpose(t), f0 + cyclic_preload_force(model, cyclic))
+        else
+            kk = model%stiffness
+            d = channel_directions(model, cs)
+            f0 = f0 + preload_force(model)
+        end if
+        n = size(kk, 1)
         allocate (rigid(0))
         do c = 1, cs%nchannel
             ch = cs%channel(c)
@@ -753,9 +850,9 @@ contains
         nr = size(rigid)
         allocate (a(n + nr, n + nr), b(n + nr), ipiv(n + nr))
         a = 0.0_dp
-        a(1:n, 1:n) = model%stiffness
+        a(1:n, 1:n) = kk
         b = 0.0_dp
-        b(1:n) = preload_force(model)
+        b(1:n) = f0
         do c = 1, cs%nchannel
             ch = cs%channel(c)
             if (.not. closed_at_rest(c, ch) .or. ch%compliance <= 0.0_dp) cycle
@@ -793,49 +890,60 @@ contains
         end function closed_at_rest
     end function static_normal_forces
 
-    !> The start guess from the stuck linear mode: x = a phi cos(omega t), the channel
-    !> forces that hold it (the cosine of the fundamental; the preload as the mean of a
-    !> normal channel), xi = phi^T C phi (its viscous damping).
-    function stuck_guess(fam, model, phi, omega, a) result(y)
+    !> The start guess from the stuck linear mode: x = Re(a phi exp(i omega t)), the channel
+    !> forces that hold it (the fundamental; the preload as the mean of a normal channel),
+    !> xi = phi^H C phi (its viscous damping); on a sector with `cyclic`.
+    function stuck_guess(fam, model, phi, omega, a, cyclic) result(y)
         type(modes_family_t), intent(in) :: fam
         type(model_t), intent(in) :: model
-        real(dp), intent(in) :: phi(:), omega, a
+        complex(dp), intent(in) :: phi(:)
+        real(dp), intent(in) :: omega, a
+        type(cyclic_t), intent(in), optional :: cyclic
         real(dp) :: y(fam%n + 2)
         type(contact_set_t) :: cs
-        real(dp), allocatable :: r(:), lambda(:)
+        complex(dp), allocatable :: r(:)
+        real(dp), allocatable :: lambda(:)
         integer :: c, nb
         call new_contact_set(cs, model)
         nb = fam%prob%basis%nb
-        r = reactions(model, cs, phi, omega, a)
-        lambda = static_normal_forces(model, cs)
+        r = reactions(model, cs, phi, omega, a, cyclic)
+        lambda = static_normal_forces(model, cs, cyclic)
         y = 0.0_dp
         do c = 1, cs%nchannel
-            y((c - 1)*nb + fam%ic1) = r(c)
+            ! R = r_cos - i r_sin
+            y((c - 1)*nb + fam%ic1) = real(r(c), dp)
+            y((c - 1)*nb + fam%is1) = -aimag(r(c))
             if (cs%along(c) == along_normal .and. fam%prob%basis%i0 > 0) &
                 y((c - 1)*nb + fam%prob%basis%i0) = lambda(c)
         end do
         y(fam%n + 1) = omega
-        y(fam%n + 2) = dot_product(phi, matmul(model%damping, phi))
+        y(fam%n + 2) = real(dot_product(phi, matmul(model%damping, phi)), dp)
     end function stuck_guess
 
-    !> The start guess from the slipping linear mode: x = a phi cos(omega t), each tangential
-    !> channel's force the fundamental of Coulomb's -mu N sign(v) (4 mu N / pi on sin),
-    !> xi from the energy balance 4 mu N |u| per cycle (+ the viscous phi^T C phi).
-    function slip_guess(fam, model, phi, omega, a) result(y)
+    !> The start guess from the slipping linear mode: x = Re(a phi exp(i omega t)), each
+    !> tangential channel's force the fundamental of Coulomb's -mu N sign(v) (amplitude 4 mu
+    !> N / pi, a quarter period behind the channel's displacement U = a D^T phi), xi from the
+    !> energy balance 4 mu N |U| per cycle (+ the viscous phi^H C phi); on a sector with
+    !> `cyclic`.
+    function slip_guess(fam, model, phi, omega, a, cyclic) result(y)
         type(modes_family_t), intent(in) :: fam
         type(model_t), intent(in) :: model
-        real(dp), intent(in) :: phi(:), omega, a
+        complex(dp), intent(in) :: phi(:)
+        real(dp), intent(in) :: omega, a
+        type(cyclic_t), intent(in), optional :: cyclic
         real(dp) :: y(fam%n + 2)
         type(contact_set_t) :: cs
-        real(dp), allocatable :: d(:, :), lambda(:)
-        real(dp) :: limit, u, dissipated
+        complex(dp), allocatable :: dm(:, :)
+        real(dp), allocatable :: lambda(:)
+        real(dp) :: limit, dissipated
+        complex(dp) :: u, r
         integer :: c, nb, j
         call new_contact_set(cs, model)
-        d = channel_directions(model, cs)
+        dm = directions(model, cs, cyclic)
         nb = fam%prob%basis%nb
         y = 0.0_dp
         dissipated = 0.0_dp
-        lambda = static_normal_forces(model, cs)
+        lambda = static_normal_forces(model, cs, cyclic)
         do c = 1, cs%nchannel
             j = cs%contact_of(c)
             if (cs%along(c) == along_normal) then
@@ -843,11 +951,39 @@ contains
                 cycle
             end if
             limit = cs%elements(j)%e%rest_limit(c - cs%first(j) + 1)
-            u = a*dot_product(d(:, c), phi)
-            y((c - 1)*nb + fam%is1) = 4.0_dp*limit/pi*sign(1.0_dp, u)
+            u = a*sum(dm(:, c)*phi)
+            if (abs(u) > 0.0_dp) then
+                r = cmplx(0.0_dp, -4.0_dp*limit/pi, dp)*u/abs(u)
+            else
+                r = cmplx(0.0_dp, -4.0_dp*limit/pi, dp)
+            end if
+            y((c - 1)*nb + fam%ic1) = real(r, dp)
+            y((c - 1)*nb + fam%is1) = -aimag(r)
             dissipated = dissipated + 4.0_dp*limit*abs(u)
         end do
         y(fam%n + 1) = omega
-        y(fam%n + 2) = dissipated/(pi*omega*a*a) + dot_product(phi, matmul(model%damping, phi))
+        y(fam%n + 2) = dissipated/(pi*omega*a*a) + &
+                       real(dot_product(phi, matmul(model%damping, phi)), dp)
     end function slip_guess
+
+    !> The channels' measuring directions, N x channels (complex): d, or on a sector of
+    !> `cyclic` D = d - e d_next at the fundamental's inter-sector phase e.
+    function directions(model, cs, cyclic) result(dm)
+        type(model_t), intent(in) :: model
+        type(contact_set_t), intent(in) :: cs
+        type(cyclic_t), intent(in), optional :: cyclic
+        complex(dp), allocatable :: dm(:, :)
+        if (present(cyclic)) then
+            dm = cyclic_directions(model, cyclic, cs, fundamental_phase(cyclic))
+        else
+            dm = cmplx(channel_directions(model, cs), 0.0_dp, dp)
+        end if
+    end function directions
+
+    !> The next sector's phase factor at the fundamental of a wave of nodal diameter
+    !> cyc%engine_order: exp(-i 2 pi nd / N).
+    complex(dp) function fundamental_phase(cyc) result(e)
+        type(cyclic_t), intent(in) :: cyc
+        e = exp(cmplx(0.0_dp, sector_phase(1, cyc%engine_order, cyc%sectors, 1), dp))
+    end function fundamental_phase
 end module stickslip_modes

@@ -25,14 +25,24 @@
 !> nothing determines while its contact sticks all period (a singular direction of dF/dR
 !> that would leave the continuation's tangent undefined), gets a Tikhonov term
 !> mean_weight rho R_0 in its row.
+!>
+!> On one sector of a tuned bladed disk (`cyclic`, its engine order the nodal diameter nd of
+!> the mode) the family is the mode's travelling wave: the same equations on the sector's
+!> cyclic condensation (new_cyclic_dynamics: sector s moves as sector 0 delayed by nd s / N
+!> of the period), the amplitude a^2 = X1^H M X1 over the sector's DOFs (its share of the
+!> disk's), and the phase condition Im(phi_ref^H M X1) = 0 with the complex cyclic mode
+!> phi_ref (for a real phi_ref: phi_ref^T M s1 = 0 as above).
 module stickslip_modes_family
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t
-    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
+    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem, new_condensed_problem
     use stickslip_dynamics, only: dynamics_t, new_dynamics
+    use stickslip_basis, only: basis_t, new_basis
+    use stickslip_cyclic, only: cyclic_t, sector_phase, cyclic_directions, cyclic_basis
+    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
     use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_continuation, only: parametric_system_t
     implicit none
@@ -54,8 +64,12 @@ module stickslip_modes_family
         type(hb_problem_t) :: prob
         real(dp) :: current_omega = -1.0_dp, current_xi = 0.0_dp
         logical :: have_current = .false.
-        !> The reference shape of the phase condition (mass-normalized) and M phi_ref.
-        real(dp), allocatable :: phi(:), mphi(:)
+        !> The reference shape of the phase condition (mass-normalized; complex on a sector)
+        !> and M phi_ref.
+        complex(dp), allocatable :: phi(:), mphi(:)
+        !> The disk when the model is one sector of it (engine order: the mode's nodal
+        !> diameter); unallocated: a whole structure.
+        type(cyclic_t), allocatable :: cyclic
         !> Velocity scale per unit modal amplitude [1/s]: omega_ref max |phi_ref|.
         real(dp) :: vref = 1.0_dp
         !> Basis indices of cos(omega t) and sin(omega t), and the column of harmonic 1 in
@@ -82,24 +96,32 @@ module stickslip_modes_family
 
 contains
 
-    !> `model` without its forcing terms: the free structure whose modes are sought.
+    !> `model` without its harmonic forcing terms: the free structure whose modes are sought,
+    !> its static loads (force_harmonic = 0: a centrifugal load pressing a damper) kept.
     function free_structure(model) result(m)
         !> A validated model.
         type(model_t), intent(in) :: model
         type(model_t) :: m
+        logical, allocatable :: static(:)
+        integer :: k
         m = model
-        if (allocated(m%force_shape)) deallocate (m%force_shape)
-        m%force_dof = [integer ::]
-        m%force_harmonic = [integer ::]
-        m%force_amplitude = [real(dp) ::]
-        m%force_phase = [real(dp) ::]
+        static = model%force_harmonic == 0
+        if (allocated(model%force_shape)) then
+            m%force_shape = model%force_shape(:, pack([(k, k=1, size(static))], static))
+        else if (allocated(model%force_dof)) then
+            m%force_dof = pack(model%force_dof, static)
+        end if
+        m%force_harmonic = pack(model%force_harmonic, static)
+        m%force_amplitude = pack(model%force_amplitude, static)
+        m%force_phase = pack(model%force_phase, static)
     end function free_structure
 
     !> Build the family of `model` (its forcing is ignored) on the basis of `hbm` (rho > 0;
     !> odd harmonics only unless a contact needs the constant term), phase-referenced to the
-    !> mass-normalized shape `phi` of frequency `omega_ref` [rad/s]. Errors: as
-    !> new_hb_problem (stat numerical: a singular dynamic stiffness at omega_ref).
-    subroutine new_modes_family(fam, model, hbm, phi, omega_ref, error)
+    !> mass-normalized shape `phi` of frequency `omega_ref` [rad/s]; with `cyclic`, of the
+    !> sector `model` of that disk (phi its complex cyclic mode). Errors: as new_hb_problem
+    !> and new_cyclic_dynamics (stat numerical: a singular dynamic stiffness at omega_ref).
+    subroutine new_modes_family(fam, model, hbm, phi, omega_ref, error, cyclic)
         !> The family.
         type(modes_family_t), intent(out) :: fam
         !> A validated model with contacts.
@@ -107,34 +129,52 @@ contains
         !> Basis options (rho > 0).
         type(hbm_options_t), intent(in) :: hbm
         !> Reference shape (N), mass-normalized.
-        real(dp), intent(in) :: phi(:)
+        complex(dp), intent(in) :: phi(:)
         !> Its frequency [rad/s] (> 0).
         real(dp), intent(in) :: omega_ref
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
+        !> The disk of which `model` is a sector.
+        type(cyclic_t), intent(in), optional :: cyclic
         type(contact_set_t) :: cs
         integer :: k, nb
         type(model_t) :: m
+        type(basis_t) :: basis
+        type(dynamics_t) :: dyn
         fam%model = free_structure(model)
         fam%model%omega = omega_ref
         fam%opts = hbm
         call new_contact_set(cs, fam%model)
         ! the odd harmonics unless a contact needs the constant term (a gap channel: its gap,
-        ! preload and mean normal force)
-        if (.not. cs%needs_constant()) fam%opts%odd_only = .true.
+        ! preload and mean normal force) or the structure carries a static load
+        fam%opts%odd_only = .not. cs%needs_constant() .and. fam%model%nforce() == 0
         ! built at (omega_ref, xi = 0.01 omega_ref): omega_ref may be a natural frequency of
         ! the undamped structure (the slipping limit), where Z_1 is singular without damping
         m = fam%model
         m%damping = m%damping - 0.01_dp*omega_ref*m%mass
-        call new_hb_problem(fam%prob, m, fam%opts%harmonics, fam%opts%odd_only, &
-                            fam%opts%samples, fam%opts%rho, error)
+        if (present(cyclic)) then
+            fam%cyclic = cyclic
+            call new_basis(basis, fam%opts%harmonics, fam%opts%odd_only, fam%opts%samples, &
+                           error)
+            if (allocated(error)) return
+            call new_cyclic_dynamics(dyn, fam%model, cyclic, basis, error, &
+                                     mass_damping=0.01_dp*omega_ref)
+            call basis%destroy()
+            if (allocated(error)) return
+            call new_condensed_problem(fam%prob, dyn, cs, fam%opts%harmonics, &
+                                       fam%opts%odd_only, fam%opts%samples, fam%opts%rho, error)
+        else
+            call new_hb_problem(fam%prob, m, fam%opts%harmonics, fam%opts%odd_only, &
+                                fam%opts%samples, fam%opts%rho, error)
+        end if
         if (allocated(error)) return
         fam%factorizations = 1
         fam%current_omega = omega_ref
         fam%current_xi = 0.01_dp*omega_ref
         fam%have_current = .true.
         fam%phi = phi
-        fam%mphi = matmul(fam%model%mass, phi)
+        fam%mphi = cmplx(matmul(fam%model%mass, real(phi, dp)), &
+                         matmul(fam%model%mass, aimag(phi)), dp)
         fam%vref = omega_ref*maxval(abs(phi))
         nb = fam%prob%basis%nb
         fam%n = nb*fam%prob%nc
@@ -155,8 +195,37 @@ contains
         end if
         ! the tangential channels' mean forces (undetermined where they stick all period)
         fam%mean_rows = fam%prob%tangential_mean_rows()
+        if (present(cyclic)) fam%mean_rows = [fam%mean_rows, idle_rows(fam, cs, cyclic)]
         if (size(fam%mean_rows) > 0) fam%mean_weight = mean_weight
     end subroutine new_modes_family
+
+    !> On a sector: the unknowns of the harmonics in which a channel against the next sector
+    !> measures nothing (T_h^H conj(D_h) = 0: a contact of a DOF against its own copy on the
+    !> next sector in a harmonic whose inter-sector phase is 0, e.g. harmonic 3 of diameter
+    !> 8 on 24 sectors). Their forces move nothing, so nothing determines them while the
+    !> contact sticks: they get the Tikhonov term of the undetermined mean forces.
+    function idle_rows(fam, cs, cyc) result(rows)
+        type(modes_family_t), intent(in) :: fam
+        type(contact_set_t), intent(in) :: cs
+        type(cyclic_t), intent(in) :: cyc
+        integer, allocatable :: rows(:)
+        complex(dp), allocatable :: dm(:, :), a(:, :)
+        complex(dp) :: e
+        integer :: ih, c, nb
+        allocate (rows(0))
+        nb = fam%prob%basis%nb
+        do ih = 1, fam%prob%basis%nharm
+            e = exp(cmplx(0.0_dp, sector_phase(fam%prob%basis%harm(ih), cyc%engine_order, &
+                                               cyc%sectors, 1), dp))
+            dm = cyclic_directions(fam%model, cyc, cs, e)
+            a = matmul(conjg(transpose(cyclic_basis(cyc, fam%model%ndof, e))), conjg(dm))
+            do c = 1, cs%nchannel
+                if (maxval(abs(a(:, c))) <= 1.0e-12_dp*max(maxval(abs(dm(:, c))), &
+                                                           tiny(1.0_dp))) &
+                    rows = [rows, (c - 1)*nb + fam%prob%basis%icos(ih) + [0, 1]]
+            end do
+        end do
+    end function idle_rows
 
     !> Move the family's dynamics to (omega, xi): Z_h with damping C - xi M, factorized
     !> anew unless already there. stat = 1 when omega is not > 0 or a Z_h is singular.
@@ -177,8 +246,14 @@ contains
         end if
         m = self%model
         m%omega = omega
-        m%damping = m%damping - xi*m%mass
-        call new_dynamics(self%prob%dyn, m, self%prob%basis, error)
+        if (allocated(self%cyclic)) then
+            ! C - xi M: the sector's prepared modes serve (modal damping c_j - xi)
+            call new_cyclic_dynamics(self%prob%dyn, m, self%cyclic, self%prob%basis, error, &
+                                     mass_damping=xi)
+        else
+            m%damping = m%damping - xi*m%mass
+            call new_dynamics(self%prob%dyn, m, self%prob%basis, error)
+        end if
         self%factorizations = self%factorizations + 1
         if (allocated(error)) then
             stat = 1
@@ -233,7 +308,7 @@ contains
         call self%harmonic_one(reshape(y(1:n), [nb, nc]), c1, s1)
         a = exp(lambda)
         f(n + 1) = self%vref*(quad(c1, s1)/a - a)
-        f(n + 2) = self%vref*dot_product(self%mphi, s1)
+        f(n + 2) = self%vref*phase(self, c1, s1)
     contains
         real(dp) function quad(c, s)
             real(dp), intent(in) :: c(:), s(:)
@@ -284,12 +359,12 @@ contains
                 ds = -aimag(y1(:, j))
                 jy(n + 1, (j - 1)*nb + self%ic1) = self%vref*2.0_dp*(dot_product(mc, dc) + &
                                                                    dot_product(ms, ds))/a
-                jy(n + 2, (j - 1)*nb + self%ic1) = self%vref*dot_product(self%mphi, ds)
+                jy(n + 2, (j - 1)*nb + self%ic1) = self%vref*phase(self, dc, ds)
                 dc = aimag(y1(:, j))
                 ds = real(y1(:, j), dp)
                 jy(n + 1, (j - 1)*nb + self%is1) = self%vref*2.0_dp*(dot_product(mc, dc) + &
                                                                    dot_product(ms, ds))/a
-                jy(n + 2, (j - 1)*nb + self%is1) = self%vref*dot_product(self%mphi, ds)
+                jy(n + 2, (j - 1)*nb + self%is1) = self%vref*phase(self, dc, ds)
             end do
         end associate
         ! f(n+1) = v_ref (Q / a - a), a = exp(lambda); the other rows do not depend on lambda
@@ -317,6 +392,16 @@ contains
         self%have_current = .true.
         if (.not. (all(ieee_is_finite(jy)) .and. all(ieee_is_finite(jl)))) stat = 1
     end subroutine modes_jacobian
+
+    !> The phase condition's function of the fundamental X1 = c1 - i s1: -Im(phi_ref^H M X1)
+    !> = Re(M phi_ref)^T s1 + Im(M phi_ref)^T c1 (linear in c1, s1).
+    pure real(dp) function phase(self, c1, s1)
+        !> The family.
+        class(modes_family_t), intent(in) :: self
+        !> Cosine and sine coefficients of x at omega [m].
+        real(dp), intent(in) :: c1(:), s1(:)
+        phase = dot_product(real(self%mphi, dp), s1) + dot_product(aimag(self%mphi), c1)
+    end function phase
 
     !> The velocity scale of the mode at lambda = ln a: v_ref a [m/s].
     real(dp) function modes_scale(self, lambda) result(s)

@@ -238,7 +238,7 @@ contains
         !> Progress hook: told after every curve.
         type(progress_t), intent(inout), optional :: progress
         !> `model` is one sector of this tuned disk: every curve is its travelling wave
-        !> (run_sweep's cyclic); the linear limits are not computed (NaN).
+        !> (run_sweep's cyclic); the linear limits are the sector's travelling wave's.
         type(cyclic_t), intent(in), optional :: cyclic
         type(model_t), allocatable :: models(:)
         type(hbm_options_t) :: ho
@@ -459,15 +459,17 @@ contains
                 errors(k) = ek
                 return
             end if
-            if (.not. family%references .or. present(cyclic)) return
-            ! the linear limits; a limit without motion (every DOF held) has no peak
+            if (.not. family%references) return
+            ! the linear limits (on a sector: its travelling wave's); a limit without motion
+            ! (every DOF held) has no peak
             call linear_limit_peaks(models(k), .true., min(sweep%start, sweep%stop), &
                                     max(sweep%start, sweep%stop), family%measure, &
-                                    found(k)%stuck, ek, observe=sweep%observe)
+                                    found(k)%stuck, ek, observe=sweep%observe, cyclic=cyclic)
             if (allocated(ek)) deallocate (ek)
             call linear_limit_peaks(models(k), .false., min(sweep%start, sweep%stop), &
                                     max(sweep%start, sweep%stop), family%measure, &
-                                    found(k)%slipping, ek, observe=sweep%observe)
+                                    found(k)%slipping, ek, observe=sweep%observe, &
+                                    cyclic=cyclic)
             if (allocated(ek)) deallocate (ek)
         end subroutine one_curve
 

@@ -26,7 +26,8 @@ module stickslip_run_studies
     use stickslip_summary, only: write_study_summary, write_sweep_summary, &
         write_robustness_summary, write_modes_summary
     use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script, &
-        write_modes_plot_script
+        write_modes_plot_script, write_sector_modes_plot_script
+    use stickslip_run_sector_modes, only: sector_backbones, sector_diameters
     use stickslip_run_findings, only: study_findings
     use stickslip_case_messages, only: to_case_message
     use stickslip_sweep_family, only: family_result_t
@@ -284,11 +285,19 @@ contains
         type(progress_t), intent(inout), optional :: progress
         type(modes_options_t) :: opts
         type(contact_set_t) :: contacts
-        integer, allocatable :: cols(:)
-        logical :: wanted
+        type(modes_result_t), allocatable :: per(:)
+        integer, allocatable :: cols(:), diameters(:)
+        logical :: wanted, sector
         opts = case%modes%modes_options_t
         if (recovers(case)) opts%observe = case%reduction%output_rows
-        call run_modes(case%model, case%hbm, opts, res, error, progress)
+        sector = case%cyclic%given .and. case%cyclic%model == 'sector'
+        if (sector) then
+            ! one backbone per nodal diameter on the sector
+            diameters = sector_diameters(case)
+            call sector_backbones(case, opts, diameters, res, per, error, progress)
+        else
+            call run_modes(case%model, case%hbm, opts, res, error, progress)
+        end if
         ! a mode the structure does not have: named as the case file's variable
         if (allocated(error)) then
             if (error%stat == stickslip_stat%input) call to_case_message(error, "", ['opts'], &
@@ -302,10 +311,20 @@ contains
         call new_contact_set(contacts, case%model)
         call write_modes_harmonics_csv(dir, res, error, cols, selected_dofs(case), contacts)
         if (allocated(error)) return
-        call write_modes_plot_script(dir, case%modes%mode, res%omega_stuck, &
-                                     res%omega_slipping, error, case%units)
+        if (sector) then
+            call write_sector_modes_plot_script(dir, case%modes%mode, &
+                                                pack(diameters, per%npoints > 0), error, &
+                                                case%units)
+        else
+            call write_modes_plot_script(dir, case%modes%mode, res%omega_stuck, &
+                                         res%omega_slipping, error, case%units)
+        end if
         if (allocated(error)) return
-        call write_modes_summary(dir, case, res, error)
+        if (sector) then
+            call write_modes_summary(dir, case, res, error, per, diameters)
+        else
+            call write_modes_summary(dir, case, res, error)
+        end if
         if (allocated(error)) return
         if (.not. res%complete) call fatal_error(error, "modes: "//res%diagnosis// &
                                                  " (modes.csv holds the points computed)", &

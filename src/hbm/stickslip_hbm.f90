@@ -31,7 +31,7 @@ module stickslip_hbm
     implicit none
     private
     public :: solve_periodic, validate_options, convergence_scale, solution_from_forces
-    public :: condensed_structure_t, solve_condensed, solve_setup
+    public :: condensed_structure_t, solve_condensed, solve_setup, solution_from_problem
     public :: hbm_max_harmonics, hbm_max_samples, hbm_max_unknowns, newton_min_unknowns
     public :: energy_warning, energy_untrusted, dissipation_warning, dissipation_untrusted
     public :: force_excess_warning, force_excess_untrusted, rho_ratio_min, rho_ratio_max
@@ -177,13 +177,32 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(hb_problem_t) :: prob
-        type(condensed_structure_t) :: s
-        real(dp), allocatable :: y(:), f(:)
-        integer :: k, stat
-        s = dense_structure(model)
         call new_hb_problem(prob, model, opts%harmonics, opts%odd_only, opts%samples, opts%rho, &
                             error)
         if (allocated(error)) return
+        call solution_from_problem(dense_structure(model), opts, prob, rcoef, sol, error, model)
+    end subroutine solution_from_forces
+
+    !> solution_from_forces on projected friction equations already built (`prob`, whose
+    !> dynamics condense the structure `s`; with `dense_model` the dense path's energies, see
+    !> solve_condensed). Destroys `prob`. Errors: stat input when rcoef is not nb x channels.
+    subroutine solution_from_problem(s, opts, prob, rcoef, sol, error, dense_model)
+        !> The structure's data (omega, forcing).
+        type(condensed_structure_t), intent(in) :: s
+        !> Basis options, rho > 0.
+        type(hbm_options_t), intent(in) :: opts
+        !> The projected friction equations (destroyed on return).
+        type(hb_problem_t), intent(inout) :: prob
+        !> Friction-force (channel) coefficients [N].
+        real(dp), intent(in) :: rcoef(:, :)
+        !> The solution.
+        type(hbm_solution_t), intent(out) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The dense model (dense path only).
+        type(model_t), intent(in), optional :: dense_model
+        real(dp), allocatable :: y(:), f(:)
+        integer :: k, stat
         if (size(rcoef, 1) /= prob%basis%nb .or. size(rcoef, 2) /= prob%nc) then
             call fatal_error(error, "solution_from_forces: rcoef must be nb x channels", &
                              stickslip_stat%input)
@@ -204,9 +223,9 @@ contains
         sol%fnorm = norm2(f)
         sol%converged = .true.
         sol%diagnosis = ""
-        call finish_solution(s, opts, prob, y, sol, model)
+        call finish_solution(s, opts, prob, y, sol, dense_model)
         call prob%destroy()
-    end subroutine solution_from_forces
+    end subroutine solution_from_problem
 
     !> The data of a dense model the weighted-residual solve needs beside its dynamics.
     function dense_structure(model) result(s)

@@ -15,10 +15,10 @@ module stickslip_hbm_cyclic
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
     use stickslip_hbm, only: condensed_structure_t, solve_condensed, solve_setup, &
-        solution_from_forces
+        solution_from_forces, solution_from_problem
     implicit none
     private
-    public :: solve_periodic_cyclic, disk_solution
+    public :: solve_periodic_cyclic, disk_solution, cyclic_solution_from_forces
 
 contains
 
@@ -64,6 +64,45 @@ contains
         call system_clock(c1)
         sol%seconds = real(c1 - c0, dp)/real(rate, dp)
     end subroutine solve_periodic_cyclic
+
+    !> The sector's solution (sector 0) whose friction-force coefficients `rcoef` (nb x
+    !> channels, on the basis of `opts`, rho > 0) were found elsewhere, e.g. by the
+    !> continuation of a nonlinear mode: no solve, as solution_from_forces gives a whole
+    !> structure's, on the sector's cyclic condensation (energies per sector from its Gram
+    !> matrices; with `mass_damping` xi the damping C - xi M, see new_cyclic_dynamics).
+    !> Errors: those of validate_cyclic, new_cyclic_dynamics and solution_from_problem.
+    subroutine cyclic_solution_from_forces(model, cyc, opts, rcoef, sol, error, mass_damping)
+        !> The sector.
+        type(model_t), intent(in) :: model
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> Basis options, rho > 0.
+        type(hbm_options_t), intent(in) :: opts
+        !> Friction-force (channel) coefficients [N].
+        real(dp), intent(in) :: rcoef(:, :)
+        !> The solution of sector 0.
+        type(hbm_solution_t), intent(out) :: sol
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Mass-proportional damping removed, xi [1/s] (default 0).
+        real(dp), intent(in), optional :: mass_damping
+        type(condensed_structure_t) :: s
+        type(hbm_options_t) :: o
+        type(basis_t) :: basis
+        type(dynamics_t) :: dyn
+        type(hb_problem_t) :: prob
+        call solve_setup(model, opts, s, o, error)
+        if (allocated(error)) return
+        call new_basis(basis, o%harmonics, o%odd_only, o%samples, error)
+        if (allocated(error)) return
+        call new_cyclic_dynamics(dyn, model, cyc, basis, error, mass_damping=mass_damping)
+        call basis%destroy()
+        if (allocated(error)) return
+        call new_condensed_problem(prob, dyn, s%contacts, o%harmonics, o%odd_only, o%samples, &
+                                   o%rho, error, s%force_harmonic)
+        if (allocated(error)) return
+        call solution_from_problem(s, o, prob, rcoef, sol, error)
+    end subroutine cyclic_solution_from_forces
 
     !> The whole disk's weighted-residual solution of a sector's travelling wave `sol`
     !> (solved with `opts` and sol%rho): the disk assembled (assemble_disk) and its solution

@@ -313,6 +313,8 @@ contains
         if (allocated(error)) return
         call read_modes_group(nml, case%modes, case%has_modes, error)
         if (allocated(error)) return
+        call check_modes_diameters(nml, case, error)
+        if (allocated(error)) return
 
         call choose_method(nml, method, method_given, error)
         if (allocated(error)) return
@@ -411,15 +413,48 @@ contains
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: what
+        if (case%method == 'modes') return
         what = weighted_residual_only(case, .false.)
         if (len(what) == 0) return
         call group_error(nml, error, what//": on one sector of a disk (&cyclic model = "// &
                          "'sector') only the weighted residual runs in this version "// &
                          "(&run method = 'hbm' without verify_periods, harmonics_tol; "// &
-                         "'sweep', families included; their stability is the assembled "// &
-                         "disk's); set &cyclic model = 'disk' to run it on the assembled "// &
-                         "full disk")
+                         "'sweep', families included, their stability the assembled disk's; "// &
+                         "'modes', the backbones per nodal diameter); set &cyclic model = "// &
+                         "'disk' to run it on the assembled full disk")
     end subroutine check_sector_methods
+
+    !> &modes nodal_diameters: only on one sector of a disk, each in 0 .. N/2 and given once;
+    !> an input error naming the variable (and its element) otherwise.
+    subroutine check_modes_diameters(nml, case, error)
+        type(nml_file_t), intent(in) :: nml
+        type(case_t), intent(in) :: case
+        type(error_type), allocatable, intent(out) :: error
+        integer :: k, n
+        if (.not. allocated(case%modes%nodal_diameters)) return
+        if (.not. (case%cyclic%given .and. case%cyclic%model == 'sector')) then
+            call group_error(nml, error, "&modes nodal_diameters: only on one sector of a "// &
+                             "bladed disk (&cyclic with model = 'sector'); this case has "// &
+                             "no &cyclic group or assembles the disk")
+            return
+        end if
+        n = case%cyclic%cyc%sectors
+        do k = 1, size(case%modes%nodal_diameters)
+            associate (nd => case%modes%nodal_diameters(k))
+                if (nd < 0 .or. nd > n/2) then
+                    call group_error(nml, error, "&modes nodal_diameters("//itoa(k)//") = "// &
+                                     itoa(nd)//": must be 0 to N/2 = "//itoa(n/2)// &
+                                     " (&cyclic sectors = "//itoa(n)//")")
+                    return
+                end if
+                if (any(case%modes%nodal_diameters(1:k - 1) == nd)) then
+                    call group_error(nml, error, "&modes nodal_diameters("//itoa(k)//") = "// &
+                                     itoa(nd)//": given twice")
+                    return
+                end if
+            end associate
+        end do
+    end subroutine check_modes_diameters
 
     !> For a model on which only the weighted residual runs (&run method 'hbm' or 'sweep',
     !> no &hbm verify_periods or harmonics_tol, and with `no_stability` no &hbm or &sweep
@@ -905,6 +940,9 @@ contains
                     call put(unit, "  amplitude_stop = "//rtoa(w%amplitude_stop), stat, msg)
                     call put(unit, "  points = "//itoa(w%points), stat, msg)
                     call put(unit, "  plot = "//ltoa(w%plot), stat, msg)
+                    call put(unit, "  error_estimate = "//ltoa(w%error_estimate), stat, msg)
+                    if (allocated(w%nodal_diameters)) call put(unit, "  nodal_diameters = "// &
+                                                               ilist(w%nodal_diameters), stat, msg)
                     call put(unit, "/", stat, msg)
                 end associate
             end if

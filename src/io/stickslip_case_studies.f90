@@ -17,6 +17,7 @@ module stickslip_case_studies
     use stickslip_sweep_family, only: family_options_t, validate_family_options, &
         max_family_curves
     use stickslip_namelist, only: nml_file_t, lower
+    use stickslip_cyclic, only: max_sectors
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_logical, get_string, &
         get_integers, get_reals
     use stickslip_case_model, only: group_error, max_terms
@@ -43,12 +44,16 @@ module stickslip_case_studies
     type, extends(modes_options_t) :: modes_run_options_t
         !> Draw modes.png with gnuplot (the command-line program).
         logical :: plot = .true.
+        !> On one sector of a disk (&cyclic model = 'sector'): the nodal diameters whose
+        !> backbones are traced (unallocated: every diameter 0 .. N/2).
+        integer, allocatable :: nodal_diameters(:)
     end type modes_run_options_t
 
 contains
 
     !> Read &modes (optional; `given` tells whether it is present): mode, amplitude_start and
-    !> amplitude_stop (both required with the group), points, plot, error_estimate; validate.
+    !> amplitude_stop (both required with the group), points, plot, error_estimate,
+    !> nodal_diameters (checked against the disk by the caller); validate.
     subroutine read_modes_group(nml, opts, given, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
@@ -59,11 +64,13 @@ contains
         !> Set on the first problem found.
         type(error_type), allocatable, intent(out) :: error
         logical :: found
+        integer, allocatable :: list(:)
         character(len=*), parameter :: g = "modes"
         given = nml%find(g) > 0
         if (.not. given) return
         call check_names(nml, g, [character(len=16) :: "mode", "amplitude_start", &
-                             "amplitude_stop", "points", "plot", "error_estimate"], error)
+                             "amplitude_stop", "points", "plot", "error_estimate", &
+                             "nodal_diameters"], error)
         if (allocated(error)) return
         call get_integer(nml, g, "mode", opts%mode, error)
         if (allocated(error)) return
@@ -87,6 +94,10 @@ contains
         if (allocated(error)) return
         call get_logical(nml, g, "error_estimate", opts%error_estimate, error)
         if (allocated(error)) return
+        ! checked against the disk by the caller (check_modes_diameters)
+        call get_integers(nml, g, "nodal_diameters", list, found, max_sectors/2 + 1, error)
+        if (allocated(error)) return
+        if (found) opts%nodal_diameters = list
         call validate_modes_options(opts%modes_options_t, error)
         if (allocated(error)) call to_case_message(error, nml%path, ['opts'], ['modes'])
     end subroutine read_modes_group

@@ -543,7 +543,8 @@ contains
     !> rmax_1..rmax_C [N], stick_1..stick_C, harmonics, residual, status, nfev; with contact
     !> laws then open_1..open_C, slip_1..slip_C, normal_max_1..normal_max_C; then trusted,
     !> check, omega_error (relative) and damping_error (of D) as estimated against half the
-    !> harmonics (NaN when not estimated). Error: stat io.
+    !> harmonics (NaN when not estimated); with backbones of a disk's sector last
+    !> nodal_diameter (points with mode_point_t%nodal_diameter >= 0). Error: stat io.
     subroutine write_modes_csv(dir, res, error, dofs, labels)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
@@ -558,7 +559,7 @@ contains
         integer :: u, k, i, stat, n, nc
         character(len=512) :: msg
         character(len=:), allocatable :: header
-        logical :: laws
+        logical :: laws, diameters
         integer, allocatable :: sel(:), numbers(:)
         stat = 0
         msg = ''
@@ -582,6 +583,10 @@ contains
                  ",harmonics,residual,status,nfev"
         if (laws) header = header//law_columns(nc)
         header = header//",trusted,check,omega_error,damping_error"
+        ! backbones of several nodal diameters of a sector
+        diameters = .false.
+        if (res%npoints > 0) diameters = any(res%points(1:res%npoints)%nodal_diameter >= 0)
+        if (diameters) header = header//",nodal_diameter"
         call open_temporary(dir, "modes.csv", u, error)
         if (allocated(error)) return
         write (u, '(a)', iostat=stat, iomsg=msg) header
@@ -599,9 +604,12 @@ contains
                                                  iostat=stat, iomsg=msg, advance='no') &
                     p%open, 1.0_dp - p%open - p%stick, p%normal_max
                 if (stat == 0) write (u, '(",",i0,",",a,2(",",' // real_fmt // '))', &
-                                      iostat=stat, iomsg=msg) &
+                                      iostat=stat, iomsg=msg, advance='no') &
                     merge(0, 1, p%check_level >= level_untrusted), trim(p%check), &
                     m%omega_error, m%damping_error
+                if (stat == 0 .and. diameters) write (u, '(",",i0)', iostat=stat, iomsg=msg, &
+                                                      advance='no') m%nodal_diameter
+                if (stat == 0) write (u, '()', iostat=stat, iomsg=msg)
             end associate
         end do
         call close_and_rename(dir, "modes.csv", u, stat, msg, error)

@@ -17,6 +17,7 @@ module stickslip_plot_scripts
     implicit none
     private
     public :: write_frc_plot_script, write_robustness_plot_script, write_modes_plot_script
+    public :: write_sector_modes_plot_script
     public :: write_family_plot_script
 
 contains
@@ -382,6 +383,84 @@ contains
         call put(u, "unset multiplot", stat, msg)
         call close_and_rename(dir, "modes.gp", u, stat, msg, error)
     end subroutine write_modes_plot_script
+
+    !> Write `dir`/modes.gp for the backbones of a disk's sector per nodal diameter (modes.csv
+    !> with its column nodal_diameter): frequency (upper panel, as write_modes_plot_script)
+    !> and modal damping ratio (lower panel) against the modal amplitude, one curve per
+    !> diameter of `diameters` (those with points). Error: stat io.
+    subroutine write_sector_modes_plot_script(dir, mode, diameters, error, units)
+        !> Output directory (must exist).
+        character(len=*), intent(in) :: dir
+        !> The mode's number in each diameter (for the title).
+        integer, intent(in) :: mode
+        !> The nodal diameters drawn.
+        integer, intent(in) :: diameters(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> The units the labels name (as write_modes_plot_script).
+        type(plot_units_t), intent(in), optional :: units
+        type(plot_units_t) :: un
+        integer :: u, stat
+        character(len=512) :: msg
+        character(len=:), allocatable :: fcol, funit
+        if (present(units)) un = units
+        if (un%cycles) then
+            fcol = "'frequency'"
+            funit = cycles_unit(un)
+        else
+            fcol = "'omega'"
+            funit = "rad/"//trim(un%time)
+        end if
+        call begin_script(dir, "modes", "Backbones per nodal diameter of a bladed disk's "// &
+                          "sector (modes.png)", u, stat, msg, error)
+        if (allocated(error)) return
+        call put(u, "set terminal pngcairo size 1000,900 noenhanced font ',11'", stat, msg)
+        call put(u, "set output 'modes.png'.suffix", stat, msg)
+        call put(u, "set grid lc rgb '#dddddd'", stat, msg)
+        call put(u, "set logscale x", stat, msg)
+        call put(u, "array nd["//itoa(max(1, size(diameters)))//"] = ["// &
+                 ilist_text(diameters)//"]", stat, msg)
+        call put(u, "# the rows of diameter d: column nodal_diameter = d", stat, msg)
+        call put(u, "of(d, c) = (column('nodal_diameter') == d ? column(c) : 1/0)", stat, msg)
+        call put(u, "set autoscale xfix", stat, msg)
+        call put(u, "set multiplot layout 2,1 title 'Nonlinear mode "//itoa(mode)// &
+                 " of each nodal diameter (EPMC on the sector): frequency and damping "// &
+                 "against the modal amplitude'", stat, msg)
+        call put(u, "set key outside right top title 'nodal diameter'", stat, msg)
+        if (un%cycles) then
+            call put(u, "set ylabel 'frequency f = omega / 2 pi ["//funit//"]'", stat, msg)
+        else
+            call put(u, "set ylabel 'frequency omega ["//funit//"]'", stat, msg)
+        end if
+        call put(u, "set format x ''", stat, msg)
+        call put(u, "# one colour per diameter, from blue (the lowest) to red", stat, msg)
+        call put(u, "set palette defined (0 '#1f77b4', 0.35 '#2ca02c', 0.7 '#ff7f0e', "// &
+                 "1 '#d62728')", stat, msg)
+        call put(u, "unset colorbox", stat, msg)
+        call put(u, "hue(i) = (|nd| > 1 ? (i - 1.0)/(|nd| - 1) : 0)", stat, msg)
+        call put(u, "plot for [i=1:|nd|] f using 1:(of(nd[i], "//fcol//")) with lines "// &
+                 "lw 1.5 lc palette frac hue(i) title sprintf('%d', nd[i])", stat, msg)
+        call put(u, "set format x '%g'", stat, msg)
+        call put(u, "set xlabel 'modal amplitude of the sector a = sqrt(x1^H M x1) ["// &
+                 trim(un%length)//" sqrt("//mass_unit(un)//")]'", stat, msg)
+        call put(u, "set ylabel 'modal damping ratio D = xi / (2 omega) [-]'", stat, msg)
+        call put(u, "plot for [i=1:|nd|] f using 1:(of(nd[i], 'damping_ratio')) with lines "// &
+                 "lw 1.5 lc palette frac hue(i) title sprintf('%d', nd[i])", stat, msg)
+        call put(u, "unset multiplot", stat, msg)
+        call close_and_rename(dir, "modes.gp", u, stat, msg, error)
+    end subroutine write_sector_modes_plot_script
+
+    !> Integers separated by commas (gnuplot array text).
+    pure function ilist_text(v) result(t)
+        integer, intent(in) :: v(:)
+        character(len=:), allocatable :: t
+        integer :: k
+        t = ""
+        do k = 1, size(v)
+            t = t//merge(",", " ", k > 1)//itoa(v(k))
+        end do
+        t = trim(adjustl(t))
+    end function ilist_text
 
     !> Open `dir`/<name>.gp (a temporary until close_and_rename) and write what every script
     !> starts with: a comment saying what it draws and how to run it, the PNG name suffix

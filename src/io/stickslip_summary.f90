@@ -560,8 +560,12 @@ contains
     !> complete, points, the linear limits omega_stuck and omega_slipping [rad/s], start,
     !> rho, odd_only, amplitude_first/last, omega_min/max, damping_ratio_max and the
     !> amplitude where it is reached, max_energy_error, folds, rejected_steps,
-    !> factorizations, cpu_seconds, diagnosis), then the effective case. Error: stat io.
-    subroutine write_modes_summary(dir, case, res, error)
+    !> factorizations, cpu_seconds, diagnosis), then the effective case. With the backbones
+    !> `per` of a sector's nodal `diameters` (res gathers their points): nodal_diameters and
+    !> per diameter d complete_nd<d>, points_nd<d>, unloaded_nd<d>, omega_stuck_nd<d>,
+    !> omega_slipping_nd<d>, start_nd<d> and, with points, omega_min_nd<d>, omega_max_nd<d>,
+    !> damping_ratio_max_nd<d>, and diagnosis_nd<d> when there is one. Error: stat io.
+    subroutine write_modes_summary(dir, case, res, error, per, diameters)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
         !> The case.
@@ -570,8 +574,13 @@ contains
         type(modes_result_t), intent(in) :: res
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        integer :: u, stat, n, k
+        !> The backbones per nodal diameter of a sector.
+        type(modes_result_t), intent(in), optional :: per(:)
+        !> Their nodal diameters.
+        integer, intent(in), optional :: diameters(:)
+        integer :: u, stat, n, k, i
         character(len=512) :: msg
+        character(len=:), allocatable :: d
         n = res%npoints
         call begin_summary(dir, "modes", case, res%diagnostics, u, stat, msg, error)
         call put_reduction_keys(u, case, stat, msg)
@@ -608,6 +617,35 @@ contains
         call put(u, "  cpu_seconds = "//rtoa(res%seconds), stat, msg)
         if (allocated(res%diagnosis)) then
             call put(u, "  diagnosis = '"//quote(res%diagnosis)//"'", stat, msg)
+        end if
+        if (present(per) .and. present(diameters)) then
+            call put(u, "  nodal_diameters = "//ilist(diameters), stat, msg)
+            do i = 1, size(per)
+                d = itoa(diameters(i))
+                associate (b => per(i))
+                    call put(u, "  complete_nd"//d//" = "//ltoa(b%complete), stat, msg)
+                    call put(u, "  points_nd"//d//" = "//itoa(b%npoints), stat, msg)
+                    call put(u, "  unloaded_nd"//d//" = "//ltoa(b%unloaded), stat, msg)
+                    call put(u, "  omega_stuck_nd"//d//" = "//rtoa(b%omega_stuck), stat, msg)
+                    call put(u, "  omega_slipping_nd"//d//" = "//rtoa(b%omega_slipping), &
+                             stat, msg)
+                    call put(u, "  start_nd"//d//" = '"//trim(b%start)//"'", stat, msg)
+                    if (b%npoints > 0) then
+                        associate (pts => b%points(1:b%npoints))
+                            call put(u, "  omega_min_nd"//d//" = "//rtoa(minval(pts%p%omega)), &
+                                     stat, msg)
+                            call put(u, "  omega_max_nd"//d//" = "//rtoa(maxval(pts%p%omega)), &
+                                     stat, msg)
+                            call put(u, "  damping_ratio_max_nd"//d//" = "// &
+                                     rtoa(maxval(pts%damping_ratio)), stat, msg)
+                        end associate
+                    end if
+                    if (allocated(b%diagnosis)) then
+                        if (len(b%diagnosis) > 0) call put(u, "  diagnosis_nd"//d//" = '"// &
+                                                           quote(b%diagnosis)//"'", stat, msg)
+                    end if
+                end associate
+            end do
         end if
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_modes_summary

@@ -24,7 +24,8 @@ module stickslip_cyclic
     use stickslip_hash, only: hash_t
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t, force_direction, contact_velocity_direction, &
-        contact_normal_direction, contact_tangent2_direction, is_unilateral, is_planar
+        contact_normal_direction, contact_tangent2_direction, is_unilateral, is_planar, &
+        preload_force
     use stickslip_lapack, only: zhegv
     use stickslip_contact_set, only: contact_set_t, channel_directions
     use stickslip_contact_element, only: along_tangent, along_normal
@@ -32,7 +33,8 @@ module stickslip_cyclic
     private
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
         cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis, &
-        structure_key, disk_dof_table
+        structure_key, disk_dof_table, channel_next_dofs, cyclic_directions, &
+        cyclic_preload_force
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -196,6 +198,63 @@ contains
         if (.not. allocated(list)) return
         if (j <= size(list)) next_of = list(j)
     end function next_of
+
+    !> Each force channel's DOF on the next sector (0: none): the `next_dof` of a tangential
+    !> channel's contact, the `next_normal_dof` of a normal one. No errors.
+    function channel_next_dofs(cyc, contacts) result(next)
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> The sector's contacts.
+        type(contact_set_t), intent(in) :: contacts
+        integer :: next(contacts%nchannel)
+        integer :: c, j
+        next = 0
+        do c = 1, contacts%nchannel
+            j = contacts%contact_of(c)
+            if (contacts%along(c) == along_tangent) next(c) = next_of(cyc%next_dof, j)
+            if (contacts%along(c) == along_normal) next(c) = next_of(cyc%next_normal_dof, j)
+        end do
+    end function channel_next_dofs
+
+    !> The measuring directions of the sector's force channels at boundary phase e (the
+    !> next sector's motion is this one's times e): D = d - e d_next, N x channels; a channel
+    !> measures U = D^T X and pushes the sector with conj(D) R. No errors.
+    function cyclic_directions(model, cyc, contacts, e) result(dm)
+        !> The sector.
+        type(model_t), intent(in) :: model
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> The sector's contacts.
+        type(contact_set_t), intent(in) :: contacts
+        !> The phase factor of the next sector.
+        complex(dp), intent(in) :: e
+        complex(dp), allocatable :: dm(:, :)
+        integer :: next(contacts%nchannel), c
+        dm = cmplx(channel_directions(model, contacts), 0.0_dp, dp)
+        next = channel_next_dofs(cyc, contacts)
+        do c = 1, contacts%nchannel
+            if (next(c) > 0) dm(next(c), c) = dm(next(c), c) - e
+        end do
+    end function cyclic_directions
+
+    !> The static load of the preloads on the sector [N]: each pressed contact's preload
+    !> along its normal (preload_force), and for a contact against the next sector
+    !> (next_normal_dof) its next DOF pressed back, the reaction of the previous sector's
+    !> contact on a tuned disk (the pair acts along D = d - d_next). No errors.
+    function cyclic_preload_force(model, cyc) result(f)
+        !> The sector.
+        type(model_t), intent(in) :: model
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        real(dp) :: f(model%ndof)
+        integer :: k, b
+        f = preload_force(model)
+        if (.not. allocated(model%preload)) return
+        do k = 1, size(model%preload)
+            b = next_of(cyc%next_normal_dof, k)
+            if (b > 0) f(b) = f(b) + model%preload(k)
+        end do
+    end function cyclic_preload_force
 
     !> The sector's cyclic motions for the boundary phase e, n x (n - boundary pairs): the
     !> DOFs off the right boundary free (an identity column each, in their order), the right
@@ -422,15 +481,13 @@ contains
         real(dp), intent(in) :: xcoef(:, :)
         real(dp), allocatable :: u(:, :)
         real(dp), allocatable :: d(:, :)
-        integer :: c, k, b, h
+        integer :: c, k, b, h, next(contacts%nchannel)
         complex(dp) :: e, x
         d = channel_directions(model, contacts)
         u = matmul(xcoef, d)
+        next = channel_next_dofs(cyc, contacts)
         do c = 1, contacts%nchannel
-            b = 0
-            if (contacts%along(c) == along_tangent) b = next_of(cyc%next_dof, contacts%contact_of(c))
-            if (contacts%along(c) == along_normal) &
-                b = next_of(cyc%next_normal_dof, contacts%contact_of(c))
+            b = next(c)
             if (b == 0) cycle
             k = 1
             do while (k <= size(harmonic))

@@ -19,14 +19,13 @@
 module stickslip_cyclic_dynamics
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
-    use stickslip_model, only: model_t, force_direction, preload_force
+    use stickslip_model, only: model_t, force_direction
     use stickslip_basis, only: basis_t
     use stickslip_dynamics, only: dynamics_t, check_harmonics_in_basis, singular_threshold, &
         static_singular_threshold, smallest_singular, note_conditioning
-    use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
-    use stickslip_contact_element, only: along_tangent, along_normal
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, next_of, cyclic_basis, &
-        nodal_diameter, structure_key
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, cyclic_basis, &
+        nodal_diameter, structure_key, cyclic_directions, cyclic_preload_force
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     use stickslip_dense_products, only: cmat_mul
     implicit none
@@ -36,11 +35,14 @@ module stickslip_cyclic_dynamics
 contains
 
     !> The condensed dynamics of the sector `model` of the disk `cyc` on `basis` (see the
-    !> module). With `with_omega_derivative`, dv0 and dg too (continuation in omega).
+    !> module). With `with_omega_derivative`, dv0 and dg too (continuation in omega). With
+    !> `mass_damping` xi [1/s], the damping is C - xi M (a nonlinear mode's negative modal
+    !> damping): the prepared modes still serve, each modal damping c_j - xi.
     !> Errors: those of validate_cyclic and check_harmonics_in_basis (stat input); stat
     !> numerical when the projected dynamic stiffness is singular (an undamped cyclic mode at
     !> h omega) or K on the cyclic motions is (h = 0).
-    subroutine new_cyclic_dynamics(self, model, cyc, basis, error, with_omega_derivative)
+    subroutine new_cyclic_dynamics(self, model, cyc, basis, error, with_omega_derivative, &
+                                   mass_damping)
         !> The condensed dynamics (rows: the sector's DOFs).
         type(dynamics_t), intent(out) :: self
         !> The sector (a validated model).
@@ -53,11 +55,15 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Also dv0 and dg (default .false.).
         logical, intent(in), optional :: with_omega_derivative
+        !> Mass-proportional damping removed, xi [1/s] (default 0).
+        real(dp), intent(in), optional :: mass_damping
         type(contact_set_t) :: cs
-        real(dp), allocatable :: d(:, :), rwork(:)
+        real(dp), allocatable :: damping(:, :)
+        real(dp) :: xi
+        real(dp), allocatable :: rwork(:)
         complex(dp), allocatable :: t(:, :), rhs(:, :), x(:, :), dm(:, :), f(:), work(:), &
                                     dx(:, :), cx(:, :)
-        integer, allocatable :: ipiv(:), next(:)
+        integer, allocatable :: ipiv(:)
         integer :: n, m, nc, ih, h, j, c, k, info
         real(dp) :: anorm, rcond, zscale, rel, smin_k, smin_m
         complex(dp) :: e, ihw
@@ -69,19 +75,14 @@ contains
         if (allocated(error)) return
         deriv = .false.
         if (present(with_omega_derivative)) deriv = with_omega_derivative
+        xi = 0.0_dp
+        if (present(mass_damping)) xi = mass_damping
+        damping = model%damping
+        if (xi /= 0.0_dp) damping = damping - xi*model%mass
         n = model%ndof
         m = n - size(cyc%right)
         call new_contact_set(cs, model)
         nc = cs%nchannel
-        d = channel_directions(model, cs)
-        ! each channel's DOF on the next sector (0: none)
-        allocate (next(nc))
-        next = 0
-        do c = 1, nc
-            j = cs%contact_of(c)
-            if (cs%along(c) == along_tangent) next(c) = next_of(cyc%next_dof, j)
-            if (cs%along(c) == along_normal) next(c) = next_of(cyc%next_normal_dof, j)
-        end do
         self%ndof = n
         self%ncontact = nc
         self%omega = model%omega
@@ -115,10 +116,7 @@ contains
             end if
             e = exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, 1), dp))
             ! the measuring directions D = d - e d_next
-            dm = cmplx(d, 0.0_dp, dp)
-            do c = 1, nc
-                if (next(c) > 0) dm(next(c), c) = dm(next(c), c) - e
-            end do
+            dm = cyclic_directions(model, cyc, cs, e)
             ! the forcing of harmonic h on the sector
             f = (0.0_dp, 0.0_dp)
             do k = 1, model%nforce()
@@ -129,14 +127,7 @@ contains
                 ! the preloads, along the normals' D: a contact against the next sector
                 ! presses its next DOF back (its reaction from the previous sector's contact
                 ! cancels the pair on a tuned disk)
-                f = f + preload_force(model)
-                if (allocated(model%preload)) then
-                    do k = 1, size(model%preload)
-                        if (next_of(cyc%next_normal_dof, k) > 0) &
-                            f(next_of(cyc%next_normal_dof, k)) = &
-                            f(next_of(cyc%next_normal_dof, k)) + model%preload(k)
-                    end do
-                end if
+                f = f + cyclic_preload_force(model, cyc)
             end if
             rhs(:, 1) = f
             rhs(:, 2:) = conj_dm(dm)
@@ -160,8 +151,7 @@ contains
             self%v0(:, ih) = ihw*matmul(transpose(dm), x(:, 1))
             self%g(:, :, ih) = ihw*matmul(transpose(dm), x(:, 2:))
             if (.not. modal_gram) then
-                cx = cmplx(matmul(model%damping, real(x, dp)), &
-                           matmul(model%damping, aimag(x)), dp)
+                cx = cmplx(matmul(damping, real(x, dp)), matmul(damping, aimag(x)), dp)
                 self%damping_gram(:, :, ih) = matmul(conjg(transpose(x)), cx)
             end if
             self%forcing_gram(:, ih) = matmul(conjg(f), x)
@@ -216,7 +206,7 @@ contains
             nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
             hw = h*model%omega
             associate (md => cyc%modes(nd))
-                dd = cmplx(md%lambda - hw**2, hw*md%damping, dp)
+                dd = cmplx(md%lambda - hw**2, hw*(md%damping - xi), dp)
                 if (h == 0) then
                     rel = minval(abs(md%lambda))/max(maxval(abs(md%lambda)), tiny(1.0_dp))
                 else
@@ -238,14 +228,14 @@ contains
                     modal_gram = .true.
                     gq = gr
                     do jj = 1, size(dd)
-                        gq(jj, :) = md%damping(jj)*gr(jj, :)
+                        gq(jj, :) = (md%damping(jj) - xi)*gr(jj, :)
                     end do
                     self%damping_gram(:, :, ih) = matmul(conjg(transpose(gr)), gq)
                 end if
                 if (deriv .and. h > 0) then
                     do jj = 1, size(dd)
                         gr(jj, :) = gr(jj, :)*cmplx(-2.0_dp*h*h*model%omega, &
-                                                    h*md%damping(jj), dp)/dd(jj)
+                                                    h*(md%damping(jj) - xi), dp)/dd(jj)
                     end do
                     dx = shapes_times(gr, nd, conj_shapes)
                 end if
@@ -273,7 +263,7 @@ contains
             ! the cyclic motions: the right boundary is the left one times e
             t = cyclic_basis(cyc, n, e)
             z = cmplx(model%stiffness - (h*model%omega)**2*model%mass, &
-                      h*model%omega*model%damping, dp)
+                      h*model%omega*damping, dp)
             zc = matmul(conjg(transpose(t)), matmul(z, t))
             anorm = zlange('1', m, m, zc, m, rwork)
             call zgetrf(m, m, zc, m, ipiv, info)
@@ -291,7 +281,7 @@ contains
             x = matmul(t, r)
             if (deriv .and. h > 0) then
                 r = matmul(conjg(transpose(t)), matmul(cmplx(-2.0_dp*h*h*model%omega* &
-                                                             model%mass, h*model%damping, &
+                                                             model%mass, h*damping, &
                                                              dp), x))
                 call zgetrs('N', m, nc + 1, zc, m, ipiv, r, m, info)
                 dx = matmul(t, r)

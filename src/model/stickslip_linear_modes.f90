@@ -16,10 +16,19 @@ module stickslip_linear_modes
     use stickslip_model, only: model_t
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: channel_t, kinematics_gap
-    use stickslip_lapack, only: dsygv, dgeqrf, dorgqr
+    use stickslip_lapack, only: dsygv, dsyev, dgeqrf, dorgqr
     implicit none
     private
-    public :: linear_modes, limit_structure
+    public :: linear_modes, limit_structure, channel_limit_stiffness, independence_tolerance, &
+        rigid_tolerance
+
+    !> Eigenvalues of a constraint set's Gram matrix below this share of the largest are
+    !> dependent combinations (singular values below 1e-6 of the largest).
+    real(dp), parameter :: independence_tolerance = 1.0e-12_dp
+    !> Eigenvalues (omega^2) below this share of the largest are rigid-body motions (their
+    !> roundoff, about 1e-16 of the largest): a reduced FE model's pencil spans ten decades
+    !> or more, so its lowest genuine modes sit at 1e-11 of the largest.
+    real(dp), parameter :: rigid_tolerance = 1.0e-13_dp
 
 contains
 
@@ -63,9 +72,9 @@ contains
         end if
         ! drop the zero-frequency (rigid-body) modes of a structure held only by friction
         scale = max(maxval(abs(w)), tiny(1.0_dp))
-        m = count(w > 1.0e-10_dp*scale)
-        omegas = sqrt(pack(w, w > 1.0e-10_dp*scale))
-        shapes = matmul(t, kr(:, pack([(j, j=1, nfree)], w > 1.0e-10_dp*scale)))
+        m = count(w > rigid_tolerance*scale)
+        omegas = sqrt(pack(w, w > rigid_tolerance*scale))
+        shapes = matmul(t, kr(:, pack([(j, j=1, nfree)], w > rigid_tolerance*scale)))
         do j = 1, m
             if (shapes(maxloc(abs(shapes(:, j)), 1), j) < 0.0_dp) shapes(:, j) = -shapes(:, j)
         end do
@@ -88,38 +97,30 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(contact_set_t) :: cs
-        real(dp), allocatable :: d(:, :), cons(:, :), q(:, :), tau(:), work(:)
-        real(dp) :: k, wq(1)
+        real(dp), allocatable :: d(:, :), cons(:, :), q(:, :), tau(:), work(:), k(:)
+        real(dp) :: wq(1)
         integer :: n, c, j, ncons, nfree, info, lwork
-        logical :: closed
-        type(channel_t) :: ch
         n = model%ndof
         kk = model%stiffness
         allocate (cons(n, 0))
         if (model%ncontact() > 0) then
             call new_contact_set(cs, model)
             d = channel_directions(model, cs)
+            k = channel_limit_stiffness(cs, stuck)
             do c = 1, cs%nchannel
-                j = cs%contact_of(c)
-                ch = cs%channel(c)
-                if (ch%kinematics == kinematics_gap) then
-                    closed = cs%elements(j)%e%preload() > 0.0_dp .or. ch%gap <= 0.0_dp
-                    if (.not. closed) cycle
-                else
-                    if (.not. stuck) cycle
-                end if
-                k = 0.0_dp
-                if (ch%compliance > 0.0_dp) k = 1.0_dp/ch%compliance
-                if (k > 0.0_dp) then
-                    kk = kk + k*spread(d(:, c), 2, n)*spread(d(:, c), 1, n)
-                else
+                if (k(c) > 0.0_dp) then
+                    kk = kk + k(c)*spread(d(:, c), 2, n)*spread(d(:, c), 1, n)
+                else if (k(c) == 0.0_dp) then
                     cons = reshape([cons, d(:, c)], [n, size(cons, 2) + 1])
                 end if
             end do
         end if
+        ! independent combinations of the constraints (channels that close a ring, e.g.
+        ! contacts between the neighbours all round a disk, are dependent)
+        if (size(cons, 2) > 0) cons = independent_columns(cons)
         ncons = size(cons, 2)
         ! an orthonormal basis t of the motions the constraints allow: the last columns of
-        ! the complete Q of cons = Q R (rank = ncons: the channels are independent)
+        ! the complete Q of cons = Q R (rank = ncons after the selection)
         if (ncons > 0) then
             allocate (q(n, n), tau(min(n, ncons)))
             q = 0.0_dp
@@ -150,4 +151,53 @@ contains
             return
         end if
     end subroutine limit_structure
+
+    !> What each force channel of `cs` is in a friction limit (every contact stuck when
+    !> `stuck`, else slipping): its stiffness k > 0 (an elastic channel: 1 / its compliance),
+    !> 0 (a rigid one: a constraint d^T x = 0) or -1 (it carries nothing: a slipping
+    !> tangential channel, an open unilateral normal). A unilateral normal counts as closed
+    !> when pressed (preload > 0) or without a gap (gap <= 0). No errors.
+    function channel_limit_stiffness(cs, stuck) result(k)
+        !> The contacts.
+        type(contact_set_t), intent(in) :: cs
+        !> Contacts stuck (.true.) or slipping (.false.).
+        logical, intent(in) :: stuck
+        real(dp) :: k(cs%nchannel)
+        type(channel_t) :: ch
+        integer :: c, j
+        do c = 1, cs%nchannel
+            j = cs%contact_of(c)
+            ch = cs%channel(c)
+            k(c) = -1.0_dp
+            if (ch%kinematics == kinematics_gap) then
+                if (.not. (cs%elements(j)%e%preload() > 0.0_dp .or. ch%gap <= 0.0_dp)) cycle
+            else if (.not. stuck) then
+                cycle
+            end if
+            k(c) = 0.0_dp
+            if (ch%compliance > 0.0_dp) k(c) = 1.0_dp/ch%compliance
+        end do
+    end function channel_limit_stiffness
+
+    !> Independent combinations spanning the columns of `a` (N x k): a V, V the eigenvectors of
+    !> a^T a whose eigenvalues exceed independence_tolerance of the largest (none when a = 0
+    !> or the eigensolver fails on a non-finite a). No errors.
+    function independent_columns(a) result(b)
+        real(dp), intent(in) :: a(:, :)
+        real(dp), allocatable :: b(:, :)
+        real(dp), allocatable :: g(:, :), w(:), work(:)
+        real(dp) :: wq(1)
+        integer :: k, info, j
+        k = size(a, 2)
+        g = matmul(transpose(a), a)
+        allocate (w(k))
+        call dsyev('V', 'U', k, g, k, w, wq, -1, info)
+        allocate (work(max(1, int(wq(1)), 3*k)))
+        call dsyev('V', 'U', k, g, k, w, work, size(work), info)
+        if (info /= 0 .or. .not. (maxval(w) > 0.0_dp)) then
+            allocate (b(size(a, 1), 0))
+            return
+        end if
+        b = matmul(a, g(:, pack([(j, j=1, k)], w > independence_tolerance*maxval(w))))
+    end function independent_columns
 end module stickslip_linear_modes

@@ -5,13 +5,17 @@
 !> forced-response curves over a normal load or a friction coefficient: the curves' peaks
 !> tend to the slipping limit's as the friction limit goes to zero and to the stuck limit's
 !> as it grows. The static part (preload) is left out: the amplitudes are those of the
-!> vibration. Dense: for the models the weighted residual solves densely.
+!> vibration. Dense: for the models the weighted residual solves densely. On one sector of
+!> a tuned disk (`cyclic`) the limit structure of harmonic h is the sector's on its cyclic
+!> motions at that harmonic's inter-sector phase (stickslip_cyclic_limits), complex.
 module stickslip_linear_response
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_is_finite
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type
     use stickslip_model, only: model_t, force_direction
     use stickslip_linear_modes, only: limit_structure, linear_modes
+    use stickslip_cyclic, only: cyclic_t, sector_phase
+    use stickslip_cyclic_limits, only: cyclic_limit_structure, cyclic_limit_modes
     use stickslip_lapack, only: zgetrf, zgetrs
     use stickslip_golden, only: golden_search_t
     use stickslip_sorting, only: sort_ascending
@@ -26,6 +30,12 @@ module stickslip_linear_response
         real(dp) :: amplitude = 0.0_dp, omega = 0.0_dp
     end type limit_peak_t
 
+    !> The limit structure of one harmonic: K with the elastic channels' springs (N x N) and a
+    !> basis of the motions the rigid channels allow (N x m).
+    type :: limit_t
+        complex(dp), allocatable :: kk(:, :), t(:, :)
+    end type limit_t
+
     !> Grid of omega values the peak search starts from (beside the limit's natural
     !> frequencies in the range).
     integer, parameter :: grid_points = 240
@@ -39,8 +49,10 @@ contains
     !> 'first_harmonic'. Observed: the rows of `observe` (nobs x N), or every DOF. A grid of
     !> omega values with the limit's natural frequencies in the range, then a golden-section
     !> search around each DOF's largest value (to 1e-9 of the range). Undamped resonances in
-    !> the range give NaN. Errors: those of limit_structure (stat numerical).
-    subroutine linear_limit_peaks(model, stuck, lo, hi, measure, peaks, error, observe)
+    !> the range give NaN. With `cyclic`, `model` is one sector of that disk under its
+    !> engine-order forcing: sector 0's response. Errors: those of limit_structure and
+    !> cyclic_limit_structure (stat numerical).
+    subroutine linear_limit_peaks(model, stuck, lo, hi, measure, peaks, error, observe, cyclic)
         !> A validated model (dense M, K, C).
         type(model_t), intent(in) :: model
         !> Contacts stuck (.true.) or slipping (.false.).
@@ -55,20 +67,38 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> Observed combinations of DOFs, nobs x N (default: every DOF).
         real(dp), intent(in), optional :: observe(:, :)
-        real(dp), allocatable :: kk(:, :), t(:, :), obs(:, :), grid(:), values(:, :), &
-                                 wn(:), shapes(:, :), a(:)
+        !> The disk of which `model` is a sector.
+        type(cyclic_t), intent(in), optional :: cyclic
+        real(dp), allocatable :: kk(:, :), t(:, :), grid(:), values(:, :), wn(:), &
+                                 shapes(:, :), a(:)
+        complex(dp), allocatable :: cshapes(:, :)
+        type(limit_t), allocatable :: lim(:)
+        integer, allocatable :: hs(:)
         type(error_type), allocatable :: modes_error
         type(golden_search_t) :: search
-        integer :: nobs, i, j, k, ng
+        integer :: nobs, i, j, k, ng, m
         real(dp) :: x, best, best_x
-        call limit_structure(model, stuck, kk, t, error)
-        if (allocated(error)) return
+        ! the limit structure of each forced harmonic (one for all without `cyclic`)
+        hs = unique_harmonics(model%force_harmonic)
+        allocate (lim(size(hs)))
+        do m = 1, size(hs)
+            if (present(cyclic)) then
+                call cyclic_limit_structure(model, cyclic, phase_factor(hs(m)), stuck, &
+                                            lim(m)%kk, lim(m)%t, error)
+            else
+                if (m == 1) call limit_structure(model, stuck, kk, t, error)
+                if (.not. allocated(error)) then
+                    lim(m)%kk = cmplx(kk, 0.0_dp, dp)
+                    lim(m)%t = cmplx(t, 0.0_dp, dp)
+                end if
+            end if
+            if (allocated(error)) return
+        end do
         if (present(observe)) then
-            obs = matmul(observe, t)
+            nobs = size(observe, 1)
         else
-            obs = t
+            nobs = model%ndof
         end if
-        nobs = size(obs, 1)
         allocate (peaks(nobs))
         if (all(model%damping == 0.0_dp) .or. model%nforce() == 0) then
             ! no viscous damping: an undamped resonance in the range has no finite peak
@@ -78,16 +108,26 @@ contains
         end if
         ! the grid and the natural frequencies of the limit inside the range
         grid = [(lo + (hi - lo)*real(j, dp)/real(grid_points - 1, dp), j=0, grid_points - 1)]
-        call linear_modes(model, stuck, wn, shapes, modes_error)
-        if (.not. allocated(modes_error)) then
-            do k = 1, size(model%force_harmonic)
-                if (model%force_harmonic(k) < 1) cycle
-                grid = [grid, pack(wn/model%force_harmonic(k), &
-                                   wn/model%force_harmonic(k) > lo .and. &
-                                   wn/model%force_harmonic(k) < hi)]
-            end do
-        end if
+        do k = 1, size(model%force_harmonic)
+            if (model%force_harmonic(k) < 1) cycle
+            if (present(cyclic)) then
+                call cyclic_limit_modes(model, cyclic, phase_factor(model%force_harmonic(k)), &
+                                        stuck, wn, cshapes, modes_error)
+            else if (k == 1 .or. .not. allocated(wn)) then
+                call linear_modes(model, stuck, wn, shapes, modes_error)
+            end if
+            if (allocated(modes_error)) then
+                deallocate (modes_error)
+                cycle
+            end if
+            grid = [grid, pack(wn/model%force_harmonic(k), &
+                               wn/model%force_harmonic(k) > lo .and. &
+                               wn/model%force_harmonic(k) < hi)]
+        end do
         call sort_ascending(grid)
+        ! one entry per value: a double natural frequency (a disk's pair of waves) must not
+        ! leave a search bracket empty on one side
+        grid = pack(grid, [.true., grid(2:) - grid(:size(grid) - 1) > 1.0e-12_dp*(hi - lo)])
         ng = size(grid)
         allocate (values(nobs, ng))
         do j = 1, ng
@@ -126,24 +166,24 @@ contains
         function response(w) result(amp)
             real(dp), intent(in) :: w
             real(dp) :: amp(nobs)
-            complex(dp), allocatable :: z(:, :), f(:, :), xh(:, :)
-            integer, allocatable :: hs(:), ipiv(:)
+            complex(dp), allocatable :: z(:, :), f(:, :), xh(:, :), th(:, :)
+            integer, allocatable :: ipiv(:)
             integer :: nf, h, m, info, s, ns
             real(dp), allocatable :: u(:, :)
             real(dp) :: phase
-            nf = size(t, 2)
-            hs = unique_harmonics(model%force_harmonic)
-            allocate (xh(nobs, size(hs)), ipiv(nf))
+            allocate (xh(nobs, size(hs)))
             do m = 1, size(hs)
                 h = hs(m)
-                z = matmul(transpose(t), matmul(cmplx(kk - (h*w)**2*model%mass, &
-                                                      h*w*model%damping, dp), t))
-                allocate (f(nf, 1))
+                nf = size(lim(m)%t, 2)
+                th = conjg(transpose(lim(m)%t))
+                z = matmul(th, matmul(lim(m)%kk - cmplx((h*w)**2*model%mass, &
+                                                        -h*w*model%damping, dp), lim(m)%t))
+                allocate (f(nf, 1), ipiv(nf))
                 f(:, 1) = (0.0_dp, 0.0_dp)
                 do k = 1, model%nforce()
                     if (model%force_harmonic(k) == h) f(:, 1) = f(:, 1) + &
                         model%force_amplitude(k)*exp(cmplx(0.0_dp, model%force_phase(k), dp))* &
-                        matmul(transpose(t), force_direction(model, k))
+                        matmul(th, force_direction(model, k))
                 end do
                 call zgetrf(nf, nf, z, nf, ipiv, info)
                 if (info /= 0) then
@@ -151,8 +191,12 @@ contains
                     return
                 end if
                 call zgetrs('N', nf, 1, z, nf, ipiv, f, nf, info)
-                xh(:, m) = matmul(obs, f(:, 1))
-                deallocate (f)
+                if (present(observe)) then
+                    xh(:, m) = matmul(observe, matmul(lim(m)%t, f(:, 1)))
+                else
+                    xh(:, m) = matmul(lim(m)%t, f(:, 1))
+                end if
+                deallocate (f, ipiv)
             end do
             if (measure == 'first_harmonic') then
                 amp = 0.0_dp
@@ -180,6 +224,13 @@ contains
             end if
             where (.not. ieee_is_finite(amp)) amp = huge(1.0_dp)
         end function response
+
+        !> The next sector's phase factor at harmonic h of the engine-order forcing.
+        complex(dp) function phase_factor(h)
+            integer, intent(in) :: h
+            phase_factor = exp(cmplx(0.0_dp, sector_phase(h, cyclic%engine_order, &
+                                                          cyclic%sectors, 1), dp))
+        end function phase_factor
     end subroutine linear_limit_peaks
 
     !> The distinct positive harmonics of a forcing, increasing.

@@ -1,0 +1,116 @@
+!> The backbones of a bladed disk's nonlinear modes per nodal diameter (&run method =
+!> 'modes' on one sector, &cyclic model = 'sector'): run_modes on the sector's travelling
+!> wave of each diameter of &modes nodal_diameters (default every diameter 0 .. N/2), gathered
+!> into one result whose points carry their diameter (modes.csv's column nodal_diameter).
+module stickslip_run_sector_modes
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
+    use stickslip_progress, only: progress_t
+    use stickslip_case, only: case_t
+    use stickslip_cyclic, only: cyclic_t
+    use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes
+    implicit none
+    private
+    public :: sector_backbones, sector_diameters
+
+contains
+
+    !> The nodal diameters whose backbones a sector's case traces: &modes nodal_diameters,
+    !> or every diameter 0 .. N/2.
+    function sector_diameters(case) result(nd)
+        !> The case (one sector of a disk).
+        type(case_t), intent(in) :: case
+        integer, allocatable :: nd(:)
+        integer :: k
+        if (allocated(case%modes%nodal_diameters)) then
+            nd = case%modes%nodal_diameters
+        else
+            nd = [(k, k=0, case%cyclic%cyc%sectors/2)]
+        end if
+    end function sector_diameters
+
+    !> The backbones of the sector `case%model` in the diameters `diameters`, with `opts`:
+    !> `per(i)` diameter i's (a diameter whose modes leave the contacts unloaded has no
+    !> points, per(i)%unloaded; one whose start or continuation failed keeps its diagnosis),
+    !> and `res` all their points in that order, each with its nodal_diameter, complete
+    !> when every loaded diameter is, its diagnosis the diameters' joined, its counts and
+    !> CPU time the sums. Errors: stat numerical when no diameter has a point (the first
+    !> diameter's error, or that every diameter is unloaded).
+    subroutine sector_backbones(case, opts, diameters, res, per, error, progress)
+        !> The case (one sector of a disk).
+        type(case_t), intent(in) :: case
+        !> The modal-analysis options.
+        type(modes_options_t), intent(in) :: opts
+        !> The nodal diameters (each 0 .. N/2).
+        integer, intent(in) :: diameters(:)
+        !> All points.
+        type(modes_result_t), intent(out) :: res
+        !> Each diameter's backbone.
+        type(modes_result_t), allocatable, intent(out) :: per(:)
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        !> Progress hook, told after every point.
+        type(progress_t), intent(inout), optional :: progress
+        type(cyclic_t) :: cyc
+        type(error_type), allocatable :: e, first
+        integer :: i, k, total
+        character(len=:), allocatable :: diagnosis
+        allocate (per(size(diameters)))
+        cyc = case%cyclic%cyc
+        res%complete = .true.
+        diagnosis = ""
+        do i = 1, size(diameters)
+            cyc%engine_order = diameters(i)
+            call run_modes(case%model, case%hbm, opts, per(i), e, progress, cyclic=cyc)
+            if (allocated(e)) then
+                per(i)%npoints = 0
+                per(i)%complete = per(i)%unloaded
+                per(i)%diagnosis = e%message
+                if (.not. allocated(first) .and. .not. per(i)%unloaded) call move_alloc(e, first)
+                if (allocated(e)) deallocate (e)
+            end if
+            if (.not. (per(i)%complete .or. per(i)%unloaded)) then
+                res%complete = .false.
+                diagnosis = diagnosis//merge("; ", "  ", len(diagnosis) > 0)// &
+                            "nodal diameter "//itoa(diameters(i))//": "//per(i)%diagnosis
+            end if
+        end do
+        total = sum(per%npoints)
+        allocate (res%points(max(1, total)))
+        do i = 1, size(diameters)
+            do k = 1, per(i)%npoints
+                res%npoints = res%npoints + 1
+                res%points(res%npoints) = per(i)%points(k)
+                res%points(res%npoints)%nodal_diameter = diameters(i)
+            end do
+            res%factorizations = res%factorizations + per(i)%factorizations
+            res%rejected = res%rejected + per(i)%rejected
+            res%folds = res%folds + per(i)%folds
+            res%seconds = res%seconds + per(i)%seconds
+            ! each finding named with its diameter
+            if (allocated(per(i)%diagnostics%items)) then
+                do k = 1, size(per(i)%diagnostics%items)
+                    associate (item => per(i)%diagnostics%items(k))
+                        call res%diagnostics%add(item%level, item%key, "nodal diameter "// &
+                                                 itoa(diameters(i))//": "//item%message)
+                    end associate
+                end do
+            end if
+            if (per(i)%npoints > 0 .and. res%rho == 0.0_dp) then
+                res%rho = per(i)%rho
+                res%odd_only = per(i)%odd_only
+                res%start = per(i)%start
+            end if
+        end do
+        res%diagnosis = trim(adjustl(diagnosis))
+        if (res%npoints == 0) then
+            if (allocated(first)) then
+                call move_alloc(first, error)
+            else
+                call fatal_error(error, "nonlinear modes: in every nodal diameter asked for, "// &
+                                 "the modes leave the contacts still and unloaded (their "// &
+                                 "backbones are the linear modes)", stickslip_stat%numerical)
+            end if
+        end if
+    end subroutine sector_backbones
+end module stickslip_run_sector_modes

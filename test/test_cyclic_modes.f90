@@ -1,0 +1,437 @@
+!> Nonlinear modes per nodal diameter on one sector of a tuned bladed disk (EPMC on the
+!> sector's travelling wave, run_modes with `cyclic`), against the assembled disk: the
+!> sector's cyclic modes with the contacts stuck and slipping are the disk's linear modes;
+!> every backbone point of the sector, expanded to the disk (each sector its phased copy),
+!> solves the disk's own nonlinear-mode equations; the family's Jacobian on the sector
+!> against central differences.
+module test_cyclic_modes
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type, real_text, itoa
+    use stickslip_model, only: model_t
+    use stickslip_cyclic, only: cyclic_t, assemble_disk, sector_phase
+    use stickslip_cyclic_limits, only: cyclic_limit_modes
+    use stickslip_linear_modes, only: linear_modes
+    use stickslip_modes, only: modes_options_t, modes_result_t, run_modes
+    use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
+    use stickslip_hb_residual, only: hb_problem_t, new_hb_problem
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic
+    use stickslip_case, only: case_t, read_case, write_case
+    use fixtures, only: project_path, enter_project_root, scratch, write_lines
+    use testing, only: test_counter_t, check, check_error
+    implicit none
+    private
+    public :: run_cyclic_modes_tests
+
+contains
+
+    subroutine run_cyclic_modes_tests(t)
+        type(test_counter_t), intent(inout) :: t
+        call enter_project_root()
+        call test_limit_modes(t)
+        call test_sector_backbones(t)
+        call test_cyclic_jacobian(t)
+        call test_modes_input(t)
+        call test_static_load(t)
+    end subroutine run_cyclic_modes_tests
+
+    !> A static load stays in a modal analysis: the underplatform dampers of
+    !> examples/bladed_disk_damper.nml, pressed on the platforms by their centrifugal load
+    !> (a static force), diameter 8. The backbone's first point (dampers stuck) carries the
+    !> mean normal forces of the sector's static solution under that load alone (the
+    !> weighted residual on the sector with the harmonic terms removed), to 1e-8; the
+    !> backbone is complete with its energy balance.
+    subroutine test_static_load(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(model_t) :: statics
+        type(cyclic_t) :: cyc
+        type(hbm_options_t) :: ho
+        type(modes_options_t) :: mo
+        type(modes_result_t) :: res
+        type(hbm_solution_t) :: sol
+        type(error_type), allocatable :: error
+        real(dp) :: worst, scale
+        integer :: ch, i0
+        call read_case(project_path("examples/bladed_disk_damper.nml"), c, error)
+        call check_error(t, error, "cyclic modes static load: read the example", .false.)
+        if (allocated(error)) return
+        cyc = c%cyclic%cyc
+        cyc%engine_order = 8
+        ho = c%hbm
+        ho%samples = 384
+        mo%amplitude_start = 1.0e-3_dp
+        mo%amplitude_stop = 1.0_dp
+        mo%points = 20
+        mo%error_estimate = .false.
+        call run_modes(c%model, ho, mo, res, error, cyclic=cyc)
+        call check_error(t, error, "cyclic modes static load: the backbone", .false.)
+        if (allocated(error)) return
+        ! the static solution: the static load alone (free_structure keeps it)
+        statics = free_structure(c%model)
+        ho%rho = res%rho
+        call solve_periodic_cyclic(statics, cyc, ho, sol, error)
+        call check_error(t, error, "cyclic modes static load: the static solution", .false.)
+        if (allocated(error)) return
+        i0 = findloc(sol%harmonic, 0, 1)
+        worst = 0.0_dp
+        scale = maxval(abs(sol%rcoef(i0, :)))
+        do ch = 1, size(sol%rcoef, 2)
+            worst = max(worst, abs(res%points(1)%p%rcoef(i0, ch) - sol%rcoef(i0, ch))/scale)
+        end do
+        call check(t, res%complete .and. res%points(1)%p%stick(1) == 1.0_dp .and. &
+                   scale > 0.0_dp .and. worst < 1.0e-8_dp .and. &
+                   maxval(res%points(1:res%npoints)%energy_error) < 1.0e-6_dp, &
+                   "cyclic modes static load: the dampers pressed by their centrifugal "// &
+                   "load, the stuck start's mean forces = the static solution's", &
+                   "difference "//real_text(worst)//" of the largest mean force "// &
+                   real_text(scale)//", energy error at most "// &
+                   real_text(maxval(res%points(1:res%npoints)%energy_error)))
+    end subroutine test_static_load
+
+    !> &modes nodal_diameters in a case file: read and echoed on a sector (the echo reads
+    !> back to the same list); refused, naming the variable, without &cyclic, on the
+    !> assembled disk, out of 0 .. N/2, or repeated; method 'modes' runs on a sector.
+    subroutine test_modes_input(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c, back
+        type(error_type), allocatable :: error
+        character(len=*), parameter :: path = scratch//"/cyclic_modes_case.nml"
+        character(len=*), parameter :: echo = scratch//"/cyclic_modes_echo.nml"
+        character(len=100), parameter :: head(4) = [character(len=100) :: &
+            "&system ndof = 4, mass = 0.25,0,0,0, 0,0.3,0,0, 0,0,0.25,0, 0,0,0,1.0,", &
+            "  stiffness = 20,0,0,-20, 0,3,0,-3, 0,0,20,-20, -20,-3,-20,48 /", &
+            "&friction contact_dof = 2, mu = 0.3, normal_load = 0.5 /", &
+            "&run method = 'modes' /"]
+        character(len=*), parameter :: cyc = "&cyclic sectors = 24, engine_order = 3, "// &
+            "left_dofs = 1, right_dofs = 3, next_dof = 2"
+        character(len=*), parameter :: modes = "&modes amplitude_start = 1e-3, "// &
+            "amplitude_stop = 1, nodal_diameters = "
+        character(len=120) :: bad(4)
+        character(len=40), parameter :: named(4) = [character(len=40) :: &
+            "&modes nodal_diameters: only on one", "&modes nodal_diameters: only on one", &
+            "&modes nodal_diameters(2) = 13", "&modes nodal_diameters(3) = 4: given"]
+        integer :: k, u, stat
+        character(len=200) :: msg
+        bad = [character(len=120) :: modes//"3 /", cyc//", model = 'disk' /", &
+               cyc//" /", cyc//" /"]
+        call write_lines(path, [character(len=120) :: head, cyc//" /", modes//"3, 4, 12 /", &
+                                "&output directory = '"//scratch//"/cyclic_modes_case' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic modes case: read", .false.)
+        if (allocated(error)) return
+        open (newunit=u, file=echo, status='replace', action='write')
+        call write_case(u, c, stat, msg)
+        close (u)
+        call read_case(echo, back, error)
+        call check_error(t, error, "cyclic modes case: the echo reads back", .false.)
+        if (allocated(error)) return
+        call check(t, c%method == 'modes' .and. allocated(back%modes%nodal_diameters), &
+                   "cyclic modes case: method 'modes' on a sector, nodal_diameters echoed")
+        if (allocated(back%modes%nodal_diameters)) &
+            call check(t, size(back%modes%nodal_diameters) == 3 .and. &
+                       all(back%modes%nodal_diameters == [3, 4, 12]), &
+                       "cyclic modes case: the echo's nodal_diameters = 3, 4, 12")
+        do k = 1, size(bad)
+            select case (k)
+            case (1)
+                call write_lines(path, [character(len=120) :: head, bad(k)])
+            case (2)
+                call write_lines(path, [character(len=120) :: head, bad(k), modes//"3 /"])
+            case (3)
+                call write_lines(path, [character(len=120) :: head, bad(k), modes//"3, 13 /"])
+            case (4)
+                call write_lines(path, [character(len=120) :: head, bad(k), modes//"3, 4, 4 /"])
+            end select
+            call read_case(path, c, error)
+            call check_error(t, error, "cyclic modes case: bad input "//itoa(k), .true., &
+                             [named(k), "cyclic_modes_case.nml                   "])
+        end do
+    end subroutine test_modes_input
+
+    !> The example disk (examples/bladed_disk.nml: a shroud rubbing on the next blade).
+    subroutine example(sector, cyc, ho, error)
+        type(model_t), intent(out) :: sector
+        type(cyclic_t), intent(out) :: cyc
+        type(hbm_options_t), intent(out) :: ho
+        type(error_type), allocatable, intent(out) :: error
+        type(case_t) :: c
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        if (allocated(error)) return
+        sector = c%cyclic%sector
+        cyc = c%cyclic%cyc
+        ho = c%hbm
+    end subroutine example
+
+    !> The sector's cyclic modes of every diameter 0..12, the shroud stuck to the next blade
+    !> (a constraint D^T X = 0, D = d - e d_next) and slipping, are the assembled disk's
+    !> linear modes with its 24 shrouds stuck and slipping (dense dsygv): every diameter's
+    !> frequencies among the disk's, diameters 1..11 twice, and the counts add up.
+    subroutine test_limit_modes(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector, disk
+        type(cyclic_t) :: cyc
+        type(hbm_options_t) :: ho
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: ws(:), wd(:), phid(:, :), found(:)
+        complex(dp), allocatable :: shapes(:, :)
+        integer :: nd, k, lim, total, hits, j
+        real(dp) :: worst, norm_error
+        logical :: stuck
+        call example(sector, cyc, ho, error)
+        call check_error(t, error, "cyclic modes: read the example", .false.)
+        if (allocated(error)) return
+        call assemble_disk(sector, cyc, disk, error)
+        call check_error(t, error, "cyclic modes: assemble the disk", .false.)
+        if (allocated(error)) return
+        worst = 0.0_dp
+        norm_error = 0.0_dp
+        do lim = 1, 2
+            stuck = lim == 1
+            call linear_modes(disk, stuck, wd, phid, error)
+            if (allocated(error)) exit
+            total = 0
+            allocate (found(0))
+            do nd = 0, cyc%sectors/2
+                cyc%engine_order = nd
+                call cyclic_limit_modes(sector, cyc, exp(cmplx(0.0_dp, &
+                                        sector_phase(1, nd, cyc%sectors, 1), dp)), stuck, ws, &
+                                        shapes, error)
+                if (allocated(error)) exit
+                do k = 1, size(ws)
+                    ! each frequency's multiplicity in the disk: 1 at nd = 0, N/2, else 2
+                    hits = count(abs(wd - ws(k)) <= 1.0e-9_dp*ws(k))
+                    if (hits /= merge(1, 2, nd == 0 .or. nd == cyc%sectors/2)) &
+                        worst = max(worst, 1.0_dp)
+                    worst = max(worst, minval(abs(wd - ws(k)))/ws(k))
+                    norm_error = max(norm_error, abs(real(dot_product(shapes(:, k), &
+                        matmul(sector%mass, shapes(:, k))), dp) - 1.0_dp))
+                    j = merge(1, 2, nd == 0 .or. nd == cyc%sectors/2)
+                    total = total + j
+                end do
+            end do
+            deallocate (found)
+            if (allocated(error)) exit
+            if (total /= size(wd)) worst = max(worst, 1.0_dp)
+        end do
+        call check_error(t, error, "cyclic modes: the limits' eigensolves", .false.)
+        if (allocated(error)) return
+        call check(t, worst < 1.0e-9_dp .and. norm_error < 1.0e-12_dp, &
+                   "cyclic modes: the sector's stuck and slipping cyclic modes per diameter "// &
+                   "= the disk's linear modes", "largest relative difference "// &
+                   real_text(worst)//", mass norm "//real_text(norm_error))
+    end subroutine test_limit_modes
+
+    !> Backbones of diameters 3, 7 and 12 on the sector from the stuck to the slipping
+    !> shroud: complete, each point's energy balance, the first point's frequency the stuck
+    !> cyclic mode's and the last one's a slipping one (to 1 %); and every point's friction
+    !> forces, copied to every sector with its phase, solve the assembled disk's
+    !> nonlinear-mode equations (damping C - xi M at the point's omega, no forcing) to 1e-9
+    !> of their scale (samples a multiple of N, so that the disk's quadrature is the
+    !> sector's).
+    subroutine test_sector_backbones(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector, disk, free
+        type(cyclic_t) :: cyc
+        type(hbm_options_t) :: ho
+        type(modes_options_t) :: mo
+        type(modes_result_t) :: res
+        type(hb_problem_t) :: prob
+        type(error_type), allocatable :: error
+        integer, parameter :: diameters(3) = [3, 7, 12]
+        real(dp), allocatable :: y(:), f(:), r(:, :), wslip(:)
+        complex(dp), allocatable :: shapes(:, :)
+        real(dp) :: worst_res, worst_energy, first_error, last_slip, stick_last, scale
+        integer :: i, p, stat
+        logical :: complete
+        call example(sector, cyc, ho, error)
+        call check_error(t, error, "cyclic backbones: read the example", .false.)
+        if (allocated(error)) return
+        ho%samples = 2*cyc%sectors*4
+        ho%tol = 1.0e-11_dp
+        mo%amplitude_start = 1.0e-3_dp
+        mo%amplitude_stop = 1.0_dp
+        mo%points = 40
+        mo%error_estimate = .false.
+        worst_res = 0.0_dp
+        worst_energy = 0.0_dp
+        first_error = 0.0_dp
+        last_slip = 0.0_dp
+        stick_last = 0.0_dp
+        complete = .true.
+        free = free_structure(sector)
+        do i = 1, size(diameters)
+            cyc%engine_order = diameters(i)
+            call run_modes(sector, ho, mo, res, error, cyclic=cyc)
+            if (allocated(error)) exit
+            complete = complete .and. res%complete
+            first_error = max(first_error, abs(res%points(1)%p%omega - res%omega_stuck)/ &
+                              res%omega_stuck)
+            ! the nearest slipping cyclic frequency of the diameter (the stuck mode may
+            ! become the second slipping one: the shroud's slip detunes the blade)
+            call cyclic_limit_modes(sector, cyc, exp(cmplx(0.0_dp, sector_phase(1, &
+                                    diameters(i), cyc%sectors, 1), dp)), .false., wslip, &
+                                    shapes, error)
+            if (allocated(error)) exit
+            last_slip = max(last_slip, minval(abs(res%points(res%npoints)%p%omega - wslip))/ &
+                            res%points(res%npoints)%p%omega)
+            stick_last = max(stick_last, res%points(res%npoints)%p%stick(1))
+            ! the disk's equations at every point
+            call assemble_disk(free, cyc, disk, error)
+            if (allocated(error)) exit
+            do p = 1, res%npoints
+                associate (pt => res%points(p))
+                    worst_energy = max(worst_energy, pt%energy_error)
+                    disk%omega = pt%p%omega
+                    disk%damping = 0.0_dp
+                    call assemble_damping(free, cyc, pt%xi, disk)
+                    call new_hb_problem(prob, disk, ho%harmonics, res%odd_only, ho%samples, &
+                                        res%rho, error)
+                    if (allocated(error)) exit
+                    r = phased_forces(pt%p%rcoef, prob, cyc)
+                    y = reshape(r, [size(r)])
+                    allocate (f(size(y)))
+                    stat = 0
+                    call prob%residual(y, f, stat)
+                    ! the scale: the velocity of the point's motion (its amplitude times omega)
+                    scale = pt%p%omega*maxval(abs(pt%p%amplitude))
+                    worst_res = max(worst_res, norm2(f)/scale/sqrt(real(cyc%sectors, dp)))
+                    deallocate (f)
+                    call prob%destroy()
+                end associate
+            end do
+            if (allocated(error)) exit
+        end do
+        call check_error(t, error, "cyclic backbones: diameters 3, 7, 12", .false.)
+        if (allocated(error)) return
+        call check(t, complete .and. worst_energy < 1.0e-6_dp, &
+                   "cyclic backbones: complete, energy balance per point", &
+                   "largest energy error "//real_text(worst_energy))
+        call check(t, first_error < 1.0e-6_dp .and. last_slip < 0.01_dp .and. &
+                   stick_last < 0.5_dp, "cyclic backbones: from the stuck cyclic mode "// &
+                   "towards the slipping one", "first point "//real_text(first_error)// &
+                   " from the stuck frequency, last "//real_text(last_slip)// &
+                   " from a slipping one, stick share at the end "//real_text(stick_last))
+        call check(t, worst_res < 1.0e-9_dp, "cyclic backbones: every point solves the "// &
+                   "assembled disk's nonlinear-mode equations", "largest residual "// &
+                   real_text(worst_res)//" of the point's velocity scale")
+    end subroutine test_sector_backbones
+
+    !> The disk's damping C - xi M: the sector's copied, as assemble_disk copies C.
+    subroutine assemble_damping(free, cyc, xi, disk)
+        type(model_t), intent(in) :: free
+        type(cyclic_t), intent(in) :: cyc
+        real(dp), intent(in) :: xi
+        type(model_t), intent(inout) :: disk
+        type(model_t) :: shifted, d2
+        type(error_type), allocatable :: error
+        shifted = free
+        shifted%damping = free%damping - xi*free%mass
+        call assemble_disk(shifted, cyc, d2, error)
+        disk%damping = d2%damping
+    end subroutine assemble_damping
+
+    !> The disk's friction-force coefficients: sector s's the sector's times exp(i h phase_s)
+    !> per harmonic (cos, sin rows).
+    function phased_forces(rs, prob, cyc) result(r)
+        real(dp), intent(in) :: rs(:, :)
+        type(hb_problem_t), intent(in) :: prob
+        type(cyclic_t), intent(in) :: cyc
+        real(dp), allocatable :: r(:, :)
+        integer :: nb, nch, s, c, k, h
+        complex(dp) :: z
+        nb = size(rs, 1)
+        nch = size(rs, 2)
+        allocate (r(nb, nch*cyc%sectors))
+        do s = 0, cyc%sectors - 1
+            do c = 1, nch
+                k = 1
+                do while (k <= nb)
+                    h = prob%basis%harmonic_of(k)
+                    if (h == 0) then
+                        r(k, s*nch + c) = rs(k, c)
+                        k = k + 1
+                        cycle
+                    end if
+                    z = cmplx(rs(k, c), -rs(k + 1, c), dp)* &
+                        exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, s), dp))
+                    r(k, s*nch + c) = real(z, dp)
+                    r(k + 1, s*nch + c) = -aimag(z)
+                    k = k + 2
+                end do
+            end do
+        end do
+    end function phased_forces
+
+    !> The family's Jacobian on the sector (the complex phase row, the cyclic condensation)
+    !> against central differences of its residual at a stuck, a stick-slip and the last
+    !> point of the diameter-3 backbone: dF/dy and dF/dlambda.
+    subroutine test_cyclic_jacobian(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector, free
+        type(cyclic_t) :: cyc
+        type(hbm_options_t) :: ho
+        type(modes_options_t) :: mo
+        type(modes_result_t) :: res
+        type(modes_family_t) :: fam
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: ws(:), y(:), jy(:, :), jl(:), fp(:), fm(:), yp(:), fd(:, :), &
+                                 fdl(:)
+        complex(dp), allocatable :: shapes(:, :)
+        real(dp) :: lambda, h, worst, worst_l
+        integer :: which(3), i, j, n, stat
+        call example(sector, cyc, ho, error)
+        call check_error(t, error, "cyclic modes jacobian: read the example", .false.)
+        if (allocated(error)) return
+        ho%samples = 192
+        mo%amplitude_start = 1.0e-3_dp
+        mo%amplitude_stop = 1.0_dp
+        mo%points = 40
+        mo%error_estimate = .false.
+        cyc%engine_order = 3
+        free = free_structure(sector)
+        call run_modes(free, ho, mo, res, error, cyclic=cyc)
+        if (.not. allocated(error)) call cyclic_limit_modes(free, cyc, exp(cmplx(0.0_dp, &
+            sector_phase(1, 3, cyc%sectors, 1), dp)), .true., ws, shapes, error)
+        call check_error(t, error, "cyclic modes jacobian: backbone", .false.)
+        if (allocated(error)) return
+        ho%rho = res%rho
+        call new_modes_family(fam, free, ho, shapes(:, 1), ws(1), error, cyc)
+        call check_error(t, error, "cyclic modes jacobian: the family", .false.)
+        if (allocated(error)) return
+        which = [1, minloc([(abs(res%points(i)%p%stick(1) - 0.5_dp), i=1, res%npoints)], 1), &
+                 res%npoints]
+        worst = 0.0_dp
+        worst_l = 0.0_dp
+        stat = 0
+        do i = 1, 3
+            associate (p => res%points(which(i)))
+                y = [reshape(p%p%rcoef, [size(p%p%rcoef)]), p%p%omega, p%xi]
+                lambda = log(p%p%parameter)
+            end associate
+            n = size(y)
+            allocate (jy(n, n), jl(n), fp(n), fm(n), fd(n, n), fdl(n))
+            call fam%jacobian(y, lambda, jy, jl, stat)
+            do j = 1, n
+                h = 1.0e-6_dp*max(abs(y(j)), 1.0e-3_dp*maxval(abs(y(1:n - 2))))
+                yp = y
+                yp(j) = y(j) + h
+                call fam%residual(yp, lambda, fp, stat)
+                yp(j) = y(j) - h
+                call fam%residual(yp, lambda, fm, stat)
+                fd(:, j) = (fp - fm)/(2.0_dp*h)
+            end do
+            call fam%residual(y, lambda + 1.0e-6_dp, fp, stat)
+            call fam%residual(y, lambda - 1.0e-6_dp, fm, stat)
+            fdl = (fp - fm)/2.0e-6_dp
+            worst = max(worst, maxval(abs(jy - fd))/maxval(abs(jy)))
+            worst_l = max(worst_l, maxval(abs(jl - fdl))/maxval(abs(jl)))
+            deallocate (jy, jl, fp, fm, fd, fdl)
+        end do
+        call fam%destroy()
+        call check(t, stat == 0 .and. res%complete .and. worst <= 1.0e-5_dp .and. &
+                   worst_l <= 1.0e-6_dp, "cyclic modes jacobian: dF/dy and dF/dlambda "// &
+                   "against central differences (stuck, stick-slip, slipping)", &
+                   "dF/dy "//real_text(worst)//", dF/dlambda "//real_text(worst_l)//" "//res%diagnosis)
+    end subroutine test_cyclic_jacobian
+end module test_cyclic_modes

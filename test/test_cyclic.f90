@@ -48,6 +48,7 @@ contains
         call test_case_input(t)
         call test_sector_solve(t)
         call test_sector_laws(t)
+        call test_sector_planar(t)
         call test_sector_sweep(t)
         call test_sector_stability(t)
         call test_sector_family(t)
@@ -399,6 +400,106 @@ contains
                    real_text(worst_energy)//", largest open share "//real_text(opened))
     end subroutine test_sector_laws
 
+    !> 2D friction against the next sector: the shroud of the 6-DOF sector rubs on the next
+    !> blade in two tangents (the blade's tangential DOF 2 and axial DOF 6: next_dof,
+    !> next_tangent2_dof) under an elastic unilateral normal on the next blade's normal DOF 5
+    !> (next_normal_dof, preloaded, lifting off); EO = 0, 1, 7, 12; the sector's answer
+    !> equals sector 0 of the assembled disk's to 1e-10 of the in-phase response, the
+    !> energies per sector the disk's / N, and the shroud slips in both tangents in some wave.
+    !> A 2D contact with next_dof alone is refused, naming next_tangent2_dof.
+    subroutine test_sector_planar(t)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t) :: sector
+        type(cyclic_t) :: cyc
+        type(hbm_solution_t) :: sec, full
+        type(hbm_options_t) :: ho
+        type(error_type), allocatable :: error
+        integer, parameter :: orders(4) = [0, 1, 7, 12]
+        integer :: e, j
+        real(dp) :: worst, worst_energy, scale, work0, opened, slipped
+        real(dp), allocatable :: disk0(:, :), m(:, :), k(:, :)
+        logical :: converged
+        sector = lumped_sector()
+        ! DOF 5: the blade's normal motion, DOF 6: its axial motion
+        allocate (m(6, 6), k(6, 6))
+        m = 0.0_dp
+        k = 0.0_dp
+        m(1:4, 1:4) = sector%mass
+        k(1:4, 1:4) = sector%stiffness
+        m(5, 5) = 0.3_dp
+        m(6, 6) = 0.3_dp
+        k(5, 5) = 6.0_dp
+        k(6, 6) = 4.0_dp
+        sector%ndof = 6
+        sector%mass = m
+        sector%stiffness = k
+        sector%damping = 0.01_dp*sector%mass + 0.002_dp*sector%stiffness
+        sector%force_dof = [2, 5, 6]
+        sector%force_harmonic = [1, 1, 1]
+        sector%force_amplitude = [1.0_dp, 0.6_dp, 0.8_dp]
+        sector%force_phase = [0.3_dp, 1.1_dp, -0.4_dp]
+        deallocate (sector%contact_dof, sector%contact_dof2, sector%mu, sector%normal_load)
+        sector%contact_dof = [2]
+        sector%contact_dof2 = [0]
+        sector%mu = [0.3_dp]
+        sector%normal_load = [0.0_dp]
+        allocate (sector%normal_direction(6, 1), sector%tangent2_direction(6, 1))
+        sector%normal_direction = 0.0_dp
+        sector%normal_direction(5, 1) = 1.0_dp
+        sector%tangent2_direction = 0.0_dp
+        sector%tangent2_direction(6, 1) = 1.0_dp
+        sector%gap = [0.0_dp]
+        sector%preload = [0.3_dp]
+        sector%normal_stiffness = [20.0_dp]
+        call validate_model(sector, error)
+        call check_error(t, error, "cyclic 2D: the sector is a valid model", .false.)
+        if (allocated(error)) return
+        ho%harmonics = 12
+        ho%rho = 0.5_dp
+        ho%samples = 48*ns
+        ho%tol = 1.0e-12_dp
+        ! next_dof without next_tangent2_dof: refused
+        cyc = lumped_cyclic(1)
+        cyc%next_dof = [2]
+        cyc%next_normal_dof = [5]
+        call validate_cyclic(sector, cyc, error)
+        call check_error(t, error, "cyclic 2D: next_dof alone on a 2D contact", .true., &
+                         [character(len=40) :: "cyc%next_tangent2_dof(1): missing"])
+        worst = 0.0_dp
+        worst_energy = 0.0_dp
+        opened = 0.0_dp
+        slipped = 0.0_dp
+        converged = .true.
+        do e = 1, size(orders)
+            cyc = lumped_cyclic(orders(e))
+            cyc%next_dof = [2]
+            cyc%next_normal_dof = [5]
+            cyc%next_tangent2_dof = [6]
+            call sector_and_disk(sector, cyc, ho, sec, full, disk0, error)
+            if (allocated(error)) exit
+            converged = converged .and. sec%converged .and. full%converged
+            if (e == 1) then
+                scale = maxval(abs(full%xcoef))
+                work0 = full%work_forcing/ns
+            end if
+            worst = max(worst, maxval(abs(sec%xcoef - disk0))/scale)
+            worst_energy = max(worst_energy, &
+                               abs(sec%diss_friction - full%diss_friction/ns)/work0, &
+                               abs(sec%diss_damping - full%diss_damping/ns)/work0)
+            opened = max(opened, sec%open_fraction(1))
+            slipped = max(slipped, sec%slip_fraction(1))
+        end do
+        call check_error(t, error, "cyclic 2D: EO = 0, 1, 7, 12", .false.)
+        if (allocated(error)) return
+        if (.false.) j = 0
+        call check(t, converged .and. worst < 1.0e-10_dp .and. worst_energy < 1.0e-10_dp .and. &
+                   slipped > 0.05_dp, "cyclic 2D: 2D friction and lift-off against the next "// &
+                   "blade, the sector's answer = the disk's sector 0", &
+                   "largest difference "//real_text(worst)//", energies "// &
+                   real_text(worst_energy)//", largest slip share "//real_text(slipped)// &
+                   ", open share "//real_text(opened))
+    end subroutine test_sector_planar
+
     !> The sector's travelling wave `sec` and the assembled disk's weighted residual `full`
     !> with the same options, and `disk0`: the disk's coefficients of sector 0's DOFs (nb x
     !> the sector's DOFs, as sec%xcoef).
@@ -577,7 +678,7 @@ contains
             "  stiffness = 20,0,0,-20, 0,3,0,-3, 0,0,20,-20, -20,-3,-20,48 /", &
             "&forcing omega = 2.9, force_dof = 2, force_amplitude = 0.2 /", &
             "&friction contact_dof = 2, mu = 0.3, normal_load = 0.5 /"]
-        character(len=120), parameter :: bad(7) = [character(len=120) :: &
+        character(len=120), parameter :: bad(8) = [character(len=120) :: &
             "&cyclic engine_order = 3, left_dofs = 1, right_dofs = 3, model = 'disk' /", &
             "&cyclic sectors = 24, engine_order = -1"// &
             ", left_dofs = 1, right_dofs = 3, model = 'disk' /", &
@@ -590,14 +691,17 @@ contains
             "&cyclic sectors = 24, engine_order = 3"// &
             ", left_dofs = 1, right_dofs = 3, next_dof = 3, model = 'disk' /", &
             "&cyclic sectors = 24, engine_order = 3"// &
-            ", left_dofs = 1, right_dofs = 3, model = 'ring' /"]
+            ", left_dofs = 1, right_dofs = 3, model = 'ring' /", &
+            "&cyclic sectors = 24, engine_order = 3, left_dofs = 1, right_dofs = 3"// &
+            ", next_tangent2_dof = 4 /"]
         character(len=*), parameter :: good = "&cyclic sectors = 24, engine_order = 3, "// &
             "left_dofs = 1, right_dofs = 3, next_dof = 2, model = 'disk' /"
-        character(len=40), parameter :: named(7) = [character(len=40) :: &
+        character(len=40), parameter :: named(8) = [character(len=40) :: &
             "&cyclic sectors: missing", &
             "&cyclic engine_order = -1", "&cyclic left_dofs, right_dofs", &
             "&cyclic left_dofs(2) = 1: repeated", "&cyclic sectors = 1", &
-            "&cyclic next_dof(1) = 3", "&cyclic model = 'ring'"]
+            "&cyclic next_dof(1) = 3", "&cyclic model = 'ring'", &
+            "&cyclic next_tangent2_dof(1)"]
         integer :: k, u
         character(len=200) :: msg_buffer
         msg_buffer = ''

@@ -955,6 +955,8 @@ contains
                     call put(unit, "  right_dofs = "//ilist(c%right), stat, msg)
                     if (allocated(c%next_dof)) call put(unit, "  next_dof = "// &
                                                         ilist(c%next_dof), stat, msg)
+                    if (allocated(c%next_tangent2_dof)) call put(unit, &
+                        "  next_tangent2_dof = "//ilist(c%next_tangent2_dof), stat, msg)
                     if (allocated(c%next_normal_dof)) call put(unit, "  next_normal_dof = "// &
                                                                ilist(c%next_normal_dof), stat, msg)
                     call put(unit, "  model = '"//trim(case%cyclic%model)//"'", stat, msg)

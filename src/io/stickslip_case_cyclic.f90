@@ -9,6 +9,8 @@
 !>                      of sector s is left_dofs(k) of sector s + 1 (required)
 !>     next_dof         per &friction contact (0: none): the DOF of the next sector the
 !>                      contact slips against (v(contact_dof) - v_next(next_dof))
+!>     next_tangent2_dof per 2D contact against the next sector: the next sector's DOF of
+!>                      its second tangent (required with next_dof on a 2D contact)
 !>     next_normal_dof  per contact (0: none): the DOF of the next sector its normal
 !>                      (normal_dof) acts against
 !>     model            'sector' (the default): the weighted residual on one sector, the tuned
@@ -90,8 +92,8 @@ contains
         integer, allocatable :: list(:)
         cc%given = nml%find(g) > 0
         if (.not. cc%given) return
-        call check_names(nml, g, [character(len=16) :: "sectors", "engine_order", "left_dofs", &
-                         "right_dofs", "next_dof", "next_normal_dof", "model"], error)
+        call check_names(nml, g, [character(len=17) :: "sectors", "engine_order", "left_dofs", &
+                         "right_dofs", "next_dof", "next_normal_dof", "next_tangent2_dof", "model"], error)
         if (allocated(error)) return
         call get_integer(nml, g, "sectors", cc%cyc%sectors, error, found)
         if (allocated(error)) return
@@ -129,6 +131,9 @@ contains
         call get_integers(nml, g, "next_normal_dof", list, found, max_terms, error)
         if (allocated(error)) return
         if (found) cc%cyc%next_normal_dof = list
+        call get_integers(nml, g, "next_tangent2_dof", list, found, max_terms, error)
+        if (allocated(error)) return
+        if (found) cc%cyc%next_tangent2_dof = list
         kind = trim(cc%model)
         call get_string(nml, g, "model", kind, error)
         if (allocated(error)) return
@@ -236,6 +241,8 @@ contains
         if (allocated(cyc%next_dof)) dofs = [dofs, pack(cyc%next_dof, cyc%next_dof > 0)]
         if (allocated(cyc%next_normal_dof)) dofs = [dofs, pack(cyc%next_normal_dof, &
                                                             cyc%next_normal_dof > 0)]
+        if (allocated(cyc%next_tangent2_dof)) dofs = [dofs, pack(cyc%next_tangent2_dof, &
+                                                              cyc%next_tangent2_dof > 0)]
     end function cyclic_boundary_dofs
 
     !> Put renumbered cyclic_boundary_dofs back into `cyc`.
@@ -251,6 +258,7 @@ contains
         k = 2*k
         if (allocated(cyc%next_dof)) call take(cyc%next_dof)
         if (allocated(cyc%next_normal_dof)) call take(cyc%next_normal_dof)
+        if (allocated(cyc%next_tangent2_dof)) call take(cyc%next_tangent2_dof)
     contains
         !> The positive entries of `list` from the next ones of `dofs`.
         subroutine take(list)
@@ -310,12 +318,12 @@ contains
     function cyclic_words(message) result(words)
         character(len=*), intent(in) :: message
         character(len=:), allocatable :: words
-        character(len=28), parameter :: from(7) = [character(len=28) :: "cyc%sectors", &
+        character(len=28), parameter :: from(8) = [character(len=28) :: "cyc%sectors", &
             "cyc%engine_order", "cyc%left, cyc%right", "cyc%left", "cyc%right", &
-            "cyc%next_normal_dof", "cyc%next_dof"]
-        character(len=28), parameter :: to(7) = [character(len=28) :: "sectors", &
+            "cyc%next_normal_dof", "cyc%next_tangent2_dof", "cyc%next_dof"]
+        character(len=28), parameter :: to(8) = [character(len=28) :: "sectors", &
             "engine_order", "left_dofs, right_dofs", "left_dofs", "right_dofs", &
-            "next_normal_dof", "next_dof"]
+            "next_normal_dof", "next_tangent2_dof", "next_dof"]
         integer :: k
         words = message
         do k = 1, size(from)

@@ -28,7 +28,7 @@ module stickslip_cyclic
         preload_force
     use stickslip_lapack, only: zhegv
     use stickslip_contact_set, only: contact_set_t, channel_directions
-    use stickslip_contact_element, only: along_tangent, along_normal
+    use stickslip_contact_element, only: along_tangent, along_normal, along_tangent2
     implicit none
     private
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
@@ -64,8 +64,9 @@ module stickslip_cyclic
         !> left(k) of sector s + 1.
         integer, allocatable :: left(:), right(:)
         !> Per contact (0 or absent: none): the DOF of the next sector its tangential
-        !> direction acts against, and the one its normal acts against.
-        integer, allocatable :: next_dof(:), next_normal_dof(:)
+        !> direction acts against, the one its normal acts against, and the one its second
+        !> tangential direction acts against (2D friction against the next sector).
+        integer, allocatable :: next_dof(:), next_normal_dof(:), next_tangent2_dof(:)
         !> Optional, per nodal diameter 0 .. N/2: the sector's cyclic modes
         !> (prepare_cyclic_modes), which make the condensation per harmonic a modal sum.
         !> Valid for the sector they were prepared from only.
@@ -128,16 +129,36 @@ contains
                 if (len_trim(buf) > 0) exit
             end do
         end if
-        if (len_trim(buf) == 0) call check_next(cyc%next_dof, "next_dof", .false.)
-        if (len_trim(buf) == 0) call check_next(cyc%next_normal_dof, "next_normal_dof", .true.)
+        if (len_trim(buf) == 0) call check_next(cyc%next_dof, "next_dof", along_tangent)
+        if (len_trim(buf) == 0) call check_next(cyc%next_normal_dof, "next_normal_dof", &
+                                                along_normal)
+        if (len_trim(buf) == 0) call check_next(cyc%next_tangent2_dof, "next_tangent2_dof", &
+                                                along_tangent2)
+        ! a 2D contact against the next sector: both tangents against it, or neither
+        if (len_trim(buf) == 0) then
+            do k = 1, model%ncontact()
+                if (.not. is_planar(model, k)) cycle
+                if ((next_of(cyc%next_dof, k) > 0) .eqv. &
+                    (next_of(cyc%next_tangent2_dof, k) > 0)) cycle
+                if (next_of(cyc%next_dof, k) > 0) then
+                    write (buf, '(a,i0,a)') "cyc%next_tangent2_dof(", k, "): missing (a 2D "// &
+                        "contact against the next sector, next_dof, needs the next sector's "// &
+                        "DOF of its second tangent too)"
+                else
+                    write (buf, '(a,i0,a)') "cyc%next_tangent2_dof(", k, "): given without "// &
+                        "next_dof (a 2D contact rubs on the next sector in both tangents)"
+                end if
+                exit
+            end do
+        end if
         if (len_trim(buf) > 0) call fatal_error(error, trim(buf), stickslip_stat%input)
 
     contains
 
-        subroutine check_next(next, name, normal)
+        subroutine check_next(next, name, along)
             integer, allocatable, intent(in) :: next(:)
             character(len=*), intent(in) :: name
-            logical, intent(in) :: normal
+            integer, intent(in) :: along
             integer :: j
             if (.not. allocated(next)) return
             if (size(next) > model%ncontact()) then
@@ -154,13 +175,12 @@ contains
                     write (buf, '(a,i0,a,i0,a)') "cyc%"//name//"(", j, ") = ", next(j), &
                         ": a right boundary DOF (it belongs to the sector after the next: "// &
                         "name that sector's left DOF instead)"
-                else if (.not. normal .and. is_planar(model, j)) then
-                    write (buf, '(a,i0,a)') "cyc%"//name//"(", j, &
-                        "): 2D friction against the next sector is not supported (its "// &
-                        "second tangent would act against the ground)"
-                else if (normal .and. .not. is_unilateral(model, j)) then
+                else if (along == along_normal .and. .not. is_unilateral(model, j)) then
                     write (buf, '(a,i0,a)') "cyc%"//name//"(", j, &
                         "): the contact has no normal direction (normal_dof)"
+                else if (along == along_tangent2 .and. .not. is_planar(model, j)) then
+                    write (buf, '(a,i0,a)') "cyc%"//name//"(", j, &
+                        "): the contact has no second tangent (tangent2_dof: 2D friction)"
                 end if
                 if (len_trim(buf) > 0) return
             end do
@@ -213,6 +233,8 @@ contains
             j = contacts%contact_of(c)
             if (contacts%along(c) == along_tangent) next(c) = next_of(cyc%next_dof, j)
             if (contacts%along(c) == along_normal) next(c) = next_of(cyc%next_normal_dof, j)
+            if (contacts%along(c) == along_tangent2) &
+                next(c) = next_of(cyc%next_tangent2_dof, j)
         end do
     end function channel_next_dofs
 
@@ -432,8 +454,15 @@ contains
                         disk%normal_direction(g(next_of(cyc%next_normal_dof, j), &
                                                 modulo(s + 1, ns)), c) - 1.0_dp
                 end if
-                if (planar) disk%tangent2_direction(:, c) = &
-                    scatter(contact_tangent2_direction(sector, j), s)
+                if (planar) then
+                    disk%tangent2_direction(:, c) = &
+                        scatter(contact_tangent2_direction(sector, j), s)
+                    if (next_of(cyc%next_tangent2_dof, j) > 0) &
+                        disk%tangent2_direction(g(next_of(cyc%next_tangent2_dof, j), &
+                                                  modulo(s + 1, ns)), c) = &
+                        disk%tangent2_direction(g(next_of(cyc%next_tangent2_dof, j), &
+                                                  modulo(s + 1, ns)), c) - 1.0_dp
+                end if
                 if (allocated(disk%laws)) then
                     if (allocated(sector%laws(j)%e)) &
                         allocate (disk%laws(c)%e, source=sector%laws(j)%e)

@@ -8,7 +8,7 @@ module test_cyclic_modes
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, real_text, itoa
     use stickslip_model, only: model_t
-    use stickslip_cyclic, only: cyclic_t, assemble_disk, sector_phase
+    use stickslip_cyclic, only: cyclic_t, assemble_disk, sector_phase, phased_copies
     use stickslip_cyclic_limits, only: cyclic_limit_modes
     use stickslip_linear_modes, only: linear_modes
     use stickslip_modes, only: modes_options_t, modes_result_t, run_modes
@@ -19,6 +19,7 @@ module test_cyclic_modes
     use stickslip_case, only: case_t, read_case, write_case
     use fixtures, only: project_path, enter_project_root, scratch, write_lines
     use testing, only: test_counter_t, check, check_error
+    use test_modes, only: jacobian_errors
     implicit none
     private
     public :: run_cyclic_modes_tests
@@ -239,10 +240,10 @@ contains
         type(hb_problem_t) :: prob
         type(error_type), allocatable :: error
         integer, parameter :: diameters(3) = [3, 7, 12]
-        real(dp), allocatable :: y(:), f(:), r(:, :), wslip(:)
+        real(dp), allocatable :: y(:), f(:), wslip(:)
         complex(dp), allocatable :: shapes(:, :)
         real(dp) :: worst_res, worst_energy, first_error, last_slip, stick_last, scale
-        integer :: i, p, stat
+        integer :: i, p, stat, k
         logical :: complete
         call example(sector, cyc, ho, error)
         call check_error(t, error, "cyclic backbones: read the example", .false.)
@@ -288,8 +289,9 @@ contains
                     call new_hb_problem(prob, disk, ho%harmonics, res%odd_only, ho%samples, &
                                         res%rho, error)
                     if (allocated(error)) exit
-                    r = phased_forces(pt%p%rcoef, prob, cyc)
-                    y = reshape(r, [size(r)])
+                    y = reshape(phased_copies(pt%p%rcoef, &
+                        prob%basis%harmonic_of([(k, k=1, prob%basis%nb)]), cyc), &
+                                [prob%basis%nb*prob%nc])
                     allocate (f(size(y)))
                     stat = 0
                     call prob%residual(y, f, stat)
@@ -331,38 +333,6 @@ contains
         disk%damping = d2%damping
     end subroutine assemble_damping
 
-    !> The disk's friction-force coefficients: sector s's the sector's times exp(i h phase_s)
-    !> per harmonic (cos, sin rows).
-    function phased_forces(rs, prob, cyc) result(r)
-        real(dp), intent(in) :: rs(:, :)
-        type(hb_problem_t), intent(in) :: prob
-        type(cyclic_t), intent(in) :: cyc
-        real(dp), allocatable :: r(:, :)
-        integer :: nb, nch, s, c, k, h
-        complex(dp) :: z
-        nb = size(rs, 1)
-        nch = size(rs, 2)
-        allocate (r(nb, nch*cyc%sectors))
-        do s = 0, cyc%sectors - 1
-            do c = 1, nch
-                k = 1
-                do while (k <= nb)
-                    h = prob%basis%harmonic_of(k)
-                    if (h == 0) then
-                        r(k, s*nch + c) = rs(k, c)
-                        k = k + 1
-                        cycle
-                    end if
-                    z = cmplx(rs(k, c), -rs(k + 1, c), dp)* &
-                        exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, s), dp))
-                    r(k, s*nch + c) = real(z, dp)
-                    r(k + 1, s*nch + c) = -aimag(z)
-                    k = k + 2
-                end do
-            end do
-        end do
-    end function phased_forces
-
     !> The family's Jacobian on the sector (the complex phase row, the cyclic condensation)
     !> against central differences of its residual at a stuck, a stick-slip and the last
     !> point of the diameter-3 backbone: dF/dy and dF/dlambda.
@@ -375,11 +345,10 @@ contains
         type(modes_result_t) :: res
         type(modes_family_t) :: fam
         type(error_type), allocatable :: error
-        real(dp), allocatable :: ws(:), y(:), jy(:, :), jl(:), fp(:), fm(:), yp(:), fd(:, :), &
-                                 fdl(:)
+        real(dp), allocatable :: ws(:), y(:)
         complex(dp), allocatable :: shapes(:, :)
-        real(dp) :: lambda, h, worst, worst_l
-        integer :: which(3), i, j, n, stat
+        real(dp) :: lambda, worst, worst_l, e_y, e_l
+        integer :: which(3), i, stat
         call example(sector, cyc, ho, error)
         call check_error(t, error, "cyclic modes jacobian: read the example", .false.)
         if (allocated(error)) return
@@ -409,24 +378,9 @@ contains
                 y = [reshape(p%p%rcoef, [size(p%p%rcoef)]), p%p%omega, p%xi]
                 lambda = log(p%p%parameter)
             end associate
-            n = size(y)
-            allocate (jy(n, n), jl(n), fp(n), fm(n), fd(n, n), fdl(n))
-            call fam%jacobian(y, lambda, jy, jl, stat)
-            do j = 1, n
-                h = 1.0e-6_dp*max(abs(y(j)), 1.0e-3_dp*maxval(abs(y(1:n - 2))))
-                yp = y
-                yp(j) = y(j) + h
-                call fam%residual(yp, lambda, fp, stat)
-                yp(j) = y(j) - h
-                call fam%residual(yp, lambda, fm, stat)
-                fd(:, j) = (fp - fm)/(2.0_dp*h)
-            end do
-            call fam%residual(y, lambda + 1.0e-6_dp, fp, stat)
-            call fam%residual(y, lambda - 1.0e-6_dp, fm, stat)
-            fdl = (fp - fm)/2.0e-6_dp
-            worst = max(worst, maxval(abs(jy - fd))/maxval(abs(jy)))
-            worst_l = max(worst_l, maxval(abs(jl - fdl))/maxval(abs(jl)))
-            deallocate (jy, jl, fp, fm, fd, fdl)
+            call jacobian_errors(fam, y, lambda, e_y, e_l, stat)
+            worst = max(worst, e_y)
+            worst_l = max(worst_l, e_l)
         end do
         call fam%destroy()
         call check(t, stat == 0 .and. res%complete .and. worst <= 1.0e-5_dp .and. &

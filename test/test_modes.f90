@@ -24,7 +24,7 @@ module test_modes
     use testing, only: test_counter_t, check, check_error
     implicit none
     private
-    public :: run_modes_tests
+    public :: run_modes_tests, jacobian_errors
 
 contains
 
@@ -361,10 +361,9 @@ contains
         type(modes_family_t) :: fam
         type(model_t) :: free
         type(error_type), allocatable :: error
-        real(dp), allocatable :: ws(:), phis(:, :), y(:), jy(:, :), jl(:), fp(:), fm(:), &
-                                 yp(:), fd(:, :), fdl(:)
-        real(dp) :: lambda, h, worst, worst_l
-        integer :: which(3), i, j, n, stat
+        real(dp), allocatable :: ws(:), phis(:, :), y(:)
+        real(dp) :: lambda, worst, worst_l, e_y, e_l
+        integer :: which(3), i, stat
         ho%harmonics = 7
         ho%samples = 128
         mo%amplitude_start = 0.1_dp
@@ -389,25 +388,10 @@ contains
                 y = [reshape(p%p%rcoef, [size(p%p%rcoef)]), p%p%omega, p%xi]
                 lambda = log(p%p%parameter)
             end associate
-            n = size(y)
-            allocate (jy(n, n), jl(n), fp(n), fm(n), fd(n, n), fdl(n))
             stat = 0
-            call fam%jacobian(y, lambda, jy, jl, stat)
-            do j = 1, n
-                h = 1.0e-6_dp*max(abs(y(j)), 1.0e-3_dp*maxval(abs(y(1:n - 2))))
-                yp = y
-                yp(j) = y(j) + h
-                call fam%residual(yp, lambda, fp, stat)
-                yp(j) = y(j) - h
-                call fam%residual(yp, lambda, fm, stat)
-                fd(:, j) = (fp - fm)/(2.0_dp*h)
-            end do
-            call fam%residual(y, lambda + 1.0e-6_dp, fp, stat)
-            call fam%residual(y, lambda - 1.0e-6_dp, fm, stat)
-            fdl = (fp - fm)/2.0e-6_dp
-            worst = max(worst, maxval(abs(jy - fd))/maxval(abs(jy)))
-            worst_l = max(worst_l, maxval(abs(jl - fdl))/maxval(abs(jl)))
-            deallocate (jy, jl, fp, fm, fd, fdl)
+            call jacobian_errors(fam, y, lambda, e_y, e_l, stat)
+            worst = max(worst, e_y)
+            worst_l = max(worst_l, e_l)
         end do
         call fam%destroy()
         call check(t, stat == 0 .and. worst <= 1.0e-5_dp .and. worst_l <= 1.0e-6_dp, &
@@ -415,6 +399,37 @@ contains
                    "(stuck, stick-slip, slipping)", "dF/dy "//real_text(worst)// &
                    ", dF/dlambda "//real_text(worst_l))
     end subroutine test_jacobian
+
+    !> The largest errors of a family's Jacobian at (y, lambda) against central differences
+    !> of its residual, relative to the largest entry: dF/dy (steps 1e-6 of each unknown, at
+    !> least 1e-9 of the largest force) and dF/dlambda (step 1e-6). stat nonzero when the
+    !> family has no equations there.
+    subroutine jacobian_errors(fam, y, lambda, e_y, e_l, stat)
+        type(modes_family_t), intent(inout) :: fam
+        real(dp), intent(in) :: y(:), lambda
+        real(dp), intent(out) :: e_y, e_l
+        integer, intent(inout) :: stat
+        real(dp), allocatable :: jy(:, :), jl(:), fp(:), fm(:), yp(:), fd(:, :), fdl(:)
+        real(dp) :: h
+        integer :: j, n
+        n = size(y)
+        allocate (jy(n, n), jl(n), fp(n), fm(n), fd(n, n), fdl(n))
+        call fam%jacobian(y, lambda, jy, jl, stat)
+        do j = 1, n
+            h = 1.0e-6_dp*max(abs(y(j)), 1.0e-3_dp*maxval(abs(y(1:n - 2))))
+            yp = y
+            yp(j) = y(j) + h
+            call fam%residual(yp, lambda, fp, stat)
+            yp(j) = y(j) - h
+            call fam%residual(yp, lambda, fm, stat)
+            fd(:, j) = (fp - fm)/(2.0_dp*h)
+        end do
+        call fam%residual(y, lambda + 1.0e-6_dp, fp, stat)
+        call fam%residual(y, lambda - 1.0e-6_dp, fm, stat)
+        fdl = (fp - fm)/2.0e-6_dp
+        e_y = maxval(abs(jy - fd))/maxval(abs(jy))
+        e_l = maxval(abs(jl - fdl))/maxval(abs(jl))
+    end subroutine jacobian_errors
 
     !> Single-nonlinear-mode synthesis: the seed structure with light damping (C = 0.01 M)
     !> forced by f = 0.05 cos(Omega t) on DOF 1 (resonant peak at a = 0.56, where the

@@ -10,7 +10,7 @@ module stickslip_hbm_cyclic
     use stickslip_model, only: model_t
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, assemble_disk, sector_phase
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, assemble_disk, phased_copies
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hb_residual, only: hb_problem_t, new_condensed_problem
@@ -127,36 +127,12 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(hbm_options_t) :: o
-        real(dp), allocatable :: r(:, :)
-        complex(dp) :: z
-        integer :: nb, nch, s, c, k, h
         call assemble_disk(sector, cyc, disk, error)
         if (allocated(error)) return
-        nb = size(sol%rcoef, 1)
-        nch = size(sol%rcoef, 2)
-        allocate (r(nb, nch*cyc%sectors))
-        do s = 0, cyc%sectors - 1
-            do c = 1, nch
-                k = 1
-                do while (k <= nb)
-                    h = sol%harmonic(k)
-                    if (h == 0) then
-                        r(k, s*nch + c) = sol%rcoef(k, c)
-                        k = k + 1
-                        cycle
-                    end if
-                    ! rows k, k + 1: a cos + b sin = Re((a - i b) exp(i h omega t))
-                    z = cmplx(sol%rcoef(k, c), -sol%rcoef(k + 1, c), dp)* &
-                        exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, s), dp))
-                    r(k, s*nch + c) = real(z, dp)
-                    r(k + 1, s*nch + c) = -aimag(z)
-                    k = k + 2
-                end do
-            end do
-        end do
         o = opts
         o%rho = sol%rho
         o%want_samples = .true.
-        call solution_from_forces(disk, o, r, dsol, error)
+        call solution_from_forces(disk, o, phased_copies(sol%rcoef, sol%harmonic, cyc), dsol, &
+                                  error)
     end subroutine disk_solution
 end module stickslip_hbm_cyclic

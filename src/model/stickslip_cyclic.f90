@@ -34,7 +34,7 @@ module stickslip_cyclic
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
         cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis, &
         structure_key, disk_dof_table, channel_next_dofs, cyclic_directions, &
-        cyclic_preload_force
+        cyclic_preload_force, phased_copies
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -491,6 +491,41 @@ contains
             if (allocated(a)) b = [(a, k=1, ns)]
         end subroutine copy_scalars
     end subroutine assemble_disk
+
+    !> The whole disk's coefficients of a travelling wave from sector 0's `coef` (nb x m, rows
+    !> of harmonics `harmonic`: cos then sin): nb x (m N), sector s's m columns after sector
+    !> s - 1's, each harmonic h times exp(-i h 2 pi EO s / N) (X = a - i b). No errors.
+    pure function phased_copies(coef, harmonic, cyc) result(all)
+        !> Sector 0's coefficients.
+        real(dp), intent(in) :: coef(:, :)
+        !> Harmonic of each row.
+        integer, intent(in) :: harmonic(:)
+        !> The disk.
+        type(cyclic_t), intent(in) :: cyc
+        real(dp) :: all(size(coef, 1), size(coef, 2)*cyc%sectors)
+        complex(dp) :: z
+        integer :: nb, m, s, c, k
+        nb = size(coef, 1)
+        m = size(coef, 2)
+        do s = 0, cyc%sectors - 1
+            do c = 1, m
+                k = 1
+                do while (k <= nb)
+                    if (harmonic(k) == 0) then
+                        all(k, s*m + c) = coef(k, c)
+                        k = k + 1
+                        cycle
+                    end if
+                    z = cmplx(coef(k, c), -coef(k + 1, c), dp)* &
+                        exp(cmplx(0.0_dp, sector_phase(harmonic(k), cyc%engine_order, &
+                                                       cyc%sectors, s), dp))
+                    all(k, s*m + c) = real(z, dp)
+                    all(k + 1, s*m + c) = -aimag(z)
+                    k = k + 2
+                end do
+            end do
+        end do
+    end function phased_copies
 
     !> The Fourier coefficients of the displacement along each force channel of the sector
     !> `model` (nb x channels [m]) from its DOFs' coefficients `xcoef` (nb x N, rows of

@@ -5,7 +5,7 @@
 !> of its stability time (doc/benchmarks.md). Knows nothing of the model; no state.
 module stickslip_dense_products
     use stickslip_kinds, only: dp
-    use stickslip_lapack, only: dgemm, dgemv, zgemm
+    use stickslip_lapack, only: dgemm, dgemv, zgemm, zgemv
     implicit none
     private
     public :: mat_mul, mat_vec, cmat_mul
@@ -15,6 +15,9 @@ module stickslip_dense_products
     !> models (measured: the seed, chain4 and damper_liftoff sweeps' stability 5-20 %
     !> slower on BLAS, their matrices 4-10 wide).
     real(dp), parameter :: small_product = 32.0_dp**3
+    !> cmat_mul of at most this many columns: matrix-vector products (zgemm's packing of the
+    !> other factor costs more than the product itself).
+    integer, parameter :: few_columns = 4
 
 contains
 
@@ -66,7 +69,7 @@ contains
         !> The factors, m x k and k x n.
         complex(dp), intent(in) :: a(:, :), b(:, :)
         complex(dp) :: c(size(a, 1), size(b, 2))
-        integer :: m, n, k
+        integer :: m, n, k, j
         m = size(a, 1)
         n = size(b, 2)
         k = size(a, 2)
@@ -77,6 +80,14 @@ contains
         end if
         if (real(m, dp)*real(n, dp)*real(k, dp) < small_product/4) then
             c = matmul(a, b)
+            return
+        end if
+        if (n <= few_columns) then
+            ! a few columns: one matrix-vector product each (zgemm would pack all of a)
+            do j = 1, n
+                call zgemv('N', m, k, (1.0_dp, 0.0_dp), a, m, b(:, j), 1, (0.0_dp, 0.0_dp), &
+                           c(:, j), 1)
+            end do
             return
         end if
         call zgemm('N', 'N', m, n, k, (1.0_dp, 0.0_dp), a, m, b, k, (0.0_dp, 0.0_dp), c, m)

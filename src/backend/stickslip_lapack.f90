@@ -7,7 +7,7 @@ module stickslip_lapack
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgeqrf, zungqr, &
         zgetrf, zgetrs, zgemm, zgecon, zlange, dgeev, dgesv, zgesv, dsygv, dsyev, sgetrf, sgetrs, &
-        dgemm, dgemv, zhegv
+        dgemm, dgemv, zgemv, zhegv
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -278,5 +278,14 @@ module stickslip_lapack
             complex(dp), intent(inout) :: work(*)
             integer, intent(out) :: info
         end subroutine zungqr
+
+        !> y <- alpha op(A) x + beta y, complex (BLAS).
+        subroutine zgemv(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
+            import :: dp
+            character(len=1), intent(in) :: trans
+            integer, intent(in) :: m, n, lda, incx, incy
+            complex(dp), intent(in) :: alpha, beta, a(lda, *), x(*)
+            complex(dp), intent(inout) :: y(*)
+        end subroutine zgemv
     end interface
 end module stickslip_lapack

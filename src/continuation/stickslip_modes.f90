@@ -809,9 +809,10 @@ contains
     end function reactions
 
     !> The static normal force of every channel (0 for a tangential one) [N]: the linear
-    !> statics of the structure under its preloads and static loads with every closed unilateral contact a
-    !> spring k_n (an elastic one: lambda = -k_n (gap + n^T x)) or a constraint n^T x =
-    !> -gap (a rigid one: lambda its reaction); the tangential channels carry no mean force.
+    !> statics of the structure under its preloads and static loads with every closed
+    !> unilateral contact a spring k_n (an elastic one: lambda = -k_n (gap + n^T x)) or a
+    !> constraint n^T x = -gap (a rigid one: lambda its reaction); the tangential channels
+    !> carry no mean force.
     !> On a sector (`cyclic`) on its in-phase motions (the static pattern of the disk).
     function static_normal_forces(model, cs, cyclic) result(lambda)
         type(model_t), intent(in) :: model

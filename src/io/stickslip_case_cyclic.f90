@@ -93,7 +93,8 @@ contains
         cc%given = nml%find(g) > 0
         if (.not. cc%given) return
         call check_names(nml, g, [character(len=17) :: "sectors", "engine_order", "left_dofs", &
-                         "right_dofs", "next_dof", "next_normal_dof", "next_tangent2_dof", "model"], error)
+                         "right_dofs", "next_dof", "next_normal_dof", "next_tangent2_dof", &
+                         "model"], error)
         if (allocated(error)) return
         call get_integer(nml, g, "sectors", cc%cyc%sectors, error, found)
         if (allocated(error)) return

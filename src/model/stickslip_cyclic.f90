@@ -34,7 +34,7 @@ module stickslip_cyclic
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
         cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis, &
         structure_key, disk_dof_table, channel_next_dofs, cyclic_directions, &
-        cyclic_preload_force, phased_copies
+        cyclic_preload_force, phased_copies, hermitian_pencil
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -571,6 +571,34 @@ contains
         end do
     end function channel_displacements
 
+    !> The Hermitian-definite pencil A v = lambda B v (LAPACK zhegv with its workspace query):
+    !> `w` the eigenvalues, increasing; with `vectors` A holds the B-orthonormal eigenvectors
+    !> on return (B is overwritten either way). info: zhegv's (nonzero: B not positive
+    !> definite, or no convergence).
+    subroutine hermitian_pencil(a, b, w, vectors, info)
+        !> A, n x n; the eigenvectors with `vectors`.
+        complex(dp), intent(inout) :: a(:, :)
+        !> B, n x n, positive definite.
+        complex(dp), intent(inout) :: b(:, :)
+        !> The eigenvalues.
+        real(dp), allocatable, intent(out) :: w(:)
+        !> Compute the eigenvectors.
+        logical, intent(in) :: vectors
+        !> zhegv's info.
+        integer, intent(out) :: info
+        complex(dp), allocatable :: work(:)
+        complex(dp) :: query(1)
+        real(dp), allocatable :: rwork(:)
+        character(len=1) :: jobz
+        integer :: n
+        n = size(a, 1)
+        jobz = merge('V', 'N', vectors)
+        allocate (w(n), rwork(max(1, 3*n - 2)))
+        call zhegv(1, jobz, 'U', n, a, n, b, n, w, query, -1, rwork, info)
+        allocate (work(max(1, int(real(query(1), dp)), 2*n)))
+        call zhegv(1, jobz, 'U', n, a, n, b, n, w, work, size(work), rwork, info)
+    end subroutine hermitian_pencil
+
     !> The undamped natural frequencies [rad/s], increasing, of the sector's structure (M and
     !> K, its contacts carrying nothing) in the cyclic modes of nodal diameter `nd`: sector
     !> s moves as sector 0 times exp(i 2 pi nd s / N), so X_right = exp(i 2 pi nd / N)
@@ -589,9 +617,9 @@ contains
         real(dp), allocatable, intent(out) :: omegas(:)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :), work(:)
-        real(dp), allocatable :: w(:), rwork(:)
-        complex(dp) :: query(1), e
+        complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :)
+        real(dp), allocatable :: w(:)
+        complex(dp) :: e
         integer :: n, m, info
         call validate_cyclic(sector, cyc, error)
         if (allocated(error)) return
@@ -606,10 +634,7 @@ contains
         t = cyclic_basis(cyc, n, e)
         kc = matmul(conjg(transpose(t)), matmul(cmplx(sector%stiffness, 0.0_dp, dp), t))
         mc = matmul(conjg(transpose(t)), matmul(cmplx(sector%mass, 0.0_dp, dp), t))
-        allocate (w(m), rwork(max(1, 3*m - 2)))
-        call zhegv(1, 'N', 'U', m, kc, m, mc, m, w, query, -1, rwork, info)
-        allocate (work(max(1, int(real(query(1), dp)), 2*m)))
-        call zhegv(1, 'N', 'U', m, kc, m, mc, m, w, work, size(work), rwork, info)
+        call hermitian_pencil(kc, mc, w, .false., info)
         if (info /= 0) then
             call fatal_error(error, "cyclic modes: the eigensolver failed (zhegv info "// &
                              itoa(info)//"): the sector's mass is not positive definite on "// &

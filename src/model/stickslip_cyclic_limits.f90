@@ -14,10 +14,11 @@ module stickslip_cyclic_limits
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
     use stickslip_contact_set, only: contact_set_t, new_contact_set
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, cyclic_basis, cyclic_directions
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, cyclic_basis, cyclic_directions, &
+        hermitian_pencil
     use stickslip_linear_modes, only: channel_limit_stiffness, independence_tolerance, &
         rigid_tolerance
-    use stickslip_lapack, only: zhegv, zgeqrf, zungqr
+    use stickslip_lapack, only: zgeqrf, zungqr
     implicit none
     private
     public :: cyclic_limit_modes, cyclic_limit_structure
@@ -45,9 +46,8 @@ contains
         complex(dp), allocatable, intent(out) :: shapes(:, :)
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        complex(dp), allocatable :: kk(:, :), t(:, :), mr(:, :), work(:)
-        complex(dp) :: query(1)
-        real(dp), allocatable :: w(:), rwork(:)
+        complex(dp), allocatable :: kk(:, :), t(:, :), mr(:, :)
+        real(dp), allocatable :: w(:)
         real(dp) :: scale
         integer :: m, info, j, k
         call cyclic_limit_structure(model, cyc, e, stuck, kk, t, error)
@@ -57,10 +57,7 @@ contains
         mr = matmul(conjg(transpose(t)), matmul(cmplx(model%mass, 0.0_dp, dp), t))
         kk = 0.5_dp*(kk + conjg(transpose(kk)))
         mr = 0.5_dp*(mr + conjg(transpose(mr)))
-        allocate (w(m), rwork(max(1, 3*m - 2)))
-        call zhegv(1, 'V', 'U', m, kk, m, mr, m, w, query, -1, rwork, info)
-        allocate (work(max(1, int(real(query(1), dp)), 2*m)))
-        call zhegv(1, 'V', 'U', m, kk, m, mr, m, w, work, size(work), rwork, info)
+        call hermitian_pencil(kk, mr, w, .true., info)
         if (info /= 0) then
             call fatal_error(error, "cyclic modes: the eigensolver failed (zhegv info "// &
                              itoa(info)//"): the sector's mass is not positive definite on "// &
@@ -153,20 +150,17 @@ contains
         !> above independence_tolerance of its largest eigenvalue (none when a = 0).
         subroutine independent(a)
             complex(dp), allocatable, intent(inout) :: a(:, :)
-            complex(dp), allocatable :: g(:, :), b(:, :), wk(:)
-            real(dp), allocatable :: w(:), rw(:)
-            complex(dp) :: wq(1)
+            complex(dp), allocatable :: g(:, :), b(:, :)
+            real(dp), allocatable :: w(:)
             integer :: nk, j, inf
             nk = size(a, 2)
             g = matmul(conjg(transpose(a)), a)
-            allocate (b(nk, nk), w(nk), rw(max(1, 3*nk - 2)))
+            allocate (b(nk, nk))
             b = (0.0_dp, 0.0_dp)
             do j = 1, nk
                 b(j, j) = (1.0_dp, 0.0_dp)
             end do
-            call zhegv(1, 'V', 'U', nk, g, nk, b, nk, w, wq, -1, rw, inf)
-            allocate (wk(max(1, int(real(wq(1), dp)), 2*nk)))
-            call zhegv(1, 'V', 'U', nk, g, nk, b, nk, w, wk, size(wk), rw, inf)
+            call hermitian_pencil(g, b, w, .true., inf)
             if (inf /= 0 .or. .not. (maxval(w) > 0.0_dp)) then
                 deallocate (a)
                 allocate (a(m, 0))

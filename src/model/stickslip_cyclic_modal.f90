@@ -16,9 +16,8 @@ module stickslip_cyclic_modal
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, cyclic_basis, nodal_diameter, &
-        structure_key
+        structure_key, hermitian_pencil
     use stickslip_dynamics, only: smallest_singular
-    use stickslip_lapack, only: zhegv
     implicit none
     private
     public :: prepare_cyclic_modes, modal_tolerance
@@ -46,9 +45,9 @@ contains
         type(error_type), allocatable, intent(out) :: error
         !> The modes were prepared.
         logical, intent(out), optional :: prepared
-        complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :), cc(:, :), work(:)
-        real(dp), allocatable :: w(:), rwork(:)
-        complex(dp) :: query(1), e
+        complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :), cc(:, :)
+        real(dp), allocatable :: w(:)
+        complex(dp) :: e
         logical, allocatable :: wanted(:)
         real(dp) :: offdiag, diag
         integer :: n, m, nd, h, info, j
@@ -78,11 +77,7 @@ contains
             kc = matmul(conjg(transpose(t)), matmul(cmplx(model%stiffness, 0.0_dp, dp), t))
             mc = matmul(conjg(transpose(t)), matmul(cmplx(model%mass, 0.0_dp, dp), t))
             cc = matmul(conjg(transpose(t)), matmul(cmplx(model%damping, 0.0_dp, dp), t))
-            if (allocated(w)) deallocate (w, rwork, work)
-            allocate (w(m), rwork(max(1, 3*m - 2)))
-            call zhegv(1, 'V', 'U', m, kc, m, mc, m, w, query, -1, rwork, info)
-            allocate (work(max(1, int(real(query(1), dp)), 2*m)))
-            call zhegv(1, 'V', 'U', m, kc, m, mc, m, w, work, size(work), rwork, info)
+            call hermitian_pencil(kc, mc, w, .true., info)
             if (info /= 0) then
                 ok = .false.
                 exit

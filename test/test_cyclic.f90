@@ -25,8 +25,9 @@ module test_cyclic
     use fixtures, only: scratch, write_lines, project_path, enter_project_root
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t
-    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
+    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics, cyclic_projections_t
     use stickslip_cyclic_modal, only: prepare_cyclic_modes
+    use stickslip_rho, only: automatic_rho
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
     implicit none
     private
@@ -53,7 +54,85 @@ contains
         call test_sector_stability(t)
         call test_sector_family(t)
         call test_modal_condensation(t)
+        call test_channel_condensation(t)
     end subroutine run_cyclic_tests
+
+    !> What a sweep's continuation builds at every omega on a sector with prepared modes:
+    !> the channels' dynamics only (channels_only) from the projections kept since the
+    !> first omega (cyclic_projections_t), on the underplatform damper example with EO 3,
+    !> harmonics 0..15: V0, G, their omega derivatives, the static terms and the energy Gram
+    !> matrices equal the dense LU's at three omegas (the cache made at the first, reused at
+    !> the others, and remade for a doubled forcing) to 1e-10, and the N-row responses are
+    !> not kept. The free sector's modes give its automatic rho (a modal sum instead of an
+    !> LU): equal to the LU's to 1e-12 at each omega.
+    subroutine test_channel_condensation(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(cyclic_t) :: plain
+        type(model_t) :: sector
+        type(basis_t) :: basis
+        type(dynamics_t) :: dc, dd
+        type(cyclic_projections_t) :: cache
+        type(error_type), allocatable :: error
+        real(dp), parameter :: omegas(3) = [2.1_dp, 2.6_dp, 2.6_dp]
+        real(dp) :: worst, rho_worst, fmax(3)
+        integer :: k
+        logical :: lean, reused
+        call read_case(project_path("examples/bladed_disk_damper.nml"), c, error)
+        call check_error(t, error, "cyclic channels: read the example", .false.)
+        if (allocated(error)) return
+        call new_basis(basis, 15, .false., 64, error)
+        sector = c%cyclic%sector
+        plain = c%cyclic%cyc
+        deallocate (plain%modes)
+        worst = 0.0_dp
+        rho_worst = 0.0_dp
+        lean = .true.
+        reused = .true.
+        do k = 1, size(omegas)
+            sector%omega = omegas(k)
+            if (k == 3) sector%force_amplitude = 2.0_dp*sector%force_amplitude
+            call new_cyclic_dynamics(dc, sector, c%cyclic%cyc, basis, error, .true., &
+                                     channels_only=.true., projections=cache)
+            if (allocated(error)) exit
+            reused = reused .and. all(cache%made)
+            fmax(k) = maxval(abs(cache%f))
+            call new_cyclic_dynamics(dd, sector, plain, basis, error, .true.)
+            if (allocated(error)) exit
+            lean = lean .and. .not. allocated(dc%x0) .and. .not. allocated(dc%y) .and. &
+                   .not. allocated(dc%x0_static)
+            worst = max(worst, differ(dc%v0, dd%v0), differ(dc%dv0, dd%dv0), &
+                        maxval(abs(dc%g - dd%g))/maxval(abs(dd%g)), &
+                        maxval(abs(dc%dg - dd%dg))/maxval(abs(dd%dg)), &
+                        maxval(abs(dc%g_static - dd%g_static))/maxval(abs(dd%g_static)), &
+                        maxval(abs(dc%u_static - dd%u_static))/ &
+                        max(maxval(abs(dd%u_static)), tiny(1.0_dp)), &
+                        maxval(abs(dc%damping_gram - dd%damping_gram))/ &
+                        maxval(abs(dd%damping_gram)), &
+                        differ(dc%forcing_gram, dd%forcing_gram))
+            rho_worst = max(rho_worst, abs(automatic_rho(sector, c%cyclic%cyc%free_lambda, &
+                                                         c%cyclic%cyc%free_shapes) - &
+                                           automatic_rho(sector))/automatic_rho(sector))
+        end do
+        call check_error(t, error, "cyclic channels: the condensations", .false.)
+        if (allocated(error)) return
+        ! the cache remade for the doubled forcing
+        reused = reused .and. fmax(2) == fmax(1) .and. abs(fmax(3) - 2.0_dp*fmax(2)) <= &
+                 1.0e-15_dp*fmax(3)
+        call check(t, lean .and. reused .and. worst < 1.0e-10_dp, "cyclic channels: the "// &
+                   "channels' dynamics from kept projections = the dense LU's (3 omegas, "// &
+                   "a new forcing)", "largest difference "//real_text(worst))
+        call check(t, allocated(c%cyclic%cyc%free_lambda) .and. rho_worst < 1.0e-12_dp, &
+                   "cyclic channels: the automatic rho from the free sector's modes = the "// &
+                   "LU's", "largest relative difference "//real_text(rho_worst))
+        call basis%destroy()
+    end subroutine test_channel_condensation
+
+    !> max |a - b| / max |b| (b = 0: max |a| / tiny).
+    real(dp) function differ(a, b)
+        complex(dp), intent(in) :: a(:, :), b(:, :)
+        differ = maxval(abs(a - b))/max(maxval(abs(b)), tiny(1.0_dp))
+    end function differ
 
     !> The sector's condensation as a modal sum over its prepared cyclic modes (a case file
     !> prepares them; Rayleigh damping) against the dense LU of the projected pencil (the
@@ -125,11 +204,6 @@ contains
         if (ok) ok = differ(dm%x0, dd%x0) == 0.0_dp
         call check(t, ok, "cyclic modal: another sector's modes are not used")
         call basis%destroy()
-    contains
-        real(dp) function differ(a, b)
-            complex(dp), intent(in) :: a(:, :), b(:, :)
-            differ = maxval(abs(a - b))/max(maxval(abs(b)), tiny(1.0_dp))
-        end function differ
     end subroutine test_modal_condensation
 
     !> A family over the shrouds' normal load on one sector: both curves complete, their

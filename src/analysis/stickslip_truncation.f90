@@ -36,7 +36,7 @@ module stickslip_truncation
     use stickslip_model, only: model_t, contact_velocity_direction, force_direction
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_basis, only: basis_t, new_basis
-    use stickslip_hbm, only: solve_periodic
+    use stickslip_hbm, only: solve_periodic, condensed_structure_t
     use stickslip_dynamics, only: dynamics_t
     use stickslip_contact_set, only: channel_directions
     use stickslip_cyclic, only: cyclic_t, channel_displacements
@@ -221,7 +221,8 @@ contains
     !> observe x (e.g. the full-model DOFs of a reduced model, rows of its basis: the
     !> amplitudes of its tiny high-mode coordinates would otherwise decide the estimate),
     !> one per row, instead of one per DOF.
-    subroutine estimate_truncation(model, opts, sol, est, error, dyn, observe, cyclic)
+    subroutine estimate_truncation(model, opts, sol, est, error, dyn, observe, cyclic, &
+                                   structure)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> The options sol was solved with.
@@ -240,6 +241,9 @@ contains
         !> against the next sector measure relative motion, the coarse solve is the
         !> sector's.
         type(cyclic_t), intent(in), optional :: cyclic
+        !> With `cyclic`: the sector's data set by sol's own solve at this omega
+        !> (solve_periodic_cyclic), reused by the coarse solve.
+        type(condensed_structure_t), intent(inout), optional :: structure
         type(hbm_options_t) :: copts
         type(hbm_solution_t) :: coarse
         integer(int64) :: c0, c1, rate
@@ -261,7 +265,8 @@ contains
             nbc = count(sol%harmonic <= hc)
             if (present(cyclic)) then
                 call solve_periodic_cyclic(model, cyclic, copts, coarse, error, &
-                                           r_start=sol%rcoef(1:nbc, :))
+                                           r_start=sol%rcoef(1:nbc, :), dyn=dyn, &
+                                           structure=structure)
             else
                 call solve_periodic(model, copts, coarse, error, r_start=sol%rcoef(1:nbc, :), &
                                     dyn=dyn)
@@ -413,8 +418,8 @@ contains
         type(basis_t) :: fb
         type(fine_grid_t) :: grid
         real(dp), allocatable :: rt(:), vt(:), pt(:), st(:), vc(:), xt(:)
-        real(dp) :: vstruct, vfloor, vslip, limit, rho
-        integer :: nf, j, p, nobs
+        real(dp) :: vstruct, vfloor, vslip, limit, rho, vlow
+        integer :: nf, j, p, nobs, plow
 
         est%harmonics = sol%harmonics
         est%samples = sol%samples
@@ -437,8 +442,20 @@ contains
         est%amplitude_change = 0.0_dp
         est%amplitude_change_rel = 0.0_dp
         est%displacement_change_rel = 0.0_dp
+        ! the structure's largest velocity on the fine grid. The fine grid holds the
+        ! quadrature's samples (sol%v, when kept): a DOF whose bound sum_h |V_h| does not
+        ! exceed the largest of them cannot raise the maximum and is not synthesized
+        vlow = 0.0_dp
+        plow = 0
+        if (allocated(sol%v)) then
+            if (size(sol%v, 2) == model%ndof .and. size(sol%v, 1) == sol%samples) then
+                plow = maxloc(maxval(abs(sol%v), 1), 1)
+                vlow = maxval(abs(sol%v(:, plow)))
+            end if
+        end if
         vstruct = 0.0_dp
         do p = 1, model%ndof
+            if (p /= plow .and. modulus_sum(fb, sol%vcoef(:, p)) <= vlow) cycle
             call grid%synthesize(fb, sol%vcoef(:, p), xt)
             vstruct = max(vstruct, maxval(abs(xt)))
         end do
@@ -672,4 +689,18 @@ contains
             m = 2*m
         end do
     end function power_of_two_at_least
+
+    !> sum_h |c_h| of a real Fourier series on basis b (its constant and each harmonic's
+    !> modulus): a bound of |u(t)| at every t.
+    pure real(dp) function modulus_sum(b, coef) result(bound)
+        type(basis_t), intent(in) :: b
+        real(dp), intent(in) :: coef(:)
+        integer :: i, k
+        bound = 0.0_dp
+        if (b%has_zero) bound = abs(coef(b%i0))
+        do i = 1, b%nharm
+            k = b%icos(i)
+            bound = bound + hypot(coef(k), coef(k + 1))
+        end do
+    end function modulus_sum
 end module stickslip_truncation

@@ -35,7 +35,7 @@ module stickslip_friction_family
     use stickslip_progress, only: progress_t
     use stickslip_hbm_sparse, only: solve_periodic_sparse, kept_dofs
     use stickslip_cyclic, only: cyclic_t
-    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
+    use stickslip_cyclic_dynamics, only: new_cyclic_dynamics, cyclic_projections_t
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic
     use stickslip_friction, only: psi_limit_derivative
     use stickslip_contact_set, only: contact_set_t, new_contact_set
@@ -100,6 +100,9 @@ module stickslip_friction_family
         !> One sector of a tuned bladed disk (its travelling wave: stickslip_cyclic_dynamics
         !> condenses it), when allocated.
         type(cyclic_t), allocatable :: cyclic
+        !> On a sector with prepared modes: the projections its builds keep from one
+        !> parameter value to the next (the continuation's dynamics keep its channels only).
+        type(cyclic_projections_t) :: projections
         !> Rows of the tangential channels' mean forces, and the point they are pinned to
         !> (empty until the continuation anchors the family).
         integer, allocatable :: mean_rows(:)
@@ -111,6 +114,7 @@ module stickslip_friction_family
         procedure :: recover => family_recover
         procedure :: residual_scale => family_scale
         procedure :: set => family_set
+        procedure :: point_dynamics => family_point_dynamics
         procedure :: destroy => family_destroy
     end type friction_family_t
 
@@ -313,7 +317,8 @@ contains
         ! K and M do not change along the family: their smallest singular values neither
         if (allocated(self%cyclic)) then
             call new_cyclic_dynamics(self%prob%dyn, self%model, self%cyclic, self%prob%basis, &
-                                     error, with_omega_derivative=.true.)
+                                     error, with_omega_derivative=.true., &
+                                     channels_only=.true., projections=self%projections)
         else if (allocated(self%sparse)) then
             self%sparse%model = self%model
             if (self%singular_values(1) >= 0.0_dp) then
@@ -347,6 +352,25 @@ contains
         self%cached_omega(k) = p
         self%cached_age(k) = self%clock
     end subroutine set_omega_dynamics
+
+    !> The condensed dynamics at the family's current parameter with the N-row responses
+    !> that recover the displacements: the family's own, or on a sector (whose
+    !> continuation keeps the channels only) built here. Errors: those of
+    !> new_cyclic_dynamics.
+    subroutine family_point_dynamics(self, dyn, error)
+        !> The family, at the point's parameter.
+        class(friction_family_t), intent(inout) :: self
+        !> The dynamics.
+        type(dynamics_t), intent(out) :: dyn
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        if (allocated(self%prob%dyn%x0) .or. .not. allocated(self%cyclic)) then
+            dyn = self%prob%dyn
+        else
+            call new_cyclic_dynamics(dyn, self%model, self%cyclic, self%prob%basis, error, &
+                                     projections=self%projections)
+        end if
+    end subroutine family_point_dynamics
 
     !> ||V0||_2 at lambda, the contact velocities without friction (as solve_periodic's
     !> fscale): near a resonance the residual cannot be computed more accurately than that

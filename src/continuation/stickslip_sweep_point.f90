@@ -23,6 +23,8 @@ module stickslip_sweep_point
     use stickslip_contact_set, only: channel_directions
     use stickslip_cyclic, only: cyclic_t, channel_displacements
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
+    use stickslip_dynamics, only: dynamics_t
+    use stickslip_condensed_structure, only: condensed_structure_t
     implicit none
     private
     public :: point_tally_t, evaluate_point, keep_coefficients, contact_point_values
@@ -119,6 +121,8 @@ contains
         logical :: defer
         type(truncation_t) :: est
         type(model_t) :: m
+        type(dynamics_t) :: pdyn
+        type(condensed_structure_t) :: setup
         type(hbm_solution_t) :: ps
         type(hbm_options_t) :: po
         integer :: k, nb, nc
@@ -133,7 +137,15 @@ contains
         ! the family's dynamics are at this parameter (the tangent was just computed
         ! there): the point and its truncation estimate need no new factorization
         at_point = fam%have_current .and. fam%current == state%lambda
-        if (allocated(fam%cyclic)) then
+        if (allocated(fam%cyclic) .and. at_point) then
+            ! the family's dynamics at the point keep the channels only: one build with
+            ! the displacements
+            call fam%point_dynamics(pdyn, error)
+            if (allocated(error)) return
+            call solve_periodic_cyclic(m, fam%cyclic, po, ps, error, &
+                                       r_start=reshape(state%y, [nb, nc]), dyn=pdyn, &
+                                       structure=setup)
+        else if (allocated(fam%cyclic)) then
             call solve_periodic_cyclic(m, fam%cyclic, po, ps, error, &
                                        r_start=reshape(state%y, [nb, nc]))
         else if (allocated(fam%sparse)) then
@@ -175,7 +187,11 @@ contains
         pt%stable = -1
         pt%truncation = ieee_value(1.0_dp, ieee_quiet_nan)
         if (opts%truncation .and. .not. allocated(fam%sparse)) then
-            if (at_point .and. .not. allocated(fam%cyclic)) then
+            if (at_point .and. allocated(fam%cyclic)) then
+                call estimate_truncation(m, po, ps, est, error, dyn=pdyn, &
+                                         observe=opts%observe, cyclic=fam%cyclic, &
+                                         structure=setup)
+            else if (at_point) then
                 call estimate_truncation(m, po, ps, est, error, dyn=fam%prob%dyn, &
                                          observe=opts%observe)
             else

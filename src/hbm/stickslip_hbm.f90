@@ -137,8 +137,9 @@ contains
 
     !> What a dense solve of `model` with `opts` starts from: both validated, the condensed
     !> structure `s` and the options in effect `o` (rho = 0 asks for the automatic weight,
-    !> s%rho_auto). Errors: those of validate_model and validate_options (stat input).
-    subroutine solve_setup(model, opts, s, o, error)
+    !> s%rho_auto; with the model's modes `lambda`, `shapes`, from their sums: see
+    !> contact_mobility). Errors: those of validate_model and validate_options (stat input).
+    subroutine solve_setup(model, opts, s, o, error, lambda, shapes)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Solver options as given.
@@ -149,11 +150,14 @@ contains
         type(hbm_options_t), intent(out) :: o
         !> Set on invalid input.
         type(error_type), allocatable, intent(out) :: error
+        !> Optional: the model's modes, K Phi = M Phi Lambda, Phi^H M Phi = I.
+        real(dp), intent(in), optional :: lambda(:)
+        complex(dp), intent(in), optional :: shapes(:, :)
         call validate_model(model, error)
         if (allocated(error)) return
         call validate_options(opts, error)
         if (allocated(error)) return
-        s = dense_structure(model)
+        s = dense_structure(model, lambda, shapes)
         o = opts
         if (o%rho == 0.0_dp) o%rho = s%rho_auto
     end subroutine solve_setup
@@ -227,16 +231,20 @@ contains
         call prob%destroy()
     end subroutine solution_from_problem
 
-    !> The data of a dense model the weighted-residual solve needs beside its dynamics.
-    function dense_structure(model) result(s)
+    !> The data of a dense model the weighted-residual solve needs beside its dynamics
+    !> (with its modes `lambda`, `shapes`, the automatic rho from their sums).
+    function dense_structure(model, lambda, shapes) result(s)
         !> A validated model.
         type(model_t), intent(in) :: model
+        !> Optional: its modes (automatic_rho).
+        real(dp), intent(in), optional :: lambda(:)
+        complex(dp), intent(in), optional :: shapes(:, :)
         type(condensed_structure_t) :: s
         integer :: i
         s%omega = model%omega
         s%ncontact = model%ncontact()
         call new_contact_set(s%contacts, model)
-        s%rho_auto = automatic_rho(model)
+        s%rho_auto = automatic_rho(model, lambda, shapes)
         allocate (s%force_rows(model%ndof, model%nforce()))
         do i = 1, model%nforce()
             s%force_rows(:, i) = force_direction(model, i)

@@ -65,17 +65,21 @@ contains
     !> geometric mean over the force channels that can hold a force (all when none can) of
     !> their resonance-free mobility at the dominant forcing frequency (rho_from_channels).
     !> Always finite and > 0; 1 for a model without contacts (rho is then unused). `model`
-    !> must be valid (validate_model); no error can occur.
-    function automatic_rho(model) result(rho)
+    !> must be valid (validate_model); no error can occur. With `lambda` and `shapes`, the
+    !> model's own modes (see contact_mobility), no factorization.
+    function automatic_rho(model, lambda, shapes) result(rho)
         !> A validated model.
         type(model_t), intent(in) :: model
+        !> Optional: its modes, K Phi = M Phi Lambda, Phi^H M Phi = I (both or neither).
+        real(dp), intent(in), optional :: lambda(:)
+        complex(dp), intent(in), optional :: shapes(:, :)
         !> The weight rho > 0 [m/(N s)].
         real(dp) :: rho
         real(dp), allocatable :: mob(:)
         type(contact_set_t) :: cs
         rho = 1.0_dp
         if (model%ncontact() == 0) return
-        mob = contact_mobility(model)
+        mob = contact_mobility(model, lambda, shapes)
         call new_contact_set(cs, model)
         rho = rho_from_channels(mob, cs, model%omega, dominant_harmonic(model)*model%omega)
     end function automatic_rho
@@ -142,9 +146,15 @@ contains
     !> |amplitude| x max |load shape| (h > 0; 1 when the forcing is static). Falls back on
     !> the mass line w_j^T M^{-1} w_j / Omega when K + Omega^2 M is singular or the value
     !> is not positive (an indefinite K). `model` must be valid (validate_model); no error can occur.
-    function contact_mobility(model) result(mob)
+    !> With the model's modes `lambda`, `shapes` (K Phi = M Phi Lambda, Phi^H M Phi = I), the
+    !> same mobility as the modal sum Omega sum_k |Phi_k^H w_j|^2 / (lambda_k + Omega^2),
+    !> O(n^2) instead of a factorization (the LU when a term is not positive).
+    function contact_mobility(model, lambda, shapes) result(mob)
         !> A validated model.
         type(model_t), intent(in) :: model
+        !> Optional: its modes (both or neither).
+        real(dp), intent(in), optional :: lambda(:)
+        complex(dp), intent(in), optional :: shapes(:, :)
         !> Mobility of each contact (of each force channel with contact laws) [m/(N s)].
         real(dp), allocatable :: mob(:)
         real(dp), allocatable :: s(:, :), w(:, :), y(:, :)
@@ -158,6 +168,20 @@ contains
         if (nc == 0) return
         hf = dominant_harmonic(model)
         w = channel_directions(model, cs)
+        if (present(lambda) .and. present(shapes)) then
+            if (size(lambda) == n .and. size(shapes, 1) == n .and. size(shapes, 2) == n) then
+                associate (big_omega => hf*model%omega)
+                    if (all(lambda + big_omega**2 > 0.0_dp)) then
+                        do j = 1, nc
+                            ! |Phi_k^H w| = |w^T Phi_k| for a real w
+                            mob(j) = big_omega*sum(abs(matmul(w(:, j), shapes))**2/ &
+                                                   (lambda + big_omega**2))
+                        end do
+                        if (all(mob > 0.0_dp .and. ieee_is_finite(mob))) return
+                    end if
+                end associate
+            end if
+        end if
         allocate (s(n, n), y(n, nc), ipiv(n))
         associate (big_omega => hf*model%omega)
             s = model%stiffness + big_omega**2*model%mass

@@ -76,6 +76,11 @@ module stickslip_cyclic
         !> With `modes`: structure_key of the sector they belong to (another sector's
         !> condensation ignores them).
         integer(int64) :: modes_key = 0
+        !> With `modes` (when prepared): the free sector's modes (its faces free), K Phi =
+        !> M Phi Lambda with Phi^H M Phi = I, whose sums give its contact mobility at any
+        !> frequency (the automatic rho of solve_periodic_cyclic) without a factorization.
+        real(dp), allocatable :: free_lambda(:)
+        complex(dp), allocatable :: free_shapes(:, :)
     end type cyclic_t
 
 contains

@@ -17,6 +17,7 @@
 !> proportional damping) (T^H Z T)^-1 is their modal sum, exact, O(n m) per harmonic;
 !> otherwise a dense LU of the projected pencil per harmonic (LAPACK), O(n^2 m).
 module stickslip_cyclic_dynamics
+    use, intrinsic :: iso_fortran_env, only: int64
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t, force_direction
@@ -30,19 +31,45 @@ module stickslip_cyclic_dynamics
     use stickslip_dense_products, only: cmat_mul
     implicit none
     private
-    public :: new_cyclic_dynamics
+    public :: new_cyclic_dynamics, cyclic_projections_t
+
+    !> What new_cyclic_dynamics can keep from one omega to the next on a sector with
+    !> prepared modes: per harmonic of the basis, the projections G^H [F_h, conj(D_h)] of
+    !> the forcing and of the channels' measuring directions on the diameter's mode shapes
+    !> G (m x (n_c + 1)), and the F_h and D_h they were made from. They do not depend on
+    !> omega, so with them a build of the channels' dynamics costs O(m n_c^2) per harmonic
+    !> instead of O(n m n_c). A cache of one caller for one sector (a family's; its M, K and
+    !> C never change along it): the sector's fingerprint is checked when it is made, its
+    !> forcing and directions at every use.
+    type :: cyclic_projections_t
+        !> The prepared modes' fingerprint (cyclic_t%modes_key) the entries belong to.
+        integer(int64) :: modes_key = 0
+        !> Per harmonic index 0 .. nharm of the basis: made.
+        logical, allocatable :: made(:)
+        !> The harmonics h > 0 of the basis (dynamics_t%harm).
+        integer, allocatable :: harm(:)
+        !> F_h, N x (0:nharm).
+        complex(dp), allocatable :: f(:, :)
+        !> D_h, N x n_c x (0:nharm).
+        complex(dp), allocatable :: d(:, :, :)
+        !> G^H [F_h, conj(D_h)], m x (n_c + 1) x (0:nharm).
+        complex(dp), allocatable :: a(:, :, :)
+    end type cyclic_projections_t
 
 contains
 
     !> The condensed dynamics of the sector `model` of the disk `cyc` on `basis` (see the
     !> module). With `with_omega_derivative`, dv0 and dg too (continuation in omega). With
     !> `mass_damping` xi [1/s], the damping is C - xi M (a nonlinear mode's negative modal
-    !> damping): the prepared modes still serve, each modal damping c_j - xi.
+    !> damping): the prepared modes still serve, each modal damping c_j - xi. With
+    !> `channels_only`, the N-row responses (x0, y, x0_static, y_static) are not kept (left
+    !> unallocated): what the friction equations need, without what recovers the
+    !> displacements, at O(m n_c^2) per harmonic on prepared modes with `projections`.
     !> Errors: those of validate_cyclic and check_harmonics_in_basis (stat input); stat
     !> numerical when the projected dynamic stiffness is singular (an undamped cyclic mode at
     !> h omega) or K on the cyclic motions is (h = 0).
     subroutine new_cyclic_dynamics(self, model, cyc, basis, error, with_omega_derivative, &
-                                   mass_damping)
+                                   mass_damping, channels_only, projections)
         !> The condensed dynamics (rows: the sector's DOFs).
         type(dynamics_t), intent(out) :: self
         !> The sector (a validated model).
@@ -57,17 +84,21 @@ contains
         logical, intent(in), optional :: with_omega_derivative
         !> Mass-proportional damping removed, xi [1/s] (default 0).
         real(dp), intent(in), optional :: mass_damping
+        !> Keep the channels' dynamics only (default .false.).
+        logical, intent(in), optional :: channels_only
+        !> The projections kept from an earlier call for this sector (made or updated here).
+        type(cyclic_projections_t), intent(inout), optional :: projections
         type(contact_set_t) :: cs
         real(dp), allocatable :: damping(:, :)
         real(dp) :: xi
         real(dp), allocatable :: rwork(:)
         complex(dp), allocatable :: t(:, :), rhs(:, :), x(:, :), dm(:, :), f(:), work(:), &
-                                    dx(:, :), cx(:, :)
+                                    dx(:, :), cx(:, :), cv(:, :), dcv(:, :)
         integer, allocatable :: ipiv(:)
-        integer :: n, m, nc, ih, h, j, c, k, info
+        integer :: n, m, nc, ih, h, k, info
         real(dp) :: anorm, rcond, zscale, rel, smin_k, smin_m
         complex(dp) :: e, ihw
-        logical :: deriv, modal, modal_gram, conj_shapes
+        logical :: deriv, modal, modal_gram, conj_shapes, keep_x, cached
 
         call validate_cyclic(model, cyc, error)
         if (allocated(error)) return
@@ -75,6 +106,8 @@ contains
         if (allocated(error)) return
         deriv = .false.
         if (present(with_omega_derivative)) deriv = with_omega_derivative
+        keep_x = .true.
+        if (present(channels_only)) keep_x = .not. channels_only
         xi = 0.0_dp
         if (present(mass_damping)) xi = mass_damping
         damping = model%damping
@@ -87,16 +120,30 @@ contains
         self%ncontact = nc
         self%omega = model%omega
         self%harm = basis%harm(1:basis%nharm)
-        allocate (self%rel(basis%nharm), self%x0(n, basis%nharm), self%y(n, nc, basis%nharm), &
-                  self%v0(nc, basis%nharm), self%g(nc, nc, basis%nharm), &
+        allocate (self%rel(basis%nharm), self%v0(nc, basis%nharm), self%g(nc, nc, basis%nharm), &
                   self%damping_gram(nc + 1, nc + 1, basis%nharm), &
                   self%forcing_gram(nc + 1, basis%nharm))
+        if (keep_x) allocate (self%x0(n, basis%nharm), self%y(n, nc, basis%nharm))
         if (deriv) allocate (self%dv0(nc, basis%nharm), self%dg(nc, nc, basis%nharm))
         allocate (ipiv(m), work(2*m), rwork(2*m), dm(n, nc), f(n), rhs(n, nc + 1))
         ! the smallest singular values of K and M of the sector (the scale of the distance
-        ! to a resonance, as new_dynamics); prepared with the modes
+        ! to a resonance, as new_dynamics); prepared with the modes. A cache made for these
+        ! modes stands for the fingerprint's check (see cyclic_projections_t).
         modal = .false.
-        if (allocated(cyc%modes)) modal = cyc%modes_key == structure_key(model)
+        cached = .false.
+        if (allocated(cyc%modes) .and. present(projections)) then
+            cached = allocated(projections%made) .and. projections%modes_key == cyc%modes_key
+            if (cached) cached = size(projections%made) == basis%nharm + 1 .and. &
+                                 size(projections%f, 1) == n .and. size(projections%d, 2) == nc
+            if (cached) cached = size(projections%harm) == size(self%harm)
+            if (cached) cached = all(projections%harm == self%harm)
+        end if
+        if (cached) then
+            modal = .true.
+        else if (allocated(cyc%modes)) then
+            modal = cyc%modes_key == structure_key(model)
+            if (modal .and. present(projections)) call reset_projections()
+        end if
         if (modal) then
             smin_k = cyc%smin_k
             smin_m = cyc%smin_m
@@ -136,33 +183,38 @@ contains
                 call modal_solve(h, conj_shapes)
             else
                 call direct_solve(h)
+                if (.not. allocated(error)) then
+                    ! the channels' values D^T [X0, Y] (and their omega derivative)
+                    cv = matmul(transpose(dm), x)
+                    if (deriv .and. h > 0) dcv = matmul(transpose(dm), dx)
+                end if
             end if
             if (allocated(error)) return
             if (h == 0) then
-                self%x0_static = real(x(:, 1), dp)
-                self%y_static = real(x(:, 2:), dp)
-                self%g_static = matmul(transpose(real(dm, dp)), self%y_static)
-                self%u_static = matmul(self%x0_static, real(dm, dp))
+                if (keep_x) then
+                    self%x0_static = real(x(:, 1), dp)
+                    self%y_static = real(x(:, 2:), dp)
+                end if
+                self%g_static = real(cv(:, 2:), dp)
+                self%u_static = real(cv(:, 1), dp)
                 cycle
             end if
-            self%x0(:, ih) = x(:, 1)
-            self%y(:, :, ih) = x(:, 2:)
+            if (keep_x) then
+                self%x0(:, ih) = x(:, 1)
+                self%y(:, :, ih) = x(:, 2:)
+            end if
             ihw = cmplx(0.0_dp, h*model%omega, dp)
-            self%v0(:, ih) = ihw*matmul(transpose(dm), x(:, 1))
-            self%g(:, :, ih) = ihw*matmul(transpose(dm), x(:, 2:))
+            self%v0(:, ih) = ihw*cv(:, 1)
+            self%g(:, :, ih) = ihw*cv(:, 2:)
             if (.not. modal_gram) then
                 cx = cmplx(matmul(damping, real(x, dp)), matmul(damping, aimag(x)), dp)
                 self%damping_gram(:, :, ih) = matmul(conjg(transpose(x)), cx)
+                self%forcing_gram(:, ih) = matmul(conjg(f), x)
             end if
-            self%forcing_gram(:, ih) = matmul(conjg(f), x)
             if (deriv) then
                 ! dx = T Zc^-1 T^H (dZ/domega) X: d X / d omega = -dx
-                self%dv0(:, ih) = cmplx(0.0_dp, real(h, dp), dp)* &
-                                  matmul(transpose(dm), x(:, 1)) - &
-                                  ihw*matmul(transpose(dm), dx(:, 1))
-                self%dg(:, :, ih) = cmplx(0.0_dp, real(h, dp), dp)* &
-                                    matmul(transpose(dm), x(:, 2:)) - &
-                                    ihw*matmul(transpose(dm), dx(:, 2:))
+                self%dv0(:, ih) = cmplx(0.0_dp, real(h, dp), dp)*cv(:, 1) - ihw*dcv(:, 1)
+                self%dg(:, :, ih) = cmplx(0.0_dp, real(h, dp), dp)*cv(:, 2:) - ihw*dcv(:, 2:)
             end if
         end do
 
@@ -174,6 +226,18 @@ contains
             complex(dp) :: b(size(a, 1), size(a, 2))
             b = conjg(a)
         end function conj_dm
+
+        !> An empty cache for these modes and this basis.
+        subroutine reset_projections()
+            projections%modes_key = cyc%modes_key
+            projections%harm = self%harm
+            if (allocated(projections%made)) deallocate (projections%made, projections%f, &
+                                                         projections%d, projections%a)
+            allocate (projections%made(0:basis%nharm), projections%f(n, 0:basis%nharm), &
+                      projections%d(n, nc, 0:basis%nharm), &
+                      projections%a(m, nc + 1, 0:basis%nharm))
+            projections%made = .false.
+        end subroutine reset_projections
 
         !> Whether harmonic h has prepared modes; then its T Phi are the prepared shapes S,
         !> or with `conj_shapes` their conjugates (a phase p <= N/2, see
@@ -193,14 +257,45 @@ contains
             modal_harmonic = .true.
         end function modal_harmonic
 
-        !> x (and dx) at harmonic h as the modal sum G diag(1 / D) G^H rhs, D_j = lambda_j
-        !> - (h w)^2 + i h w c_j, G = S or conj(S) (G^H b = conj(S^H conj(b)), G a =
-        !> conj(S conj(a))); the conditioning min |D_j| / (lambda_1 + (h w)^2); the damping
-        !> Gram matrix x^H C x = q^H diag(c) q, q = D^-1 G^H rhs.
+        !> The projections a = G^H rhs of this harmonic, G = S or conj(S) (G^H b = conj(S^H
+        !> conj(b))): from the cache when it holds them for this F_h and D_h.
+        function projected(conj_shapes, nd) result(a)
+            integer, intent(in) :: nd
+            logical, intent(in) :: conj_shapes
+            complex(dp), allocatable :: a(:, :)
+            if (present(projections)) then
+                if (projections%made(ih)) then
+                    if (all(projections%f(:, ih) == f) .and. &
+                        all(projections%d(:, :, ih) == dm)) then
+                        a = projections%a(:, :, ih)
+                        return
+                    end if
+                end if
+            end if
+            if (conj_shapes) then
+                a = conjg(cmat_mul(cyc%modes(nd)%shapes_h, conjg(rhs)))
+            else
+                a = cmat_mul(cyc%modes(nd)%shapes_h, rhs)
+            end if
+            if (present(projections)) then
+                projections%f(:, ih) = f
+                projections%d(:, :, ih) = dm
+                projections%a(:, :, ih) = a
+                projections%made(ih) = .true.
+            end if
+        end function projected
+
+        !> The channels' values cv = D^T x at harmonic h by the modal sum x = G diag(1 / D)
+        !> G^H rhs, D_j = lambda_j - (h w)^2 + i h w c_j, with a = G^H rhs (projected),
+        !> q = diag(1 / D) a: with x kept, x = G q (G a = conj(S conj(a)) for the conjugate
+        !> shapes) and cv = D^T x; without, cv = a(:, 2:)^H q (D^T G = a(:, 2:)^H). The
+        !> conditioning min |D_j| / (lambda_1 + (h w)^2); the Gram matrices x^H C x = q^H
+        !> diag(c) q and F^H x (= a(:, 1)^H q); with the derivative dcv, the same with q
+        !> (-2 h^2 w + i h c_j) / D_j.
         subroutine modal_solve(h, conj_shapes)
             integer, intent(in) :: h
             logical, intent(in) :: conj_shapes
-            complex(dp), allocatable :: dd(:), gr(:, :), gq(:, :)
+            complex(dp), allocatable :: dd(:), a(:, :), gr(:, :), gq(:, :), ah(:, :)
             real(dp) :: hw
             integer :: nd, jj
             nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
@@ -214,32 +309,48 @@ contains
                 end if
             end associate
             if (.not. check_conditioning(h, rel)) return
-            associate (md => cyc%modes(nd))
-                if (conj_shapes) then
-                    gr = conjg(cmat_mul(md%shapes_h, conjg(rhs)))
-                else
-                    gr = cmat_mul(md%shapes_h, rhs)
-                end if
-                do jj = 1, size(dd)
-                    gr(jj, :) = gr(jj, :)/dd(jj)
-                end do
+            a = projected(conj_shapes, nd)
+            gr = a
+            do jj = 1, size(dd)
+                gr(jj, :) = gr(jj, :)/dd(jj)
+            end do
+            ! with x kept, the channels from it (D^T x, as a whole structure's); else by
+            ! D^T G = a(:, 2:)^H, equal up to roundoff
+            if (keep_x) then
                 x = shapes_times(gr, nd, conj_shapes)
-                if (h > 0) then
-                    modal_gram = .true.
-                    gq = gr
+                cv = matmul(transpose(dm), x)
+            else
+                ah = conjg(transpose(a(:, 2:)))
+                cv = matmul(ah, gr)
+            end if
+            if (h > 0) then
+                modal_gram = .true.
+                gq = gr
+                associate (md => cyc%modes(nd))
                     do jj = 1, size(dd)
                         gq(jj, :) = (md%damping(jj) - xi)*gr(jj, :)
                     end do
-                    self%damping_gram(:, :, ih) = matmul(conjg(transpose(gr)), gq)
+                end associate
+                self%damping_gram(:, :, ih) = matmul(conjg(transpose(gr)), gq)
+                if (keep_x) then
+                    self%forcing_gram(:, ih) = matmul(conjg(f), x)
+                else
+                    self%forcing_gram(:, ih) = matmul(conjg(a(:, 1)), gr)
                 end if
-                if (deriv .and. h > 0) then
+            end if
+            if (deriv .and. h > 0) then
+                associate (md => cyc%modes(nd))
                     do jj = 1, size(dd)
                         gr(jj, :) = gr(jj, :)*cmplx(-2.0_dp*h*h*model%omega, &
                                                     h*(md%damping(jj) - xi), dp)/dd(jj)
                     end do
-                    dx = shapes_times(gr, nd, conj_shapes)
+                end associate
+                if (keep_x) then
+                    dcv = matmul(transpose(dm), shapes_times(gr, nd, conj_shapes))
+                else
+                    dcv = matmul(ah, gr)
                 end if
-            end associate
+            end if
         end subroutine modal_solve
 
         !> S a, or conj(S conj(a)) with `conj_shapes`, S the prepared shapes of the

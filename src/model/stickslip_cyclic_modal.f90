@@ -55,6 +55,7 @@ contains
 
         if (present(prepared)) prepared = .false.
         if (allocated(cyc%modes)) deallocate (cyc%modes)
+        if (allocated(cyc%free_lambda)) deallocate (cyc%free_lambda, cyc%free_shapes)
         call validate_cyclic(model, cyc, error)
         if (allocated(error)) return
         if (hmax < 0) then
@@ -105,6 +106,14 @@ contains
         if (.not. ok) then
             deallocate (cyc%modes)
             return
+        end if
+        ! the free sector's modes (for its contact mobility; none when zhegv fails)
+        kc = cmplx(model%stiffness, 0.0_dp, dp)
+        mc = cmplx(model%mass, 0.0_dp, dp)
+        call hermitian_pencil(kc, mc, w, .true., info)
+        if (info == 0) then
+            cyc%free_lambda = w
+            cyc%free_shapes = kc
         end if
         cyc%smin_k = smallest_singular(model%stiffness, maxval(sum(abs(model%stiffness), 1)))
         cyc%smin_m = smallest_singular(model%mass, maxval(sum(abs(model%mass), 1)))

@@ -28,7 +28,7 @@ module stickslip_cli
     use stickslip_flow, only: event_name
     use stickslip_contact_set, only: contact_set_t
     use stickslip_contact_law, only: state_open, state_slip
-    use stickslip_summary, only: energy_balance_error, reference_balance_error
+    use stickslip_summary, only: energy_balance_error, reference_balance_error, sector_stability
     use stickslip_gnuplot, only: run_gnuplot, rename_pictures
     use stickslip_files, only: remove_file
     use stickslip_blas_threads, only: limit_blas_threads, parallel_threads, blas_library
@@ -544,7 +544,8 @@ contains
                            " NOT met: max_harmonics reached       ", checks%truncation%met))
             call emit(u)
         end if
-        if (checks%stability) write (u, '(a)') "  stability: "//checks%floquet%diagnosis
+        if (checks%stability) write (u, '(a)') "  stability"//trim(disk_scope(case))//": "// &
+            checks%floquet%diagnosis
         if (allocated(checks%notes)) then
             if (len(checks%notes) > 0) write (u, '(a)') "  note: "//checks%notes
         end if
@@ -749,6 +750,7 @@ contains
             count(res%points(1:n)%stable == -1)
         write (u, '(a,f0.3,a,f0.3,a)') "  CPU ", res%seconds, " s (stability ", &
             res%stability_seconds, " s)"
+        if (sector_stability(case)) write (u, '(a)') "  stability"//trim(disk_scope(case))
         if (len(sampling_notes(case%hbm%samples, case%hbm%harmonics)) > 0) write (u, '(a)') &
             "  note: "//sampling_notes(case%hbm%samples, case%hbm%harmonics)
         if (allocated(res%notes)) then
@@ -1000,5 +1002,21 @@ contains
             text = text//" in samples too few for a stick phase the harmonics resolve"
         end if
     end function stick_text
+
+    !> For the stability of a sector's wave: " (the assembled <n>-DOF disk's Floquet
+    !> multipliers: every perturbation, not only the wave's symmetry)"; '' otherwise.
+    function disk_scope(case) result(text)
+        !> The case.
+        type(case_t), intent(in) :: case
+        character(len=:), allocatable :: text
+        text = ""
+        if (.not. sector_stability(case)) return
+        associate (c => case%cyclic%cyc)
+            text = " (the assembled "//itoa(c%sectors*(case%cyclic%sector%ndof - &
+                                                     size(c%right)))// &
+                   "-DOF disk's Floquet multipliers: every perturbation, not only the "// &
+                   "wave's symmetry)"
+        end associate
+    end function disk_scope
 
 end module stickslip_cli

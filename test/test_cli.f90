@@ -38,6 +38,7 @@ contains
         if (allocated(error)) return
         call test_version_line(t)
         call test_cli_examples(t)
+        call test_cli_sector_stability(t)
         call test_cli_figures(t)
         call test_methods_cli(t)
         call test_stale_results(t)
@@ -685,6 +686,38 @@ contains
         end do
 
     end subroutine test_cli_figures
+
+    !> The stability of a sector's travelling wave (examples/bladed_disk.nml with &hbm
+    !> stability) says on stdout and in summary.nml that it is the assembled disk's.
+    subroutine test_cli_sector_stability(t)
+        type(test_counter_t), intent(inout) :: t
+        integer :: code, ui, uo, stat
+        character(len=:), allocatable :: out, err, path
+        character(len=200) :: edited
+        character(len=1000) :: line
+        path = scratch_copy("bladed_disk", "stab_")
+        ! fixed length: gfortran 12 overruns a deferred-length string in a typed constructor
+        edited = scratch//"/stab_edited.nml"
+        open (newunit=ui, file=path, status='old', action='read')
+        open (newunit=uo, file=trim(edited), status='replace', action='write')
+        do
+            read (ui, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            if (index(line, "&hbm ") == 1) then
+                write (uo, '(a)') "&hbm stability = .true.,"//trim(line(5:))
+            else
+                write (uo, '(a)') trim(line)
+            end if
+        end do
+        close (ui)
+        close (uo)
+        call cli([character(len=200) :: edited], code, out, err)
+        call check(t, code == 0 .and. index(out, "stability (the assembled 72-DOF disk's "// &
+                   "Floquet multipliers: every perturbation") > 0 .and. &
+                   summary_value(scratch//"/stab_bladed_disk/summary.nml", &
+                                 "stability_scope") == "'disk'", &
+                   "cli sector stability: stdout and summary say it is the disk's", err)
+    end subroutine test_cli_sector_stability
 
     subroutine test_cli_examples(t)
         type(test_counter_t), intent(inout) :: t

@@ -810,6 +810,27 @@ contains
         call read_case(path, c, error)
         call check_error(t, error, "cyclic case: euler on one sector", .true., &
                          [character(len=40) :: "&run method = 'euler'", "model = 'disk'"])
+        ! a sector's stability is the assembled disk's: 24 x 3 DOFs are affordable, 48 x 3
+        ! are not (the default &sweep stability named as such), nor an explicit &hbm one
+        call write_lines(path, [character(len=120) :: head, &
+            "&cyclic sectors = 24, engine_order = 3, left_dofs = 1, right_dofs = 3 /", &
+            "&run method = 'sweep' /", "&sweep start = 2, stop = 3 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic case: the stability of a 72-DOF disk", .false.)
+        call write_lines(path, [character(len=120) :: head, &
+            "&cyclic sectors = 48, engine_order = 3, left_dofs = 1, right_dofs = 3 /", &
+            "&run method = 'sweep' /", "&sweep start = 2, stop = 3 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic case: the stability of a 144-DOF disk", .true., &
+                         [character(len=40) :: "&sweep stability = .true. (the default)", &
+                          "144 DOFs", "stability = .false.", "cyclic_case.nml"])
+        call write_lines(path, [character(len=120) :: head, &
+            "&cyclic sectors = 48, engine_order = 3, left_dofs = 1, right_dofs = 3 /", &
+            "&hbm stability = .true. /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic case: an hbm stability on a 144-DOF disk", .true., &
+                         [character(len=40) :: "&hbm stability = .true.: the stab", &
+                          "144 DOFs"])
     end subroutine test_case_input
 
     !> The lumped sector: DOF 1 the left disk node, 2 the blade, 3 the right disk node, 4 the

@@ -18,7 +18,7 @@ module stickslip_case
     use stickslip_study, only: study_options_t
     use stickslip_robustness, only: robustness_options_t
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance, lower
-    use stickslip_namelist_values, only: get_logical, get_string
+    use stickslip_namelist_values, only: get_logical, get_string, is_given
     use stickslip_progress, only: progress_t
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         max_dof, max_terms, group_error, system_files_t, max_file_dof, &
@@ -55,6 +55,12 @@ module stickslip_case
     !> Most doubles of the sampled results of one run (samples or steps per period times
     !> 2 ndof + 3 ncontact + 1): 2**27 doubles = 1 GiB.
     integer(int64), parameter :: max_sample_values = 2_int64**27
+    !> Most DOFs of the assembled disk whose Floquet multipliers a sector's stability
+    !> computes (&sweep or &hbm stability on one sector): its exact flow took 1.5 s a point
+    !> on the 72-DOF shrouded disk (24 contacts) and over 200 s on the 168-DOF damper disk
+    !> (48 contacts with lift-off), release build; it grows like the cube of the DOFs times
+    !> the events a period.
+    integer, parameter :: max_disk_stability_dof = 128
 
     !> A case: where it came from, the model, the solver options and where results go.
     type :: case_t
@@ -413,9 +419,28 @@ contains
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
         character(len=:), allocatable :: what
+        integer(int64) :: disk_dofs
         if (case%method == 'modes') return
         what = weighted_residual_only(case, .false.)
-        if (len(what) == 0) return
+        if (len(what) == 0) then
+            ! the stability is the assembled disk's: only where that is affordable
+            what = weighted_residual_only(case, .true.)
+            disk_dofs = int(case%cyclic%cyc%sectors, int64)* &
+                        (case%model%ndof - size(case%cyclic%cyc%right))
+            if (len(what) == 0 .or. disk_dofs <= max_disk_stability_dof) return
+            if (case%method == 'sweep' .and. .not. is_given(nml, 'sweep', 'stability')) &
+                what = what//" (the default)"
+            call group_error(nml, error, what//": the stability of a sector's travelling "// &
+                             "wave is the assembled disk's Floquet multipliers (every "// &
+                             "perturbation), and that disk would have "// &
+                             itoa(int(disk_dofs))//" DOFs: more than the "// &
+                             itoa(max_disk_stability_dof)//" for which its exact flow "// &
+                             "costs seconds a point (minutes to hours beyond); set "// &
+                             what(1:index(what, " = ") - 1)//" = .false., or &cyclic "// &
+                             "model = 'disk' to run the assembled disk with its stability "// &
+                             "knowingly")
+            return
+        end if
         call group_error(nml, error, what//": on one sector of a disk (&cyclic model = "// &
                          "'sector') only the weighted residual runs in this version "// &
                          "(&run method = 'hbm' without verify_periods, harmonics_tol; "// &

@@ -13,7 +13,7 @@ module stickslip_namelist_values
     implicit none
     private
     public :: check_names, get_integer, get_real, get_logical, get_string, get_integers, &
-        get_reals
+        get_reals, is_given
 
 contains
 
@@ -70,6 +70,17 @@ contains
             s = s//")"
         end if
     end function suggestion
+
+    !> Whether the case file gives the variable `name` in group `group` (lower case).
+    logical function is_given(self, group, name)
+        !> The file.
+        type(nml_file_t), intent(in) :: self
+        !> Group and variable names (lower case).
+        character(len=*), intent(in) :: group, name
+        integer :: g, k
+        call locate(self, group, name, g, k)
+        is_given = k > 0
+    end function is_given
 
     !> The entry `name` of group `group`: g, k (0 when absent).
     subroutine locate(self, group, name, g, k)

@@ -28,7 +28,7 @@ module stickslip_summary
     public :: write_summary, write_euler_summary, write_reference_summary
     public :: write_side_by_side_summary, write_study_summary, write_sweep_summary
     public :: write_robustness_summary, write_modes_summary, write_family_summary
-    public :: energy_balance_error, reference_balance_error
+    public :: energy_balance_error, reference_balance_error, sector_stability
 
 contains
 
@@ -764,7 +764,9 @@ contains
     end subroutine begin_summary
 
     !> The keys of a bladed disk (&cyclic): cyclic_model ('disk'), sectors, engine_order,
-    !> disk_dof, and for the forced harmonics h the nodal diameter (cyclic_nodal_diameters)
+    !> disk_dof, stability_scope = 'disk' when a sector's stability was asked for (the
+    !> assembled disk's multipliers: every perturbation), and for the forced harmonics h the
+    !> nodal diameter (cyclic_nodal_diameters)
     !> and the sector's lowest linear frequencies in that diameter (at most
     !> max_cyclic_frequencies), contacts carrying nothing (cyclic_frequencies_nd<k>
     !> [rad/s]); for a reduced FE sector the diameters its run's harmonics reach
@@ -786,6 +788,7 @@ contains
             call put(u, "  engine_order = "//itoa(c%engine_order), stat, msg)
             call put(u, "  disk_dof = "//itoa(c%sectors*(sector%ndof - size(c%right))), &
                      stat, msg)
+            if (sector_stability(case)) call put(u, "  stability_scope = 'disk'", stat, msg)
             allocate (nds(0))
             do k = 1, sector%nforce()
                 nd = nodal_diameter(sector%force_harmonic(k), c%engine_order, c%sectors)
@@ -895,4 +898,16 @@ contains
             end if
         end do
     end function quote
+
+    !> Whether `case` computes the stability of a sector's travelling wave (method 'hbm'
+    !> with &hbm stability or 'sweep' with &sweep stability, on &cyclic model = 'sector'):
+    !> the assembled disk's multipliers.
+    logical function sector_stability(case)
+        !> The case.
+        type(case_t), intent(in) :: case
+        sector_stability = .false.
+        if (.not. (case%cyclic%given .and. case%cyclic%model == 'sector')) return
+        if (case%method == 'sweep') sector_stability = case%sweep%stability
+        if (case%method == 'hbm') sector_stability = case%checks%stability
+    end function sector_stability
 end module stickslip_summary

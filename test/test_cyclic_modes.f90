@@ -34,7 +34,40 @@ contains
         call test_cyclic_jacobian(t)
         call test_modes_input(t)
         call test_static_load(t)
+        call test_samples_advice(t)
     end subroutine run_cyclic_modes_tests
+
+    !> The shrouded disk's diameter 1 (examples/bladed_disk_modes.nml, its damping ratio
+    !> climbing to 0.33): at the example's 384 samples the backbone stops ("3 failed points
+    !> in a row") with a diagnosis that gives the samples in use and suggests 4 times as
+    !> many; with 1536 samples it is complete.
+    subroutine test_samples_advice(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(cyclic_t) :: cyc
+        type(hbm_options_t) :: ho
+        type(modes_result_t) :: coarse, fine
+        type(error_type), allocatable :: error
+        call read_case(project_path("examples/bladed_disk_modes.nml"), c, error)
+        call check_error(t, error, "cyclic modes samples: read the example", .false.)
+        if (allocated(error)) return
+        cyc = c%cyclic%cyc
+        cyc%engine_order = 1
+        ho = c%hbm
+        call run_modes(c%model, ho, c%modes%modes_options_t, coarse, error, cyclic=cyc)
+        call check_error(t, error, "cyclic modes samples: 384 samples", .false.)
+        if (allocated(error)) return
+        ho%samples = 1536
+        call run_modes(c%model, ho, c%modes%modes_options_t, fine, error, cyclic=cyc)
+        call check_error(t, error, "cyclic modes samples: 1536 samples", .false.)
+        if (allocated(error)) return
+        call check(t, .not. coarse%complete .and. &
+                   index(coarse%diagnosis, "try more &hbm samples (now 384; 4 times") > 0 .and. &
+                   fine%complete .and. fine%npoints > coarse%npoints, &
+                   "cyclic modes samples: diameter 1 stops at 384 samples, saying so, and "// &
+                   "completes at 1536", itoa(coarse%npoints)//" then "//itoa(fine%npoints)// &
+                   " points; "//coarse%diagnosis)
+    end subroutine test_samples_advice
 
     !> A static load stays in a modal analysis: the underplatform dampers of
     !> examples/bladed_disk_damper.nml, pressed on the platforms by their centrifugal load

@@ -440,7 +440,9 @@ contains
                                 "modal amplitude a = "//trim(adjustl(buf))//" (the model's "// &
                                 "length unit times the square root of its mass unit; the "// &
                                 "smallest step and the recovery both failed): try more "// &
-                                "&hbm samples (8 per harmonic or more), or other harmonics"
+                                "&hbm samples (now "//itoa(hbm%samples)//"; 4 times as "// &
+                                "many carried such stops to the end on the lumped disks of "// &
+                                "doc/cyclic.md), or other harmonics"
             else if (allocated(rep%message)) then
                 if (len(rep%message) > 0) res%diagnosis = rep%message
             end if

@@ -444,30 +444,14 @@ contains
         do s = 0, ns - 1
             do j = 1, nc
                 c = s*nc + j
-                disk%contact_direction(:, c) = scatter(contact_velocity_direction(sector, j), s)
-                if (next_of(cyc%next_dof, j) > 0) then
-                    ! the second side on the next sector: slip velocity v_s(dof) - v_{s+1}(b)
-                    disk%contact_direction(g(next_of(cyc%next_dof, j), modulo(s + 1, ns)), c) = &
-                        disk%contact_direction(g(next_of(cyc%next_dof, j), &
-                                                 modulo(s + 1, ns)), c) - 1.0_dp
-                end if
-                if (unilateral) then
-                    disk%normal_direction(:, c) = scatter(contact_normal_direction(sector, j), s)
-                    if (next_of(cyc%next_normal_dof, j) > 0) &
-                        disk%normal_direction(g(next_of(cyc%next_normal_dof, j), &
-                                                modulo(s + 1, ns)), c) = &
-                        disk%normal_direction(g(next_of(cyc%next_normal_dof, j), &
-                                                modulo(s + 1, ns)), c) - 1.0_dp
-                end if
-                if (planar) then
-                    disk%tangent2_direction(:, c) = &
-                        scatter(contact_tangent2_direction(sector, j), s)
-                    if (next_of(cyc%next_tangent2_dof, j) > 0) &
-                        disk%tangent2_direction(g(next_of(cyc%next_tangent2_dof, j), &
-                                                  modulo(s + 1, ns)), c) = &
-                        disk%tangent2_direction(g(next_of(cyc%next_tangent2_dof, j), &
-                                                  modulo(s + 1, ns)), c) - 1.0_dp
-                end if
+                ! the second side on the next sector: slip velocity v_s(dof) - v_{s+1}(b)
+                disk%contact_direction(:, c) = &
+                    against_next(contact_velocity_direction(sector, j), cyc%next_dof, j, s)
+                if (unilateral) disk%normal_direction(:, c) = &
+                    against_next(contact_normal_direction(sector, j), cyc%next_normal_dof, j, s)
+                if (planar) disk%tangent2_direction(:, c) = &
+                    against_next(contact_tangent2_direction(sector, j), cyc%next_tangent2_dof, &
+                                 j, s)
                 if (allocated(disk%laws)) then
                     if (allocated(sector%laws(j)%e)) &
                         allocate (disk%laws(c)%e, source=sector%laws(j)%e)
@@ -488,6 +472,18 @@ contains
                 w(g(k, s)) = w(g(k, s)) + v(k)
             end do
         end function scatter
+
+        !> Direction v of contact j on sector s, minus the unit vector of its next-sector
+        !> DOF (entry j of `next`, 0 or absent: none) on sector s + 1.
+        function against_next(v, next, j, s) result(w)
+            real(dp), intent(in) :: v(:)
+            integer, allocatable, intent(in) :: next(:)
+            integer, intent(in) :: j, s
+            real(dp) :: w(nd)
+            w = scatter(v, s)
+            if (next_of(next, j) > 0) w(g(next_of(next, j), modulo(s + 1, ns))) = &
+                w(g(next_of(next, j), modulo(s + 1, ns))) - 1.0_dp
+        end function against_next
 
         subroutine copy_scalars(a, b)
             real(dp), allocatable, intent(in) :: a(:)

@@ -110,8 +110,6 @@ contains
         if (present(channels_only)) keep_x = .not. channels_only
         xi = 0.0_dp
         if (present(mass_damping)) xi = mass_damping
-        damping = model%damping
-        if (xi /= 0.0_dp) damping = damping - xi*model%mass
         n = model%ndof
         m = n - size(cyc%right)
         call new_contact_set(cs, model)
@@ -371,6 +369,11 @@ contains
         subroutine direct_solve(h)
             integer, intent(in) :: h
             complex(dp), allocatable :: z(:, :), zc(:, :), r(:, :)
+            ! C - xi M, once (the modal path never needs it)
+            if (.not. allocated(damping)) then
+                damping = model%damping
+                if (xi /= 0.0_dp) damping = damping - xi*model%mass
+            end if
             ! the cyclic motions: the right boundary is the left one times e
             t = cyclic_basis(cyc, n, e)
             z = cmplx(model%stiffness - (h*model%omega)**2*model%mass, &

@@ -24,7 +24,7 @@ module stickslip_case
         max_dof, max_terms, group_error, system_files_t, max_file_dof, &
         sparse_system_t, load_sparse_system
     use stickslip_case_reduction, only: reduction_case_t, read_reduction_group, &
-        reduce_case_model
+        reduce_case_model, reduce_case_faces
     use stickslip_case_solvers, only: read_hbm_group, read_euler_group, read_reference_group, &
         read_run_group, read_output_group, default_output_dofs
     use stickslip_case_messages, only: to_case_message
@@ -192,6 +192,14 @@ contains
                              "the matrices as Matrix Market files")
             return
         end if
+        if (case%reduction%interface_modes > 0 .and. (.not. sparse%read .or. &
+                                                      nml%find("cyclic") == 0)) then
+            call group_error(nml, error, "&reduction interface_modes = "// &
+                             itoa(case%reduction%interface_modes)//": reduces the cyclic "// &
+                             "faces of a sector of a bladed disk (&cyclic) given by Matrix "// &
+                             "Market files; this case has no &cyclic group or inline matrices")
+            return
+        end if
         call read_forcing_group(nml, case%model, error, case%system_files, &
                                 optional_group=modes_case(nml))
         if (allocated(error)) return
@@ -239,12 +247,19 @@ contains
                 if (allocated(error)) return
                 cyc_full = case%cyclic%cyc
                 call set_cyclic_boundary_dofs(case%cyclic%cyc, keep)
+                ! the run's highest harmonic frequency
+                band = abs(case%model%omega)*case%hbm%harmonics
+                if (allocated(case%reduction%report%error_frequencies)) band = &
+                    max(band, maxval(case%reduction%report%error_frequencies))
+                ! the faces by interface modes (measured below with the rest)
+                if (case%reduction%interface_modes > 0) then
+                    call reduce_case_faces(nml, case%reduction, case%model, &
+                                           case%cyclic%cyc, band, error)
+                    if (allocated(error)) return
+                end if
                 ! the reduction's error per nodal diameter (the full matrices are at hand
                 ! unless the reduced model came from the cache)
                 if (case%reduction%error_estimate .and. sparse%loaded) then
-                    band = abs(case%model%omega)*case%hbm%harmonics
-                    if (allocated(case%reduction%report%error_frequencies)) band = &
-                        max(band, maxval(case%reduction%report%error_frequencies))
                     call measure_diameter_errors(nml, case%cyclic, sparse%stiffness, &
                                                  sparse%mass, cyc_full, case%model, &
                                                  case%hbm%harmonics, case%hbm%odd_only, &
@@ -879,6 +894,8 @@ contains
             call put(unit, "  max_frequency = "//rtoa(case%reduction%max_frequency), stat, msg)
             call put(unit, "  damping_ratio = "//rtoa(case%reduction%damping_ratio), stat, msg)
             call put(unit, "  error_estimate = "//ltoa(case%reduction%error_estimate), stat, msg)
+            if (case%reduction%interface_modes > 0) call put(unit, "  interface_modes = "// &
+                itoa(case%reduction%interface_modes), stat, msg)
             if (allocated(case%reduction%cache)) call put(unit, "  cache = "// &
                 quoted(case%reduction%cache), stat, msg)
             call put(unit, "/", stat, msg)

@@ -43,6 +43,8 @@ module stickslip_case_reduction
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_model, only: model_t
+    use stickslip_cyclic, only: cyclic_t
+    use stickslip_cyclic_interface, only: face_reduction_t, reduce_cyclic_faces
     use stickslip_diagnostics, only: diagnostics_t, level_warning, level_note
     use stickslip_namelist, only: nml_file_t
     use stickslip_namelist_values, only: check_names, get_integer, get_real, get_string, &
@@ -66,7 +68,7 @@ module stickslip_case_reduction
     real(dp), parameter, public :: reduction_error_warning = 0.05_dp
 
     public :: reduction_case_t, read_reduction_group, reduce_case_model, recover_outputs, &
-        recover_full_field, error_frequencies, write_reduction_cache_of
+        recover_full_field, error_frequencies, write_reduction_cache_of, reduce_case_faces
     !> File name of the default cache (&reduction cache = 'auto') in the output directory.
     character(len=*), parameter, public :: default_cache_name = "reduction.cache"
 
@@ -82,6 +84,12 @@ module stickslip_case_reduction
         real(dp) :: damping_ratio = 0.0_dp
         !> Measure the reduction error (&reduction error_estimate).
         logical :: error_estimate = .true.
+        !> Interface modes per cyclic face of a sector (&reduction interface_modes; 0: every
+        !> face DOF kept).
+        integer :: interface_modes = 0
+        !> With interface_modes: what the faces' reduction did and its transformation
+        !> (reduce_case_faces; stickslip_cyclic_interface).
+        type(face_reduction_t), allocatable :: faces
         !> &reduction cache as given: 'auto' (reduction.cache in the output directory),
         !> 'off', or the path of the cache file.
         character(len=:), allocatable :: cache
@@ -133,8 +141,9 @@ contains
         character(len=:), allocatable :: method
         character(len=*), parameter :: g = "reduction"
         type(reduction_options_t), parameter :: defaults = reduction_options_t()
-        call check_names(nml, g, [character(len=14) :: "method", "modes", "max_frequency", &
-                                 "damping_ratio", "error_estimate", "cache"], error)
+        call check_names(nml, g, [character(len=16) :: "method", "modes", "max_frequency", &
+                                 "damping_ratio", "error_estimate", "cache", &
+                                 "interface_modes"], error)
         if (allocated(error)) return
         method = trim(red%method)
         call get_string(nml, g, "method", method, error)
@@ -175,6 +184,14 @@ contains
         end if
         call get_logical(nml, g, "error_estimate", red%error_estimate, error)
         if (allocated(error)) return
+        call get_integer(nml, g, "interface_modes", red%interface_modes, error)
+        if (allocated(error)) return
+        if (red%interface_modes < 0) then
+            call group_error(nml, error, "&reduction interface_modes = "// &
+                             itoa(red%interface_modes)//": must be >= 0 (0: every DOF of a "// &
+                             "sector's cyclic faces kept)")
+            return
+        end if
         red%cache = 'auto'
         call get_string(nml, g, "cache", red%cache, error)
         if (allocated(error)) return
@@ -710,17 +727,30 @@ contains
         real(dp), allocatable, intent(out) :: coef(:, :)
         !> Set on a size mismatch.
         type(error_type), allocatable, intent(out) :: error
+        real(dp), allocatable :: q(:, :)
         if (.not. allocated(red%basis)) then
             coef = transpose(qcoef)
             return
         end if
-        if (size(qcoef, 2) /= red%basis%nr) then
+        if (allocated(red%faces)) then
+            ! the faces' interface modes back to the Craig-Bampton coordinates
+            if (size(qcoef, 2) /= size(red%faces%basis, 2)) then
+                call fatal_error(error, "recover_full_field: the coefficients have "// &
+                                 itoa(size(qcoef, 2))//" columns, the reduced model "// &
+                                 itoa(size(red%faces%basis, 2))//" DOFs", stickslip_stat%input)
+                return
+            end if
+            q = matmul(qcoef, transpose(red%faces%basis))
+        else
+            q = qcoef
+        end if
+        if (size(q, 2) /= red%basis%nr) then
             call fatal_error(error, "recover_full_field: the coefficients have "// &
-                             itoa(size(qcoef, 2))//" columns, the reduced model "// &
+                             itoa(size(q, 2))//" columns, the reduced model "// &
                              itoa(red%basis%nr)//" DOFs", stickslip_stat%input)
             return
         end if
-        associate (b => red%basis)
+        associate (b => red%basis, qcoef => q)
             allocate (coef(b%n, size(qcoef, 1)))
             coef(b%boundary, :) = transpose(qcoef(:, 1:b%nb))
             if (size(b%interior) > 0) then
@@ -732,6 +762,49 @@ contains
             end if
         end associate
     end subroutine recover_full_field
+
+    !> &reduction interface_modes on a reduced sector (stickslip_cyclic_interface): its
+    !> cyclic faces replaced by red%interface_modes interface modes each, `model` and `cyc`
+    !> renumbered, the output DOFs kept physical and their rows of the basis composed with
+    !> the faces' transformation; red%faces keeps it (the full field). Errors (stat input or
+    !> numerical, those of reduce_cyclic_faces) start "<path>: &reduction interface_modes =
+    !> p: ".
+    subroutine reduce_case_faces(nml, red, model, cyc, band, error)
+        !> The parsed case file.
+        type(nml_file_t), intent(in) :: nml
+        !> The reduction of the case (interface_modes > 0; output rows and DOFs set).
+        type(reduction_case_t), intent(inout) :: red
+        !> The reduced sector; its faces reduced on return.
+        type(model_t), intent(inout) :: model
+        !> Its symmetry in its numbers; renumbered on return.
+        type(cyclic_t), intent(inout) :: cyc
+        !> The run's highest harmonic frequency [rad/s]: the cyclic modes below it shape the
+        !> interface modes.
+        real(dp), intent(in) :: band
+        !> Set on failure.
+        type(error_type), allocatable, intent(out) :: error
+        integer, allocatable :: keep(:)
+        integer :: k
+        allocate (red%faces)
+        keep = [integer ::]
+        if (allocated(red%output_reduced)) keep = red%output_reduced
+        call reduce_cyclic_faces(model, cyc, red%interface_modes, keep, band, red%faces, &
+                                 error)
+        if (allocated(error)) then
+            error%message = nml%path//": &reduction interface_modes = "// &
+                            itoa(red%interface_modes)//": "//error%message
+            deallocate (red%faces)
+            return
+        end if
+        if (allocated(red%output_rows)) red%output_rows = matmul(red%output_rows, &
+                                                                 red%faces%basis)
+        if (allocated(red%output_reduced)) then
+            do k = 1, size(red%output_reduced)
+                if (red%output_reduced(k) > 0) red%output_reduced(k) = &
+                    red%faces%new_of_old(red%output_reduced(k))
+            end do
+        end if
+    end subroutine reduce_case_faces
 
     !> The frequencies where the reduction error is measured [rad/s]: m h omega for every
     !> distinct forcing harmonic h > 0 (a static load alone: h = 1), m = 1, 3, 5 (the

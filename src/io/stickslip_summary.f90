@@ -822,7 +822,12 @@ contains
     !> asked for), reduction_error_method ('enriched', 'sparse LU', 'off', 'none'),
     !> reduction_error_seconds, reduction_read_seconds (the matrix files), reduction_cache
     !> ('off', 'hit', 'written', 'not written'), reduction_cache_file,
-    !> reduction_cache_seconds. For the exact sparse condensation (&reduction method
+    !> reduction_cache_seconds; with &reduction interface_modes on a sector,
+    !> reduction_interface_modes, reduction_face_dofs (each face's DOFs reduced),
+    !> reduction_interface_dof (the sector's DOFs after; reduced_dof stays the Craig-Bampton
+    !> model's), reduction_interface_band_modes (the cyclic modes whose face motion shaped
+    !> them) and reduction_interface_left_out (the share of that motion left out). For the
+    !> exact sparse condensation (&reduction method
     !> = 'none', N > max_file_dof): reduction_method = 'none', reduced_dof = full_dof = N and
     !> reduction_error = 0 (exact); the time of the sparse factorizations is the hbm key
     !> condensation_seconds.
@@ -861,6 +866,18 @@ contains
                 end if
                 call put(u, "  reduction_cache_seconds = "// &
                          rtoa(case%reduction%cache_seconds), stat, msg)
+                if (allocated(case%reduction%faces)) then
+                    associate (f => case%reduction%faces)
+                        call put(u, "  reduction_interface_modes = "//itoa(f%modes), stat, msg)
+                        call put(u, "  reduction_face_dofs = "//itoa(f%face_dofs), stat, msg)
+                        call put(u, "  reduction_interface_dof = "// &
+                                 itoa(size(f%basis, 2)), stat, msg)
+                        call put(u, "  reduction_interface_band_modes = "// &
+                                 itoa(f%modes_in_band), stat, msg)
+                        call put(u, "  reduction_interface_left_out = "// &
+                                 rtoa(f%share_left_out), stat, msg)
+                    end associate
+                end if
             else if (allocated(case%sparse_model)) then
                 ! &reduction method = 'none' on a sparse model: exact, nothing reduced
                 call put(u, "  reduction_method = 'none'", stat, msg)

@@ -34,7 +34,7 @@ module stickslip_cyclic
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
         cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis, &
         structure_key, disk_dof_table, channel_next_dofs, cyclic_directions, &
-        cyclic_preload_force, phased_copies, hermitian_pencil
+        cyclic_preload_force, phased_copies, hermitian_pencil, cyclic_pencil
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -572,6 +572,25 @@ contains
         end do
     end function channel_displacements
 
+    !> The sector's stiffness and mass on the cyclic motions of nodal diameter nd: t =
+    !> cyclic_basis(cyc, n, exp(i 2 pi nd / N)) (n x m), kc = t^H K t and mc = t^H M t (m x m,
+    !> Hermitian). No errors.
+    pure subroutine cyclic_pencil(sector, cyc, nd, t, kc, mc)
+        !> The sector.
+        type(model_t), intent(in) :: sector
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> The nodal diameter.
+        integer, intent(in) :: nd
+        !> The cyclic motions and the projected stiffness and mass.
+        complex(dp), allocatable, intent(out) :: t(:, :), kc(:, :), mc(:, :)
+        complex(dp) :: e
+        e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
+        t = cyclic_basis(cyc, sector%ndof, e)
+        kc = matmul(conjg(transpose(t)), matmul(cmplx(sector%stiffness, 0.0_dp, dp), t))
+        mc = matmul(conjg(transpose(t)), matmul(cmplx(sector%mass, 0.0_dp, dp), t))
+    end subroutine cyclic_pencil
+
     !> The Hermitian-definite pencil A v = lambda B v (LAPACK zhegv with its workspace query):
     !> `w` the eigenvalues, increasing; with `vectors` A holds the B-orthonormal eigenvectors
     !> on return (B is overwritten either way). info: zhegv's (nonzero: B not positive
@@ -620,8 +639,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :)
         real(dp), allocatable :: w(:)
-        complex(dp) :: e
-        integer :: n, m, info
+        integer :: info
         call validate_cyclic(sector, cyc, error)
         if (allocated(error)) return
         if (nd < 0 .or. nd > cyc%sectors/2) then
@@ -629,12 +647,7 @@ contains
                              itoa(cyc%sectors/2), stickslip_stat%input)
             return
         end if
-        n = sector%ndof
-        m = n - size(cyc%right)
-        e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
-        t = cyclic_basis(cyc, n, e)
-        kc = matmul(conjg(transpose(t)), matmul(cmplx(sector%stiffness, 0.0_dp, dp), t))
-        mc = matmul(conjg(transpose(t)), matmul(cmplx(sector%mass, 0.0_dp, dp), t))
+        call cyclic_pencil(sector, cyc, nd, t, kc, mc)
         call hermitian_pencil(kc, mc, w, .false., info)
         if (info /= 0) then
             call fatal_error(error, "cyclic modes: the eigensolver failed (zhegv info "// &

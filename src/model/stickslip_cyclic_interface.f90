@@ -30,10 +30,9 @@
 module stickslip_cyclic_interface
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_kinds, only: two_pi
     use stickslip_lapack, only: dsyev
     use stickslip_model, only: model_t
-    use stickslip_cyclic, only: cyclic_t, cyclic_basis, hermitian_pencil
+    use stickslip_cyclic, only: cyclic_t, cyclic_pencil, hermitian_pencil
     implicit none
     private
     public :: face_reduction_t, reduce_cyclic_faces
@@ -188,16 +187,12 @@ contains
             type(error_type), allocatable, intent(out) :: error
             complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :), phi(:)
             real(dp), allocatable :: lam(:)
-            complex(dp) :: e
             integer :: nd, j, status
             allocate (c(nf, nf))
             c = 0.0_dp
             count_in_band = 0
             do nd = 0, cyc%sectors/2
-                e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
-                t = cyclic_basis(cyc, n, e)
-                kc = matmul(conjg(transpose(t)), matmul(cmplx(model%stiffness, 0.0_dp, dp), t))
-                mc = matmul(conjg(transpose(t)), matmul(cmplx(model%mass, 0.0_dp, dp), t))
+                call cyclic_pencil(model, cyc, nd, t, kc, mc)
                 call hermitian_pencil(kc, mc, lam, .true., status)
                 if (status /= 0) then
                     call fatal_error(error, "the sector's cyclic modes at nodal diameter "// &

@@ -12,10 +12,10 @@
 !> so the conjugate shapes) or nd = N - p; only the diameters the harmonics 0..hmax reach
 !> are prepared.
 module stickslip_cyclic_modal
-    use stickslip_kinds, only: dp, two_pi
+    use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
-    use stickslip_cyclic, only: cyclic_t, validate_cyclic, cyclic_basis, nodal_diameter, &
+    use stickslip_cyclic, only: cyclic_t, validate_cyclic, cyclic_pencil, nodal_diameter, &
         structure_key, hermitian_pencil
     use stickslip_dynamics, only: smallest_singular
     implicit none
@@ -47,7 +47,6 @@ contains
         logical, intent(out), optional :: prepared
         complex(dp), allocatable :: t(:, :), kc(:, :), mc(:, :), cc(:, :)
         real(dp), allocatable :: w(:)
-        complex(dp) :: e
         logical, allocatable :: wanted(:)
         real(dp) :: offdiag, diag
         integer :: n, m, nd, h, info, j
@@ -73,10 +72,7 @@ contains
         ok = .true.
         do nd = 0, cyc%sectors/2
             if (.not. wanted(nd)) cycle
-            e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
-            t = cyclic_basis(cyc, n, e)
-            kc = matmul(conjg(transpose(t)), matmul(cmplx(model%stiffness, 0.0_dp, dp), t))
-            mc = matmul(conjg(transpose(t)), matmul(cmplx(model%mass, 0.0_dp, dp), t))
+            call cyclic_pencil(model, cyc, nd, t, kc, mc)
             cc = matmul(conjg(transpose(t)), matmul(cmplx(model%damping, 0.0_dp, dp), t))
             call hermitian_pencil(kc, mc, w, .true., info)
             if (info /= 0) then

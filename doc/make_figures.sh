@@ -152,6 +152,7 @@ values["calculix_beam:reduction_seconds"] = sig(float(s["reduction_seconds"])) +
 s = summary("out/calculix_sector")
 values["calculix_sector:points"] = s["points"]
 values["calculix_sector:reduced_dof"] = s["reduced_dof"]
+values["calculix_sector:interface_dof"] = s["reduction_interface_dof"]
 values["calculix_sector:error_nd3"] = sci(float(s["reduction_error_nd3"]))
 values["calculix_sector:error_nd9"] = sci(float(s["reduction_error_nd9"]))
 # the backbones per nodal diameter: points, and the largest damping ratio of each example

@@ -25,6 +25,7 @@ module test_cyclic_fe
     use stickslip_namelist, only: nml_file_t, read_namelist_file
     use stickslip_namelist_values, only: get_integers
     use stickslip_case, only: case_t, read_case
+    use stickslip_case_cyclic, only: forced_diameters
     use stickslip_sorting, only: sort_ascending
     use testing, only: test_counter_t, check, check_error
     use fixtures, only: project_path, scratch, write_lines, enter_project_root
@@ -55,6 +56,7 @@ contains
         call test_reduced_sector(t, kmat, mmat, cyc)
         call test_interface_modes(t, kmat, mmat, cyc)
         call test_interface_exact(t)
+        call test_run_diameters(t)
         call test_sparse_sector_refused(t)
     end subroutine run_cyclic_fe_tests
 
@@ -261,6 +263,28 @@ contains
                    "sector = the dense LU", "largest difference "//real_text(worst))
         call basis%destroy()
     end subroutine test_reduced_sector
+
+    !> The diameters where a reduced sector's error is measured: a forced run's (EO 3, N =
+    !> 24, odd harmonics to 15: 3 and 9) and a run of the backbones of diameters 1..6 (their
+    !> odd harmonics reach 1..7, 9..12; calculix_sector/modes.nml).
+    subroutine test_run_diameters(t)
+        type(test_counter_t), intent(inout) :: t
+        type(cyclic_t) :: c
+        integer :: k
+        c%sectors = 24
+        c%engine_order = 3
+        call check(t, all_equal(forced_diameters(c, 15, .true.), [3, 9]) .and. &
+                   all_equal(forced_diameters(c, 15, .true., [(k, k=1, 6)]), &
+                             [1, 2, 3, 4, 5, 6, 7, 9, 10, 11, 12]) .and. &
+                   all_equal(forced_diameters(c, 2, .false., [5]), [0, 5, 10]), &
+                   "cyclic FE: the diameters a run's error is measured in (forced, backbones)")
+    contains
+        logical function all_equal(a, b)
+            integer, intent(in) :: a(:), b(:)
+            all_equal = size(a) == size(b)
+            if (all_equal) all_equal = all(a == b)
+        end function all_equal
+    end subroutine test_run_diameters
 
     !> The interface reduction's exactness on a sector with 5-DOF faces (6 sectors; faces
     !> 1..5 and 6..10, three interior DOFs, springs within and across): with the band

@@ -18,7 +18,7 @@ module stickslip_case
     use stickslip_study, only: study_options_t
     use stickslip_robustness, only: robustness_options_t
     use stickslip_namelist, only: nml_file_t, read_namelist_file, edit_distance, lower
-    use stickslip_namelist_values, only: get_logical, get_string, is_given
+    use stickslip_namelist_values, only: get_logical, get_string, is_given, get_integers
     use stickslip_progress, only: progress_t
     use stickslip_case_model, only: read_system_group, read_forcing_group, &
         max_dof, max_terms, group_error, system_files_t, max_file_dof, &
@@ -263,7 +263,8 @@ contains
                     call measure_diameter_errors(nml, case%cyclic, sparse%stiffness, &
                                                  sparse%mass, cyc_full, case%model, &
                                                  case%hbm%harmonics, case%hbm%odd_only, &
-                                                 band, error)
+                                                 band, error, run_engine_orders(nml, &
+                                                 case%cyclic%cyc))
                     if (allocated(error)) return
                     call diameter_findings(case%cyclic, case%reduction%diagnostics)
                 end if
@@ -391,6 +392,29 @@ contains
             end if
         end if
     end subroutine read_case
+
+    !> The engine orders of the waves a sector's run computes: the forcing's, or in a run
+    !> of nonlinear modes (&run method = 'modes') its &modes nodal_diameters (default every
+    !> diameter 0..N/2; values out of range left to the checks of &modes).
+    function run_engine_orders(nml, cyc) result(eos)
+        type(nml_file_t), intent(in) :: nml
+        type(cyclic_t), intent(in) :: cyc
+        integer, allocatable :: eos(:)
+        character(len=:), allocatable :: method
+        type(error_type), allocatable :: error
+        integer, allocatable :: given(:)
+        logical :: found
+        integer :: k
+        eos = [cyc%engine_order]
+        method = ''
+        call get_string(nml, "run", "method", method, error)
+        if (allocated(error)) return
+        if (lower(trim(method)) /= 'modes') return
+        eos = [(k, k=0, cyc%sectors/2)]
+        call get_integers(nml, "modes", "nodal_diameters", given, found, cyc%sectors, error)
+        if (allocated(error) .or. .not. found) return
+        eos = pack(given, given >= 0 .and. given <= cyc%sectors/2)
+    end function run_engine_orders
 
     !> Whether the case computes nonlinear modes (a &modes group or &run method = 'modes'),
     !> which need no &forcing. A bad &run method is left to read_run_group.

@@ -160,30 +160,40 @@ contains
 
     !> The nodal diameters, increasing, that the harmonics of a run reach: 1..harmonics
     !> (odd ones only with odd_only) and 0 (the static term) unless odd_only.
-    pure function forced_diameters(cyc, harmonics, odd_only) result(nds)
+    !> With `engine_orders`, the union of those the harmonics reach under each of them (a
+    !> run of nonlinear modes: its nodal diameters are the engine orders of its waves)
+    !> instead of cyc%engine_order's.
+    pure function forced_diameters(cyc, harmonics, odd_only, engine_orders) result(nds)
         !> The symmetry.
         type(cyclic_t), intent(in) :: cyc
         !> &hbm harmonics and odd_only.
         integer, intent(in) :: harmonics
         logical, intent(in) :: odd_only
-        integer, allocatable :: nds(:)
+        !> The engine orders of the run's waves (>= 0; default cyc%engine_order).
+        integer, intent(in), optional :: engine_orders(:)
+        integer, allocatable :: nds(:), eos(:)
         logical :: hit(0:cyc%sectors/2)
         integer :: h, k
+        eos = [cyc%engine_order]
+        if (present(engine_orders)) eos = engine_orders
         hit = .false.
-        do h = merge(1, 0, odd_only), harmonics
-            if (odd_only .and. mod(h, 2) == 0) cycle
-            hit(nodal_diameter(h, cyc%engine_order, cyc%sectors)) = .true.
+        do k = 1, size(eos)
+            do h = merge(1, 0, odd_only), harmonics
+                if (odd_only .and. mod(h, 2) == 0) cycle
+                hit(nodal_diameter(h, eos(k), cyc%sectors)) = .true.
+            end do
         end do
         nds = pack([(k, k=0, cyc%sectors/2)], hit)
     end function forced_diameters
 
     !> The error of a reduced FE sector per nodal diameter (stickslip_cyclic_sparse,
-    !> diameter_frequency_errors) into cc: the diameters of forced_diameters, the
+    !> diameter_frequency_errors) into cc: the diameters of forced_diameters (under
+    !> `engine_orders` when given), the
     !> frequencies up to `band` [rad/s]. `kmat`, `mmat`: the full sector; `cyc_full` its
     !> boundaries in full numbers; cc%cyc and `reduced` the reduced sector. Errors: those
     !> of the eigensolvers, prefixed with the file and &cyclic.
     subroutine measure_diameter_errors(nml, cc, kmat, mmat, cyc_full, reduced, harmonics, &
-                                       odd_only, band, error)
+                                       odd_only, band, error, engine_orders)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
         !> The &cyclic group read, in reduced numbers; the errors on return.
@@ -201,7 +211,9 @@ contains
         real(dp), intent(in) :: band
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
-        cc%diameters = forced_diameters(cc%cyc, harmonics, odd_only)
+        !> The engine orders of the run's waves (forced_diameters; default the forcing's).
+        integer, intent(in), optional :: engine_orders(:)
+        cc%diameters = forced_diameters(cc%cyc, harmonics, odd_only, engine_orders)
         call diameter_frequency_errors(kmat, mmat, cyc_full, reduced, cc%cyc, cc%diameters, &
                                        band, cc%diameter_errors, cc%diameter_lowest, error)
         if (allocated(error)) then

@@ -20,6 +20,7 @@ module test_cyclic_modes
     use fixtures, only: project_path, enter_project_root, scratch, write_lines
     use testing, only: test_counter_t, check, check_error
     use test_modes, only: jacobian_errors
+    use stickslip_run_sector_modes, only: sector_backbones, sector_diameters
     implicit none
     private
     public :: run_cyclic_modes_tests
@@ -33,6 +34,7 @@ contains
         call test_sector_backbones(t)
         call test_cyclic_jacobian(t)
         call test_modes_input(t)
+        call test_mode_per_diameter(t)
         call test_static_load(t)
         call test_samples_advice(t)
     end subroutine run_cyclic_modes_tests
@@ -182,6 +184,102 @@ contains
                              [named(k), "cyclic_modes_case.nml                   "])
         end do
     end subroutine test_modes_input
+
+    !> &modes mode as a list, one per nodal diameter: read and echoed (the echo reads back
+    !> to the same list); sector_backbones traces mode 1 of diameter 3 and mode 2 of
+    !> diameter 7, each backbone's stuck and slipping limits those of run_modes with that
+    !> one mode (and diameter 7's mode 2 is not its mode 1); refused, naming the variable,
+    !> with as many values as diameters wanting, a value < 1, or without &cyclic.
+    subroutine test_mode_per_diameter(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c, back
+        type(error_type), allocatable :: error
+        type(modes_result_t) :: res, alone(2), first
+        type(modes_result_t), allocatable :: per(:)
+        type(cyclic_t) :: cyc
+        character(len=*), parameter :: path = scratch//"/cyclic_mode_list.nml"
+        character(len=*), parameter :: echo = scratch//"/cyclic_mode_list_echo.nml"
+        character(len=100), parameter :: head(4) = [character(len=100) :: &
+            "&system ndof = 4, mass = 0.25,0,0,0, 0,0.3,0,0, 0,0,0.25,0, 0,0,0,1.0,", &
+            "  stiffness = 20,0,0,-20, 0,3,0,-3, 0,0,20,-20, -20,-3,-20,48 /", &
+            "&friction contact_dof = 2, mu = 0.3, normal_load = 0.5 /", &
+            "&run method = 'modes' /"]
+        character(len=*), parameter :: cy = "&cyclic sectors = 24, engine_order = 3, "// &
+            "left_dofs = 1, right_dofs = 3, next_dof = 2 /"
+        character(len=*), parameter :: modes = "&modes amplitude_start = 1e-3, "// &
+            "amplitude_stop = 1, points = 10, error_estimate = F, "
+        integer :: k, u, stat
+        integer, allocatable :: diameters(:)
+        character(len=200) :: msg
+        real(dp) :: worst
+        call write_lines(path, [character(len=160) :: head, cy, &
+                                modes//"nodal_diameters = 3, 7, mode = 1, 2 /", &
+                                "&output directory = '"//scratch//"/cyclic_mode_list' /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic mode list: read", .false.)
+        if (allocated(error)) return
+        open (newunit=u, file=echo, status='replace', action='write')
+        call write_case(u, c, stat, msg)
+        close (u)
+        call read_case(echo, back, error)
+        call check_error(t, error, "cyclic mode list: the echo reads back", .false.)
+        if (allocated(error)) return
+        call check(t, allocated(back%modes%diameter_modes), "cyclic mode list: echoed")
+        if (allocated(back%modes%diameter_modes)) call check(t, &
+            size(back%modes%diameter_modes) == 2 .and. all(back%modes%diameter_modes == [1, 2]), &
+            "cyclic mode list: the echo's mode = 1, 2")
+        diameters = sector_diameters(c)
+        call sector_backbones(c, c%modes%modes_options_t, diameters, res, per, error)
+        call check_error(t, error, "cyclic mode list: the backbones", .false.)
+        if (allocated(error)) return
+        cyc = c%cyclic%cyc
+        do k = 1, 2
+            cyc%engine_order = diameters(k)
+            c%modes%mode = k
+            call run_modes(c%model, c%hbm, c%modes%modes_options_t, alone(k), error, cyclic=cyc)
+            if (allocated(error)) exit
+        end do
+        if (.not. allocated(error)) then
+            c%modes%mode = 1
+            call run_modes(c%model, c%hbm, c%modes%modes_options_t, first, error, cyclic=cyc)
+        end if
+        call check_error(t, error, "cyclic mode list: the backbones one by one", .false.)
+        if (allocated(error)) return
+        worst = 0.0_dp
+        do k = 1, 2
+            worst = max(worst, abs(per(k)%omega_stuck - alone(k)%omega_stuck)/ &
+                        alone(k)%omega_stuck, abs(per(k)%omega_slipping - &
+                        alone(k)%omega_slipping)/alone(k)%omega_slipping)
+        end do
+        call check(t, worst < 1.0e-12_dp .and. abs(per(2)%omega_stuck - first%omega_stuck) > &
+                   1.0e-3_dp*first%omega_stuck, "cyclic mode list: diameter 3 traces mode 1 "// &
+                   "and diameter 7 mode 2", "stuck limits "//real_text(per(1)%omega_stuck)// &
+                   ", "//real_text(per(2)%omega_stuck)//" (mode 1 of diameter 7: "// &
+                   real_text(first%omega_stuck)//"), difference to one by one "// &
+                   real_text(worst))
+        ! bad lists
+        call write_lines(path, [character(len=160) :: head, cy, &
+                                modes//"nodal_diameters = 3, 7, 9, mode = 1, 2 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic mode list: fewer values than diameters", .true., &
+                         [character(len=60) :: "&modes mode: 2 values, but 3 nodal diameters", &
+                          "cyclic_mode_list.nml"])
+        call write_lines(path, [character(len=160) :: head, cy, modes//"mode = 1, 2 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic mode list: every diameter traced", .true., &
+                         [character(len=60) :: "&modes mode: 2 values, but 13 nodal diameters", &
+                          "every diameter 0..N/2"])
+        call write_lines(path, [character(len=160) :: head, cy, &
+                                modes//"nodal_diameters = 3, 7, mode = 1, 0 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic mode list: a mode 0", .true., &
+                         [character(len=60) :: "&modes mode(2) = 0: must be >= 1"])
+        call write_lines(path, [character(len=160) :: head, modes//"mode = 1, 2 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic mode list: without &cyclic", .true., &
+                         [character(len=60) :: "&modes mode: 2 values, one per nodal "// &
+                          "diameter, only on one sector"])
+    end subroutine test_mode_per_diameter
 
     !> The example disk (examples/bladed_disk.nml: a shroud rubbing on the next blade).
     subroutine example(sector, cyc, ho, error)

@@ -11,7 +11,7 @@ module stickslip_run_sector_modes
     use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes
     implicit none
     private
-    public :: sector_backbones, sector_diameters
+    public :: sector_backbones, sector_diameters, diameter_mode
 
 contains
 
@@ -29,7 +29,19 @@ contains
         end if
     end function sector_diameters
 
-    !> The backbones of the sector `case%model` in the diameters `diameters`, with `opts`:
+    !> The mode traced in the i-th diameter of sector_diameters: &modes mode, or its i-th
+    !> value when given one per diameter.
+    pure integer function diameter_mode(case, i) result(mode)
+        !> The case (one sector of a disk).
+        type(case_t), intent(in) :: case
+        !> Position among the diameters traced.
+        integer, intent(in) :: i
+        mode = case%modes%mode
+        if (allocated(case%modes%diameter_modes)) mode = case%modes%diameter_modes(i)
+    end function diameter_mode
+
+    !> The backbones of the sector `case%model` in the diameters `diameters`, with `opts`
+    !> (its mode replaced by diameter_mode in each diameter):
     !> `per(i)` diameter i's (a diameter whose modes leave the contacts unloaded has no
     !> points, per(i)%unloaded; one whose start or continuation failed keeps its diagnosis),
     !> and `res` all their points in that order, each with its nodal_diameter, complete
@@ -52,6 +64,7 @@ contains
         !> Progress hook, told after every point.
         type(progress_t), intent(inout), optional :: progress
         type(cyclic_t) :: cyc
+        type(modes_options_t) :: one
         type(error_type), allocatable :: e, first
         integer :: i, k, total
         character(len=:), allocatable :: diagnosis
@@ -61,7 +74,9 @@ contains
         diagnosis = ""
         do i = 1, size(diameters)
             cyc%engine_order = diameters(i)
-            call run_modes(case%model, case%hbm, opts, per(i), e, progress, cyclic=cyc)
+            one = opts
+            one%mode = diameter_mode(case, i)
+            call run_modes(case%model, case%hbm, one, per(i), e, progress, cyclic=cyc)
             if (allocated(e)) then
                 per(i)%npoints = 0
                 per(i)%complete = per(i)%unloaded

@@ -489,12 +489,36 @@ contains
     end subroutine check_sector_methods
 
     !> &modes nodal_diameters: only on one sector of a disk, each in 0 .. N/2 and given once;
-    !> an input error naming the variable (and its element) otherwise.
+    !> &modes mode as a list (one per diameter): only on one sector, as many as the
+    !> diameters traced; an input error naming the variable (and its element) otherwise.
     subroutine check_modes_diameters(nml, case, error)
         type(nml_file_t), intent(in) :: nml
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
-        integer :: k, n
+        integer :: k, n, traced
+        character(len=:), allocatable :: which
+        if (allocated(case%modes%diameter_modes)) then
+            if (.not. (case%cyclic%given .and. case%cyclic%model == 'sector')) then
+                call group_error(nml, error, "&modes mode: "// &
+                                 itoa(size(case%modes%diameter_modes))//" values, one per "// &
+                                 "nodal diameter, only on one sector of a bladed disk "// &
+                                 "(&cyclic with model = 'sector'); give one mode")
+                return
+            end if
+            traced = case%cyclic%cyc%sectors/2 + 1
+            which = "every diameter 0..N/2"
+            if (allocated(case%modes%nodal_diameters)) then
+                traced = size(case%modes%nodal_diameters)
+                which = "&modes nodal_diameters"
+            end if
+            if (size(case%modes%diameter_modes) /= traced) then
+                call group_error(nml, error, "&modes mode: "// &
+                                 itoa(size(case%modes%diameter_modes))//" values, but "// &
+                                 itoa(traced)//" nodal diameters are traced ("//which// &
+                                 "): give one mode, or one per diameter in their order")
+                return
+            end if
+        end if
         if (.not. allocated(case%modes%nodal_diameters)) return
         if (.not. (case%cyclic%given .and. case%cyclic%model == 'sector')) then
             call group_error(nml, error, "&modes nodal_diameters: only on one sector of a "// &
@@ -1001,7 +1025,11 @@ contains
             if (case%has_modes .and. case%method == 'modes') then
                 associate (w => case%modes)
                     call put(unit, "&modes", stat, msg)
-                    call put(unit, "  mode = "//itoa(w%mode), stat, msg)
+                    if (allocated(w%diameter_modes)) then
+                        call put(unit, "  mode = "//ilist(w%diameter_modes), stat, msg)
+                    else
+                        call put(unit, "  mode = "//itoa(w%mode), stat, msg)
+                    end if
                     call put(unit, "  amplitude_start = "//rtoa(w%amplitude_start), stat, msg)
                     call put(unit, "  amplitude_stop = "//rtoa(w%amplitude_stop), stat, msg)
                     call put(unit, "  points = "//itoa(w%points), stat, msg)

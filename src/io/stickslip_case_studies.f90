@@ -7,7 +7,7 @@
 !> a case uses.
 module stickslip_case_studies
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type
+    use stickslip_error, only: error_type, itoa
     use stickslip_model, only: model_t
     use stickslip_study, only: study_options_t, default_study_options, validate_study_options
     use stickslip_sweep, only: sweep_options_t, validate_sweep_options
@@ -47,6 +47,9 @@ module stickslip_case_studies
         !> On one sector of a disk (&cyclic model = 'sector'): the nodal diameters whose
         !> backbones are traced (unallocated: every diameter 0 .. N/2).
         integer, allocatable :: nodal_diameters(:)
+        !> On one sector, &modes mode given as a list: the mode of each diameter traced (one
+        !> per diameter, in their order; unallocated: `mode` in every diameter).
+        integer, allocatable :: diameter_modes(:)
     end type modes_run_options_t
 
 contains
@@ -65,6 +68,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         logical :: found
         integer, allocatable :: list(:)
+        integer :: k
         character(len=*), parameter :: g = "modes"
         given = nml%find(g) > 0
         if (.not. given) return
@@ -72,8 +76,21 @@ contains
                              "amplitude_stop", "points", "plot", "error_estimate", &
                              "nodal_diameters"], error)
         if (allocated(error)) return
-        call get_integer(nml, g, "mode", opts%mode, error)
+        ! one mode, or on a sector one per nodal diameter (checked by the caller)
+        call get_integers(nml, g, "mode", list, found, max_sectors/2 + 1, error)
         if (allocated(error)) return
+        if (found) then
+            do k = 1, size(list)
+                if (list(k) < 1) then
+                    call group_error(nml, error, "&modes mode("//itoa(k)//") = "// &
+                                     itoa(list(k))//": must be >= 1 (1: the lowest mode "// &
+                                     "with the contacts stuck)")
+                    return
+                end if
+            end do
+            opts%mode = list(1)
+            if (size(list) > 1) opts%diameter_modes = list
+        end if
         call get_real(nml, g, "amplitude_start", opts%amplitude_start, error, found)
         if (allocated(error)) return
         if (.not. found) then

@@ -388,11 +388,11 @@ contains
     !> with its column nodal_diameter): frequency (upper panel, as write_modes_plot_script)
     !> and modal damping ratio (lower panel) against the modal amplitude, one curve per
     !> diameter of `diameters` (those with points). Error: stat io.
-    subroutine write_sector_modes_plot_script(dir, mode, diameters, error, units)
+    subroutine write_sector_modes_plot_script(dir, modes, diameters, error, units)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
-        !> The mode's number in each diameter (for the title).
-        integer, intent(in) :: mode
+        !> The mode traced in each diameter (for the title and the keys).
+        integer, intent(in) :: modes(:)
         !> The nodal diameters drawn.
         integer, intent(in) :: diameters(:)
         !> Set on failure.
@@ -402,7 +402,8 @@ contains
         type(plot_units_t) :: un
         integer :: u, stat
         character(len=512) :: msg
-        character(len=:), allocatable :: fcol, funit
+        character(len=:), allocatable :: fcol, funit, key
+        logical :: one
         if (present(units)) un = units
         if (un%cycles) then
             fcol = "'frequency'"
@@ -423,10 +424,26 @@ contains
         call put(u, "# the rows of diameter d: column nodal_diameter = d", stat, msg)
         call put(u, "of(d, c) = (column('nodal_diameter') == d ? column(c) : 1/0)", stat, msg)
         call put(u, "set autoscale xfix", stat, msg)
-        call put(u, "set multiplot layout 2,1 title 'Nonlinear mode "//itoa(mode)// &
-                 " of each nodal diameter (EPMC on the sector): frequency and damping "// &
-                 "against the modal amplitude'", stat, msg)
-        call put(u, "set key outside right top title 'nodal diameter'", stat, msg)
+        if (size(modes) > 0) then
+            one = all(modes == modes(1))
+        else
+            one = .true.
+        end if
+        if (one) then
+            call put(u, "set multiplot layout 2,1 title 'Nonlinear mode "// &
+                     itoa(merge(modes(1), 1, size(modes) > 0))//" of each nodal diameter "// &
+                     "(EPMC on the sector): frequency and damping against the modal "// &
+                     "amplitude'", stat, msg)
+            call put(u, "set key outside right top title 'nodal diameter'", stat, msg)
+            key = "sprintf('%d', nd[i])"
+        else
+            call put(u, "array md["//itoa(size(modes))//"] = ["//ilist_text(modes)//"]", &
+                     stat, msg)
+            call put(u, "set multiplot layout 2,1 title 'Nonlinear modes per nodal diameter "// &
+                     "(EPMC on the sector; each one's mode in the key)'", stat, msg)
+            call put(u, "set key outside right top title 'diameter (mode)'", stat, msg)
+            key = "sprintf('%d (%d)', nd[i], md[i])"
+        end if
         if (un%cycles) then
             call put(u, "set ylabel 'frequency f = omega / 2 pi ["//funit//"]'", stat, msg)
         else
@@ -439,13 +456,13 @@ contains
         call put(u, "unset colorbox", stat, msg)
         call put(u, "hue(i) = (|nd| > 1 ? (i - 1.0)/(|nd| - 1) : 0)", stat, msg)
         call put(u, "plot for [i=1:|nd|] f using 1:(of(nd[i], "//fcol//")) with lines "// &
-                 "lw 1.5 lc palette frac hue(i) title sprintf('%d', nd[i])", stat, msg)
+                 "lw 1.5 lc palette frac hue(i) title "//key, stat, msg)
         call put(u, "set format x '%g'", stat, msg)
         call put(u, "set xlabel 'modal amplitude of the sector a = sqrt(x1^H M x1) ["// &
                  trim(un%length)//" sqrt("//mass_unit(un)//")]'", stat, msg)
         call put(u, "set ylabel 'modal damping ratio D = xi / (2 omega) [-]'", stat, msg)
         call put(u, "plot for [i=1:|nd|] f using 1:(of(nd[i], 'damping_ratio')) with lines "// &
-                 "lw 1.5 lc palette frac hue(i) title sprintf('%d', nd[i])", stat, msg)
+                 "lw 1.5 lc palette frac hue(i) title "//key, stat, msg)
         call put(u, "unset multiplot", stat, msg)
         call close_and_rename(dir, "modes.gp", u, stat, msg, error)
     end subroutine write_sector_modes_plot_script

@@ -562,7 +562,7 @@ contains
     !> amplitude where it is reached, max_energy_error, folds, rejected_steps,
     !> factorizations, cpu_seconds, diagnosis), then the effective case. With the backbones
     !> `per` of a sector's nodal `diameters` (res gathers their points): nodal_diameters and
-    !> per diameter d complete_nd<d>, points_nd<d>, unloaded_nd<d>, omega_stuck_nd<d>,
+    !> per diameter d mode_nd<d> (the mode traced there), complete_nd<d>, points_nd<d>, unloaded_nd<d>, omega_stuck_nd<d>,
     !> omega_slipping_nd<d>, start_nd<d> and, with points, omega_min_nd<d>, omega_max_nd<d>,
     !> damping_ratio_max_nd<d>, and diagnosis_nd<d> when there is one. Error: stat io.
     subroutine write_modes_summary(dir, case, res, error, per, diameters)
@@ -578,7 +578,7 @@ contains
         type(modes_result_t), intent(in), optional :: per(:)
         !> Their nodal diameters.
         integer, intent(in), optional :: diameters(:)
-        integer :: u, stat, n, k, i
+        integer :: u, stat, n, k, i, mode
         character(len=512) :: msg
         character(len=:), allocatable :: d
         n = res%npoints
@@ -623,6 +623,10 @@ contains
             do i = 1, size(per)
                 d = itoa(diameters(i))
                 associate (b => per(i))
+                    mode = case%modes%mode
+                    if (allocated(case%modes%diameter_modes)) mode = &
+                        case%modes%diameter_modes(i)
+                    call put(u, "  mode_nd"//d//" = "//itoa(mode), stat, msg)
                     call put(u, "  complete_nd"//d//" = "//ltoa(b%complete), stat, msg)
                     call put(u, "  points_nd"//d//" = "//itoa(b%npoints), stat, msg)
                     call put(u, "  unloaded_nd"//d//" = "//ltoa(b%unloaded), stat, msg)

@@ -440,7 +440,7 @@ contains
             call put(u, "array md["//itoa(size(modes))//"] = ["//ilist_text(modes)//"]", &
                      stat, msg)
             call put(u, "set multiplot layout 2,1 title 'Nonlinear modes per nodal diameter "// &
-                     "(EPMC on the sector; each one's mode in the key)'", stat, msg)
+                     "(EPMC on the sector; the mode of each in the key)'", stat, msg)
             call put(u, "set key outside right top title 'diameter (mode)'", stat, msg)
             key = "sprintf('%d (%d)', nd[i], md[i])"
         end if

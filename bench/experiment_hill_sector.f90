@@ -22,6 +22,7 @@ program experiment_hill_sector
     use stickslip_solution, only: hbm_solution_t, hbm_options_t
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
     use stickslip_stability, only: floquet_t, periodic_stability
+    use stickslip_sorting, only: sort_ascending
     implicit none
     interface
         subroutine zggev(jobvl, jobvr, n, a, lda, b, ldb, alpha, beta, vl, ldvl, vr, ldvr, &
@@ -75,21 +76,11 @@ program experiment_hill_sector
 
 contains
 
-    !> Sort descending (insertion).
+    !> Sort descending.
     subroutine sort_desc(a)
         real(dp), intent(inout) :: a(:)
-        integer :: i, m
-        real(dp) :: x
-        do i = 2, size(a)
-            x = a(i)
-            m = i - 1
-            do while (m >= 1)
-                if (a(m) >= x) exit
-                a(m + 1) = a(m)
-                m = m - 1
-            end do
-            a(m + 1) = x
-        end do
+        call sort_ascending(a)
+        a = a(size(a):1:-1)
     end subroutine sort_desc
 
 

@@ -31,7 +31,7 @@ module test_cyclic
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
     implicit none
     private
-    public :: run_cyclic_tests
+    public :: run_cyclic_tests, add_spring
 
     integer, parameter :: ns = 24
 
@@ -863,12 +863,20 @@ contains
         subroutine spring(a, b, k)
             integer, intent(in) :: a, b
             real(dp), intent(in) :: k
-            m%stiffness(a, a) = m%stiffness(a, a) + k
-            m%stiffness(b, b) = m%stiffness(b, b) + k
-            m%stiffness(a, b) = m%stiffness(a, b) - k
-            m%stiffness(b, a) = m%stiffness(b, a) - k
+            call add_spring(m%stiffness, a, b, k)
         end subroutine spring
     end function lumped_sector
+
+    !> Add a spring k between DOFs a and b to the stiffness matrix `stiffness`.
+    pure subroutine add_spring(stiffness, a, b, k)
+        real(dp), intent(inout) :: stiffness(:, :)
+        integer, intent(in) :: a, b
+        real(dp), intent(in) :: k
+        stiffness(a, a) = stiffness(a, a) + k
+        stiffness(b, b) = stiffness(b, b) + k
+        stiffness(a, b) = stiffness(a, b) - k
+        stiffness(b, a) = stiffness(b, a) - k
+    end subroutine add_spring
 
     function lumped_cyclic(eo) result(c)
         integer, intent(in) :: eo

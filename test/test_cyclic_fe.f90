@@ -33,6 +33,7 @@ module test_cyclic_fe
     use stickslip_dynamics, only: dynamics_t
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
     use test_cli, only: scratch_copy
+    use test_cyclic, only: add_spring
     implicit none
     private
     public :: run_cyclic_fe_tests
@@ -412,10 +413,7 @@ contains
         subroutine spring(a, b, k)
             integer, intent(in) :: a, b
             real(dp), intent(in) :: k
-            m%stiffness(a, a) = m%stiffness(a, a) + k
-            m%stiffness(b, b) = m%stiffness(b, b) + k
-            m%stiffness(a, b) = m%stiffness(a, b) - k
-            m%stiffness(b, a) = m%stiffness(b, a) - k
+            call add_spring(m%stiffness, a, b, k)
         end subroutine spring
     end subroutine wide_face_sector
 

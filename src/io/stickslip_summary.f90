@@ -562,9 +562,10 @@ contains
     !> amplitude where it is reached, max_energy_error, folds, rejected_steps,
     !> factorizations, cpu_seconds, diagnosis), then the effective case. With the backbones
     !> `per` of a sector's nodal `diameters` (res gathers their points): nodal_diameters and
-    !> per diameter d mode_nd<d> (the mode traced there), complete_nd<d>, points_nd<d>, unloaded_nd<d>, omega_stuck_nd<d>,
-    !> omega_slipping_nd<d>, start_nd<d> and, with points, omega_min_nd<d>, omega_max_nd<d>,
-    !> damping_ratio_max_nd<d>, and diagnosis_nd<d> when there is one. Error: stat io.
+    !> per diameter d mode_nd<d> (the mode traced there), complete_nd<d>, points_nd<d>,
+    !> unloaded_nd<d>, omega_stuck_nd<d>, omega_slipping_nd<d>, start_nd<d> and, with points,
+    !> omega_min_nd<d>, omega_max_nd<d>, damping_ratio_max_nd<d>, and diagnosis_nd<d> when there
+    !> is one. Error: stat io.
     subroutine write_modes_summary(dir, case, res, error, per, diameters)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir

@@ -58,9 +58,10 @@ contains
     !> Replace the faces of the sector `model` (symmetry `cyc`, in its numbers) by `modes`
     !> interface modes each (see the module header); `model` and `cyc` are renumbered, the
     !> cyclic modes of `cyc` dropped (they belong to the old sector). `keep`: more DOFs that
-    !> must stay physical (any order; 0 ignored). Errors (stat input): modes < 1, no face pair
-    !> left to reduce, modes >= the face DOFs to reduce; (stat numerical): the faces' pencil
-    !> not definite (dsygv failing). On error `model` and `cyc` are unchanged.
+    !> must stay physical (any order; 0 ignored). Errors (stat input): modes < 1, band <= 0 or
+    !> no cyclic mode below it, no face pair left to reduce, modes >= the face DOFs to reduce;
+    !> (stat numerical): a diameter's pencil not definite (zhegv) or dsyev failing. On error
+    !> `model` and `cyc` are unchanged.
     subroutine reduce_cyclic_faces(model, cyc, modes, keep, band, red, error)
         !> The sector (dense, e.g. Craig-Bampton reduced); reduced on return.
         type(model_t), intent(inout) :: model
@@ -115,8 +116,19 @@ contains
         end if
 
         ! the faces' motion in the cyclic modes of every nodal diameter up to `band`
+        if (.not. (band > 0.0_dp)) then
+            call fatal_error(error, "no frequency band to take the faces' motion from (the "// &
+                             "run's highest harmonic frequency is 0)", stickslip_stat%input)
+            return
+        end if
         call face_correlation(kf, error)
         if (allocated(error)) return
+        if (count_in_band == 0) then
+            call fatal_error(error, "the sector has no cyclic mode below the run's highest "// &
+                             "harmonic frequency: nothing shapes the interface modes", &
+                             stickslip_stat%input)
+            return
+        end if
         allocate (w(nf))
         call dsyev('V', 'U', nf, kf, nf, w, query, -1, info)
         allocate (work(max(1, int(query(1)))))

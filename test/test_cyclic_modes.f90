@@ -65,6 +65,8 @@ contains
         if (allocated(error)) return
         call check(t, .not. coarse%complete .and. &
                    index(coarse%diagnosis, "try more &hbm samples (now 384; 4 times") > 0 .and. &
+                   index(coarse%diagnosis, "a smaller &hbm rho (now ") > 0 .and. &
+                   index(coarse%diagnosis, ", automatic; 0.1 instead") > 0 .and. &
                    fine%complete .and. fine%npoints > coarse%npoints, &
                    "cyclic modes samples: diameter 1 stops at 384 samples, saying so, and "// &
                    "completes at 1536", itoa(coarse%npoints)//" then "//itoa(fine%npoints)// &

@@ -192,7 +192,7 @@ contains
         integer :: k, nguess, g
         type(error_type), allocatable :: err_stuck, err_slip
         character(len=16) :: names(2)
-        character(len=32) :: buf
+        character(len=32) :: buf, rho_text
 
         c0 = thread_cpu_seconds()
         call validate_model(model, error)
@@ -436,13 +436,17 @@ contains
             if (state%reason == reason_failures) then
                 ! the continuation's parameter is ln a: say the amplitude, in its unit
                 write (buf, '(g0.6)') exp(state%lambda)
+                write (rho_text, '(g0.3)') ho%rho
+                if (hbm%rho == 0.0_dp) rho_text = trim(adjustl(rho_text))//", automatic"
                 res%diagnosis = itoa(state%failures)//" failed points in a row after "// &
                                 "modal amplitude a = "//trim(adjustl(buf))//" (the model's "// &
                                 "length unit times the square root of its mass unit; the "// &
                                 "smallest step and the recovery both failed): try more "// &
                                 "&hbm samples (now "//itoa(hbm%samples)//"; 4 times as "// &
                                 "many carried such stops to the end on the lumped disks of "// &
-                                "doc/cyclic.md), or other harmonics"
+                                "doc/cyclic.md), a smaller &hbm rho (now "// &
+                                trim(adjustl(rho_text))//"; 0.1 instead of the automatic 6.73 carried the damper "// &
+                                "disk's diameters 1, 4 and 6 to the end), or other harmonics"
             else if (allocated(rep%message)) then
                 if (len(rep%message) > 0) res%diagnosis = rep%message
             end if
@@ -474,6 +478,8 @@ contains
             res%points(res%npoints) = mp
             if (present(progress)) then
                 write (buf, '(g0.6)') exp(state%lambda)
+                write (rho_text, '(g0.3)') ho%rho
+                if (hbm%rho == 0.0_dp) rho_text = trim(adjustl(rho_text))//", automatic"
                 call progress%report(res%npoints, 0, "amplitude = "//trim(adjustl(buf)))
             end if
         end subroutine add_point

@@ -31,7 +31,7 @@ module test_cyclic
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
     implicit none
     private
-    public :: run_cyclic_tests, add_spring
+    public :: run_cyclic_tests, add_spring, model_frequencies
 
     integer, parameter :: ns = 24
 
@@ -867,6 +867,24 @@ contains
         end subroutine spring
     end function lumped_sector
 
+    !> The undamped natural frequencies of a dense model, increasing [rad/s] (LAPACK dsygv;
+    !> `info` its info, the frequencies undefined when nonzero).
+    subroutine model_frequencies(model, omegas, info)
+        type(model_t), intent(in) :: model
+        real(dp), allocatable, intent(out) :: omegas(:)
+        integer, intent(out) :: info
+        real(dp), allocatable :: k(:, :), m(:, :), work(:)
+        real(dp) :: q(1)
+        k = model%stiffness
+        m = model%mass
+        allocate (omegas(model%ndof))
+        call dsygv(1, 'N', 'U', model%ndof, k, model%ndof, m, model%ndof, omegas, q, -1, info)
+        allocate (work(int(q(1))))
+        call dsygv(1, 'N', 'U', model%ndof, k, model%ndof, m, model%ndof, omegas, work, &
+                   size(work), info)
+        omegas = sqrt(max(omegas, 0.0_dp))
+    end subroutine model_frequencies
+
     !> Add a spring k between DOFs a and b to the stiffness matrix `stiffness`.
     pure subroutine add_spring(stiffness, a, b, k)
         real(dp), intent(inout) :: stiffness(:, :)
@@ -903,8 +921,7 @@ contains
         type(model_t) :: sector, disk
         type(cyclic_t) :: cyc
         type(error_type), allocatable :: error
-        real(dp), allocatable :: w(:), all(:), k(:, :), m(:, :), ev(:), work(:)
-        real(dp) :: q(1)
+        real(dp), allocatable :: w(:), all(:), ev(:)
         integer :: nd, info, i, j, v
         sector = lumped_sector()
         cyc = lumped_cyclic(3)
@@ -932,14 +949,7 @@ contains
                 v = j
             end do
         end do
-        k = disk%stiffness
-        m = disk%mass
-        allocate (ev(disk%ndof))
-        call dsygv(1, 'N', 'U', disk%ndof, k, disk%ndof, m, disk%ndof, ev, q, -1, info)
-        allocate (work(int(q(1))))
-        call dsygv(1, 'N', 'U', disk%ndof, k, disk%ndof, m, disk%ndof, ev, work, size(work), &
-                   info)
-        ev = sqrt(ev)
+        call model_frequencies(disk, ev, info)
         call check(t, disk%ndof == 72 .and. size(all) == 72 .and. info == 0, &
                    "cyclic frequencies: 72 of the sector (3 a diameter), 72 of the disk")
         if (size(all) /= size(ev)) return

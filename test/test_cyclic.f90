@@ -848,9 +848,9 @@ contains
         m%mass(2, 2) = 0.3_dp
         m%mass(4, 4) = 1.0_dp
         m%stiffness = 0.0_dp
-        call spring(1, 4, 0.5_dp*kr)
-        call spring(3, 4, 0.5_dp*kr)
-        call spring(2, 4, kb)
+        call add_spring(m%stiffness, 1, 4, 0.5_dp*kr)
+        call add_spring(m%stiffness, 3, 4, 0.5_dp*kr)
+        call add_spring(m%stiffness, 2, 4, kb)
         m%stiffness(4, 4) = m%stiffness(4, 4) + kg
         m%damping = 0.01_dp*m%mass + 0.002_dp*m%stiffness
         m%omega = 3.0_dp
@@ -859,12 +859,6 @@ contains
         m%force_amplitude = [1.0_dp]
         m%force_phase = [0.3_dp]
         allocate (m%contact_dof(0), m%contact_dof2(0), m%mu(0), m%normal_load(0))
-    contains
-        subroutine spring(a, b, k)
-            integer, intent(in) :: a, b
-            real(dp), intent(in) :: k
-            call add_spring(m%stiffness, a, b, k)
-        end subroutine spring
     end function lumped_sector
 
     !> The undamped natural frequencies of a dense model, increasing [rad/s] (LAPACK dsygv;

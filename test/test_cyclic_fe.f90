@@ -380,16 +380,16 @@ contains
             m%mass(i, i) = 0.2_dp + 0.05_dp*i
         end do
         do i = 1, 5
-            call spring(i, 11 + mod(i, 3), 10.0_dp + i)
-            call spring(5 + i, 11 + mod(i + 1, 3), 12.0_dp - i)
-            if (i < 5) call spring(i, i + 1, 3.0_dp + 0.5_dp*i)
-            if (i < 5) call spring(5 + i, 6 + i, 2.0_dp + 0.7_dp*i)
+            call add_spring(m%stiffness, i, 11 + mod(i, 3), 10.0_dp + i)
+            call add_spring(m%stiffness, 5 + i, 11 + mod(i + 1, 3), 12.0_dp - i)
+            if (i < 5) call add_spring(m%stiffness, i, i + 1, 3.0_dp + 0.5_dp*i)
+            if (i < 5) call add_spring(m%stiffness, 5 + i, 6 + i, 2.0_dp + 0.7_dp*i)
         end do
         do i = 11, 13
             m%stiffness(i, i) = m%stiffness(i, i) + 4.0_dp*(i - 10)
         end do
-        call spring(11, 12, 6.0_dp)
-        call spring(12, 13, 5.0_dp)
+        call add_spring(m%stiffness, 11, 12, 6.0_dp)
+        call add_spring(m%stiffness, 12, 13, 5.0_dp)
         m%damping = 0.01_dp*m%mass + 0.001_dp*m%stiffness
         m%omega = 1.0_dp
         m%force_dof = [12]
@@ -401,12 +401,6 @@ contains
         c%engine_order = 1
         c%left = [1, 2, 3, 4, 5]
         c%right = [6, 7, 8, 9, 10]
-    contains
-        subroutine spring(a, b, k)
-            integer, intent(in) :: a, b
-            real(dp), intent(in) :: k
-            call add_spring(m%stiffness, a, b, k)
-        end subroutine spring
     end subroutine wide_face_sector
 
     !> The example case with its cyclic faces kept (&reduction interface_modes = 0): a

@@ -445,8 +445,9 @@ contains
                                 "&hbm samples (now "//itoa(hbm%samples)//"; 4 times as "// &
                                 "many carried such stops to the end on the lumped disks of "// &
                                 "doc/cyclic.md), a smaller &hbm rho (now "// &
-                                trim(adjustl(rho_text))//"; 0.1 instead of the automatic 6.73 carried the damper "// &
-                                "disk's diameters 1, 4 and 6 to the end), or other harmonics"
+                                trim(adjustl(rho_text))//"; a 70th of the automatic one "// &
+                                "carried the damper disk's diameters 1, 4 and 6 to the "// &
+                                "end), or other harmonics"
             else if (allocated(rep%message)) then
                 if (len(rep%message) > 0) res%diagnosis = rep%message
             end if
@@ -478,8 +479,6 @@ contains
             res%points(res%npoints) = mp
             if (present(progress)) then
                 write (buf, '(g0.6)') exp(state%lambda)
-                write (rho_text, '(g0.3)') ho%rho
-                if (hbm%rho == 0.0_dp) rho_text = trim(adjustl(rho_text))//", automatic"
                 call progress%report(res%npoints, 0, "amplitude = "//trim(adjustl(buf)))
             end if
         end subroutine add_point

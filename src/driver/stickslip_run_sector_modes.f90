@@ -7,11 +7,12 @@ module stickslip_run_sector_modes
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_progress, only: progress_t
     use stickslip_case, only: case_t
+    use stickslip_case_studies, only: diameter_mode
     use stickslip_cyclic, only: cyclic_t
     use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes
     implicit none
     private
-    public :: sector_backbones, sector_diameters, diameter_mode
+    public :: sector_backbones, sector_diameters
 
 contains
 
@@ -29,19 +30,8 @@ contains
         end if
     end function sector_diameters
 
-    !> The mode traced in the i-th diameter of sector_diameters: &modes mode, or its i-th
-    !> value when given one per diameter.
-    pure integer function diameter_mode(case, i) result(mode)
-        !> The case (one sector of a disk).
-        type(case_t), intent(in) :: case
-        !> Position among the diameters traced.
-        integer, intent(in) :: i
-        mode = case%modes%mode
-        if (allocated(case%modes%diameter_modes)) mode = case%modes%diameter_modes(i)
-    end function diameter_mode
-
     !> The backbones of the sector `case%model` in the diameters `diameters`, with `opts`
-    !> (its mode replaced by diameter_mode in each diameter):
+    !> (its mode replaced by diameter_mode, stickslip_case_studies, in each diameter):
     !> `per(i)` diameter i's (a diameter whose modes leave the contacts unloaded has no
     !> points, per(i)%unloaded; one whose start or continuation failed keeps its diagnosis),
     !> and `res` all their points in that order, each with its nodal_diameter, complete
@@ -75,7 +65,7 @@ contains
         do i = 1, size(diameters)
             cyc%engine_order = diameters(i)
             one = opts
-            one%mode = diameter_mode(case, i)
+            one%mode = diameter_mode(case%modes, i)
             call run_modes(case%model, case%hbm, one, per(i), e, progress, cyclic=cyc)
             if (allocated(e)) then
                 per(i)%npoints = 0

@@ -27,7 +27,8 @@ module stickslip_run_studies
         write_robustness_summary, write_modes_summary
     use stickslip_plot_scripts, only: write_frc_plot_script, write_robustness_plot_script, &
         write_modes_plot_script, write_sector_modes_plot_script
-    use stickslip_run_sector_modes, only: sector_backbones, sector_diameters, diameter_mode
+    use stickslip_run_sector_modes, only: sector_backbones, sector_diameters
+    use stickslip_case_studies, only: diameter_mode
     use stickslip_run_findings, only: study_findings
     use stickslip_case_messages, only: to_case_message
     use stickslip_sweep_family, only: family_result_t
@@ -313,7 +314,7 @@ contains
         call write_modes_harmonics_csv(dir, res, error, cols, selected_dofs(case), contacts)
         if (allocated(error)) return
         if (sector) then
-            call write_sector_modes_plot_script(dir, pack([(diameter_mode(case, i), &
+            call write_sector_modes_plot_script(dir, pack([(diameter_mode(case%modes, i), &
                                                       i=1, size(diameters))], &
                                                     per%npoints > 0), &
                                                 pack(diameters, per%npoints > 0), error, &

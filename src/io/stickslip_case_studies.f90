@@ -25,7 +25,7 @@ module stickslip_case_studies
     implicit none
     private
     public :: read_study_group, read_sweep_group, read_robustness_group, read_modes_group
-    public :: sweep_run_options_t, modes_run_options_t
+    public :: sweep_run_options_t, modes_run_options_t, diameter_mode
 
     !> The &sweep group of a case: the options of run_sweep and what the run of a case does
     !> around it (the checkpoint, the picture), which run_sweep does not use.
@@ -53,6 +53,17 @@ module stickslip_case_studies
     end type modes_run_options_t
 
 contains
+
+    !> The mode traced in the i-th nodal diameter a sector's run of modes traces: `mode`, or
+    !> its i-th value when &modes mode gives one per diameter.
+    pure integer function diameter_mode(opts, i) result(mode)
+        !> The &modes group.
+        type(modes_run_options_t), intent(in) :: opts
+        !> Position among the diameters traced.
+        integer, intent(in) :: i
+        mode = opts%mode
+        if (allocated(opts%diameter_modes)) mode = opts%diameter_modes(i)
+    end function diameter_mode
 
     !> Read &modes (optional; `given` tells whether it is present): mode, amplitude_start and
     !> amplitude_stop (both required with the group), points, plot, error_estimate,

@@ -11,6 +11,7 @@ module stickslip_summary
     use stickslip_solution, only: hbm_solution_t
     use stickslip_euler, only: euler_result_t
     use stickslip_case, only: case_t, write_case, put, rtoa, ltoa, rlist, ilist, llist, quoted
+    use stickslip_case_studies, only: diameter_mode
     use stickslip_reference, only: reference_result_t, reference_energy_error
     use stickslip_contact_measures, only: contact_energy_error => energy_balance_error
     use stickslip_compare, only: comparison_t, quantity_names
@@ -579,7 +580,7 @@ contains
         type(modes_result_t), intent(in), optional :: per(:)
         !> Their nodal diameters.
         integer, intent(in), optional :: diameters(:)
-        integer :: u, stat, n, k, i, mode
+        integer :: u, stat, n, k, i
         character(len=512) :: msg
         character(len=:), allocatable :: d
         n = res%npoints
@@ -624,10 +625,8 @@ contains
             do i = 1, size(per)
                 d = itoa(diameters(i))
                 associate (b => per(i))
-                    mode = case%modes%mode
-                    if (allocated(case%modes%diameter_modes)) mode = &
-                        case%modes%diameter_modes(i)
-                    call put(u, "  mode_nd"//d//" = "//itoa(mode), stat, msg)
+                    call put(u, "  mode_nd"//d//" = "//itoa(diameter_mode(case%modes, i)), &
+                             stat, msg)
                     call put(u, "  complete_nd"//d//" = "//ltoa(b%complete), stat, msg)
                     call put(u, "  points_nd"//d//" = "//itoa(b%npoints), stat, msg)
                     call put(u, "  unloaded_nd"//d//" = "//ltoa(b%unloaded), stat, msg)

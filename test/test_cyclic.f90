@@ -27,8 +27,11 @@ module test_cyclic
     use stickslip_dynamics, only: dynamics_t
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics, cyclic_projections_t
     use stickslip_cyclic_modal, only: prepare_cyclic_modes
-    use stickslip_rho, only: automatic_rho
+    use stickslip_rho, only: automatic_rho, cyclic_held_rho, cyclic_mobility_matrix, &
+        rho_fraction
     use stickslip_linear_response, only: limit_peak_t, linear_limit_peaks
+    use stickslip_contact_set, only: contact_set_t, new_contact_set
+    use stickslip_contact_element, only: along_tangent, along_normal
     implicit none
     private
     public :: run_cyclic_tests, add_spring, model_frequencies
@@ -55,7 +58,80 @@ contains
         call test_sector_family(t)
         call test_modal_condensation(t)
         call test_channel_condensation(t)
+        call test_wave_rho(t)
     end subroutine run_cyclic_tests
+
+    !> The sector's held weight (cyclic_held_rho) on the underplatform damper disk
+    !> at the stuck frequency 2.887 rad/s, in the waves of nodal diameters 0, 1, 3 and 12:
+    !> rho_fraction times the geometric mean of each channel's mobility with the other
+    !> held, against the 2 x 2 Schur complements A_11 - |A_12|^2 / A_22 written out here
+    !> (the damper's tangential pair and its normal pair, each normal with its compliance
+    !> in series; the two pairs do not couple: checked), and at diameter 0, where both
+    !> tangential channels measure the same slip (the platforms move together), their own
+    !> mobilities. Held, the damper slips on a platform only as fast as that platform moves
+    !> against the next: 0.020 m/(N s) at diameter 1 against its own 13.6.
+    subroutine test_wave_rho(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(cyclic_t) :: cyc
+        type(model_t) :: sector
+        type(contact_set_t) :: cs
+        type(error_type), allocatable :: error
+        complex(dp), allocatable :: g(:, :)
+        integer, parameter :: diameters(4) = [0, 1, 3, 12]
+        real(dp) :: a(4, 4), m(4), expected, worst, coupling, held1, own1
+        integer :: k, info, tang(2), norm(2), ch
+        call read_case(project_path("examples/bladed_disk_damper.nml"), c, error)
+        call check_error(t, error, "wave rho: read the example", .false.)
+        if (allocated(error)) return
+        sector = c%cyclic%sector
+        sector%omega = 2.887_dp
+        call new_contact_set(cs, sector)
+        tang = pack([(ch, ch=1, cs%nchannel)], cs%along == along_tangent)
+        norm = pack([(ch, ch=1, cs%nchannel)], cs%along == along_normal)
+        worst = 0.0_dp
+        coupling = 0.0_dp
+        do k = 1, size(diameters)
+            cyc = c%cyclic%cyc
+            if (allocated(cyc%modes)) deallocate (cyc%modes)
+            cyc%engine_order = diameters(k)
+            call cyclic_mobility_matrix(sector, cyc, cs, 1, g, info)
+            if (info /= 0) exit
+            coupling = max(coupling, maxval(abs(g(tang, norm)))/maxval(abs(g)))
+            ! the normals' compliance in series (h = 1: a gap channel's units are the
+            ! velocity's)
+            a = real(g, dp)
+            a(norm(1), norm(1)) = a(norm(1), norm(1)) + sector%omega/40.0_dp
+            a(norm(2), norm(2)) = a(norm(2), norm(2)) + sector%omega/40.0_dp
+            m(1) = schur(tang(1), tang(2))
+            m(2) = schur(tang(2), tang(1))
+            m(3) = schur(norm(1), norm(2))
+            m(4) = schur(norm(2), norm(1))
+            if (diameters(k) == 0) m(1:2) = [a(tang(1), tang(1)), a(tang(2), tang(2))]
+            if (diameters(k) == 1) then
+                held1 = m(1)
+                own1 = a(tang(1), tang(1))
+            end if
+            expected = rho_fraction*product(m)**0.25_dp
+            worst = max(worst, abs(cyclic_held_rho(sector, cyc, 1) - expected)/expected)
+        end do
+        call check(t, info == 0 .and. worst < 1.0e-10_dp .and. coupling < 1.0e-12_dp, &
+                   "wave rho: each channel held by the other (2 x 2 Schur complements), "// &
+                   "diameters 0, 1, 3, 12", "largest relative difference "// &
+                   real_text(worst)//", tangent-normal coupling "//real_text(coupling))
+        call check(t, abs(held1 - 0.0199_dp) < 5.0e-4_dp .and. abs(own1 - 13.62_dp) < 0.01_dp, &
+                   "wave rho: diameter 1, the damper held on one platform slips on the other "// &
+                   "at 0.020 m/(N s), not its own 13.6", "held "//real_text(held1)// &
+                   ", own "//real_text(own1))
+
+    contains
+
+        !> A_ii - |A_ij|^2 / A_jj.
+        real(dp) function schur(i, j)
+            integer, intent(in) :: i, j
+            schur = a(i, i) - real(g(i, j)*conjg(g(i, j)), dp)/a(j, j)
+        end function schur
+    end subroutine test_wave_rho
 
     !> What a sweep's continuation builds at every omega on a sector with prepared modes:
     !> the channels' dynamics only (channels_only) from the projections kept since the
@@ -64,7 +140,8 @@ contains
     !> matrices equal the dense LU's at three omegas (the cache made at the first, reused at
     !> the others, and remade for a doubled forcing) to 1e-10, and the N-row responses are
     !> not kept. The free sector's modes give its automatic rho (a modal sum instead of an
-    !> LU): equal to the LU's to 1e-12 at each omega.
+    !> LU): equal to the LU's to 1e-12 at each omega; the prepared cyclic modes give the
+    !> wave's held rho, equal to the factorization's.
     subroutine test_channel_condensation(t)
         type(test_counter_t), intent(inout) :: t
         type(case_t) :: c
@@ -75,7 +152,7 @@ contains
         type(cyclic_projections_t) :: cache
         type(error_type), allocatable :: error
         real(dp), parameter :: omegas(3) = [2.1_dp, 2.6_dp, 2.6_dp]
-        real(dp) :: worst, rho_worst, fmax(3)
+        real(dp) :: worst, rho_worst, held_worst, fmax(3)
         integer :: k
         logical :: lean, reused
         call read_case(project_path("examples/bladed_disk_damper.nml"), c, error)
@@ -87,6 +164,7 @@ contains
         deallocate (plain%modes)
         worst = 0.0_dp
         rho_worst = 0.0_dp
+        held_worst = 0.0_dp
         lean = .true.
         reused = .true.
         do k = 1, size(omegas)
@@ -113,6 +191,9 @@ contains
             rho_worst = max(rho_worst, abs(automatic_rho(sector, c%cyclic%cyc%free_lambda, &
                                                          c%cyclic%cyc%free_shapes) - &
                                            automatic_rho(sector))/automatic_rho(sector))
+            held_worst = max(held_worst, abs(cyclic_held_rho(sector, c%cyclic%cyc) - &
+                                             cyclic_held_rho(sector, plain))/ &
+                             cyclic_held_rho(sector, plain))
         end do
         call check_error(t, error, "cyclic channels: the condensations", .false.)
         if (allocated(error)) return
@@ -125,6 +206,9 @@ contains
         call check(t, allocated(c%cyclic%cyc%free_lambda) .and. rho_worst < 1.0e-12_dp, &
                    "cyclic channels: the automatic rho from the free sector's modes = the "// &
                    "LU's", "largest relative difference "//real_text(rho_worst))
+        call check(t, held_worst < 1.0e-12_dp, "cyclic channels: the wave's held rho from "// &
+                   "the prepared modes = the factorization's", "largest relative difference "// &
+                   real_text(held_worst))
         call basis%destroy()
     end subroutine test_channel_condensation
 

@@ -33,7 +33,7 @@ module stickslip_modes
         cyclic_directions, cyclic_preload_force
     use stickslip_cyclic_limits, only: cyclic_limit_modes
     use stickslip_cyclic_modal, only: prepare_cyclic_modes
-    use stickslip_rho, only: automatic_rho
+    use stickslip_rho, only: automatic_rho, cyclic_held_rho
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: channel_t, kinematics_gap, along_normal
     use stickslip_linear_modes, only: linear_modes
@@ -113,6 +113,12 @@ module stickslip_modes
         logical :: unloaded = .false.
         !> Weight rho in effect, harmonics of the family (odd only for plain contacts).
         real(dp) :: rho = 0.0_dp
+        !> A sector's mode with the automatic weight: the held weight of its wave
+        !> (cyclic_held_rho at the stuck frequency) [m/(N s)], 0 otherwise; and when the
+        !> diameter was traced again with it (stickslip_run_sector_modes), what stopped the
+        !> automatic weight's backbone.
+        real(dp) :: rho_held = 0.0_dp
+        character(len=:), allocatable :: first_try
         logical :: odd_only = .false.
         !> CPU seconds, factorizations of the dynamic stiffnesses, continuation counts.
         real(dp) :: seconds = 0.0_dp
@@ -288,6 +294,9 @@ contains
             cyc = cyclic
             call prepare_cyclic_modes(free, cyc, ho%harmonics, error)
             if (allocated(error)) return
+            ! the held weight of the wave's fundamental (from the prepared modes): the
+            ! remedy of a stop (stickslip_run_sector_modes)
+            if (hbm%rho == 0.0_dp) res%rho_held = cyclic_held_rho(free, cyc, 1)
             call new_modes_family(fam, free, ho, phi, omega_ref, error, cyc)
         else
             call new_modes_family(fam, free, ho, phi, omega_ref, error)
@@ -445,9 +454,7 @@ contains
                                 "&hbm samples (now "//itoa(hbm%samples)//"; 4 times as "// &
                                 "many carried such stops to the end on the lumped disks of "// &
                                 "doc/cyclic.md), a smaller &hbm rho (now "// &
-                                trim(adjustl(rho_text))//"; a 70th of the automatic one "// &
-                                "carried the damper disk's diameters 1, 4 and 6 to the "// &
-                                "end), or other harmonics"
+                                trim(adjustl(rho_text))//"), or other harmonics"
             else if (allocated(rep%message)) then
                 if (len(rep%message) > 0) res%diagnosis = rep%message
             end if

@@ -10,6 +10,8 @@ module stickslip_run_sector_modes
     use stickslip_case_studies, only: diameter_mode
     use stickslip_cyclic, only: cyclic_t
     use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes
+    use stickslip_solution, only: hbm_options_t
+    use stickslip_diagnostics, only: level_note
     implicit none
     private
     public :: sector_backbones, sector_diameters
@@ -31,7 +33,9 @@ contains
     end function sector_diameters
 
     !> The backbones of the sector `case%model` in the diameters `diameters`, with `opts`
-    !> (its mode replaced by diameter_mode, stickslip_case_studies, in each diameter):
+    !> (its mode replaced by diameter_mode, stickslip_case_studies, in each diameter; a
+    !> backbone the automatic weight rho could not carry to the end traced again with its
+    !> wave's held weight, see retry_held):
     !> `per(i)` diameter i's (a diameter whose modes leave the contacts unloaded has no
     !> points, per(i)%unloaded; one whose start or continuation failed keeps its diagnosis),
     !> and `res` all their points in that order, each with its nodal_diameter, complete
@@ -67,6 +71,7 @@ contains
             one = opts
             one%mode = diameter_mode(case%modes, i)
             call run_modes(case%model, case%hbm, one, per(i), e, progress, cyclic=cyc)
+            if (.not. allocated(e)) call retry_held(per(i), one)
             if (allocated(e)) then
                 per(i)%npoints = 0
                 per(i)%complete = per(i)%unloaded
@@ -117,5 +122,66 @@ contains
                                  "backbones are the linear modes)", stickslip_stat%numerical)
             end if
         end if
+
+    contains
+
+        !> The remedy of a backbone `b` that the automatic weight stopped short of the end
+        !> (the continuation failed): the diameter traced again with the held weight of its
+        !> wave (modes_result_t%rho_held, when below half the automatic one), which takes
+        !> its place when it completes or reaches a larger amplitude; b%first_try then says
+        !> what stopped the first, and b's CPU time and counts hold both. A retry that does
+        !> no better leaves b, its diagnosis saying so.
+        subroutine retry_held(b, one)
+            type(modes_result_t), intent(inout) :: b
+            type(modes_options_t), intent(in) :: one
+            type(modes_result_t) :: again
+            type(hbm_options_t) :: ho
+            type(error_type), allocatable :: e2
+            character(len=12) :: reach
+            if (b%complete .or. case%hbm%rho /= 0.0_dp) return
+            if (.not. (b%rho_held > 0.0_dp .and. b%rho_held < 0.5_dp*b%rho)) return
+            ho = case%hbm
+            ho%rho = b%rho_held
+            call run_modes(case%model, ho, one, again, e2, progress, cyclic=cyc)
+            if (.not. allocated(e2)) then
+                if (again%complete .or. last_amplitude(again) > last_amplitude(b)) then
+                    again%first_try = "the automatic weight rho = "// &
+                                      trim(adjustl(rtext(b%rho)))//" stopped: "//b%diagnosis
+                    again%rho_held = b%rho_held
+                    again%seconds = again%seconds + b%seconds
+                    again%factorizations = again%factorizations + b%factorizations
+                    again%rejected = again%rejected + b%rejected
+                    if (again%complete) then
+                        reach = " to the end"
+                    else
+                        reach = " further"
+                    end if
+                    call again%diagnostics%add(level_note, "held_weight", "the automatic "// &
+                                               "weight rho = "//trim(adjustl(rtext(b%rho)))// &
+                                               " stopped the backbone at modal amplitude "// &
+                                               trim(adjustl(rtext(last_amplitude(b))))// &
+                                               "; traced again with the wave's held weight "// &
+                                               trim(adjustl(rtext(b%rho_held)))//trim(reach))
+                    b = again
+                    return
+                end if
+            end if
+            b%diagnosis = b%diagnosis//"; traced again with the wave's held weight rho = "// &
+                          trim(adjustl(rtext(b%rho_held)))//", it did no better"
+        end subroutine retry_held
     end subroutine sector_backbones
+
+    !> The modal amplitude of a backbone's last point (0 without points).
+    real(dp) function last_amplitude(b)
+        type(modes_result_t), intent(in) :: b
+        last_amplitude = 0.0_dp
+        if (b%npoints > 0) last_amplitude = b%points(b%npoints)%p%parameter
+    end function last_amplitude
+
+    !> A weight or an amplitude in three digits.
+    function rtext(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=16) :: s
+        write (s, '(g0.3)') x
+    end function rtext
 end module stickslip_run_sector_modes

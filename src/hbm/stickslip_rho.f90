@@ -43,6 +43,18 @@
 !> mobility is 0.212 m/(N s) and rho = 0.106 m/(N s). The choice is invariant under a change
 !> of units: scaling M, C, K, the forces and the normal loads by s scales rho by 1 / s and
 !> leaves every iterate of the solve unchanged.
+!>
+!> The held weight of a sector (cyclic_held_rho), the remedy of a nonlinear mode that stops:
+!> each force channel taken in the travelling wave, D = d - e d_next (the neighbour's motion
+!> the sector's own times the phase e), on the sector's cyclic dynamics, and with the other
+!> channels held (the Schur complement 1 / [G^-1]_jj of the channels' mobility matrix G). A
+!> damper pressed between two platforms is a light body whose own mobility is large (13.6
+!> m/(N s) on examples/bladed_disk_damper.nml), but held at one contact it slips at the
+!> other only as fast as one platform moves against the next (0.020 at nodal diameter 1,
+!> 0.16 at 3, 0.95 at 12). It is not the automatic rho: on shrouds and platforms that touch
+!> at several points, holding the others leaves each point only its local flexibility, and
+!> the weight falls far below the band where the solve is fastest (doc/cyclic.md, "The
+!> weight of a sector").
 !> Knows nothing of the solver: only the model.
 module stickslip_rho
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -50,14 +62,21 @@ module stickslip_rho
     use stickslip_model, only: model_t, force_direction
     use stickslip_contact_set, only: contact_set_t, new_contact_set, channel_directions
     use stickslip_contact_element, only: channel_t, kinematics_gap
-    use stickslip_lapack, only: dgetrf, dgetrs
+    use stickslip_lapack, only: dgetrf, dgetrs, zgesv
+    use stickslip_cyclic, only: cyclic_t, cyclic_directions, cyclic_basis, sector_phase, &
+        nodal_diameter, structure_key
     implicit none
     private
     public :: automatic_rho, contact_mobility, rho_fraction, rho_from_channels, &
-        dominant_harmonic
+        dominant_harmonic, cyclic_held_rho, cyclic_mobility_matrix, held_rho
 
     !> The automatic rho as a fraction of the contact mobility (see the module header).
     real(dp), parameter :: rho_fraction = 0.5_dp
+
+    !> A channel whose mobility with the others held falls below this fraction of its own
+    !> counts as dependent on them (two contacts measuring the same relative motion, e.g. a
+    !> damper at nodal diameter 0, whose platforms move together): its own mobility is used.
+    real(dp), parameter :: dependent_fraction = 1.0e-8_dp
 
 contains
 
@@ -100,26 +119,194 @@ contains
         !> Fundamental and dominant forcing angular frequencies [rad/s].
         real(dp), intent(in) :: omega, big_omega
         real(dp) :: rho
-        real(dp) :: m(size(mob))
+        real(dp) :: f(size(mob)), a(size(mob))
         logical :: holds(size(mob))
-        type(channel_t) :: ch
-        integer :: c
         rho = 1.0_dp
         if (size(mob) == 0) return
-        do c = 1, size(mob)
+        call channel_units(cs, omega, big_omega, f, a, holds)
+        rho = rho_fraction*exp(sum(log(mob*f + a), mask=holds)/real(count(holds), dp))
+    end function rho_from_channels
+
+    !> The automatic rho from the force channels' mobility matrix `g` (G_ij = Omega D_i^T
+    !> (K + Omega^2 M)^-1 conj(D_j), Hermitian, nc x nc; cyclic_mobility_matrix), each channel
+    !> in its kinematic quantity's units and with its compliance as rho_from_channels, taken
+    !> with the other channels that hold a force held: 1 / [A^-1]_jj over those channels (A
+    !> the channels' matrix in those units, all channels when none holds), rho_fraction times
+    !> the geometric mean of these [m/(N s)]. A channel dependent on the others (its held
+    !> mobility below dependent_fraction of its own, or the matrix singular) keeps its own.
+    function held_rho(g, cs, omega, big_omega) result(rho)
+        !> The channels' mobility matrix [m/(N s)].
+        complex(dp), intent(in) :: g(:, :)
+        !> The contacts.
+        type(contact_set_t), intent(in) :: cs
+        !> Fundamental and the mobility's angular frequencies [rad/s].
+        real(dp), intent(in) :: omega, big_omega
+        real(dp) :: rho
+        real(dp) :: f(size(g, 1)), a(size(g, 1)), own(size(g, 1)), m(size(g, 1))
+        logical :: holds(size(g, 1))
+        complex(dp), allocatable :: sub(:, :), inv(:, :)
+        integer, allocatable :: idx(:), ipiv(:)
+        integer :: nc, i, j, nh, info
+        nc = size(g, 1)
+        rho = 1.0_dp
+        if (nc == 0) return
+        call channel_units(cs, omega, big_omega, f, a, holds)
+        idx = pack([(i, i=1, nc)], holds)
+        nh = size(idx)
+        allocate (sub(nh, nh), inv(nh, nh), ipiv(nh))
+        do j = 1, nh
+            do i = 1, nh
+                sub(i, j) = sqrt(f(idx(i))*f(idx(j)))*g(idx(i), idx(j))
+            end do
+            sub(j, j) = sub(j, j) + a(idx(j))
+            own(idx(j)) = real(sub(j, j), dp)
+        end do
+        inv = (0.0_dp, 0.0_dp)
+        do j = 1, nh
+            inv(j, j) = (1.0_dp, 0.0_dp)
+        end do
+        call zgesv(nh, nh, sub, nh, ipiv, inv, nh, info)
+        do j = 1, nh
+            m(idx(j)) = own(idx(j))
+            if (info /= 0) cycle
+            associate (held => 1.0_dp/real(inv(j, j), dp))
+                if (ieee_is_finite(held) .and. held > dependent_fraction*own(idx(j)) .and. &
+                    held <= own(idx(j))) m(idx(j)) = held
+            end associate
+        end do
+        rho = rho_fraction*exp(sum(log(m(idx)))/real(nh, dp))
+    end function held_rho
+
+    !> Per force channel: the factor `f` and the term `a` that make its mobility (Omega
+    !> d^T (K + Omega^2 M)^-1 d) one in its kinematic quantity's units, f mob + a (a gap
+    !> channel: omega times a gap, f = omega / Omega, a = omega times its compliance; a
+    !> velocity channel: f = 1, a = Omega times its compliance, a contact stiffness in
+    !> series), and whether it can hold a force (all when none can).
+    pure subroutine channel_units(cs, omega, big_omega, f, a, holds)
+        !> The contacts.
+        type(contact_set_t), intent(in) :: cs
+        !> Fundamental and the mobility's angular frequencies [rad/s].
+        real(dp), intent(in) :: omega, big_omega
+        !> Factor, added term [m/(N s)] and whether it holds, per channel.
+        real(dp), intent(out) :: f(:), a(:)
+        logical, intent(out) :: holds(:)
+        type(channel_t) :: ch
+        integer :: c
+        do c = 1, size(f)
             ch = cs%channel(c)
+            a(c) = 0.0_dp
             if (ch%kinematics == kinematics_gap) then
-                m(c) = mob(c)*omega/big_omega
-                if (ch%compliance > 0.0_dp) m(c) = m(c) + omega*ch%compliance
+                f(c) = omega/big_omega
+                if (ch%compliance > 0.0_dp) a(c) = omega*ch%compliance
             else
-                m(c) = mob(c)
-                if (ch%compliance > 0.0_dp) m(c) = m(c) + big_omega*ch%compliance
+                f(c) = 1.0_dp
+                if (ch%compliance > 0.0_dp) a(c) = big_omega*ch%compliance
             end if
             holds(c) = ch%holds
         end do
         if (.not. any(holds)) holds = .true.
-        rho = rho_fraction*exp(sum(log(m), mask=holds)/real(count(holds), dp))
-    end function rho_from_channels
+    end subroutine channel_units
+
+    !> The held weight rho of Psi for the sector `model` of the disk `cyc` [m/(N s)] (see
+    !> the module header): held_rho of the channels' mobility matrix in the travelling wave
+    !> of harmonic `harmonic` (default: the dominant forcing harmonic; a nonlinear mode
+    !> passes 1, its fundamental) at Omega = harmonic x model%omega
+    !> (cyclic_mobility_matrix). Falls back
+    !> on automatic_rho (the free sector's contact mobility) when the sector's cyclic
+    !> dynamic stiffness is singular. Always finite and > 0; 1 without contacts. `model` and
+    !> `cyc` must be valid (validate_model, validate_cyclic); no error can occur.
+    function cyclic_held_rho(model, cyc, harmonic) result(rho)
+        !> A validated sector.
+        type(model_t), intent(in) :: model
+        !> Its disk (engine order: the wave's), optionally with its prepared cyclic modes.
+        type(cyclic_t), intent(in) :: cyc
+        !> Optional: the harmonic whose wave the mobility is taken in (>= 1).
+        integer, intent(in), optional :: harmonic
+        real(dp) :: rho
+        type(contact_set_t) :: cs
+        complex(dp), allocatable :: g(:, :)
+        integer :: h, info
+        rho = 1.0_dp
+        if (model%ncontact() == 0) return
+        h = dominant_harmonic(model)
+        if (present(harmonic)) h = max(1, harmonic)
+        call new_contact_set(cs, model)
+        call cyclic_mobility_matrix(model, cyc, cs, h, g, info)
+        if (info == 0) rho = held_rho(g, cs, model%omega, h*model%omega)
+        if (info /= 0 .or. .not. (ieee_is_finite(rho) .and. rho > 0.0_dp)) &
+            rho = automatic_rho(model)
+    end function cyclic_held_rho
+
+    !> The mobility matrix of the sector's force channels in the travelling wave of harmonic
+    !> h: G = Omega D^T T (T^H (K + Omega^2 M) T)^-1 T^H conj(D) at Omega = h omega, with D
+    !> = d - e d_next (cyclic_directions) and T the cyclic basis of the phase e of harmonic h
+    !> (the resonance-free mobility of contact_mobility, in the wave) [m/(N s)], nc x nc
+    !> Hermitian. From cyc's prepared cyclic modes (the modal sum Omega sum_k B_k B_k^H /
+    !> (lambda_k + Omega^2), B = D^T T Phi) when they hold the diameter, else one complex
+    !> factorization. info /= 0: that stiffness is singular (g undefined).
+    subroutine cyclic_mobility_matrix(model, cyc, cs, h, g, info)
+        !> A validated sector.
+        type(model_t), intent(in) :: model
+        !> Its disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> The sector's contacts.
+        type(contact_set_t), intent(in) :: cs
+        !> The harmonic (>= 1).
+        integer, intent(in) :: h
+        !> The mobility matrix [m/(N s)].
+        complex(dp), allocatable, intent(out) :: g(:, :)
+        !> 0, or nonzero when the cyclic dynamic stiffness is singular.
+        integer, intent(out) :: info
+        complex(dp), allocatable :: dm(:, :), t(:, :), sc(:, :), b(:, :), y(:, :)
+        complex(dp) :: e
+        integer, allocatable :: ipiv(:)
+        integer :: n, nd, j
+        real(dp) :: big_omega
+        n = model%ndof
+        big_omega = h*model%omega
+        e = exp(cmplx(0.0_dp, sector_phase(h, cyc%engine_order, cyc%sectors, 1), dp))
+        dm = cyclic_directions(model, cyc, cs, e)
+        nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
+        info = 0
+        if (modal()) then
+            ! the prepared shapes T Phi of this phase: conjugated for p <= N/2
+            ! (stickslip_cyclic_modal)
+            associate (md => cyc%modes(nd))
+                if (modulo(h*cyc%engine_order, cyc%sectors) == nd) then
+                    b = matmul(transpose(dm), conjg(md%shapes))
+                else
+                    b = matmul(transpose(dm), md%shapes)
+                end if
+                do j = 1, size(b, 2)
+                    b(:, j) = b(:, j)/sqrt(md%lambda(j) + big_omega**2)
+                end do
+            end associate
+            g = big_omega*matmul(b, conjg(transpose(b)))
+            return
+        end if
+        t = cyclic_basis(cyc, n, e)
+        sc = matmul(conjg(transpose(t)), matmul(cmplx(model%stiffness + &
+                                                      big_omega**2*model%mass, 0.0_dp, dp), t))
+        b = matmul(transpose(dm), t)
+        y = conjg(transpose(b))
+        allocate (ipiv(size(sc, 1)))
+        call zgesv(size(sc, 1), size(y, 2), sc, size(sc, 1), ipiv, y, size(y, 1), info)
+        if (info == 0) g = big_omega*matmul(b, y)
+
+    contains
+
+        !> cyc's prepared modes belong to this sector, hold diameter nd, and make every
+        !> lambda_k + Omega^2 positive.
+        logical function modal()
+            modal = .false.
+            if (.not. allocated(cyc%modes)) return
+            if (cyc%modes_key /= structure_key(model)) return
+            if (nd > ubound(cyc%modes, 1)) return
+            if (.not. allocated(cyc%modes(nd)%lambda)) return
+            if (size(cyc%modes(nd)%shapes, 1) /= n) return
+            modal = all(cyc%modes(nd)%lambda + big_omega**2 > 0.0_dp)
+        end function modal
+    end subroutine cyclic_mobility_matrix
 
     !> The harmonic of the forcing term of largest |amplitude| x max |load shape| (h > 0; 1
     !> when the forcing is static): Omega = h omega is where the contact mobility is taken.

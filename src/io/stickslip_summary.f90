@@ -564,9 +564,10 @@ contains
     !> factorizations, cpu_seconds, diagnosis), then the effective case. With the backbones
     !> `per` of a sector's nodal `diameters` (res gathers their points): nodal_diameters and
     !> per diameter d mode_nd<d> (the mode traced there), complete_nd<d>, points_nd<d>,
-    !> unloaded_nd<d>, omega_stuck_nd<d>, omega_slipping_nd<d>, start_nd<d> and, with points,
-    !> omega_min_nd<d>, omega_max_nd<d>, damping_ratio_max_nd<d>, and diagnosis_nd<d> when there
-    !> is one. Error: stat io.
+    !> unloaded_nd<d>, omega_stuck_nd<d>, omega_slipping_nd<d>, start_nd<d>, rho_nd<d> (the
+    !> weight of its points), first_try_nd<d> when it was traced again with its wave's held
+    !> weight, with points omega_min_nd<d>, omega_max_nd<d>, damping_ratio_max_nd<d>, and
+    !> diagnosis_nd<d> when there is one. Error: stat io.
     subroutine write_modes_summary(dir, case, res, error, per, diameters)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir
@@ -634,6 +635,9 @@ contains
                     call put(u, "  omega_slipping_nd"//d//" = "//rtoa(b%omega_slipping), &
                              stat, msg)
                     call put(u, "  start_nd"//d//" = '"//trim(b%start)//"'", stat, msg)
+                    call put(u, "  rho_nd"//d//" = "//rtoa(b%rho), stat, msg)
+                    if (allocated(b%first_try)) call put(u, "  first_try_nd"//d//" = '"// &
+                                                         quote(b%first_try)//"'", stat, msg)
                     if (b%npoints > 0) then
                         associate (pts => b%points(1:b%npoints))
                             call put(u, "  omega_min_nd"//d//" = "//rtoa(minval(pts%p%omega)), &

@@ -23,7 +23,7 @@ module test_cyclic_fe
     use stickslip_cyclic_sparse, only: cyclic_sparse_frequencies, sparse_disk
     use stickslip_namelist, only: nml_file_t, read_namelist_file
     use stickslip_namelist_values, only: get_integers
-    use stickslip_case, only: case_t, read_case
+    use stickslip_case, only: case_t, read_case, modes_band
     use stickslip_case_cyclic, only: forced_diameters
     use stickslip_sorting, only: sort_ascending
     use testing, only: test_counter_t, check, check_error
@@ -57,6 +57,7 @@ contains
         call test_interface_modes(t, kmat, mmat, cyc)
         call test_interface_exact(t)
         call test_run_diameters(t)
+        call test_modes_band(t)
         call test_sparse_sector_refused(t)
     end subroutine run_cyclic_fe_tests
 
@@ -286,6 +287,40 @@ contains
         end function all_equal
     end subroutine test_run_diameters
 
+    !> The band where a run of modes measures a reduced sector's error (modes_band): H times
+    !> the highest frequency its backbones reach. On the damper disk's example (H = 20,
+    !> diameters 1, 2, 5..11) every stuck frequency is 2.887 rad/s, and diameter 1's
+    !> slipping one, 3.1397 (its backbone rises to it: summary.nml omega_slipping_nd1), is
+    !> the highest: 62.79 rad/s. A forced run has none (0: H times its omega). And a
+    !> &modes mode list of the wrong length on the CalculiX sector is refused before the
+    !> reduction runs (nothing reduced), not after it.
+    subroutine test_modes_band(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(nml_file_t) :: nml, forced
+        type(error_type), allocatable :: error
+        real(dp) :: band, none
+        call read_case(project_path("examples/bladed_disk_damper_modes.nml"), c, error)
+        if (.not. allocated(error)) call read_namelist_file(project_path( &
+            "examples/bladed_disk_damper_modes.nml"), nml, error)
+        if (.not. allocated(error)) call read_namelist_file(project_path( &
+            "examples/bladed_disk_damper.nml"), forced, error)
+        call check_error(t, error, "cyclic FE modes band: read the examples", .false.)
+        if (allocated(error)) return
+        band = modes_band(nml, c%cyclic%sector, c%cyclic%cyc, 20)
+        none = modes_band(forced, c%cyclic%sector, c%cyclic%cyc, 20)
+        call check(t, abs(band - 20.0_dp*3.1397075968891_dp) < 1.0e-9_dp*band .and. &
+                   none == 0.0_dp, "cyclic FE modes band: H times the backbones' highest "// &
+                   "frequency (diameter 1's slipping one), none for a sweep", &
+                   "band "//real_text(band)//", sweep "//real_text(none))
+        call read_case(edited_copy("fe_modelist_", "mode = 2, 2, 2, 2, 2, 2, 3, 3, 3, 3, 3, 3", &
+                                   "mode = 2, 3", "calculix_sector/modes"), c, error)
+        call check(t, message_has(error, "&modes mode: 2 values, but 12 nodal diameters "// &
+                   "are traced (&modes nodal_diameters)") .and. &
+                   c%reduction%report%reduced_dof == 0, "cyclic FE modes band: a wrong-length "// &
+                   "&modes mode refused before the reduction", message_of(error))
+    end subroutine test_modes_band
+
     !> The interface reduction's exactness on a sector with 5-DOF faces (6 sectors; faces
     !> 1..5 and 6..10, three interior DOFs, springs within and across): with the band
     !> holding the two lowest cyclic modes (their face motion at most rank 4), 4 interface
@@ -410,14 +445,20 @@ contains
         path = edited_copy("fe_kept_", "interface_modes = 12", "interface_modes = 0")
     end function faces_kept_copy
 
-    !> A scratch copy of the example case (tag `tag`) with the text `from` replaced by `to`
-    !> on every line; returns its path.
-    function edited_copy(tag, from, to) result(path)
+    !> A scratch copy of the example case (tag `tag`; `example`, default
+    !> "calculix_sector/case") with the text `from` replaced by `to` on every line; returns
+    !> its path.
+    function edited_copy(tag, from, to, example) result(path)
         character(len=*), intent(in) :: tag, from, to
+        character(len=*), intent(in), optional :: example
         character(len=:), allocatable :: path, source
         character(len=1000) :: line
         integer :: ui, uo, stat, a
-        source = scratch_copy("calculix_sector/case", tag)
+        if (present(example)) then
+            source = scratch_copy(example, tag)
+        else
+            source = scratch_copy("calculix_sector/case", tag)
+        end if
         path = source(1:len(source) - 4)//"_edited.nml"
         open (newunit=ui, file=source, status='old', action='read')
         open (newunit=uo, file=path, status='replace', action='write')
@@ -525,21 +566,24 @@ contains
                    "cyclic faces of a sector of a bladed disk (&cyclic) given by Matrix "// &
                    "Market files"), "cyclic FE interface: refused on an inline sector", &
                    message_of(error))
-    contains
-        logical function message_has(e, text)
-            type(error_type), allocatable, intent(in) :: e
-            character(len=*), intent(in) :: text
-            message_has = .false.
-            if (allocated(e)) message_has = index(e%message, text) > 0 .and. &
-                                            index(e%message, new_line('a')) == 0
-        end function message_has
-        function message_of(e) result(m)
-            type(error_type), allocatable, intent(in) :: e
-            character(len=:), allocatable :: m
-            m = "no error"
-            if (allocated(e)) m = e%message
-        end function message_of
     end subroutine test_interface_modes
+
+    !> `e` is one line holding `text`.
+    logical function message_has(e, text)
+        type(error_type), allocatable, intent(in) :: e
+        character(len=*), intent(in) :: text
+        message_has = .false.
+        if (allocated(e)) message_has = index(e%message, text) > 0 .and. &
+                                        index(e%message, new_line('a')) == 0
+    end function message_has
+
+    !> `e`'s message ("no error" without one).
+    function message_of(e) result(m)
+        type(error_type), allocatable, intent(in) :: e
+        character(len=:), allocatable :: m
+        m = "no error"
+        if (allocated(e)) m = e%message
+    end function message_of
 
     !> The full sector's K and M, and its &cyclic in full numbers (from case.nml).
     subroutine read_sector(kmat, mmat, cyc, error)

@@ -36,7 +36,8 @@ module stickslip_case
     use stickslip_case_cyclic, only: cyclic_case_t, read_cyclic_group, cyclic_case_model, &
         cyclic_boundary_dofs, set_cyclic_boundary_dofs, measure_diameter_errors, &
         diameter_findings
-    use stickslip_cyclic, only: cyclic_t
+    use stickslip_cyclic, only: cyclic_t, sector_phase, max_sectors
+    use stickslip_cyclic_limits, only: cyclic_limit_modes
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t, read_modes_group, modes_run_options_t
     implicit none
@@ -46,7 +47,7 @@ module stickslip_case
     public :: sweep_run_options_t, modes_run_options_t
     public :: max_sample_values
     public :: put, rtoa, ltoa, rlist, ilist, llist, quoted
-    public :: selected_dofs, default_output_dofs
+    public :: selected_dofs, default_output_dofs, modes_band
 
     !> The groups of a case file.
     character(len=10), parameter :: known_groups(15) = [character(len=10) :: 'system', &
@@ -238,6 +239,8 @@ contains
                 call read_cyclic_group(nml, case%model, case%cyclic, case%hbm%harmonics, &
                                        error, defer=.true.)
                 if (allocated(error)) return
+                call check_mode_list_early(nml, case%cyclic, error)
+                if (allocated(error)) return
                 keep = cyclic_boundary_dofs(case%cyclic%cyc)
                 case%reduction%keep_basis = case%full_field
                 call reduce_case_model(nml, case%reduction, sparse, case%system_files, &
@@ -247,8 +250,10 @@ contains
                 if (allocated(error)) return
                 cyc_full = case%cyclic%cyc
                 call set_cyclic_boundary_dofs(case%cyclic%cyc, keep)
-                ! the run's highest harmonic frequency
+                ! the run's highest harmonic frequency (a run of modes: of its backbones)
                 band = abs(case%model%omega)*case%hbm%harmonics
+                band = max(band, modes_band(nml, case%model, case%cyclic%cyc, &
+                                            case%hbm%harmonics))
                 if (allocated(case%reduction%report%error_frequencies)) band = &
                     max(band, maxval(case%reduction%report%error_frequencies))
                 ! the faces by interface modes (measured below with the rest)
@@ -416,6 +421,57 @@ contains
         eos = pack(given, given >= 0 .and. given <= cyc%sectors/2)
     end function run_engine_orders
 
+    !> The highest harmonic frequency a sector's run of modes reaches [rad/s]: H times the
+    !> highest stuck frequency (stickslip_cyclic_limits) of the modes it traces, &modes mode
+    !> (one, or one per diameter) in each diameter of run_engine_orders; its backbones start
+    !> there and their frequencies fall as the contacts slip (they may rise, as a damper's
+    !> diameter 1, to its slipping one: the larger of the two then). 0 for another method,
+    !> or when `model` is not valid or has no such mode (the errors come later, from the
+    !> checks of the model and of &modes).
+    function modes_band(nml, model, cyc, harmonics) result(band)
+        type(nml_file_t), intent(in) :: nml
+        !> The sector (reduced).
+        type(model_t), intent(in) :: model
+        !> Its disk.
+        type(cyclic_t), intent(in) :: cyc
+        !> The harmonics H.
+        integer, intent(in) :: harmonics
+        real(dp) :: band
+        type(cyclic_t) :: one
+        type(error_type), allocatable :: error
+        integer, allocatable :: eos(:), modes(:)
+        real(dp), allocatable :: ws(:), wf(:)
+        complex(dp), allocatable :: phis(:, :), phif(:, :)
+        complex(dp) :: e
+        logical :: found
+        integer :: i, k, mode
+        band = 0.0_dp
+        if (.not. modes_case(nml)) return
+        call validate_model(model, error)
+        if (allocated(error)) return
+        eos = run_engine_orders(nml, cyc)
+        call get_integers(nml, "modes", "mode", modes, found, max_sectors/2 + 1, error)
+        if (allocated(error)) return
+        if (.not. found) modes = [1]
+        if (size(modes) /= 1 .and. size(modes) /= size(eos)) return
+        one = cyc
+        do i = 1, size(eos)
+            mode = modes(min(i, size(modes)))
+            one%engine_order = eos(i)
+            e = exp(cmplx(0.0_dp, sector_phase(1, eos(i), cyc%sectors, 1), dp))
+            ! the diameter's stuck mode, and the slipping one most like it (as run_modes)
+            call cyclic_limit_modes(model, one, e, .true., ws, phis, error)
+            if (allocated(error)) return
+            if (mode < 1 .or. mode > size(ws)) cycle
+            band = max(band, harmonics*ws(mode))
+            call cyclic_limit_modes(model, one, e, .false., wf, phif, error)
+            if (allocated(error)) return
+            if (size(wf) == 0) cycle
+            k = maxloc(abs(matmul(conjg(transpose(phif)), matmul(model%mass, phis(:, mode)))), 1)
+            band = max(band, harmonics*wf(k))
+        end do
+    end function modes_band
+
     !> Whether the case computes nonlinear modes (a &modes group or &run method = 'modes'),
     !> which need no &forcing. A bad &run method is left to read_run_group.
     logical function modes_case(nml)
@@ -512,10 +568,8 @@ contains
                 which = "&modes nodal_diameters"
             end if
             if (size(case%modes%diameter_modes) /= traced) then
-                call group_error(nml, error, "&modes mode: "// &
-                                 itoa(size(case%modes%diameter_modes))//" values, but "// &
-                                 itoa(traced)//" nodal diameters are traced ("//which// &
-                                 "): give one mode, or one per diameter in their order")
+                call group_error(nml, error, mode_list_message(size(case%modes% &
+                                                                    diameter_modes), traced, which))
                 return
             end if
         end if
@@ -543,6 +597,50 @@ contains
             end associate
         end do
     end subroutine check_modes_diameters
+
+    !> The error of a &modes mode list of `nvalues` values where `traced` nodal diameters
+    !> (`which`) are traced.
+    function mode_list_message(nvalues, traced, which) result(msg)
+        integer, intent(in) :: nvalues, traced
+        character(len=*), intent(in) :: which
+        character(len=:), allocatable :: msg
+        msg = "&modes mode: "//itoa(nvalues)//" values, but "//itoa(traced)//" nodal "// &
+              "diameters are traced ("//which//"): give one mode, or one per diameter in "// &
+              "their order"
+    end function mode_list_message
+
+    !> A sector's run of modes whose &modes mode list has not one value per nodal diameter
+    !> traced: the error of check_modes_diameters, before the reduction (which takes
+    !> seconds on an FE sector) rather than after it.
+    subroutine check_mode_list_early(nml, cc, error)
+        type(nml_file_t), intent(in) :: nml
+        !> The &cyclic group as read.
+        type(cyclic_case_t), intent(in) :: cc
+        type(error_type), allocatable, intent(out) :: error
+        integer, allocatable :: modes(:), diameters(:)
+        type(error_type), allocatable :: ignored
+        logical :: found, given
+        integer :: traced
+        if (.not. modes_case(nml) .or. cc%model /= 'sector') return
+        ! a bad value is left to the group's own reading
+        call get_integers(nml, "modes", "mode", modes, found, max_sectors/2 + 1, ignored)
+        if (allocated(ignored) .or. .not. found) return
+        if (size(modes) <= 1) return
+        call get_integers(nml, "modes", "nodal_diameters", diameters, given, &
+                          max_sectors/2 + 1, ignored)
+        if (allocated(ignored)) return
+        if (given) then
+            traced = size(diameters)
+            if (size(modes) /= traced) call group_error(nml, error, mode_list_message( &
+                                                        size(modes), traced, &
+                                                        "&modes nodal_diameters"))
+        else
+            traced = cc%cyc%sectors/2 + 1
+            if (size(modes) /= traced) call group_error(nml, error, mode_list_message( &
+                                                        size(modes), traced, &
+                                                        "every diameter 0..N/2"))
+        end if
+    end subroutine check_mode_list_early
 
     !> For a model on which only the weighted residual runs (&run method 'hbm' or 'sweep',
     !> no &hbm verify_periods or harmonics_tol, and with `no_stability` no &hbm or &sweep

@@ -24,6 +24,7 @@ module test_cyclic_fe
     use stickslip_namelist, only: nml_file_t, read_namelist_file
     use stickslip_namelist_values, only: get_integers
     use stickslip_case, only: case_t, read_case, modes_band
+    use stickslip_case_reduction, only: write_reduction_cache_of
     use stickslip_case_cyclic, only: forced_diameters
     use stickslip_sorting, only: sort_ascending
     use testing, only: test_counter_t, check, check_error
@@ -58,6 +59,7 @@ contains
         call test_interface_exact(t)
         call test_run_diameters(t)
         call test_modes_band(t)
+        call test_cached_diameter_errors(t)
         call test_sparse_sector_refused(t)
     end subroutine run_cyclic_fe_tests
 
@@ -321,6 +323,59 @@ contains
                    "&modes mode refused before the reduction", message_of(error))
     end subroutine test_modes_band
 
+    !> The error per nodal diameter on a reduction-cache hit: the CalculiX case read (the
+    !> error measured on the full sector, kept with the reduced model), its cache written,
+    !> then read again (a hit, the full matrices not read): the same diameters and errors,
+    !> bit for bit. With engine order 5 (diameters the cache did not measure) the hit
+    !> measures nothing and says so in a note.
+    subroutine test_cached_diameter_errors(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: first, again, other
+        type(error_type), allocatable :: error
+        character(len=:), allocatable :: path, path5
+        logical :: noted, same
+        integer :: k, u
+        path = edited_copy("fe_cache_nd_", "interface_modes = 12", "interface_modes = 12")
+        call read_case(path, first, error)
+        if (.not. allocated(error)) then
+            if (first%reduction%cache_status == 'hit') then
+                ! a cache left by an earlier run of the tests: removed, read again
+                open (newunit=u, file=first%reduction%cache_path, status='old')
+                close (u, status='delete')
+                call read_case(path, first, error)
+            end if
+        end if
+        if (.not. allocated(error)) call write_reduction_cache_of(first%reduction)
+        if (.not. allocated(error)) call read_case(path, again, error)
+        call check_error(t, error, "cyclic FE cache: read twice", .false.)
+        if (allocated(error)) return
+        same = allocated(first%cyclic%diameters) .and. allocated(again%cyclic%diameters)
+        if (same) same = size(again%cyclic%diameters) == size(first%cyclic%diameters)
+        if (same) same = all(again%cyclic%diameters == first%cyclic%diameters) .and. &
+                         all(again%cyclic%diameter_errors == first%cyclic%diameter_errors)
+        call check(t, first%reduction%cache_status /= 'hit' .and. &
+                   again%reduction%cache_status == 'hit' .and. same, "cyclic FE cache: the "// &
+                   "error per nodal diameter restored on a hit, bit for bit", "first "// &
+                   trim(first%reduction%cache_status)//", then "// &
+                   trim(again%reduction%cache_status)//", restored "//merge("T", "F", same))
+        ! the same cache (its folder) for engine order 5: its diameters were not measured
+        path5 = path(1:len(path) - 4)//"_eo5.nml"
+        call copy_edited(path, path5, "engine_order = 3", "engine_order = 5")
+        call read_case(path5, other, error)
+        call check_error(t, error, "cyclic FE cache: engine order 5", .false.)
+        if (allocated(error)) return
+        noted = .false.
+        if (allocated(other%reduction%diagnostics%items)) then
+            do k = 1, size(other%reduction%diagnostics%items)
+                noted = noted .or. other%reduction%diagnostics%items(k)%key == &
+                        "reduction_error_nd_cached"
+            end do
+        end if
+        call check(t, other%reduction%cache_status == 'hit' .and. &
+                   .not. allocated(other%cyclic%diameters) .and. noted, "cyclic FE cache: "// &
+                   "diameters the cache did not measure: none restored, a note says so")
+    end subroutine test_cached_diameter_errors
+
     !> The interface reduction's exactness on a sector with 5-DOF faces (6 sectors; faces
     !> 1..5 and 6..10, three interior DOFs, springs within and across): with the band
     !> holding the two lowest cyclic modes (their face motion at most rank 4), 4 interface
@@ -452,14 +507,20 @@ contains
         character(len=*), intent(in) :: tag, from, to
         character(len=*), intent(in), optional :: example
         character(len=:), allocatable :: path, source
-        character(len=1000) :: line
-        integer :: ui, uo, stat, a
         if (present(example)) then
             source = scratch_copy(example, tag)
         else
             source = scratch_copy("calculix_sector/case", tag)
         end if
         path = source(1:len(source) - 4)//"_edited.nml"
+        call copy_edited(source, path, from, to)
+    end function edited_copy
+
+    !> The text file `source` copied to `path` with `from` replaced by `to` on every line.
+    subroutine copy_edited(source, path, from, to)
+        character(len=*), intent(in) :: source, path, from, to
+        character(len=1000) :: line
+        integer :: ui, uo, stat, a
         open (newunit=ui, file=source, status='old', action='read')
         open (newunit=uo, file=path, status='replace', action='write')
         do
@@ -471,7 +532,7 @@ contains
         end do
         close (ui)
         close (uo)
-    end function edited_copy
+    end subroutine copy_edited
 
     !> &reduction interface_modes = 12, the example's setting: each 72-DOF face by 12
     !> interface modes, the sector 60 DOFs instead of 180; its frequencies per forced

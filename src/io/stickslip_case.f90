@@ -32,12 +32,13 @@ module stickslip_case
     use stickslip_case_friction, only: read_friction_group, friction_form_t
     use stickslip_case_microslip, only: read_microslip_group
     use stickslip_iwan_element, only: iwan_element_t
-    use stickslip_diagnostics, only: diagnostics_t, level_warning
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_note
     use stickslip_case_cyclic, only: cyclic_case_t, read_cyclic_group, cyclic_case_model, &
         cyclic_boundary_dofs, set_cyclic_boundary_dofs, measure_diameter_errors, &
-        diameter_findings
+        diameter_findings, forced_diameters
     use stickslip_cyclic, only: cyclic_t, sector_phase, max_sectors
     use stickslip_cyclic_limits, only: cyclic_limit_modes
+    use stickslip_reduction, only: reduction_report_t
     use stickslip_case_studies, only: read_study_group, read_sweep_group, read_robustness_group, &
         sweep_run_options_t, read_modes_group, modes_run_options_t
     implicit none
@@ -272,6 +273,29 @@ contains
                                                  case%cyclic%cyc))
                     if (allocated(error)) return
                     call diameter_findings(case%cyclic, case%reduction%diagnostics)
+                    ! kept with the model by the cache, for the runs that read it
+                    if (allocated(case%cyclic%diameters)) call keep_diameter_errors( &
+                        case%reduction%report, case%cyclic, band, &
+                        case%reduction%interface_modes)
+                else if (case%reduction%error_estimate) then
+                    ! a cache hit: the errors measured when the cache was written, when they
+                    ! cover this run's diameters and band
+                    call restore_diameter_errors(case%reduction%report, case%cyclic, band, &
+                                                 case%reduction%interface_modes, &
+                                                 forced_diameters(case%cyclic%cyc, &
+                                                                  case%hbm%harmonics, &
+                                                                  case%hbm%odd_only, &
+                                                                  run_engine_orders(nml, &
+                                                                  case%cyclic%cyc)))
+                    if (allocated(case%cyclic%diameters)) then
+                        call diameter_findings(case%cyclic, case%reduction%diagnostics)
+                    else
+                        call case%reduction%diagnostics%add(level_note, &
+                            "reduction_error_nd_cached", "reduction: the error per nodal "// &
+                            "diameter is not measured in this run: the reduced model came "// &
+                            "from the cache, whose measure covers other diameters or a "// &
+                            "lower band (&reduction cache = 'off' measures it)")
+                    end if
                 end if
             else
                 case%reduction%keep_basis = case%full_field
@@ -420,6 +444,48 @@ contains
         if (allocated(error) .or. .not. found) return
         eos = pack(given, given >= 0 .and. given <= cyc%sectors/2)
     end function run_engine_orders
+
+    !> Keep a sector's measured error per nodal diameter (cc, measured up to `band` with
+    !> `faces` interface modes a face) in the reduction's report, which the cache stores.
+    subroutine keep_diameter_errors(report, cc, band, faces)
+        type(reduction_report_t), intent(inout) :: report
+        type(cyclic_case_t), intent(in) :: cc
+        real(dp), intent(in) :: band
+        integer, intent(in) :: faces
+        report%diameters = cc%diameters
+        report%diameter_errors = cc%diameter_errors
+        report%diameter_lowest = cc%diameter_lowest
+        report%diameter_band = band
+        report%diameter_faces = faces
+    end subroutine keep_diameter_errors
+
+    !> On a cache hit: the error per nodal diameter of the diameters `wanted` into cc from
+    !> the cached report, when it measured each of them up to at least `band` [rad/s] (with
+    !> interface modes, exactly `band`: their shapes depend on it) with the same `faces`
+    !> interface modes a face; cc%diameters stays unallocated otherwise.
+    subroutine restore_diameter_errors(report, cc, band, faces, wanted)
+        type(reduction_report_t), intent(in) :: report
+        type(cyclic_case_t), intent(inout) :: cc
+        real(dp), intent(in) :: band
+        integer, intent(in) :: faces, wanted(:)
+        integer :: k, j
+        integer, allocatable :: at(:)
+        if (.not. allocated(report%diameters)) return
+        if (report%diameter_faces /= faces .or. report%diameter_band < band) return
+        ! interface modes take their shapes from the band: the same band, the same sector
+        if (faces > 0 .and. report%diameter_band /= band) return
+        allocate (at(size(wanted)))
+        do k = 1, size(wanted)
+            at(k) = 0
+            do j = 1, size(report%diameters)
+                if (report%diameters(j) == wanted(k)) at(k) = j
+            end do
+            if (at(k) == 0) return
+        end do
+        cc%diameters = wanted
+        cc%diameter_errors = report%diameter_errors(at)
+        cc%diameter_lowest = report%diameter_lowest(at)
+    end subroutine restore_diameter_errors
 
     !> The highest harmonic frequency a sector's run of modes reaches [rad/s]: H times the
     !> highest stuck frequency (stickslip_cyclic_limits) of the modes it traces, &modes mode

@@ -5,9 +5,10 @@
 !>
 !> The file (unformatted stream, native byte order): the text 'stickslip reduction cache',
 !> the format version and the integer 1 (another version or byte order reads as another
-!> format), the 64-bit key, the sizes (n, nb, nm, nl, nr, number of error frequencies), the
-!> boundary and interior DOFs, the reduced M, K, C, the constraint modes, the modes and their
-!> frequencies, the load vectors, the modal damping ratio, the report, and last the FNV-1a
+!> format), the 64-bit key, the sizes (n, nb, nm, nl, nr, number of error frequencies, of
+!> nodal diameters measured), the boundary and interior DOFs, the reduced M, K, C, the
+!> constraint modes, the modes and their frequencies, the load vectors, the modal damping
+!> ratio, the report (a sector's with its error per nodal diameter), and last the FNV-1a
 !> checksum of everything after the key. It is written under a temporary name (created
 !> exclusively) and renamed over the final one, so a reader sees a whole file, an old or a
 !> new one. A reader checks the header, the key, the file size against the sizes, the sizes
@@ -34,12 +35,13 @@ module stickslip_reduction_cache
                           cache_foreign = 4
     !> The format version (part of the header): raise it with any change of the layout, so
     !> that an older file reads as another format (replaced silently), not as a damaged one.
-    integer(int32), parameter :: cache_format = 1
+    integer(int32), parameter :: cache_format = 2
     character(len=*), parameter :: magic = 'stickslip reduction cache'
     !> Bytes read at a time when hashing a file.
     integer, parameter :: chunk = 8*1024*1024
-    !> Most error frequencies a file may announce (the rule takes at most 8).
-    integer, parameter :: max_frequencies = 1000
+    !> Most error frequencies a file may announce (the rule takes at most 8), and most nodal
+    !> diameters (at most max_sectors / 2 + 1).
+    integer, parameter :: max_frequencies = 1000, max_diameters = 1000
 
 contains
 
@@ -102,7 +104,7 @@ contains
         !> Set on failure.
         type(error_type), allocatable, intent(out) :: error
         type(hash_t) :: h
-        integer :: u, stat, nf
+        integer :: u, stat, nf, nd
         character(len=512) :: msg
         character(len=4096) :: temporary
         call open_temporary(dir, name, u, error, binary=.true.)
@@ -110,11 +112,14 @@ contains
         inquire (unit=u, name=temporary)
         nf = 0
         if (allocated(report%error_frequencies)) nf = size(report%error_frequencies)
+        nd = 0
+        if (allocated(report%diameters) .and. allocated(report%diameter_errors) .and. &
+            allocated(report%diameter_lowest)) nd = size(report%diameters)
         stat = 0
         msg = ''
         write (u, iostat=stat, iomsg=msg) magic, cache_format, 1_int32, key
         associate (r => reduced)
-            call put_i([r%n, r%nb, r%nm, r%nl, r%nr, nf])
+            call put_i([r%n, r%nb, r%nm, r%nl, r%nr, nf, nd])
             call put_i(r%boundary)
             call put_i(r%interior)
             call put_r(r%mass)
@@ -134,6 +139,12 @@ contains
             if (nf > 0) call put_r(reshape(p%error_frequencies, [nf, 1]))
             call put_c(p%method)
             call put_c(p%error_method)
+            call put_i([p%diameter_faces])
+            call put_r(reshape([p%diameter_band], [1, 1]))
+            if (nd > 0) then
+                call put_i(p%diameters)
+                call put_r(reshape([p%diameter_errors, p%diameter_lowest], [nd, 2]))
+            end if
         end associate
         if (stat == 0) write (u, iostat=stat, iomsg=msg) h%value()
         call close_and_rename(dir, name, u, stat, msg, error)
@@ -187,9 +198,9 @@ contains
         character(len=len(magic)) :: text
         integer(int32) :: format, one
         integer(int64) :: stored_key, stored_sum, total
-        integer :: u, stat, ni, nf, dims(6), ints(7), j
-        real(dp), allocatable :: col(:, :)
-        real(dp) :: reals(6, 1), ratio(2, 1)
+        integer :: u, stat, ni, nf, nd, dims(7), ints(7), j, faces(1)
+        real(dp), allocatable :: col(:, :), per_nd(:, :)
+        real(dp) :: reals(6, 1), ratio(2, 1), band(1, 1)
         logical :: exists
         logical, allocatable :: seen(:)
         why = ''
@@ -241,9 +252,10 @@ contains
         end if
         ni = dims(1) - dims(2)
         nf = dims(6)
+        nd = dims(7)
         if (dims(1) /= n .or. dims(2) < 1 .or. ni < 1 .or. dims(3) < 0 .or. dims(4) < 0 .or. &
             dims(3) + dims(4) > ni .or. dims(5) /= dims(2) + dims(3) + dims(4) .or. nf < 0 .or. &
-            nf > max_frequencies) then
+            nf > max_frequencies .or. nd < 0 .or. nd > max_diameters) then
             why = "sizes that do not fit together (or another model: N = "// &
                   itoa(dims(1))//", expected "//itoa(n)//")"
             call done()
@@ -288,6 +300,13 @@ contains
         end if
         call get_c(report%method)
         call get_c(report%error_method)
+        call get_i(faces)
+        call get_r(band)
+        allocate (report%diameters(nd), per_nd(nd, 2))
+        if (nd > 0) then
+            call get_i(report%diameters)
+            call get_r(per_nd)
+        end if
         if (stat == 0) read (u, iostat=stat) stored_sum
         if (stat /= 0) then
             why = "truncated"
@@ -315,7 +334,8 @@ contains
                    all(ieee_is_finite(reduced%modes)) .and. &
                    all(ieee_is_finite(reduced%frequencies)) .and. &
                    all(ieee_is_finite(reduced%loads)) .and. all(ieee_is_finite(reals)) .and. &
-                   all(ieee_is_finite(ratio)))) then
+                   all(ieee_is_finite(ratio)) .and. all(ieee_is_finite(band)) .and. &
+                   all(ieee_is_finite(per_nd)))) then
             why = "a value that is not finite"
             return
         end if
@@ -337,6 +357,12 @@ contains
         else
             allocate (report%error_frequencies(0))
         end if
+        report%diameter_faces = faces(1)
+        report%diameter_band = band(1, 1)
+        report%diameter_errors = per_nd(:, 1)
+        report%diameter_lowest = per_nd(:, 2)
+        if (nd == 0) deallocate (report%diameters, report%diameter_errors, &
+                                 report%diameter_lowest)
         if (report%full_dof /= n .or. report%reduced_dof /= reduced%nr .or. &
             report%modes /= reduced%nm .or. report%load_vectors /= reduced%nl) then
             why = "a report that does not match its model"
@@ -385,22 +411,24 @@ contains
         end subroutine get_c
     end subroutine read_reduction_cache
 
-    !> Bytes of a cache file with sizes dims = [n, nb, nm, nl, nr, nf].
+    !> Bytes of a cache file with sizes dims = [n, nb, nm, nl, nr, nf, nd].
     pure integer(int64) function expected_size(dims) result(bytes)
         !> The sizes as the file gives them.
-        integer, intent(in) :: dims(6)
-        integer(int64) :: n, nb, nm, nl, nr, nf, ni
+        integer, intent(in) :: dims(7)
+        integer(int64) :: n, nb, nm, nl, nr, nf, ni, nd
         n = dims(1)
         nb = dims(2)
         nm = dims(3)
         nl = dims(4)
         nr = dims(5)
         nf = dims(6)
+        nd = dims(7)
         ni = n - nb
         bytes = len(magic) + 4 + 4 + 8                      ! header and key
-        bytes = bytes + 6*4 + 4*n                           ! sizes, boundary and interior
+        bytes = bytes + 7*4 + 4*n                           ! sizes, boundary and interior
         bytes = bytes + 8*(3*nr*nr + ni*nb + ni*nm + nm + ni*nl + 2)
         bytes = bytes + 7*4 + 6*8 + 8*nf + 2*16             ! the report
+        bytes = bytes + 4 + 8 + nd*(4 + 2*8)                ! its error per nodal diameter
         bytes = bytes + 8                                   ! checksum
     end function expected_size
 end module stickslip_reduction_cache

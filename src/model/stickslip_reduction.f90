@@ -127,6 +127,15 @@ module stickslip_reduction
         !> max|G|, as `error`).
         integer :: error_levels = 0
         real(dp) :: error_change = 0.0_dp
+        !> A sector's reduction (set by the caller, stickslip_case): the error per nodal
+        !> diameter measured with it, kept with the model by the reduction cache: the
+        !> diameters, their largest relative frequency errors and lowest frequencies
+        !> [rad/s], the band they were measured up to [rad/s] and the interface modes per
+        !> face in effect (-1: not measured).
+        integer, allocatable :: diameters(:)
+        real(dp), allocatable :: diameter_errors(:), diameter_lowest(:)
+        real(dp) :: diameter_band = 0.0_dp
+        integer :: diameter_faces = -1
     end type reduction_report_t
 
 contains

@@ -28,7 +28,7 @@ module test_cyclic_fe
     use stickslip_case_cyclic, only: forced_diameters
     use stickslip_sorting, only: sort_ascending
     use testing, only: test_counter_t, check, check_error
-    use fixtures, only: project_path, scratch, write_lines, enter_project_root
+    use fixtures, only: project_path, scratch, write_lines, enter_project_root, msg
     use stickslip_basis, only: basis_t, new_basis
     use stickslip_dynamics, only: dynamics_t
     use stickslip_cyclic_dynamics, only: new_cyclic_dynamics
@@ -320,7 +320,7 @@ contains
         call check(t, message_has(error, "&modes mode: 2 values, but 12 nodal diameters "// &
                    "are traced (&modes nodal_diameters)") .and. &
                    c%reduction%report%reduced_dof == 0, "cyclic FE modes band: a wrong-length "// &
-                   "&modes mode refused before the reduction", message_of(error))
+                   "&modes mode refused before the reduction", msg(error))
     end subroutine test_modes_band
 
     !> The error per nodal diameter on a reduction-cache hit: the CalculiX case read (the
@@ -612,11 +612,11 @@ contains
                        c, error)
         call check(t, message_has(error, "&reduction interface_modes = 72: must be less "// &
                    "than the 72 DOFs"), "cyclic FE interface: 72 interface modes refused "// &
-                   "(the face has 72 DOFs)", message_of(error))
+                   "(the face has 72 DOFs)", msg(error))
         call read_case(edited_copy("fe_ifm1_", "interface_modes = 12", "interface_modes = -1"), &
                        c, error)
         call check(t, message_has(error, "&reduction interface_modes = -1: must be >= 0"), &
-                   "cyclic FE interface: a negative count refused", message_of(error))
+                   "cyclic FE interface: a negative count refused", msg(error))
         ! the lumped disk's inline sector: nothing to reduce
         path = scratch_copy("bladed_disk", "fe_if_lumped_")
         open (newunit=u, file=path, status='old', position='append', action='write')
@@ -626,7 +626,7 @@ contains
         call check(t, message_has(error, "&reduction interface_modes = 2: reduces the "// &
                    "cyclic faces of a sector of a bladed disk (&cyclic) given by Matrix "// &
                    "Market files"), "cyclic FE interface: refused on an inline sector", &
-                   message_of(error))
+                   msg(error))
     end subroutine test_interface_modes
 
     !> `e` is one line holding `text`.
@@ -637,14 +637,6 @@ contains
         if (allocated(e)) message_has = index(e%message, text) > 0 .and. &
                                         index(e%message, new_line('a')) == 0
     end function message_has
-
-    !> `e`'s message ("no error" without one).
-    function message_of(e) result(m)
-        type(error_type), allocatable, intent(in) :: e
-        character(len=:), allocatable :: m
-        m = "no error"
-        if (allocated(e)) m = e%message
-    end function message_of
 
     !> The full sector's K and M, and its &cyclic in full numbers (from case.nml).
     subroutine read_sector(kmat, mmat, cyc, error)

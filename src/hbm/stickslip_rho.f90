@@ -64,7 +64,7 @@ module stickslip_rho
     use stickslip_contact_element, only: channel_t, kinematics_gap
     use stickslip_lapack, only: dgetrf, dgetrs, zgesv
     use stickslip_cyclic, only: cyclic_t, cyclic_directions, cyclic_basis, sector_phase, &
-        nodal_diameter, structure_key
+        nodal_diameter, structure_key, conjugate_shapes
     implicit none
     private
     public :: automatic_rho, contact_mobility, rho_fraction, rho_from_channels, &
@@ -127,7 +127,7 @@ contains
         rho = rho_fraction*exp(sum(log(mob*f + a), mask=holds)/real(count(holds), dp))
     end function rho_from_channels
 
-    !> The automatic rho from the force channels' mobility matrix `g` (G_ij = Omega D_i^T
+    !> The held weight from the force channels' mobility matrix `g` (G_ij = Omega D_i^T
     !> (K + Omega^2 M)^-1 conj(D_j), Hermitian, nc x nc; cyclic_mobility_matrix), each channel
     !> in its kinematic quantity's units and with its compliance as rho_from_channels, taken
     !> with the other channels that hold a force held: 1 / [A^-1]_jj over those channels (A
@@ -210,10 +210,9 @@ contains
     !> The held weight rho of Psi for the sector `model` of the disk `cyc` [m/(N s)] (see
     !> the module header): held_rho of the channels' mobility matrix in the travelling wave
     !> of harmonic `harmonic` (default: the dominant forcing harmonic; a nonlinear mode
-    !> passes 1, its fundamental) at Omega = harmonic x model%omega
-    !> (cyclic_mobility_matrix). Falls back
-    !> on automatic_rho (the free sector's contact mobility) when the sector's cyclic
-    !> dynamic stiffness is singular. Always finite and > 0; 1 without contacts. `model` and
+    !> passes 1, its fundamental) at Omega = harmonic x model%omega (cyclic_mobility_matrix).
+    !> Falls back on automatic_rho (the free sector's contact mobility) when the sector's
+    !> cyclic dynamic stiffness is singular. Always finite and > 0; 1 without contacts. `model` and
     !> `cyc` must be valid (validate_model, validate_cyclic); no error can occur.
     function cyclic_held_rho(model, cyc, harmonic) result(rho)
         !> A validated sector.
@@ -269,10 +268,9 @@ contains
         nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
         info = 0
         if (modal()) then
-            ! the prepared shapes T Phi of this phase: conjugated for p <= N/2
-            ! (stickslip_cyclic_modal)
+            ! the prepared shapes T Phi of this phase
             associate (md => cyc%modes(nd))
-                if (modulo(h*cyc%engine_order, cyc%sectors) == nd) then
+                if (conjugate_shapes(h, cyc%engine_order, cyc%sectors)) then
                     b = matmul(transpose(dm), conjg(md%shapes))
                 else
                     b = matmul(transpose(dm), md%shapes)

@@ -617,8 +617,7 @@ contains
         type(nml_file_t), intent(in) :: nml
         type(case_t), intent(in) :: case
         type(error_type), allocatable, intent(out) :: error
-        integer :: k, n, traced
-        character(len=:), allocatable :: which
+        integer :: k, n
         if (allocated(case%modes%diameter_modes)) then
             if (.not. (case%cyclic%given .and. case%cyclic%model == 'sector')) then
                 call group_error(nml, error, "&modes mode: "// &
@@ -627,17 +626,9 @@ contains
                                  "(&cyclic with model = 'sector'); give one mode")
                 return
             end if
-            traced = case%cyclic%cyc%sectors/2 + 1
-            which = "every diameter 0..N/2"
-            if (allocated(case%modes%nodal_diameters)) then
-                traced = size(case%modes%nodal_diameters)
-                which = "&modes nodal_diameters"
-            end if
-            if (size(case%modes%diameter_modes) /= traced) then
-                call group_error(nml, error, mode_list_message(size(case%modes% &
-                                                                    diameter_modes), traced, which))
-                return
-            end if
+            call check_mode_count(nml, size(case%modes%diameter_modes), &
+                                  case%cyclic%cyc%sectors, error, case%modes%nodal_diameters)
+            if (allocated(error)) return
         end if
         if (.not. allocated(case%modes%nodal_diameters)) return
         if (.not. (case%cyclic%given .and. case%cyclic%model == 'sector')) then
@@ -664,20 +655,32 @@ contains
         end do
     end subroutine check_modes_diameters
 
-    !> The error of a &modes mode list of `nvalues` values where `traced` nodal diameters
-    !> (`which`) are traced.
-    function mode_list_message(nvalues, traced, which) result(msg)
-        integer, intent(in) :: nvalues, traced
-        character(len=*), intent(in) :: which
-        character(len=:), allocatable :: msg
-        msg = "&modes mode: "//itoa(nvalues)//" values, but "//itoa(traced)//" nodal "// &
-              "diameters are traced ("//which//"): give one mode, or one per diameter in "// &
-              "their order"
-    end function mode_list_message
+    !> A &modes mode list of `nvalues` values (more than one) on a disk of `sectors`
+    !> sectors: an error naming &modes mode unless there is one value per nodal diameter
+    !> traced (`diameters`, &modes nodal_diameters when given, else every diameter 0..N/2).
+    subroutine check_mode_count(nml, nvalues, sectors, error, diameters)
+        type(nml_file_t), intent(in) :: nml
+        integer, intent(in) :: nvalues, sectors
+        type(error_type), allocatable, intent(out) :: error
+        integer, intent(in), optional :: diameters(:)
+        integer :: traced
+        character(len=:), allocatable :: which
+        traced = sectors/2 + 1
+        which = "every diameter 0..N/2"
+        if (present(diameters)) then
+            traced = size(diameters)
+            which = "&modes nodal_diameters"
+        end if
+        if (nvalues /= traced) call group_error(nml, error, "&modes mode: "//itoa(nvalues)// &
+                                                " values, but "//itoa(traced)//" nodal "// &
+                                                "diameters are traced ("//which//"): give "// &
+                                                "one mode, or one per diameter in their order")
+    end subroutine check_mode_count
 
     !> A sector's run of modes whose &modes mode list has not one value per nodal diameter
     !> traced: the error of check_modes_diameters, before the reduction (which takes
-    !> seconds on an FE sector) rather than after it.
+    !> seconds on an FE sector) rather than after it. A bad value is left to the group's
+    !> own reading.
     subroutine check_mode_list_early(nml, cc, error)
         type(nml_file_t), intent(in) :: nml
         !> The &cyclic group as read.
@@ -686,9 +689,7 @@ contains
         integer, allocatable :: modes(:), diameters(:)
         type(error_type), allocatable :: ignored
         logical :: found, given
-        integer :: traced
         if (.not. modes_case(nml) .or. cc%model /= 'sector') return
-        ! a bad value is left to the group's own reading
         call get_integers(nml, "modes", "mode", modes, found, max_sectors/2 + 1, ignored)
         if (allocated(ignored) .or. .not. found) return
         if (size(modes) <= 1) return
@@ -696,15 +697,9 @@ contains
                           max_sectors/2 + 1, ignored)
         if (allocated(ignored)) return
         if (given) then
-            traced = size(diameters)
-            if (size(modes) /= traced) call group_error(nml, error, mode_list_message( &
-                                                        size(modes), traced, &
-                                                        "&modes nodal_diameters"))
+            call check_mode_count(nml, size(modes), cc%cyc%sectors, error, diameters)
         else
-            traced = cc%cyc%sectors/2 + 1
-            if (size(modes) /= traced) call group_error(nml, error, mode_list_message( &
-                                                        size(modes), traced, &
-                                                        "every diameter 0..N/2"))
+            call check_mode_count(nml, size(modes), cc%cyc%sectors, error)
         end if
     end subroutine check_mode_list_early
 

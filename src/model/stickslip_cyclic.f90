@@ -32,8 +32,8 @@ module stickslip_cyclic
     implicit none
     private
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
-        cyclic_frequencies, sector_phase, channel_displacements, next_of, cyclic_basis, &
-        structure_key, disk_dof_table, channel_next_dofs, cyclic_directions, &
+        conjugate_shapes, cyclic_frequencies, sector_phase, channel_displacements, next_of, &
+        cyclic_basis, structure_key, disk_dof_table, channel_next_dofs, cyclic_directions, &
         cyclic_preload_force, phased_copies, hermitian_pencil, cyclic_pencil
 
     !> Most sectors of a disk.
@@ -315,6 +315,16 @@ contains
         nd = modulo(h*eo, n)
         if (nd > n/2) nd = n - nd
     end function nodal_diameter
+
+    !> Whether harmonic h under engine order eo on n sectors uses the conjugates of its
+    !> diameter's prepared shapes (cyclic_modes_t): its inter-sector phase exp(-i 2 pi p /
+    !> N), p = h eo modulo n, is the conjugate of the diameter's basis when p <= n/2
+    !> (stickslip_cyclic_modal).
+    pure logical function conjugate_shapes(h, eo, n)
+        !> Harmonic, engine order, sectors.
+        integer, intent(in) :: h, eo, n
+        conjugate_shapes = modulo(h*eo, n) == nodal_diameter(h, eo, n)
+    end function conjugate_shapes
 
     !> The phase of harmonic h of sector s relative to sector 0 in a travelling wave of
     !> engine order eo on n sectors: -h 2 pi eo s / n [rad] (X_s = X_0 exp(i phase)).

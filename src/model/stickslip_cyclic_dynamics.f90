@@ -26,7 +26,7 @@ module stickslip_cyclic_dynamics
         static_singular_threshold, smallest_singular, note_conditioning
     use stickslip_contact_set, only: contact_set_t, new_contact_set
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, sector_phase, cyclic_basis, &
-        nodal_diameter, structure_key, cyclic_directions, cyclic_preload_force
+        nodal_diameter, structure_key, cyclic_directions, cyclic_preload_force, conjugate_shapes
     use stickslip_lapack, only: zgetrf, zgetrs, zgecon, zlange
     use stickslip_dense_products, only: cmat_mul
     implicit none
@@ -243,15 +243,14 @@ contains
         logical function modal_harmonic(h, conj_shapes)
             integer, intent(in) :: h
             logical, intent(out) :: conj_shapes
-            integer :: p, nd
+            integer :: nd
             modal_harmonic = .false.
             conj_shapes = .false.
             if (.not. modal) return
-            p = modulo(h*cyc%engine_order, cyc%sectors)
             nd = nodal_diameter(h, cyc%engine_order, cyc%sectors)
             if (cyc%modes(nd)%nd /= nd) return
             if (size(cyc%modes(nd)%shapes, 1) /= n) return
-            conj_shapes = p == nd
+            conj_shapes = conjugate_shapes(h, cyc%engine_order, cyc%sectors)
             modal_harmonic = .true.
         end function modal_harmonic
 

@@ -29,6 +29,7 @@ module stickslip_cli
     use stickslip_contact_set, only: contact_set_t
     use stickslip_contact_law, only: state_open, state_slip
     use stickslip_summary, only: energy_balance_error, reference_balance_error, sector_stability
+    use stickslip_wave_symmetry, only: wave_symmetry_t, stability_spans
     use stickslip_gnuplot, only: run_gnuplot, rename_pictures
     use stickslip_files, only: remove_file
     use stickslip_blas_threads, only: limit_blas_threads, parallel_threads, blas_library
@@ -1004,18 +1005,23 @@ contains
     end function stick_text
 
     !> For the stability of a sector's wave: " (the assembled <n>-DOF disk's Floquet
-    !> multipliers: every perturbation, not only the wave's symmetry)"; '' otherwise.
+    !> multipliers: every perturbation, not only the wave's symmetry; its exact flow over
+    !> T/<m> by that symmetry)"; '' otherwise.
     function disk_scope(case) result(text)
         !> The case.
         type(case_t), intent(in) :: case
         character(len=:), allocatable :: text
+        integer :: m
         text = ""
         if (.not. sector_stability(case)) return
         associate (c => case%cyclic%cyc)
+            m = stability_spans(wave_symmetry_t(c%sectors, c%engine_order), case%hbm%samples)
             text = " (the assembled "//itoa(c%sectors*(case%cyclic%sector%ndof - &
                                                      size(c%right)))// &
                    "-DOF disk's Floquet multipliers: every perturbation, not only the "// &
-                   "wave's symmetry)"
+                   "wave's symmetry"
+            if (m > 1) text = text//"; its exact flow over T/"//itoa(m)//" by that symmetry"
+            text = text//")"
         end associate
     end function disk_scope
 

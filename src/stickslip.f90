@@ -35,6 +35,7 @@ module stickslip
         sample_reference
     use stickslip_flow, only: event_name
     use stickslip_stability, only: floquet_t, periodic_stability, verify_periodicity
+    use stickslip_wave_symmetry, only: wave_symmetry_t
     ! checks of a solution, comparisons
     use stickslip_reference_start, only: reference_start_options_t, solve_reference_from_starts
     use stickslip_checks, only: check_options_t, hbm_checks_t, solve_and_check
@@ -75,7 +76,7 @@ module stickslip
     public :: euler_options_t, euler_result_t, integrate_euler
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference, &
               reference_start_options_t, solve_reference_from_starts, event_name
-    public :: floquet_t, periodic_stability, verify_periodicity
+    public :: floquet_t, periodic_stability, verify_periodicity, wave_symmetry_t
     public :: check_options_t, hbm_checks_t, solve_and_check
     public :: truncation_t, estimate_truncation, solve_to_tolerance
     public :: comparison_t, compare_samples

@@ -688,7 +688,8 @@ contains
     end subroutine test_cli_figures
 
     !> The stability of a sector's travelling wave (examples/bladed_disk.nml with &hbm
-    !> stability) says on stdout and in summary.nml that it is the assembled disk's.
+    !> stability) says on stdout and in summary.nml that it is the assembled disk's, its
+    !> exact flow over T / 8 by the wave's symmetry (24 sectors, EO 3).
     subroutine test_cli_sector_stability(t)
         type(test_counter_t), intent(inout) :: t
         integer :: code, ui, uo, stat
@@ -715,7 +716,10 @@ contains
         call check(t, code == 0 .and. index(out, "stability (the assembled 72-DOF disk's "// &
                    "Floquet multipliers: every perturbation") > 0 .and. &
                    summary_value(scratch//"/stab_bladed_disk/summary.nml", &
-                                 "stability_scope") == "'disk'", &
+                                 "stability_scope") == "'disk'" .and. &
+                   summary_value(scratch//"/stab_bladed_disk/summary.nml", &
+                                 "stability_spans") == "8" .and. &
+                   index(out, "its exact flow over T/8 by that symmetry") > 0, &
                    "cli sector stability: stdout and summary say it is the disk's", err)
     end subroutine test_cli_sector_stability
 

@@ -17,6 +17,8 @@ module test_cyclic
     use stickslip_hbm, only: solve_periodic
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
     use stickslip_stability, only: floquet_t, periodic_stability
+    use stickslip_wave_symmetry, only: wave_symmetry_t, wave_spans
+    use stickslip_reference, only: reference_options_t
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
     use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_sweep_family, only: family_options_t, family_result_t, family_peak_t, &
@@ -55,6 +57,7 @@ contains
         call test_sector_planar(t)
         call test_sector_sweep(t)
         call test_sector_stability(t)
+        call test_wave_symmetry_stability(t)
         call test_sector_family(t)
         call test_modal_condensation(t)
         call test_channel_condensation(t)
@@ -411,6 +414,113 @@ contains
                    real_text(f1%max_modulus)//" vs "//real_text(f2%max_modulus))
     end subroutine test_sector_stability
 
+    !> The disk's multipliers from the flow over T / m by its wave's symmetry
+    !> (periodic_stability with `symmetry`) = those of the flow over the period: every
+    !> multiplier of modulus above 1e-3 of either within 1e-7 of one of the other's, on the
+    !> shrouded disk (24 sectors) in engine orders 1, 2, 3 (m = 24, 12, 8) and on 6 sectors
+    !> whose shrouds lift off the next blade (an elastic unilateral normal, preloaded) in
+    !> engine orders 1, 2, 3 (m = 6, 3, 2). A disk with one mass changed is refused, naming
+    !> the mass matrix.
+    subroutine test_wave_symmetry_stability(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(model_t) :: disk, sector
+        type(cyclic_t) :: cyc
+        type(hbm_solution_t) :: dsol
+        type(hbm_options_t) :: ho
+        type(reference_options_t) :: ro
+        type(floquet_t) :: f2
+        type(error_type), allocatable :: error
+        integer :: k
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        call check_error(t, error, "wave symmetry: read the shrouded disk", .false.)
+        if (allocated(error)) return
+        ho = c%hbm
+        ho%rho = 0.5_dp
+        ho%samples = 48*ns
+        do k = 1, 3
+            c%cyclic%cyc%engine_order = k
+            call compare(c%model, c%cyclic%cyc, ho, c%reference%reference_options_t, &
+                         "shrouded disk, EO "//itoa(k))
+        end do
+        ! the shroud lifting off the next blade: DOF 5 the blade's normal motion
+        sector = normal_sector()
+        sector%contact_dof = [2]
+        sector%contact_dof2 = [0]
+        sector%mu = [0.3_dp]
+        sector%normal_load = [0.0_dp]
+        allocate (sector%normal_direction(5, 1))
+        sector%normal_direction = 0.0_dp
+        sector%normal_direction(5, 1) = 1.0_dp
+        sector%gap = [0.0_dp]
+        sector%preload = [0.3_dp]
+        sector%normal_stiffness = [20.0_dp]
+        ho = hbm_options_t()
+        ho%harmonics = 12
+        ho%rho = 0.5_dp
+        ho%samples = 384
+        do k = 1, 3
+            cyc = lumped_cyclic(k)
+            cyc%sectors = 6
+            cyc%next_dof = [2]
+            cyc%next_normal_dof = [5]
+            call compare(sector, cyc, ho, ro, "lift-off on 6 sectors, EO "//itoa(k))
+        end do
+        ! not the disk of a sector: one mass changed
+        disk%mass(1, 1) = 1.01_dp*disk%mass(1, 1)
+        call periodic_stability(disk, dsol, ro, f2, error, symmetry=wave_symmetry_t(6, 3))
+        call check(t, allocated(error), "wave symmetry: a disk with one mass changed refused", &
+                   "no error")
+        if (allocated(error)) call check(t, index(error%message, "mass matrix") > 0, &
+                                         "wave symmetry: the refusal names the mass matrix", &
+                                         error%message)
+
+    contains
+
+        subroutine compare(sec, cy, hopts, ref, what)
+            type(model_t), intent(in) :: sec
+            type(cyclic_t), intent(in) :: cy
+            type(hbm_options_t), intent(in) :: hopts
+            type(reference_options_t), intent(in) :: ref
+            character(len=*), intent(in) :: what
+            type(hbm_solution_t) :: sol
+            type(floquet_t) :: f1
+            real(dp) :: worst
+            integer :: m, u
+            call solve_periodic_cyclic(sec, cy, hopts, sol, error)
+            if (.not. allocated(error)) call disk_solution(sec, cy, hopts, sol, disk, dsol, error)
+            if (.not. allocated(error)) call periodic_stability(disk, dsol, ref, f1, error)
+            if (.not. allocated(error)) &
+                call periodic_stability(disk, dsol, ref, f2, error, &
+                                        symmetry=wave_symmetry_t(cy%sectors, cy%engine_order))
+            call check_error(t, error, "wave symmetry: "//what, .false.)
+            if (allocated(error)) return
+            call wave_spans(wave_symmetry_t(cy%sectors, cy%engine_order), m, u)
+            worst = huge(1.0_dp)
+            if (allocated(f1%multipliers) .and. allocated(f2%multipliers) .and. &
+                f1%verdict /= 'unknown' .and. f2%verdict /= 'unknown') &
+                worst = max(apart(f1%multipliers, f2%multipliers), &
+                            apart(f2%multipliers, f1%multipliers))
+            call check(t, worst < 1.0e-7_dp .and. m > 1, "wave symmetry: "//what// &
+                       ", the flow over T / "//itoa(m)//" = over T", "largest multiplier "// &
+                       real_text(f2%max_modulus)//" vs "//real_text(f1%max_modulus)// &
+                       ", worst distance "//real_text(worst)//", CPU "// &
+                       real_text(f2%seconds)//" s vs "//real_text(f1%seconds)//" s; "// &
+                       f1%diagnosis//" / "//f2%diagnosis)
+        end subroutine compare
+
+        !> The largest distance from a multiplier of a (modulus above 1e-3) to b's.
+        real(dp) function apart(a, b)
+            complex(dp), intent(in) :: a(:), b(:)
+            integer :: i
+            apart = 0.0_dp
+            do i = 1, size(a)
+                if (abs(a(i)) <= 1.0e-3_dp) cycle
+                apart = max(apart, minval(abs(b - a(i))))
+            end do
+        end function apart
+    end subroutine test_wave_symmetry_stability
+
     !> A sweep in omega on one sector (EO 3): complete; three of its points (the first, the
     !> middle, the last) against the assembled disk solved at their omega with the curve's
     !> rho: sector 0's coefficients to 1e-8 of the largest, and the shroud's relative
@@ -487,21 +597,8 @@ contains
         type(error_type), allocatable :: error
         real(dp) :: worst, worst_energy, opened, slipped
         logical :: converged
-        sector = lumped_sector()
         ! DOF 5: the blade's normal motion
-        sector%ndof = 5
-        sector%mass = reshape([sector%mass(:, 1), 0.0_dp, sector%mass(:, 2), 0.0_dp, &
-                               sector%mass(:, 3), 0.0_dp, sector%mass(:, 4), 0.0_dp, &
-                               0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.3_dp], [5, 5])
-        sector%stiffness = reshape([sector%stiffness(:, 1), 0.0_dp, sector%stiffness(:, 2), &
-                                    0.0_dp, sector%stiffness(:, 3), 0.0_dp, &
-                                    sector%stiffness(:, 4), 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, &
-                                    0.0_dp, 6.0_dp], [5, 5])
-        sector%damping = 0.01_dp*sector%mass + 0.002_dp*sector%stiffness
-        sector%force_dof = [2, 5]
-        sector%force_harmonic = [1, 1]
-        sector%force_amplitude = [1.0_dp, 0.6_dp]
-        sector%force_phase = [0.3_dp, 1.1_dp]
+        sector = normal_sector()
         ! contact 1: the shroud (tangential DOF 2, normal DOF 5, against the next blade);
         ! contact 2: the disk's middle on the ground in 2D (DOF 4, second tangent DOF 1)
         deallocate (sector%contact_dof, sector%contact_dof2, sector%mu, sector%normal_load)
@@ -895,21 +992,37 @@ contains
         call check_error(t, error, "cyclic case: euler on one sector", .true., &
                          [character(len=40) :: "&run method = 'euler'", "model = 'disk'"])
         ! a sector's stability is the assembled disk's: 24 x 3 DOFs are affordable, 48 x 3
-        ! are not (the default &sweep stability named as such), nor an explicit &hbm one
+        ! are not in engine order 24 (the flow over T / 2; the default &sweep stability named
+        ! as such), nor an explicit &hbm one; in engine order 3 they are (the flow over T /
+        ! 16), 80 x 3 are not (the limit 192 and the span named)
         call write_lines(path, [character(len=120) :: head, &
             "&cyclic sectors = 24, engine_order = 3, left_dofs = 1, right_dofs = 3 /", &
             "&run method = 'sweep' /", "&sweep start = 2, stop = 3 /"])
         call read_case(path, c, error)
         call check_error(t, error, "cyclic case: the stability of a 72-DOF disk", .false.)
         call write_lines(path, [character(len=120) :: head, &
-            "&cyclic sectors = 48, engine_order = 3, left_dofs = 1, right_dofs = 3 /", &
+            "&cyclic sectors = 48, engine_order = 24, left_dofs = 1, right_dofs = 3 /", &
             "&run method = 'sweep' /", "&sweep start = 2, stop = 3 /"])
         call read_case(path, c, error)
         call check_error(t, error, "cyclic case: the stability of a 144-DOF disk", .true., &
                          [character(len=40) :: "&sweep stability = .true. (the default)", &
-                          "144 DOFs", "stability = .false.", "cyclic_case.nml"])
+                          "144 DOFs", "more than the 128", "over T/2 by the wave's", &
+                          "stability = .false.", "cyclic_case.nml"])
         call write_lines(path, [character(len=120) :: head, &
             "&cyclic sectors = 48, engine_order = 3, left_dofs = 1, right_dofs = 3 /", &
+            "&hbm samples = 768 /", "&run method = 'sweep' /", "&sweep start = 2, stop = 3 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic case: the stability of a 144-DOF disk in EO 3", &
+                         .false.)
+        call write_lines(path, [character(len=120) :: head, &
+            "&cyclic sectors = 80, engine_order = 1, left_dofs = 1, right_dofs = 3 /", &
+            "&hbm samples = 960 /", "&run method = 'sweep' /", "&sweep start = 2, stop = 3 /"])
+        call read_case(path, c, error)
+        call check_error(t, error, "cyclic case: the stability of a 240-DOF disk in EO 1", &
+                         .true., [character(len=40) :: "240 DOFs", "more than the 192", &
+                                  "over T/80 by the wave's"])
+        call write_lines(path, [character(len=120) :: head, &
+            "&cyclic sectors = 48, engine_order = 24, left_dofs = 1, right_dofs = 3 /", &
             "&hbm stability = .true. /"])
         call read_case(path, c, error)
         call check_error(t, error, "cyclic case: an hbm stability on a 144-DOF disk", .true., &
@@ -944,6 +1057,24 @@ contains
         m%force_phase = [0.3_dp]
         allocate (m%contact_dof(0), m%contact_dof2(0), m%mu(0), m%normal_load(0))
     end function lumped_sector
+
+    !> The lumped sector with DOF 5, the blade's normal motion (mass 0.3, stiffness 6 to the
+    !> ground), forced on the blade and on DOF 5; no contacts.
+    function normal_sector() result(m)
+        type(model_t) :: m
+        m = lumped_sector()
+        m%ndof = 5
+        m%mass = reshape([m%mass(:, 1), 0.0_dp, m%mass(:, 2), 0.0_dp, m%mass(:, 3), 0.0_dp, &
+                          m%mass(:, 4), 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.0_dp, 0.3_dp], [5, 5])
+        m%stiffness = reshape([m%stiffness(:, 1), 0.0_dp, m%stiffness(:, 2), 0.0_dp, &
+                               m%stiffness(:, 3), 0.0_dp, m%stiffness(:, 4), 0.0_dp, 0.0_dp, &
+                               0.0_dp, 0.0_dp, 0.0_dp, 6.0_dp], [5, 5])
+        m%damping = 0.01_dp*m%mass + 0.002_dp*m%stiffness
+        m%force_dof = [2, 5]
+        m%force_harmonic = [1, 1]
+        m%force_amplitude = [1.0_dp, 0.6_dp]
+        m%force_phase = [0.3_dp, 1.1_dp]
+    end function normal_sector
 
     !> The undamped natural frequencies of a dense model, increasing [rad/s] (LAPACK dsygv;
     !> `info` its info, the frequencies undefined when nonzero).

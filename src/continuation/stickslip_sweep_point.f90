@@ -15,6 +15,7 @@ module stickslip_sweep_point
     use stickslip_continuation, only: continuation_state_t
     use stickslip_reference, only: reference_options_t, reference_cache_t
     use stickslip_stability, only: floquet_t, periodic_stability
+    use stickslip_wave_symmetry, only: wave_symmetry_t
     use stickslip_truncation, only: truncation_t, estimate_truncation
     use stickslip_checks, only: truncation_warning, truncation_untrusted
     use stickslip_sweep_options, only: sweep_options_t, set_sweep_parameter
@@ -214,7 +215,9 @@ contains
                     call disk_solution(m, fam%cyclic, po, ps, disk, dps, error)
                     if (allocated(error)) return
                     call stability_from(disk, dps, opts, ref, pt, stability_seconds, error, &
-                                        cache, fam%opts)
+                                        cache, fam%opts, &
+                                        wave_symmetry_t(fam%cyclic%sectors, &
+                                                        fam%cyclic%engine_order))
                 end block
             else
                 call stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache, &
@@ -229,9 +232,11 @@ contains
     !> curve's hbm options), a point whose verdict is 'unknown' is tried once more from a
     !> fresh solve with the automatic rho (the curve keeps the rho of its start; at another
     !> rho the sampled equations give another approximation of the same orbit, which can be
-    !> the better start for the shooting), without the cache. Errors: those of
+    !> the better start for the shooting), without the cache. `symmetry`: m is a disk
+    !> assembled from a sector, its wave's symmetry (periodic_stability). Errors: those of
     !> periodic_stability.
-    subroutine stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache, hopts)
+    subroutine stability_from(m, ps, opts, ref, pt, stability_seconds, error, cache, hopts, &
+                              symmetry)
         type(model_t), intent(in) :: m
         type(hbm_solution_t), intent(in) :: ps
         type(sweep_options_t), intent(in) :: opts
@@ -242,13 +247,14 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(reference_cache_t), intent(inout), optional :: cache
         type(hbm_options_t), intent(in), optional :: hopts
+        type(wave_symmetry_t), intent(in), optional :: symmetry
         type(floquet_t) :: fl
         real(dp) :: s0
         s0 = thread_cpu_seconds()
         if (present(cache) .and. opts%parameter == 'omega') then
-            call periodic_stability(m, ps, ref, fl, error, cache=cache)
+            call periodic_stability(m, ps, ref, fl, error, cache=cache, symmetry=symmetry)
         else
-            call periodic_stability(m, ps, ref, fl, error)
+            call periodic_stability(m, ps, ref, fl, error, symmetry=symmetry)
         end if
         if (.not. allocated(error) .and. fl%verdict == 'unknown' .and. present(hopts)) &
             call fresh_start()
@@ -274,7 +280,7 @@ contains
             call solve_periodic(m, fresh, ps2, solve_error)
             if (allocated(solve_error)) return
             if (.not. ps2%converged) return
-            call periodic_stability(m, ps2, ref, fl, error)
+            call periodic_stability(m, ps2, ref, fl, error, symmetry=symmetry)
         end subroutine fresh_start
     end subroutine stability_from
 

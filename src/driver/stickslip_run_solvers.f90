@@ -14,6 +14,7 @@ module stickslip_run_solvers
     use stickslip_solution, only: hbm_solution_t
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
     use stickslip_stability, only: periodic_stability
+    use stickslip_wave_symmetry, only: wave_symmetry_t
     use stickslip_model, only: model_t
     use stickslip_truncation, only: estimate_truncation
     use stickslip_checks, only: hbm_checks_t, solve_and_check, sampling_notes, &
@@ -118,7 +119,9 @@ contains
                                 ch%stability = .true.
                                 call periodic_stability(disk, dsol, &
                                                         case%reference%reference_options_t, &
-                                                        ch%floquet, error)
+                                                        ch%floquet, error, symmetry= &
+                                                        wave_symmetry_t(case%cyclic%cyc% &
+                                                        sectors, case%cyclic%cyc%engine_order))
                             end if
                         end block
                     end if

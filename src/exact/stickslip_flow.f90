@@ -96,17 +96,18 @@ contains
     end function state_of
 
     !> The period map: integrate from state z0 = [x; v; s] at time t0 [s] over one period and
-    !> return z1 at t0 + T. Optionally the monodromy matrix dz1/dz0 (nz x nz) and the
-    !> recorded orbit (phases, events, energies). The start: a rigid normal at a zero or
-    !> negative gap is put at zero gap, the elements' codes are those of the state
-    !> (contact_element_t%start_code, the undecided ones jointly), and the velocities along
-    !> the start mode's constraints are removed (projections whose Jacobian is in the
-    !> monodromy). Linear modes step by their exponentials, nonlinear ones (a 2D slip) by
-    !> exponential collocation (stickslip_flow_nonlinear). Errors (stat numerical): a
-    !> non-finite state, no consistent mode, dependent constraints, a nonlinear phase that
-    !> does not meet its tolerance, more than `max_events` events (chattering) or repeated
-    !> events at one instant.
-    subroutine period_map(self, t0, z0, z1, error, mono, orbit, energies)
+    !> return z1 at t0 + T (or over `duration` [s], 0 < duration <= T: the map to t0 +
+    !> duration, its Jacobian and orbit over that span). Optionally the monodromy matrix
+    !> dz1/dz0 (nz x nz) and the recorded orbit (phases, events, energies). The start: a
+    !> rigid normal at a zero or negative gap is put at zero gap, the elements' codes are
+    !> those of the state (contact_element_t%start_code, the undecided ones jointly), and
+    !> the velocities along the start mode's constraints are removed (projections whose
+    !> Jacobian is in the monodromy). Linear modes step by their exponentials, nonlinear ones
+    !> (a 2D slip) by exponential collocation (stickslip_flow_nonlinear). Errors: stat input
+    !> (a duration outside (0, T]); stat numerical: a non-finite state, no consistent mode,
+    !> dependent constraints, a nonlinear phase that does not meet its tolerance, more than
+    !> `max_events` events (chattering) or repeated events at one instant.
+    subroutine period_map(self, t0, z0, z1, error, mono, orbit, energies, duration)
         !> The flow (its mode cache grows).
         class(flow_t), intent(inout) :: self
         !> Start time [s].
@@ -123,6 +124,8 @@ contains
         type(orbit_t), intent(out), optional :: orbit
         !> With orbit: integrate the energies (default .true.; .false. leaves them 0).
         logical, intent(in), optional :: energies
+        !> Length of the span [s] (default the period).
+        real(dp), intent(in), optional :: duration
         integer, parameter :: max_zero_length = 8
         !> Fewest states n_z for the modal track: on smaller models a ladder step (a
         !> matrix-vector product of order n_a) costs less than the track's exponentials
@@ -151,6 +154,14 @@ contains
         if (want_orbit .and. present(energies)) want_energy = energies
         max_events = 1000*(self%nslot + 1)
         tend = t0 + self%period
+        if (present(duration)) then
+            if (.not. (duration > 0.0_dp .and. duration <= self%period)) then
+                call fatal_error(error, "period_map: the span must be in (0, T]", &
+                                 stickslip_stat%input)
+                return
+            end if
+            tend = t0 + duration
+        end if
         allocate (y(na), yb(na), ybb(na), yeb(na), ye(na), fm(na), fp(na), &
                   code(self%nslot), oldcode(self%nslot), jump(nz, nz), pj(nz, nz), &
                   dirs(3, self%nc))
@@ -837,8 +848,10 @@ contains
     !> Samples of the recorded orbit at t_k = k T / ng, k = 0..ng-1 (t = 0 is the phase of
     !> the forcing): displacements x(ng, N), velocities v(ng, N), channel forces r(ng,
     !> n_ch), and on request the contact states (state_open, state_stick, state_slip) and
-    !> the internal states s(ng, n_s). Errors (stat numerical): the state is not finite.
-    subroutine sample(self, orbit, ng, x, v, r, error, state, s)
+    !> the internal states s(ng, n_s). With `count`, only the first `count` samples at or
+    !> after the orbit's start (an orbit recorded over a part of the period; the other rows
+    !> are not set). Errors (stat numerical): the state is not finite.
+    subroutine sample(self, orbit, ng, x, v, r, error, state, s, count, first)
         !> The flow whose orbit was recorded.
         class(flow_t), intent(in) :: self
         !> One recorded period.
@@ -853,17 +866,24 @@ contains
         integer, intent(out), optional :: state(:, :)
         !> Internal states at the samples, ng x n_s [m].
         real(dp), intent(out), optional :: s(:, :)
+        !> Samples to compute (default ng).
+        integer, intent(in), optional :: count
+        !> The first sample computed is row first + 1 (0 <= first < ng).
+        integer, intent(out), optional :: first
         real(dp) :: y(self%na), yb(self%na), tk, dt, nl_t, nl_y(self%na)
         real(dp), allocatable :: step(:, :, :), edt(:, :, :), edt1(:, :)
         type(track_t) :: trk
         logical :: tracked
         integer :: nl_p, nl_mode
         logical, allocatable :: have_step(:)
-        integer :: k, kk, p, kfirst, last_p, n, stat, im
+        integer :: k, kk, p, kfirst, last_p, n, stat, im, nk
         n = self%n
+        nk = ng
+        if (present(count)) nk = min(max(count, 0), ng)
         dt = self%period/ng
         ! the first sample at or after t0; samples before t0 belong to the end of the period
         kfirst = ceiling(orbit%t0/dt - 1.0e-12_dp)
+        if (present(first)) first = modulo(kfirst, ng)
         p = 1
         last_p = 0
         ! exp(b dt) of each mode met, built on first use
@@ -872,7 +892,7 @@ contains
         nl_p = 0
         nl_mode = 0
         nl_t = 0.0_dp
-        do kk = 0, ng - 1
+        do kk = 0, nk - 1
             ! the samples from the first at or after t0 on, by index (a time test cannot
             ! tell t0 from a sample within roundoff of it)
             k = modulo(kfirst + kk, ng)

@@ -22,8 +22,11 @@ module stickslip_reference
     use stickslip_nonlinear, only: nonlinear_system_t
     use stickslip_minpack, only: hybrj_options_t, hybrj_report_t, solve_hybrj
     use stickslip_flow, only: flow_t, new_flow, orbit_t
-    use stickslip_flow_modes, only: mode_t
+    use stickslip_flow_modes, only: mode_t, identity_matrix
     use stickslip_contact_measures, only: energy_balance_error
+    use stickslip_wave_symmetry, only: wave_symmetry_t, wave_spans, stability_spans, shifted, &
+        check_wave_symmetry
+    use stickslip_dense_products, only: mat_mul
     implicit none
     private
     public :: reference_options_t, reference_result_t, solve_reference, sample_reference
@@ -157,6 +160,9 @@ module stickslip_reference
         !> start's change).
         real(dp) :: omega = 0.0_dp, omega_before = 0.0_dp
         real(dp), allocatable :: mono_before(:, :), zorbit_before(:)
+        !> The spans per period of the map whose Jacobian `mono` is (1: the period map; m:
+        !> the map over T / m of a disk's travelling wave, stickslip_wave_symmetry).
+        integer :: spans = 1
     end type reference_cache_t
 
     !> The shooting equations F(u) = (P(D u) - D u) / D, D the scales of x and v, for hybrj.
@@ -176,7 +182,12 @@ module stickslip_reference
                     fnorm_prev = huge(1.0_dp)
         real(dp), allocatable :: u_rec(:), z1_rec(:), mono_rec(:, :)
         type(orbit_t) :: orbit_rec
+        !> A disk's travelling wave (stickslip_wave_symmetry): the map is z0 -> S^-1 z(t0 +
+        !> T / spans), S the shift of `shift` sectors of `sectors` (spans = 1: the period
+        !> map); nx, nsx: DOFs and internal states per sector.
+        integer :: spans = 1, shift = 0, sectors = 1, nx = 0, nsx = 0
     contains
+        procedure :: map => shooting_map
         procedure :: residual => shooting_residual
         procedure :: jacobian => shooting_jacobian
     end type shooting_t
@@ -252,9 +263,10 @@ contains
     !> (res%converged = F and res%diagnosis, with a diagnostics item 'not_converged'); the
     !> checks of a converged orbit (energy balance, Coulomb's law) go to res%diagnostics.
     !> Errors: stat input (invalid model or options, start samples of the wrong shape or not
-    !> finite); stat numerical (dependent stuck contact directions).
+    !> finite, a symmetry without light or that the model does not have); stat numerical
+    !> (dependent stuck contact directions).
     subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name, light, &
-                               r_start, cache)
+                               r_start, cache, symmetry)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Reference options.
@@ -282,8 +294,16 @@ contains
         !> What the last solve of this model left (reference_cache_t), updated: the flow
         !> goes into res%flow (hand it back with keep_flow), the monodromy stays.
         type(reference_cache_t), intent(inout), optional :: cache
+        !> With light only: `model` is a disk assembled from a sector, forced in engine
+        !> order (stickslip_wave_symmetry, checked): the orbit is shot with the map over T /
+        !> m (m = N / gcd(EO, N)) and its monodromy over the period is S^m G^m, the same
+        !> multipliers for m times less flow; res%orbit, events and fractions then cover
+        !> that m-th of the period only (the samples cover the period). Where m does not
+        !> divide the start's samples, the period map as without it.
+        type(wave_symmetry_t), intent(in), optional :: symmetry
         character(len=:), allocatable :: name
         logical :: is_light
+        type(wave_symmetry_t) :: sym
 
         call validate_model(model, error)
         if (allocated(error)) return
@@ -306,8 +326,24 @@ contains
         res%start = name
         is_light = .false.
         if (present(light)) is_light = light
-        call shoot_from(model, opts, name, x_start, v_start, res, error, is_light, r_start, &
-                        cache)
+        if (present(symmetry)) then
+            if (symmetry%sectors > 0) then
+                if (.not. is_light) then
+                    call fatal_error(error, "solve_reference: a wave symmetry needs light = "// &
+                                     ".true. (the orbit is recorded over a part of the "// &
+                                     "period)", stickslip_stat%input)
+                    return
+                end if
+                call check_wave_symmetry(model, symmetry, error)
+                if (allocated(error)) then
+                    error%message = "solve_reference: "//error%message
+                    return
+                end if
+                sym = symmetry
+            end if
+        end if
+        call shoot_from(model, opts, name, x_start, v_start, res, error, is_light, sym, &
+                        r_start, cache)
         if (allocated(error)) return
         if (res%converged .and. is_light) then
             continue
@@ -394,7 +430,7 @@ contains
     !> One shooting attempt from samples xs, vs (t_k = k T / size(xs, 1)) of an approximate
     !> periodic solution (rs its channel forces, for the internal states), then the recording
     !> pass, the events and the samples.
-    subroutine shoot_from(model, opts, name, xs, vs, res, error, light, rs, cache)
+    subroutine shoot_from(model, opts, name, xs, vs, res, error, light, sym, rs, cache)
         type(model_t), intent(in) :: model
         type(reference_options_t), intent(in) :: opts
         character(len=*), intent(in) :: name
@@ -402,6 +438,8 @@ contains
         type(reference_result_t), intent(inout) :: res
         type(error_type), allocatable, intent(out) :: error
         logical, intent(in) :: light
+        !> A disk's wave symmetry (sectors = 0: none).
+        type(wave_symmetry_t), intent(in) :: sym
         real(dp), intent(in), optional :: rs(:, :)
         type(reference_cache_t), intent(inout), optional :: cache
         type(shooting_t) :: shooting
@@ -409,9 +447,9 @@ contains
         type(hybrj_options_t) :: hopts
         type(hybrj_report_t) :: report
         real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:), ss(:), &
-                                 rk(:), zs(:), zp(:)
+                                 rk(:), zs(:), zp(:), jmap(:, :)
         real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3), vfloor, ratio
-        integer :: n, nc, ns, j, k, ksec, nsamp, nz, nstate, s0
+        integer :: n, nc, ns, j, k, ksec, nsamp, nz, nstate, s0, m, ushift, kfirst
         logical :: reused
         type(channel_t) :: ch
         character(len=400) :: buf
@@ -476,6 +514,22 @@ contains
         end if
         nz = shooting%flow%nz
         nstate = shooting%flow%ns
+        ! the grid of the samples; a disk's travelling wave is shot over T / m when that
+        ! grid holds whole spans (stickslip_wave_symmetry)
+        nsamp = opts%samples
+        if (light) nsamp = light_grid(ns, 1)
+        if (light .and. sym%sectors > 0) then
+            call wave_spans(sym, m, ushift)
+            m = stability_spans(sym, ns)
+            if (m > 1 .and. modulo(nstate, sym%sectors) == 0) then
+                nsamp = light_grid(ns, m)
+                shooting%spans = m
+                shooting%shift = ushift
+                shooting%sectors = sym%sectors
+                shooting%nx = n/sym%sectors
+                shooting%nsx = nstate/sym%sectors
+            end if
+        end if
         ! the elements' internal states at the section, from the start's displacements and
         ! channel forces
         allocate (ss(nstate))
@@ -506,7 +560,8 @@ contains
             ! and it moved by the change of the start is the first iterate (unless that
             ! lands farther from the start than a tenth of its amplitude)
             if (allocated(cache%mono)) then
-                if (cache%ksec == ksec .and. cache%ns == ns .and. size(cache%mono, 1) == nz) then
+                if (cache%ksec == ksec .and. cache%ns == ns .and. size(cache%mono, 1) == nz &
+                    .and. cache%spans == shooting%spans) then
                     shooting%mono0 = cache%mono
                     zp = cache%zorbit + (zs - cache%zstart)
                     if (cache%omega_before /= 0.0_dp .and. cache%omega /= cache%omega_before) then
@@ -558,38 +613,35 @@ contains
                 res%orbit = shooting%orbit_rec
                 z1 = shooting%z1_rec
             else
-                call shooting%flow%period_map(res%t_section, z0, z1, error, &
-                                              mono=res%monodromy, orbit=res%orbit, &
-                                              energies=.not. light)
+                call shooting%map(z0, z1, error, res%monodromy, res%orbit, .not. light)
             end if
         else
-            call shooting%flow%period_map(res%t_section, z0, z1, error, mono=res%monodromy, &
-                                          orbit=res%orbit, energies=.not. light)
+            call shooting%map(z0, z1, error, res%monodromy, res%orbit, .not. light)
         end if
         if (allocated(error)) then
             res%diagnosis = "shooting from the "//name//" start: "//error%message//"."
             deallocate (error, res%monodromy)
             return
         end if
-        nsamp = opts%samples
-        if (light) then
-            ! the start's grid, every stride-th sample of it: at most light_samples (what a
-            ! stability verdict compares with its start; sampling costs matrix products)
-            nsamp = ns
-            do k = 1, ns
-                if (mod(ns, k) == 0 .and. ns/k <= light_samples) then
-                    nsamp = ns/k
-                    exit
-                end if
-            end do
-        end if
+        ! the map's Jacobian (for the next shooting) and the monodromy over the period
+        jmap = res%monodromy
+        if (shooting%spans > 1) res%monodromy = wave_monodromy(shooting, jmap)
         allocate (res%t(nsamp), res%x(nsamp, n), res%v(nsamp, n), &
                   res%r(nsamp, res%contacts%nchannel), res%state(nsamp, nc), &
                   res%s(nsamp, nstate))
         res%t = [(period*real(k, dp)/real(nsamp, dp), k=0, nsamp - 1)]
-        call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error, res%state, &
-                                  res%s)
-        if (allocated(error)) return
+        if (shooting%spans > 1) then
+            ! one span sampled, the others its shifts: z(t + j T / m) = S^j z(t)
+            call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error, &
+                                      res%state, res%s, count=nsamp/shooting%spans, &
+                                      first=kfirst)
+            if (allocated(error)) return
+            call unfold_samples(shooting, res, kfirst)
+        else
+            call shooting%flow%sample(res%orbit, nsamp, res%x, res%v, res%r, error, &
+                                      res%state, res%s)
+            if (allocated(error)) return
+        end if
         call contact_samples(model, res)
         ampx = max(maxval(abs(res%x)), maxval(abs(z0(1:n))))
         ampv = max(maxval(abs(res%v)), maxval(abs(z0(n + 1:2*n))))
@@ -607,13 +659,14 @@ contains
             if (res%converged .and. all(ieee_is_finite(res%monodromy))) then
                 cache%omega_before = 0.0_dp
                 if (allocated(cache%mono) .and. cache%ksec == ksec .and. cache%ns == ns) then
-                    if (size(cache%mono, 1) == nz) then
+                    if (size(cache%mono, 1) == nz .and. cache%spans == shooting%spans) then
                         call move_alloc(cache%mono, cache%mono_before)
                         call move_alloc(cache%zorbit, cache%zorbit_before)
                         cache%omega_before = cache%omega
                     end if
                 end if
-                cache%mono = res%monodromy
+                cache%mono = jmap
+                cache%spans = shooting%spans
                 cache%ksec = ksec
                 cache%ns = ns
                 cache%zorbit = z0
@@ -761,6 +814,125 @@ contains
         call res%flow%sample(res%orbit, ng, x, v, r, error)
     end subroutine sample_reference
 
+    !> The map the shooting solves, from z0 at its section: the period map, or for a disk's
+    !> travelling wave z0 -> S^-1 z(t0 + T / spans) (stickslip_wave_symmetry), with its
+    !> Jacobian and the orbit over that span on request. Errors: those of period_map.
+    subroutine shooting_map(self, z0, z1, error, mono, orbit, energies)
+        class(shooting_t), intent(inout) :: self
+        real(dp), intent(in) :: z0(:)
+        real(dp), intent(out) :: z1(:)
+        type(error_type), allocatable, intent(out) :: error
+        real(dp), intent(out), optional :: mono(:, :)
+        type(orbit_t), intent(out), optional :: orbit
+        logical, intent(in), optional :: energies
+        if (self%spans <= 1) then
+            call self%flow%period_map(self%t0, z0, z1, error, mono, orbit, energies)
+            return
+        end if
+        call self%flow%period_map(self%t0, z0, z1, error, mono, orbit, energies, &
+                                  duration=self%flow%period/self%spans)
+        if (allocated(error)) return
+        z1 = unshifted(self, z1)
+        if (present(mono)) mono = unshifted_rows(self, mono)
+    end subroutine shooting_map
+
+    !> S^-1 z for the state z = [x; v; s] of the disk of a shooting (each part in sector
+    !> blocks).
+    function unshifted(self, z) result(w)
+        type(shooting_t), intent(in) :: self
+        real(dp), intent(in) :: z(:)
+        real(dp) :: w(size(z))
+        w = state_shift(self, z, -self%shift)
+    end function unshifted
+
+    !> S^-1 a, row by row.
+    function unshifted_rows(self, a) result(w)
+        type(shooting_t), intent(in) :: self
+        real(dp), intent(in) :: a(:, :)
+        real(dp) :: w(size(a, 1), size(a, 2))
+        integer :: j
+        do j = 1, size(a, 2)
+            w(:, j) = state_shift(self, a(:, j), -self%shift)
+        end do
+    end function unshifted_rows
+
+    !> The state z = [x; v; s] shifted by k sectors (S^k with a shift of one sector per
+    !> unit of k).
+    function state_shift(self, z, k) result(w)
+        type(shooting_t), intent(in) :: self
+        real(dp), intent(in) :: z(:)
+        integer, intent(in) :: k
+        real(dp) :: w(size(z))
+        integer :: nx, nsx
+        nx = self%nx*self%sectors
+        nsx = self%nsx*self%sectors
+        w(1:nx) = shifted(z(1:nx), self%sectors, k)
+        w(nx + 1:2*nx) = shifted(z(nx + 1:2*nx), self%sectors, k)
+        if (nsx > 0) w(2*nx + 1:2*nx + nsx) = shifted(z(2*nx + 1:2*nx + nsx), self%sectors, k)
+    end function state_shift
+
+    !> The monodromy over the period from the Jacobian G of the shooting's map over T / m:
+    !> S^m G^m (m = spans; G^m by repeated squaring).
+    function wave_monodromy(self, g) result(mono)
+        type(shooting_t), intent(in) :: self
+        real(dp), intent(in) :: g(:, :)
+        real(dp) :: mono(size(g, 1), size(g, 2))
+        real(dp), allocatable :: p(:, :), q(:, :)
+        integer :: e, j
+        p = g
+        e = self%spans
+        q = identity_matrix(size(g, 1))
+        do while (e > 0)
+            if (modulo(e, 2) == 1) q = mat_mul(q, p)
+            e = e/2
+            if (e > 0) p = mat_mul(p, p)
+        end do
+        do j = 1, size(q, 2)
+            mono(:, j) = state_shift(self, q(:, j), self%spans*self%shift)
+        end do
+    end function wave_monodromy
+
+    !> The samples of res outside the span sampled (nsamp / m rows from row kfirst + 1 on)
+    !> from those in it: z(t + j T / m) = S^j z(t) for x, v, the channel forces, the
+    !> contact states and the internal states (each in sector blocks).
+    subroutine unfold_samples(self, res, kfirst)
+        type(shooting_t), intent(in) :: self
+        type(reference_result_t), intent(inout) :: res
+        integer, intent(in) :: kfirst
+        integer :: nsamp, nk, kk, j, k0, kj, ns
+        real(dp), allocatable :: st(:)
+        nsamp = size(res%t)
+        nk = nsamp/self%spans
+        ns = self%sectors
+        do kk = 0, nk - 1
+            k0 = modulo(kfirst + kk, nsamp) + 1
+            do j = 1, self%spans - 1
+                kj = modulo(kfirst + kk + j*nk, nsamp) + 1
+                res%x(kj, :) = shifted(res%x(k0, :), ns, j*self%shift)
+                res%v(kj, :) = shifted(res%v(k0, :), ns, j*self%shift)
+                res%r(kj, :) = shifted(res%r(k0, :), ns, j*self%shift)
+                if (size(res%s, 2) > 0) res%s(kj, :) = shifted(res%s(k0, :), ns, j*self%shift)
+                st = shifted(real(res%state(k0, :), dp), ns, j*self%shift)
+                res%state(kj, :) = nint(st)
+            end do
+        end do
+    end subroutine unfold_samples
+
+    !> The light grid of a start of ns samples: the largest divisor of ns that is a
+    !> multiple of m and at most max(light_samples, m) (m divides ns: m itself is one).
+    pure integer function light_grid(ns, m) result(nsamp)
+        integer, intent(in) :: ns, m
+        integer :: k
+        nsamp = ns
+        do k = 1, ns
+            if (mod(ns, k) == 0 .and. ns/k <= max(light_samples, m) .and. &
+                mod(ns/k, m) == 0) then
+                nsamp = ns/k
+                return
+            end if
+        end do
+    end function light_grid
+
     !> F(u) = (P(D u) - D u) / D. The period map without its monodromy: hybrj asks for
     !> few Jacobians (Broyden updates in between), each computed in shooting_jacobian.
     subroutine shooting_residual(self, x, f, stat)
@@ -776,13 +948,12 @@ contains
             self%fnorm_prev < huge(1.0_dp) .and. self%fnorm_prev > 0.0_dp .and. &
             self%fnorm_last**2/self%fnorm_prev <= self%record_below) then
             if (.not. allocated(self%mono_rec)) allocate (self%mono_rec(size(x), size(x)))
-            call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono_rec, &
-                                      orbit=self%orbit_rec, energies=.false.)
+            call self%map(z0, z1, self%error, self%mono_rec, self%orbit_rec, .false.)
             self%have_rec = .not. allocated(self%error)
             self%u_rec = x
             self%z1_rec = z1
         else
-            call self%flow%period_map(self%t0, z0, z1, self%error)
+            call self%map(z0, z1, self%error)
         end if
         if (allocated(self%error)) then
             stat = 1
@@ -816,11 +987,11 @@ contains
                 self%mono = self%mono_rec
             else
                 z0 = x*self%scale
-                call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono)
+                call self%map(z0, z1, self%error, self%mono)
             end if
         else
             z0 = x*self%scale
-            call self%flow%period_map(self%t0, z0, z1, self%error, mono=self%mono)
+            call self%map(z0, z1, self%error, self%mono)
         end if
         if (allocated(self%error)) then
             stat = 1

@@ -31,6 +31,7 @@ module stickslip_stability
     use stickslip_flow, only: flow_t, new_flow
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference, reference_cache_t, keep_flow
+    use stickslip_wave_symmetry, only: wave_symmetry_t
     implicit none
     private
     public :: floquet_t, floquet_multipliers, periodic_stability, verify_periodicity
@@ -245,9 +246,14 @@ contains
     !> is undetermined): fl%verdict = 'unknown', fl%stable = F, fl%diagnosis says why (in the last
     !> case the multipliers of that other orbit are kept). fl%seconds is the CPU time of the
     !> shooting and the eigenvalues. `ref` returns the exact orbit (with its monodromy).
-    !> Errors: stat input (invalid model or options, sol without samples); stat numerical
-    !> (dependent stuck contact directions, non-finite monodromy).
-    subroutine periodic_stability(model, sol, opts, fl, error, ref, tol, cache)
+    !> With `symmetry` (a disk assembled from a sector and forced in engine order, its
+    !> travelling wave: stickslip_wave_symmetry) and without `ref`, the orbit is shot with
+    !> the flow over T / m, m = N / gcd(EO, N), and the multipliers are those of the same
+    !> monodromy S^m G^m over the period (every perturbation of the disk), for m times less
+    !> flow. Errors: stat input (invalid model or options, sol without samples, a model
+    !> without the symmetry given); stat numerical (dependent stuck contact directions,
+    !> non-finite monodromy).
+    subroutine periodic_stability(model, sol, opts, fl, error, ref, tol, cache, symmetry)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> A weighted-residual solution of `model` with samples (want_samples).
@@ -266,7 +272,10 @@ contains
         !> modes and the monodromy: reference_cache_t), updated for the next point. The
         !> multipliers are the same with or without it, to roundoff.
         type(reference_cache_t), intent(inout), optional :: cache
+        !> The model's travelling-wave symmetry (used without `ref` only).
+        type(wave_symmetry_t), intent(in), optional :: symmetry
         type(reference_result_t) :: res
+        type(wave_symmetry_t) :: sym
         real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :), xs(:, :), vs(:, :)
         real(dp) :: c0, c1, ampx, ampv, distance, ftol
         integer :: stride
@@ -287,16 +296,19 @@ contains
                          "solution to assess")
             return
         end if
-        ! the full reference (energies, checks, opts%samples) only when the caller wants it
+        ! the full reference (energies, checks, opts%samples) only when the caller wants it;
+        ! a light one uses the symmetry of a disk's wave
+        if (present(symmetry) .and. .not. present(ref)) sym = symmetry
         call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
-                             light=.not. present(ref), r_start=sol%r, cache=cache)
+                             light=.not. present(ref), r_start=sol%r, cache=cache, &
+                             symmetry=sym)
         if (present(cache) .and. .not. allocated(error)) then
             if (.not. res%converged .or. .not. allocated(res%monodromy)) then
                 ! the last orbit's start or Jacobian may have led the shooting astray: once
                 ! more from the weighted-residual solution alone, the cache emptied
                 cache = reference_cache_t()
                 call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
-                                     light=.not. present(ref), r_start=sol%r)
+                                     light=.not. present(ref), r_start=sol%r, symmetry=sym)
             end if
         end if
         finer = .false.
@@ -307,7 +319,7 @@ contains
                 ! 1.5 times finer, not kept for the next point
                 call solve_reference(model, finer_grid(opts), sol%x, sol%v, res, error, &
                                      start_name='hbm', light=.not. present(ref), &
-                                     r_start=sol%r)
+                                     r_start=sol%r, symmetry=sym)
                 finer = .true.
             end if
         end if

@@ -24,6 +24,7 @@ module stickslip_summary
     use stickslip_robustness, only: robustness_row_t
     use stickslip_files, only: open_temporary, close_and_rename
     use stickslip_cyclic, only: nodal_diameter, cyclic_frequencies
+    use stickslip_wave_symmetry, only: wave_symmetry_t, stability_spans
     implicit none
     private
     public :: write_summary, write_euler_summary, write_reference_summary
@@ -773,7 +774,8 @@ contains
 
     !> The keys of a bladed disk (&cyclic): cyclic_model ('disk'), sectors, engine_order,
     !> disk_dof, stability_scope = 'disk' when a sector's stability was asked for (the
-    !> assembled disk's multipliers: every perturbation), and for the forced harmonics h the
+    !> assembled disk's multipliers: every perturbation) with stability_spans (its exact
+    !> flow over T / stability_spans by the wave's symmetry), and for the forced harmonics h the
     !> nodal diameter (cyclic_nodal_diameters)
     !> and the sector's lowest linear frequencies in that diameter (at most
     !> max_cyclic_frequencies), contacts carrying nothing (cyclic_frequencies_nd<k>
@@ -796,7 +798,12 @@ contains
             call put(u, "  engine_order = "//itoa(c%engine_order), stat, msg)
             call put(u, "  disk_dof = "//itoa(c%sectors*(sector%ndof - size(c%right))), &
                      stat, msg)
-            if (sector_stability(case)) call put(u, "  stability_scope = 'disk'", stat, msg)
+            if (sector_stability(case)) then
+                call put(u, "  stability_scope = 'disk'", stat, msg)
+                call put(u, "  stability_spans = "// &
+                         itoa(stability_spans(wave_symmetry_t(c%sectors, c%engine_order), &
+                                              case%hbm%samples)), stat, msg)
+            end if
             allocate (nds(0))
             do k = 1, sector%nforce()
                 nd = nodal_diameter(sector%force_harmonic(k), c%engine_order, c%sectors)

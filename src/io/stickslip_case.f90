@@ -65,9 +65,8 @@ module stickslip_case
     !> the events a period.
     integer, parameter :: max_disk_stability_dof = 128
     !> The same where the wave's symmetry shortens the disk's flow to T / m with m >= 8
-    !> (stickslip_wave_symmetry): 5 to 8 times less CPU, 0.8 to 1.6 s a point on 144 DOFs
-    !> (the shrouded disk on 48 sectors, EO 1, 3, 6; bench_wave_stability), 10 to 18 s on
-    !> 240.
+    !> (stickslip_wave_symmetry): 4 to 7 times less CPU, 1.6 to 2.3 s a point on 144 DOFs
+    !> (the shrouded disk on 48 sectors, EO 1 and 2; bench_wave_stability), 8 s on 240.
     integer, parameter :: max_disk_stability_dof_wave = 192
 
     !> A case: where it came from, the model, the solver options and where results go.

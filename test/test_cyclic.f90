@@ -531,8 +531,9 @@ contains
         type(model_t) :: disk, m
         type(sweep_options_t) :: so
         type(sweep_result_t) :: res
-        type(hbm_solution_t) :: full
+        type(hbm_solution_t) :: full, sec, dsol
         type(hbm_options_t) :: ho
+        type(floquet_t) :: fl
         type(error_type), allocatable :: error
         real(dp) :: worst, worst_u, scale
         integer :: k, j, q
@@ -582,6 +583,44 @@ contains
                    "cyclic sweep: points = the disk's solves, the shroud's relative motion", &
                    "largest difference "//real_text(worst)//", relative displacement "// &
                    real_text(worst_u))
+        ! with stability (the disk's flow over T / 8, the reference cache carried from point
+        ! to point): the first and last points' largest multiplier = the disk's over T
+        so%start = 2.85_dp
+        so%stop = 2.95_dp
+        so%stability = .true.
+        call run_sweep(c%model, ho, c%reference%reference_options_t, so, res, error, &
+                       cyclic=c%cyclic%cyc)
+        call check_error(t, error, "cyclic sweep with stability: run", .false.)
+        if (allocated(error)) return
+        worst = huge(1.0_dp)
+        if (res%complete .and. res%npoints >= 3) then
+            worst = 0.0_dp
+            picks(1:2) = [1, res%npoints]
+            do q = 1, 2
+                k = picks(q)
+                m = c%model
+                m%omega = res%points(k)%omega
+                ho%rho = res%rho
+                ho%want_samples = .true.
+                call solve_periodic_cyclic(m, c%cyclic%cyc, ho, sec, error)
+                if (.not. allocated(error)) call disk_solution(m, c%cyclic%cyc, ho, sec, &
+                                                               disk, dsol, error)
+                if (.not. allocated(error)) call periodic_stability(disk, dsol, &
+                    c%reference%reference_options_t, fl, error)
+                if (allocated(error)) exit
+                if (res%points(k)%stable == -1 .or. fl%verdict == 'unknown') then
+                    worst = huge(1.0_dp)
+                else
+                    worst = max(worst, abs(res%points(k)%floquet_max - fl%max_modulus))
+                end if
+            end do
+        end if
+        call check_error(t, error, "cyclic sweep with stability: the disk's", .false.)
+        if (allocated(error)) return
+        call check(t, worst < 1.0e-7_dp, "cyclic sweep with stability: the points' largest "// &
+                   "multiplier = the disk's over the whole period", "largest difference "// &
+                   real_text(worst)//", "//itoa(res%npoints)//" points, last "// &
+                   real_text(res%points(res%npoints)%floquet_max))
     end subroutine test_sector_sweep
 
     !> The sector's weighted residual against the disk's with contact laws: a shroud against

@@ -832,29 +832,21 @@ contains
         call self%flow%period_map(self%t0, z0, z1, error, mono, orbit, energies, &
                                   duration=self%flow%period/self%spans)
         if (allocated(error)) return
-        z1 = unshifted(self, z1)
-        if (present(mono)) mono = unshifted_rows(self, mono)
+        z1 = state_shift(self, z1, -self%shift)
+        if (present(mono)) mono = state_shift_rows(self, mono, -self%shift)
     end subroutine shooting_map
 
-    !> S^-1 z for the state z = [x; v; s] of the disk of a shooting (each part in sector
-    !> blocks).
-    function unshifted(self, z) result(w)
-        type(shooting_t), intent(in) :: self
-        real(dp), intent(in) :: z(:)
-        real(dp) :: w(size(z))
-        w = state_shift(self, z, -self%shift)
-    end function unshifted
-
-    !> S^-1 a, row by row.
-    function unshifted_rows(self, a) result(w)
+    !> The rows of `a` (states of the disk) shifted by k sectors, column by column.
+    function state_shift_rows(self, a, k) result(w)
         type(shooting_t), intent(in) :: self
         real(dp), intent(in) :: a(:, :)
+        integer, intent(in) :: k
         real(dp) :: w(size(a, 1), size(a, 2))
         integer :: j
         do j = 1, size(a, 2)
-            w(:, j) = state_shift(self, a(:, j), -self%shift)
+            w(:, j) = state_shift(self, a(:, j), k)
         end do
-    end function unshifted_rows
+    end function state_shift_rows
 
     !> The state z = [x; v; s] shifted by k sectors (S^k with a shift of one sector per
     !> unit of k).
@@ -878,7 +870,7 @@ contains
         real(dp), intent(in) :: g(:, :)
         real(dp) :: mono(size(g, 1), size(g, 2))
         real(dp), allocatable :: p(:, :), q(:, :)
-        integer :: e, j
+        integer :: e
         p = g
         e = self%spans
         q = identity_matrix(size(g, 1))
@@ -887,9 +879,7 @@ contains
             e = e/2
             if (e > 0) p = mat_mul(p, p)
         end do
-        do j = 1, size(q, 2)
-            mono(:, j) = state_shift(self, q(:, j), self%spans*self%shift)
-        end do
+        mono = state_shift_rows(self, q, self%spans*self%shift)
     end function wave_monodromy
 
     !> The samples of res outside the span sampled (nsamp / m rows from row kfirst + 1 on)

@@ -10,7 +10,7 @@
 !> example and bad &modes input.
 module test_modes
     use stickslip_kinds, only: dp, pi
-    use stickslip_error, only: error_type, real_text, stickslip_stat
+    use stickslip_error, only: error_type, real_text, stickslip_stat, itoa
     use stickslip_model, only: model_t
     use stickslip_solution, only: hbm_options_t, hbm_solution_t
     use stickslip_hbm, only: solve_periodic
@@ -169,7 +169,8 @@ contains
         call check(t, n == res%npoints .and. unflagged_out == 0 .and. flagged > 0, &
                    "modes: estimate: every point off the 4x-harmonics backbone beyond the "// &
                    "thresholds is flagged 'truncation' ("//real_text(real(flagged, dp))// &
-                   " flagged)", real_text(real(unflagged_out, dp)))
+                   " flagged)", real_text(real(unflagged_out, dp))//" unflagged beyond; "// &
+                   itoa(n)//" of "//itoa(res%npoints)//" points within the reference's range")
         call check(t, maxval(abs(res%points(2:res%npoints)%damping_ratio - &
                                  res%points(1:res%npoints - 1)%damping_ratio)) <= 0.01_dp, &
                    "modes: estimate: the points follow the change of D")

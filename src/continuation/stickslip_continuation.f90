@@ -28,7 +28,7 @@ module stickslip_continuation
     implicit none
     private
     public :: parametric_system_t, continuation_options_t, continuation_state_t
-    public :: continuation_report_t, start_continuation, continuation_step
+    public :: continuation_report_t, start_continuation, continuation_step, resume_continuation
     public :: validate_continuation_options
     public :: reason_running, reason_end, reason_failures, reason_max_points, reason_left
 
@@ -239,6 +239,52 @@ contains
         state%points = 1
         report%accepted = .true.
     end subroutine start_continuation
+
+    !> Resume a continuation that stopped on failed points (state%reason = reason_failures)
+    !> on `sys`, another system of the same unknowns (e.g. the same equations on a finer
+    !> quadrature): the last point corrected at its parameter, its tangent oriented as the
+    !> old one, the step opts%step. report%accepted when the corrected point met the
+    !> tolerance; the state then runs again (failures 0), else it is left as it was.
+    !> Errors: as start_continuation.
+    subroutine resume_continuation(sys, opts, state, report, error)
+        !> The family of systems (the unknowns of the one that stopped).
+        class(parametric_system_t), target, intent(inout) :: sys
+        !> Options (the same as at the start).
+        type(continuation_options_t), intent(in) :: opts
+        !> The stopped state; running again from its corrected last point when accepted.
+        type(continuation_state_t), intent(inout) :: state
+        !> What happened.
+        type(continuation_report_t), intent(out) :: report
+        !> Set on misuse or numerical breakdown.
+        type(error_type), allocatable, intent(out) :: error
+        type(bordered_t) :: b
+        real(dp), allocatable :: u(:), ty(:)
+        real(dp) :: tl
+        logical :: ok
+        integer :: n
+
+        report%message = ""
+        n = size(state%y)
+        call setup_bordered(b, sys, opts, state%y, error)
+        if (allocated(error)) return
+        b%fixed = .true.
+        b%lfix = state%lambda
+        call sys%anchor(state%y, state%lambda)
+        u = [state%y, state%lambda]
+        call correct(b, opts, u, report, ok, error)
+        if (allocated(error) .or. .not. ok) return
+        call tangent(b, u(1:n), state%lambda, state%ty, state%tl, ty, tl, ok)
+        if (ok) then
+            call rescale_tangent(b, opts, u(1:n), ty, tl)
+            state%ty = ty
+            state%tl = tl
+        end if
+        state%y = u(1:n)
+        state%ds = opts%step
+        state%failures = 0
+        state%reason = reason_running
+        report%accepted = .true.
+    end subroutine resume_continuation
 
     !> Advance the continuation by one point. Sets state%reason when it stops (the end of the
     !> range reached, too many failed points, max_points, or the branch left the range on

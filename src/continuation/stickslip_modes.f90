@@ -20,7 +20,7 @@ module stickslip_modes
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp, pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
-    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted
+    use stickslip_diagnostics, only: diagnostics_t, level_warning, level_untrusted, level_note
     use stickslip_progress, only: progress_t
     use stickslip_thread_clock, only: thread_cpu_seconds
     use stickslip_model, only: model_t, validate_model, preload_force, force_direction
@@ -39,7 +39,7 @@ module stickslip_modes
     use stickslip_linear_modes, only: linear_modes
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step, reason_running, &
-        reason_end, reason_failures
+        reason_end, reason_failures, resume_continuation
     use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
     use stickslip_sweep_result, only: frc_point_t, reason_text
     use stickslip_sweep_point, only: point_tally_t, keep_coefficients, contact_point_values
@@ -51,6 +51,12 @@ module stickslip_modes
 
     !> Largest `points` accepted.
     integer, parameter :: modes_max_points = 100000
+
+    !> A backbone that stops on failed points is continued on refine_factor times the
+    !> samples (modes_options_t%refinements times at most), never beyond
+    !> max_refined_samples; largest `refinements` accepted.
+    integer, parameter, public :: refine_factor = 4, max_refined_samples = 16384, &
+                                  modes_max_refinements = 4
 
     !> A point's estimated errors that make it a warning 'truncation': of omega (relative)
     !> and of D (relative to D, and at least damping_error_floor in D itself).
@@ -73,6 +79,9 @@ module stickslip_modes
         !> Estimate the truncation errors of omega and D at every point (a second solve on
         !> half the harmonics).
         logical :: error_estimate = .true.
+        !> How many times a backbone that stops on failed points is continued from its
+        !> last point on refine_factor times the samples (0: never).
+        integer :: refinements = 2
     end type modes_options_t
 
     !> One point of a backbone.
@@ -120,6 +129,11 @@ module stickslip_modes
         real(dp) :: rho_held = 0.0_dp
         character(len=:), allocatable :: first_try
         logical :: odd_only = .false.
+        !> Samples per period of the backbone's last points, and the modal amplitudes [m
+        !> sqrt(kg)] from which it was continued on refine_factor times the samples (one per
+        !> refinement; empty when none was needed).
+        integer :: samples = 0
+        real(dp), allocatable :: refined_at(:)
         !> CPU seconds, factorizations of the dynamic stiffnesses, continuation counts.
         real(dp) :: seconds = 0.0_dp
         integer :: factorizations = 0, rejected = 0, folds = 0
@@ -152,6 +166,10 @@ contains
         else if (opts%points < 2 .or. opts%points > modes_max_points) then
             call fatal_error(error, "opts%points = "//itoa(opts%points)//": must be in 2.."// &
                              itoa(modes_max_points), stickslip_stat%input)
+        else if (opts%refinements < 0 .or. opts%refinements > modes_max_refinements) then
+            call fatal_error(error, "opts%refinements = "//itoa(opts%refinements)// &
+                             ": must be in 0.."//itoa(modes_max_refinements), &
+                             stickslip_stat%input)
         end if
     end subroutine validate_modes_options
 
@@ -185,20 +203,21 @@ contains
         type(modes_family_t) :: fam, low
         type(continuation_options_t) :: copts
         logical :: have_low
-        type(continuation_state_t) :: state
+        type(continuation_state_t) :: state, stopped
         type(continuation_report_t) :: rep
         type(hbm_options_t) :: ho
         type(model_t) :: free
         type(point_tally_t) :: tally
-        real(dp), allocatable :: ws(:), rphis(:, :), rphif(:, :), wfv(:), guess(:, :)
+        real(dp), allocatable :: ws(:), rphis(:, :), rphif(:, :), wfv(:)
         complex(dp), allocatable :: phis(:, :), phif(:, :), phi(:), phi_slip(:)
         logical, allocatable :: unloaded(:)
         real(dp), allocatable :: c_orig(:, :)
         real(dp) :: omega_ref, c0, fscale, last_tl
-        integer :: k, nguess, g
+        integer :: k, rejected
         type(error_type), allocatable :: err_stuck, err_slip
-        character(len=16) :: names(2)
         character(len=32) :: buf, rho_text
+        character(len=:), allocatable :: how
+        logical :: continued
 
         c0 = thread_cpu_seconds()
         call validate_model(model, error)
@@ -297,10 +316,8 @@ contains
             ! the held weight of the wave's fundamental (from the prepared modes): the
             ! remedy of a stop (stickslip_run_sector_modes)
             if (hbm%rho == 0.0_dp) res%rho_held = cyclic_held_rho(free, cyc, 1)
-            call new_modes_family(fam, free, ho, phi, omega_ref, error, cyc)
-        else
-            call new_modes_family(fam, free, ho, phi, omega_ref, error)
         end if
+        call build_families()
         if (allocated(error)) return
         res%rho = ho%rho
         res%odd_only = fam%opts%odd_only
@@ -322,65 +339,11 @@ contains
         ! of 0.01 times the range of ln a, so the points crowd where D changes fast)
         copts%yscale = abs(copts%stop - copts%start)*[spread(fscale, 1, fam%n), omega_ref, &
                                                       0.02_dp*omega_ref]
-        ! the truncation estimate: the same family on half the harmonics
-        have_low = .false.
-        if (opts%error_estimate .and. fam%opts%harmonics >= 2) then
-            block
-                type(hbm_options_t) :: hl
-                hl = ho
-                hl%harmonics = fam%opts%harmonics/2
-                ! half the samples as well (when they still resolve H/2): the difference
-                ! then holds the quadrature's error (stick-slip instants on the grid of
-                ! samples) with the truncation's
-                if (hl%samples/2 > 4*hl%harmonics) hl%samples = hl%samples/2
-                if (present(cyclic)) then
-                    call new_modes_family(low, free, hl, phi, omega_ref, error, cyc)
-                else
-                    call new_modes_family(low, free, hl, phi, omega_ref, error)
-                end if
-            end block
-            if (allocated(error)) then
-                call fam%destroy()
-                return
-            end if
-            have_low = .true.
+        call start_backbone()
+        if (allocated(error)) then
+            call fam%destroy()
+            return
         end if
-        ! the start: the stuck guess first when the stuck contacts hold (the reaction of the
-        ! linear motion within the friction limits), else the slipping one first
-        allocate (guess(fam%n + 2, 0))
-        nguess = 0
-        if (res%omega_stuck > 0.0_dp) then
-            guess = reshape([guess, stuck_guess(fam, free, phi, omega_ref, &
-                                                opts%amplitude_start, cyclic)], [fam%n + 2, 1])
-            names(1) = 'stuck'
-            nguess = 1
-        end if
-        if (allocated(phi_slip)) then
-            if (res%omega_stuck > 0.0_dp .and. .not. stuck_holds(free, phi, omega_ref, &
-                                                                opts%amplitude_start, cyclic)) then
-                guess = reshape([slip_guess(fam, free, phi_slip, res%omega_slipping, &
-                                            opts%amplitude_start, cyclic), guess], &
-                                [fam%n + 2, 2])
-                names = [character(len=16) :: 'slipping', 'stuck']
-            else
-                guess = reshape([guess, slip_guess(fam, free, phi_slip, res%omega_slipping, &
-                                                   opts%amplitude_start, cyclic)], &
-                                [fam%n + 2, nguess + 1])
-                names(nguess + 1) = 'slipping'
-            end if
-            nguess = nguess + 1
-        end if
-        do g = 1, nguess
-            call start_continuation(fam, copts, guess(:, g), state, rep, error)
-            if (allocated(error)) then
-                call fam%destroy()
-                return
-            end if
-            if (rep%accepted) then
-                res%start = names(g)
-                exit
-            end if
-        end do
         if (.not. rep%accepted) then
             call fam%destroy()
             write (buf, '(es12.4e3)') opts%amplitude_start
@@ -412,29 +375,62 @@ contains
         call add_point('start')
         if (allocated(error)) return
         last_tl = state%tl
-        do while (state%reason == reason_running)
-            call continuation_step(fam, copts, state, rep, error)
+        call trace('')
+        ! a stop on failed points: the rest of the backbone on 4 times the samples, from
+        ! its last point (the stick-slip instants then fall between closer samples and the
+        ! sampled friction equations' kinks are smaller) or, when that point is no solution
+        ! there or the backbone stops again, the whole backbone on those samples from its
+        ! start (the continuation of a nonsmooth family depends on its path: started
+        ! afresh, as a run with those samples, rather than from its first point)
+        res%samples = ho%samples
+        rejected = 0
+        allocate (res%refined_at(0))
+        do while (.not. allocated(error) .and. state%reason == reason_failures .and. &
+                  size(res%refined_at) < opts%refinements .and. &
+                  ho%samples <= max_refined_samples/refine_factor)
+            call free_families()
+            ho%samples = refine_factor*ho%samples
+            call build_families()
             if (allocated(error)) exit
-            if (.not. rep%accepted) exit
-            if (state%tl*last_tl < 0.0_dp) res%folds = res%folds + 1
-            last_tl = state%tl
-            if (state%reason == reason_end) then
-                call add_point('end')
-            else if (rep%recovered) then
-                call add_point('recovered')
-            else if (rep%halvings > 0) then
-                call add_point('halved')
-            else
-                call add_point('ok')
+            continued = resumed()
+            if (continued) then
+                res%samples = ho%samples
+                res%refined_at = [res%refined_at, exp(state%lambda)]
+                call trace('refined')
+                if (allocated(error) .or. state%reason /= reason_failures) exit
             end if
+            ! the whole backbone again
+            stopped = state
+            call start_backbone()
             if (allocated(error)) exit
+            if (.not. rep%accepted) then
+                state = stopped
+                exit
+            end if
+            rejected = rejected + stopped%rejected
+            res%npoints = 0
+            res%folds = 0
+            tally = point_tally_t()
+            res%samples = ho%samples
+            if (continued) then
+                res%refined_at(size(res%refined_at)) = opts%amplitude_start
+            else
+                res%refined_at = [res%refined_at, opts%amplitude_start]
+            end if
+            call add_point('start')
+            if (allocated(error)) exit
+            last_tl = state%tl
+            call trace('')
         end do
-        res%factorizations = fam%factorizations
-        res%rejected = state%rejected
-        call fam%destroy()
-        if (have_low) then
-            res%factorizations = res%factorizations + low%factorizations
-            call low%destroy()
+        call free_families()
+        res%rejected = rejected + state%rejected
+        if (size(res%refined_at) > 0 .and. .not. allocated(error)) then
+            ! "; continued on .." -> "the backbone stopped on 384 samples; continued on .."
+            how = refined_text()
+            call res%diagnostics%add(level_note, "refined", "the backbone stopped on "// &
+                                     itoa(hbm%samples)//" samples"//how// &
+                                     trim(merge(" to the end", "           ", &
+                                                state%reason == reason_end)))
         end if
         if (allocated(error)) return
         res%complete = state%reason == reason_end
@@ -450,10 +446,17 @@ contains
                 res%diagnosis = itoa(state%failures)//" failed points in a row after "// &
                                 "modal amplitude a = "//trim(adjustl(buf))//" (the model's "// &
                                 "length unit times the square root of its mass unit; the "// &
-                                "smallest step and the recovery both failed): try more "// &
-                                "&hbm samples (now "//itoa(hbm%samples)//"; 4 times as "// &
-                                "many carried such stops to the end on the lumped disks of "// &
-                                "doc/cyclic.md), a smaller &hbm rho (now "// &
+                                "smallest step and the recovery both failed"// &
+                                refined_text()//"): try "
+                if (size(res%refined_at) < opts%refinements .or. opts%refinements == 0) &
+                    res%diagnosis = res%diagnosis//"more &hbm samples (now "// &
+                                    itoa(res%samples)//"; 4 times as many carried such "// &
+                                    "stops to the end on the lumped disks of doc/cyclic.md), "
+                if (size(res%refined_at) == opts%refinements .and. opts%refinements > 0 .and. &
+                    opts%refinements < modes_max_refinements) &
+                    res%diagnosis = res%diagnosis//"more &modes refinements (now "// &
+                                    itoa(opts%refinements)//"), "
+                res%diagnosis = res%diagnosis//"a smaller &hbm rho (now "// &
                                 trim(adjustl(rho_text))//"), or other harmonics"
             else if (allocated(rep%message)) then
                 if (len(rep%message) > 0) res%diagnosis = rep%message
@@ -463,6 +466,145 @@ contains
         res%seconds = thread_cpu_seconds() - c0
 
     contains
+
+        !> The family on ho (fam) and, for the truncation estimate, on half its harmonics
+        !> (low, have_low).
+        subroutine build_families()
+            if (present(cyclic)) then
+                call new_modes_family(fam, free, ho, phi, omega_ref, error, cyc)
+            else
+                call new_modes_family(fam, free, ho, phi, omega_ref, error)
+            end if
+            if (allocated(error)) return
+            ! the truncation estimate: the same family on half the harmonics
+            have_low = .false.
+            if (opts%error_estimate .and. fam%opts%harmonics >= 2) then
+                block
+                    type(hbm_options_t) :: hl
+                    hl = ho
+                    hl%harmonics = fam%opts%harmonics/2
+                    ! half the samples as well (when they still resolve H/2): the difference
+                    ! then holds the quadrature's error (stick-slip instants on the grid of
+                    ! samples) with the truncation's
+                    if (hl%samples/2 > 4*hl%harmonics) hl%samples = hl%samples/2
+                    if (present(cyclic)) then
+                        call new_modes_family(low, free, hl, phi, omega_ref, error, cyc)
+                    else
+                        call new_modes_family(low, free, hl, phi, omega_ref, error)
+                    end if
+                end block
+                if (allocated(error)) then
+                    call fam%destroy()
+                    return
+                end if
+                have_low = .true.
+            end if
+        end subroutine build_families
+
+        !> Destroy the families, their factorizations counted in res.
+        subroutine free_families()
+            res%factorizations = res%factorizations + fam%factorizations
+            call fam%destroy()
+            if (have_low) then
+                res%factorizations = res%factorizations + low%factorizations
+                call low%destroy()
+            end if
+            have_low = .false.
+        end subroutine free_families
+
+        !> Continue the backbone to its end or its stop, a point per step; the first new
+        !> point's status `first` when not empty.
+        subroutine trace(first)
+            character(len=*), intent(in) :: first
+            logical :: fresh
+            fresh = len(first) > 0
+            do while (state%reason == reason_running)
+                call continuation_step(fam, copts, state, rep, error)
+                if (allocated(error)) exit
+                if (.not. rep%accepted) exit
+                if (state%tl*last_tl < 0.0_dp) res%folds = res%folds + 1
+                last_tl = state%tl
+                if (fresh) then
+                    call add_point(first)
+                else if (state%reason == reason_end) then
+                    call add_point('end')
+                else if (rep%recovered) then
+                    call add_point('recovered')
+                else if (rep%halvings > 0) then
+                    call add_point('halved')
+                else
+                    call add_point('ok')
+                end if
+                fresh = .false.
+                if (allocated(error)) exit
+            end do
+        end subroutine trace
+
+        !> The backbone's first point at amplitude_start on fam (state; rep%accepted when
+        !> found, res%start says from which linear limit).
+        subroutine start_backbone()
+            real(dp), allocatable :: guess(:, :)
+            character(len=16) :: names(2)
+            integer :: nguess, g
+            ! the start: the stuck guess first when the stuck contacts hold (the reaction of the
+            ! linear motion within the friction limits), else the slipping one first
+            allocate (guess(fam%n + 2, 0))
+            nguess = 0
+            if (res%omega_stuck > 0.0_dp) then
+                guess = reshape([guess, stuck_guess(fam, free, phi, omega_ref, &
+                                                    opts%amplitude_start, cyclic)], [fam%n + 2, 1])
+                names(1) = 'stuck'
+                nguess = 1
+            end if
+            if (allocated(phi_slip)) then
+                if (res%omega_stuck > 0.0_dp .and. .not. stuck_holds(free, phi, omega_ref, &
+                                                                    opts%amplitude_start, cyclic)) then
+                    guess = reshape([slip_guess(fam, free, phi_slip, res%omega_slipping, &
+                                                opts%amplitude_start, cyclic), guess], &
+                                    [fam%n + 2, 2])
+                    names = [character(len=16) :: 'slipping', 'stuck']
+                else
+                    guess = reshape([guess, slip_guess(fam, free, phi_slip, res%omega_slipping, &
+                                                       opts%amplitude_start, cyclic)], &
+                                    [fam%n + 2, nguess + 1])
+                    names(nguess + 1) = 'slipping'
+                end if
+                nguess = nguess + 1
+            end if
+            do g = 1, nguess
+                call start_continuation(fam, copts, guess(:, g), state, rep, error)
+                if (allocated(error)) return
+                if (rep%accepted) then
+                    res%start = names(g)
+                    exit
+                end if
+            end do
+        end subroutine start_backbone
+
+        !> Whether the stopped continuation was resumed on fam (resume_continuation) from
+        !> its last point.
+        logical function resumed()
+            call resume_continuation(fam, copts, state, rep, error)
+            resumed = .not. allocated(error) .and. rep%accepted
+            if (resumed) last_tl = state%tl
+        end function resumed
+
+        !> "; continued on S samples from a = ..": where the backbone was continued on more
+        !> samples (empty when it was not).
+        function refined_text() result(t)
+            character(len=:), allocatable :: t
+            character(len=16) :: w
+            integer :: j
+            t = ""
+            if (size(res%refined_at) == 0) return
+            t = "; continued"
+            do j = 1, size(res%refined_at)
+                write (w, '(g0.4)') res%refined_at(j)
+                if (j > 1) t = t//","
+                t = t//" on "//itoa(hbm%samples*refine_factor**j)//" samples from a = "// &
+                    trim(adjustl(w))
+            end do
+        end function refined_text
 
         !> Finish the continuation's current point as a solution and add it.
         subroutine add_point(status)

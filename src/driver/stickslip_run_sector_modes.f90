@@ -9,7 +9,8 @@ module stickslip_run_sector_modes
     use stickslip_case, only: case_t
     use stickslip_case_studies, only: diameter_mode
     use stickslip_cyclic, only: cyclic_t
-    use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes
+    use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes, &
+        refine_factor
     use stickslip_solution, only: hbm_options_t
     use stickslip_diagnostics, only: level_note
     implicit none
@@ -61,6 +62,7 @@ contains
         type(modes_options_t) :: one
         type(error_type), allocatable :: e, first
         integer :: i, k, total
+        real(dp) :: rho_auto
         character(len=:), allocatable :: diagnosis
         allocate (per(size(diameters)))
         cyc = case%cyclic%cyc
@@ -70,8 +72,14 @@ contains
             cyc%engine_order = diameters(i)
             one = opts
             one%mode = diameter_mode(case%modes, i)
+            ! the cheap remedy first: the held weight on the case's samples; then both
+            ! weights continued on more samples (run_modes' refinements)
+            one%refinements = 0
             call run_modes(case%model, case%hbm, one, per(i), e, progress, cyclic=cyc)
+            rho_auto = per(i)%rho
             if (.not. allocated(e)) call retry_held(per(i), one)
+            one%refinements = opts%refinements
+            if (.not. allocated(e)) call retry_refined(per(i), one, rho_auto)
             if (allocated(e)) then
                 per(i)%npoints = 0
                 per(i)%complete = per(i)%unloaded
@@ -169,6 +177,72 @@ contains
             b%diagnosis = b%diagnosis//"; traced again with the wave's held weight rho = "// &
                           trim(adjustl(rtext(b%rho_held)))//", it did no better"
         end subroutine retry_held
+
+        !> The remedy of a backbone `b` that stopped short of the end on the case's samples
+        !> with either weight (retry_held): the diameter traced again with `one`'s
+        !> refinements (run_modes: continued on 4 times the samples where it stops), with
+        !> the weight that got further (b's), then with the other (when retry_held used the
+        !> held one), each
+        !> taking b's place when it completes or reaches a larger amplitude (run_modes' note
+        !> says where it was refined); b%first_try then says what stopped on the case's
+        !> samples, and b's CPU time and counts hold every trace. A retry that does no better leaves b, its diagnosis saying so.
+        !> `rho_auto`: the weight of the first trace.
+        subroutine retry_refined(b, one, rho_auto)
+            type(modes_result_t), intent(inout) :: b
+            type(modes_options_t), intent(in) :: one
+            real(dp), intent(in) :: rho_auto
+            type(modes_result_t) :: again, best
+            type(hbm_options_t) :: ho
+            type(error_type), allocatable :: e2
+            character(len=:), allocatable :: before
+            real(dp) :: held, seconds, weights(2)
+            integer :: w, factorizations, rejected
+            if (b%complete .or. b%unloaded .or. one%refinements == 0) return
+            before = b%diagnosis
+            if (allocated(b%first_try)) before = b%first_try//"; then "//before
+            seconds = b%seconds
+            factorizations = b%factorizations
+            rejected = b%rejected
+            held = b%rho_held
+            best = b
+            ! the weight whose trace got further first (b's), then the other one where
+            ! retry_held tried it
+            weights = [b%rho, rho_auto + held - b%rho]
+            do w = 1, 2
+                ho = case%hbm
+                if (w == 2 .and. (case%hbm%rho /= 0.0_dp .or. .not. (held > 0.0_dp .and. &
+                                                                      held < 0.5_dp*rho_auto))) &
+                    exit
+                if (case%hbm%rho == 0.0_dp) ho%rho = weights(w)
+                call run_modes(case%model, ho, one, again, e2, progress, cyclic=cyc)
+                if (allocated(e2)) then
+                    deallocate (e2)
+                    cycle
+                end if
+                seconds = seconds + again%seconds
+                factorizations = factorizations + again%factorizations
+                rejected = rejected + again%rejected
+                if (again%complete .or. last_amplitude(again) > last_amplitude(best)) &
+                    best = again
+                if (best%complete) exit
+            end do
+            if (.not. (best%complete .or. last_amplitude(best) > last_amplitude(b))) then
+                b%seconds = seconds
+                b%factorizations = factorizations
+                b%rejected = rejected
+                b%diagnosis = b%diagnosis//"; traced again on more samples (at most "// &
+                              itoa(case%hbm%samples*refine_factor**one%refinements)// &
+                              "), it did no better"
+                return
+            end if
+            if (size(best%refined_at) == 0) best%refined_at = [best%points(1)%p%parameter]
+            best%first_try = "on "//itoa(case%hbm%samples)//" samples: "//before
+            best%rho_held = held
+            best%seconds = seconds
+            best%factorizations = factorizations
+            best%rejected = rejected
+            b = best
+        end subroutine retry_refined
     end subroutine sector_backbones
 
     !> The modal amplitude of a backbone's last point (0 without points).

@@ -1216,6 +1216,7 @@ contains
                     call put(unit, "  points = "//itoa(w%points), stat, msg)
                     call put(unit, "  plot = "//ltoa(w%plot), stat, msg)
                     call put(unit, "  error_estimate = "//ltoa(w%error_estimate), stat, msg)
+                    call put(unit, "  refinements = "//itoa(w%refinements), stat, msg)
                     if (allocated(w%nodal_diameters)) call put(unit, "  nodal_diameters = "// &
                                                                ilist(w%nodal_diameters), stat, msg)
                     call put(unit, "/", stat, msg)

@@ -67,7 +67,7 @@ contains
 
     !> Read &modes (optional; `given` tells whether it is present): mode, amplitude_start and
     !> amplitude_stop (both required with the group), points, plot, error_estimate,
-    !> nodal_diameters (checked against the disk by the caller); validate.
+    !> refinements, nodal_diameters (checked against the disk by the caller); validate.
     subroutine read_modes_group(nml, opts, given, error)
         !> The parsed case file.
         type(nml_file_t), intent(in) :: nml
@@ -85,7 +85,7 @@ contains
         if (.not. given) return
         call check_names(nml, g, [character(len=16) :: "mode", "amplitude_start", &
                              "amplitude_stop", "points", "plot", "error_estimate", &
-                             "nodal_diameters"], error)
+                             "nodal_diameters", "refinements"], error)
         if (allocated(error)) return
         ! one mode, or on a sector one per nodal diameter (checked by the caller)
         call get_integers(nml, g, "mode", list, found, max_sectors/2 + 1, error)
@@ -121,6 +121,8 @@ contains
         call get_logical(nml, g, "plot", opts%plot, error)
         if (allocated(error)) return
         call get_logical(nml, g, "error_estimate", opts%error_estimate, error)
+        if (allocated(error)) return
+        call get_integer(nml, g, "refinements", opts%refinements, error)
         if (allocated(error)) return
         ! checked against the disk by the caller (check_modes_diameters)
         call get_integers(nml, g, "nodal_diameters", list, found, max_sectors/2 + 1, error)

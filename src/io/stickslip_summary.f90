@@ -566,8 +566,10 @@ contains
     !> `per` of a sector's nodal `diameters` (res gathers their points): nodal_diameters and
     !> per diameter d mode_nd<d> (the mode traced there), complete_nd<d>, points_nd<d>,
     !> unloaded_nd<d>, omega_stuck_nd<d>, omega_slipping_nd<d>, start_nd<d>, rho_nd<d> (the
-    !> weight of its points), first_try_nd<d> when it was traced again with its wave's held
-    !> weight, with points omega_min_nd<d>, omega_max_nd<d>, damping_ratio_max_nd<d>, and
+    !> weight of its points), samples_end_nd<d> and refined_at_nd<d> (samples_end and
+    !> refined_at of a whole structure: the samples of the last points and the amplitudes
+    !> from which the backbone was continued on more), first_try_nd<d> when it was traced
+    !> again with its wave's held weight or on more samples, with points omega_min_nd<d>, omega_max_nd<d>, damping_ratio_max_nd<d>, and
     !> diagnosis_nd<d> when there is one. Error: stat io.
     subroutine write_modes_summary(dir, case, res, error, per, diameters)
         !> Output directory (must exist).
@@ -596,6 +598,7 @@ contains
         call put(u, "  start = '"//trim(res%start)//"'", stat, msg)
         call put(u, "  rho = "//rtoa(res%rho), stat, msg)
         call put(u, "  odd_only = "//ltoa(res%odd_only), stat, msg)
+        if (.not. present(per)) call put_refinement(u, "", res, stat, msg)
         if (n > 0) then
             associate (pts => res%points(1:n))
                 call put(u, "  amplitude_first = "//rtoa(pts(1)%p%parameter), stat, msg)
@@ -637,6 +640,7 @@ contains
                              stat, msg)
                     call put(u, "  start_nd"//d//" = '"//trim(b%start)//"'", stat, msg)
                     call put(u, "  rho_nd"//d//" = "//rtoa(b%rho), stat, msg)
+                    call put_refinement(u, "_nd"//d, b, stat, msg)
                     if (allocated(b%first_try)) call put(u, "  first_try_nd"//d//" = '"// &
                                                          quote(b%first_try)//"'", stat, msg)
                     if (b%npoints > 0) then
@@ -658,6 +662,22 @@ contains
         end if
         call end_summary(dir, case, u, stat, msg, error)
     end subroutine write_modes_summary
+
+    !> The keys samples_end<suffix> (the samples of the backbone's last points) and, when
+    !> it was continued on more samples, refined_at<suffix> (the modal amplitudes from
+    !> which, one per refinement).
+    subroutine put_refinement(u, suffix, b, stat, msg)
+        integer, intent(in) :: u
+        character(len=*), intent(in) :: suffix
+        type(modes_result_t), intent(in) :: b
+        integer, intent(inout) :: stat
+        character(len=*), intent(inout) :: msg
+        if (b%samples > 0) call put(u, "  samples_end"//suffix//" = "//itoa(b%samples), stat, msg)
+        if (allocated(b%refined_at)) then
+            if (size(b%refined_at) > 0) call put(u, "  refined_at"//suffix//" = "// &
+                                                 rlist(b%refined_at), stat, msg)
+        end if
+    end subroutine put_refinement
 
     !> The largest finite value of x (NaN when none is).
     real(dp) function finite_max(x) result(m)

@@ -59,7 +59,6 @@ contains
         type(modes_result_t), allocatable :: per(:)
         type(error_type), allocatable :: error
         logical :: noted
-        integer :: k
         call read_case(project_path("examples/bladed_disk_damper_modes.nml"), c, error)
         call check_error(t, error, "held weight: read the example", .false.)
         if (allocated(error)) return
@@ -76,12 +75,7 @@ contains
         call sector_backbones(c, opts, [1], res, per, error)
         call check_error(t, error, "held weight: sector_backbones", .false.)
         if (allocated(error)) return
-        noted = .false.
-        if (allocated(per(1)%diagnostics%items)) then
-            do k = 1, size(per(1)%diagnostics%items)
-                noted = noted .or. per(1)%diagnostics%items(k)%key == "held_weight"
-            end do
-        end if
+        noted = per(1)%diagnostics%has("held_weight")
         call check(t, .not. alone%complete .and. per(1)%complete .and. res%complete .and. &
                    per(1)%rho == alone%rho_held .and. alone%rho_held < 0.01_dp*alone%rho .and. &
                    allocated(per(1)%first_try) .and. noted .and. &
@@ -120,7 +114,6 @@ contains
         character(len=*), parameter :: dir = scratch//"/cyclic_modes_refined"
         character(len=:), allocatable :: first_try
         logical :: noted
-        integer :: k
         real(dp) :: dw, dd
         call read_case(project_path("examples/bladed_disk_modes.nml"), c, error)
         call check_error(t, error, "cyclic modes samples: read the example", .false.)
@@ -177,12 +170,7 @@ contains
         call sector_backbones(c, c%modes%modes_options_t, [1], all, per, error)
         call check_error(t, error, "cyclic modes samples: sector_backbones", .false.)
         if (allocated(error)) return
-        noted = .false.
-        if (allocated(per(1)%diagnostics%items)) then
-            do k = 1, size(per(1)%diagnostics%items)
-                noted = noted .or. per(1)%diagnostics%items(k)%key == "refined"
-            end do
-        end if
+        noted = per(1)%diagnostics%has("refined")
         call make_directory(dir, error)
         call check_error(t, error, "cyclic modes samples: the directory", .false.)
         if (allocated(error)) return

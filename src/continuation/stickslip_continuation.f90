@@ -29,7 +29,7 @@ module stickslip_continuation
     private
     public :: parametric_system_t, continuation_options_t, continuation_state_t
     public :: continuation_report_t, start_continuation, continuation_step, resume_continuation
-    public :: validate_continuation_options
+    public :: validate_continuation_options, point_status
     public :: reason_running, reason_end, reason_failures, reason_max_points, reason_left
 
     !> Fewest unknowns of the bordered system for which the corrector runs hybrj's algorithm
@@ -410,6 +410,25 @@ contains
             report%message = "the branch turned back and left the range at its start"
         end if
     end subroutine continuation_step
+
+    !> The status of a point a continuation step accepted: 'recovered' (by the system's
+    !> recovery), 'end' (at the end of the range), 'halved' (after step halvings) or 'ok'.
+    pure function point_status(report, state) result(status)
+        !> What the step did.
+        type(continuation_report_t), intent(in) :: report
+        !> The state after it.
+        type(continuation_state_t), intent(in) :: state
+        character(len=:), allocatable :: status
+        if (report%recovered) then
+            status = "recovered"
+        else if (state%reason == reason_end) then
+            status = "end"
+        else if (report%halvings > 0) then
+            status = "halved"
+        else
+            status = "ok"
+        end if
+    end function point_status
 
     !> The direction of the curve at the new point u: the tangent of the generalized
     !> Jacobian, oriented along the secant from the last point; the secant itself where

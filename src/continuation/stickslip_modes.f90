@@ -39,7 +39,7 @@ module stickslip_modes
     use stickslip_linear_modes, only: linear_modes
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step, reason_running, &
-        reason_end, reason_failures, resume_continuation
+        reason_end, reason_failures, resume_continuation, point_status
     use stickslip_modes_family, only: modes_family_t, new_modes_family, free_structure
     use stickslip_sweep_result, only: frc_point_t, reason_text
     use stickslip_sweep_point, only: point_tally_t, keep_coefficients, contact_point_values
@@ -526,14 +526,8 @@ contains
                 last_tl = state%tl
                 if (fresh) then
                     call add_point(first)
-                else if (state%reason == reason_end) then
-                    call add_point('end')
-                else if (rep%recovered) then
-                    call add_point('recovered')
-                else if (rep%halvings > 0) then
-                    call add_point('halved')
                 else
-                    call add_point('ok')
+                    call add_point(point_status(rep, state))
                 end if
                 fresh = .false.
                 if (allocated(error)) exit

@@ -28,7 +28,7 @@ module stickslip_sweep
     use stickslip_lapack, only: dgetrf, dgetrs, dgeev
     use stickslip_continuation, only: continuation_options_t, continuation_state_t, &
         continuation_report_t, start_continuation, continuation_step, reason_running, &
-        reason_end, reason_left, reason_failures, reason_max_points
+        reason_end, reason_left, reason_failures, reason_max_points, point_status
     use stickslip_reference, only: reference_options_t, reference_cache_t
     use stickslip_progress, only: progress_t
     use stickslip_sweep_options, only: sweep_options_t, validate_sweep_options, &
@@ -366,15 +366,7 @@ contains
                 if (allocated(error)) exit
                 if (rep%accepted) then
                     call watch%accepted(state_before, res)
-                    if (rep%recovered) then
-                        call add_point("recovered")
-                    else if (res%state%reason == reason_end) then
-                        call add_point("end")
-                    else if (rep%halvings > 0) then
-                        call add_point("halved")
-                    else
-                        call add_point("ok")
-                    end if
+                    call add_point(point_status(rep, res%state))
                     if (allocated(error)) exit
                     !$omp critical (sweep_points)
                     call watch%check_retrace(res, co%max_step, opts%parameter)

@@ -243,7 +243,8 @@ contains
                    maxval(res%points(1:res%npoints)%energy_error) < 1.0e-6_dp, &
                    "cyclic modes static load: the dampers pressed by their centrifugal "// &
                    "load, the stuck start's mean forces = the static solution's", &
-                   res%diagnosis//" difference "//real_text(worst)//" of the largest mean force "// &
+                   res%diagnosis//"; difference "//real_text(worst)//" of the largest "// &
+                   "mean force "// &
                    real_text(scale)//", energy error at most "// &
                    real_text(maxval(res%points(1:res%npoints)%energy_error)))
     end subroutine test_static_load

@@ -551,8 +551,8 @@ contains
                 nguess = 1
             end if
             if (allocated(phi_slip)) then
-                if (res%omega_stuck > 0.0_dp .and. .not. stuck_holds(free, phi, omega_ref, &
-                                                                    opts%amplitude_start, cyclic)) then
+                if (res%omega_stuck > 0.0_dp .and. &
+                    .not. stuck_holds(free, phi, omega_ref, opts%amplitude_start, cyclic)) then
                     guess = reshape([slip_guess(fam, free, phi_slip, res%omega_slipping, &
                                                 opts%amplitude_start, cyclic), guess], &
                                     [fam%n + 2, 2])

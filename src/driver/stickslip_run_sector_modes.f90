@@ -182,11 +182,11 @@ contains
         !> with either weight (retry_held): the diameter traced again with `one`'s
         !> refinements (run_modes: continued on 4 times the samples where it stops), with
         !> the weight that got further (b's), then with the other (when retry_held used the
-        !> held one), each
-        !> taking b's place when it completes or reaches a larger amplitude (run_modes' note
-        !> says where it was refined); b%first_try then says what stopped on the case's
-        !> samples, and b's CPU time and counts hold every trace. A retry that does no better leaves b, its diagnosis saying so.
-        !> `rho_auto`: the weight of the first trace.
+        !> held one), each taking b's place when it completes or reaches a larger amplitude
+        !> (run_modes' note says where it was refined); b%first_try then says what stopped
+        !> on the case's samples, and b's CPU time and counts hold every trace. A retry that
+        !> does no better leaves b, its diagnosis saying so. `rho_auto`: the weight of the
+        !> first trace.
         subroutine retry_refined(b, one, rho_auto)
             type(modes_result_t), intent(inout) :: b
             type(modes_options_t), intent(in) :: one

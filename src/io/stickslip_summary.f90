@@ -569,8 +569,9 @@ contains
     !> weight of its points), samples_end_nd<d> and refined_at_nd<d> (samples_end and
     !> refined_at of a whole structure: the samples of the last points and the amplitudes
     !> from which the backbone was continued on more), first_try_nd<d> when it was traced
-    !> again with its wave's held weight or on more samples, with points omega_min_nd<d>, omega_max_nd<d>, damping_ratio_max_nd<d>, and
-    !> diagnosis_nd<d> when there is one. Error: stat io.
+    !> again with its wave's held weight or on more samples, with points omega_min_nd<d>,
+    !> omega_max_nd<d>, damping_ratio_max_nd<d>, and diagnosis_nd<d> when there is one.
+    !> Error: stat io.
     subroutine write_modes_summary(dir, case, res, error, per, diameters)
         !> Output directory (must exist).
         character(len=*), intent(in) :: dir

@@ -96,6 +96,7 @@ contains
         call check(t, maxval(res%points(1:n)%energy_error) <= 1.0e-10_dp, &
                    "modes: degenerate: energy balance at every point", &
                    real_text(maxval(res%points(1:n)%energy_error)))
+        call check_refinements(t, m, ho, mo)
         mo%mode = 2
         call run_modes(m, ho, mo, res, error)
         call check_error(t, error, "modes: degenerate: the unloaded combination refused", &
@@ -107,6 +108,68 @@ contains
         call check_error(t, error, "modes: mu = 0 refused with why", .true., &
                          [character(len=40) :: "&friction mu = 0", "linear mode at every"])
     end subroutine test_degenerate
+
+    !> &modes refinements on a whole structure (the chain of test_degenerate, H = 7): over
+    !> samples 32 to 256, a backbone that stops without refinements is continued on 4 times
+    !> the samples and completes, its last point at the free mode 3 (sqrt(2 + sqrt 2), the
+    !> analytic large-amplitude limit, to 1e-4 as at 512 samples), balancing its energy;
+    !> samples_end and refined_at say what was done, one point has the status 'refined'
+    !> (or, traced again from the start, refined_at begins at amplitude_start). At least one
+    !> of those sample counts must stop without refinements, or the check tests nothing.
+    subroutine check_refinements(t, m, ho, mo)
+        type(test_counter_t), intent(inout) :: t
+        type(model_t), intent(in) :: m
+        type(hbm_options_t), intent(in) :: ho
+        type(modes_options_t), intent(in) :: mo
+        integer, parameter :: counts(4) = [32, 64, 128, 256]
+        type(hbm_options_t) :: hs
+        type(modes_options_t) :: none
+        type(modes_result_t) :: plain, refined
+        type(error_type), allocatable :: error
+        integer :: k, stopped, n
+        logical :: ok
+        character(len=:), allocatable :: detail
+        stopped = 0
+        ok = .true.
+        detail = ""
+        do k = 1, size(counts)
+            hs = ho
+            hs%samples = counts(k)
+            none = mo
+            none%refinements = 0
+            call run_modes(m, hs, none, plain, error)
+            if (allocated(error)) then
+                ok = .false.
+                detail = detail//" "//error%message
+                exit
+            end if
+            call run_modes(m, hs, mo, refined, error)
+            if (allocated(error)) then
+                ok = .false.
+                detail = detail//" "//error%message
+                exit
+            end if
+            detail = detail//" "//itoa(counts(k))//": "//merge("complete", "stopped ", &
+                                                                plain%complete)
+            if (plain%complete) then
+                ok = ok .and. refined%samples == counts(k) .and. size(refined%refined_at) == 0
+                cycle
+            end if
+            stopped = stopped + 1
+            n = refined%npoints
+            detail = detail//", refined to "//itoa(refined%samples)//" from a = "// &
+                     real_text(refined%refined_at(1))//", end omega "// &
+                     real_text(refined%points(n)%p%omega)
+            ok = ok .and. refined%complete .and. refined%samples > counts(k) .and. &
+                 size(refined%refined_at) >= 1 .and. &
+                 abs(refined%points(n)%p%omega - sqrt(2.0_dp + sqrt(2.0_dp))) <= 1.0e-4_dp .and. &
+                 maxval(refined%points(1:n)%energy_error) <= 1.0e-10_dp .and. &
+                 (count(refined%points(1:n)%p%status == 'refined') == 1 .or. &
+                  refined%refined_at(size(refined%refined_at)) == mo%amplitude_start)
+        end do
+        call check(t, ok .and. stopped > 0, "modes: refinements: a backbone that stops on "// &
+                   "too few samples is continued on more and ends at the free mode 3", detail)
+    end subroutine check_refinements
 
     !> The per-point error estimates of omega and D (issue 24, item 3) against the backbone at
     !> 4x the harmonics (H = 60, 1024 samples) on the seed: every point the estimate leaves

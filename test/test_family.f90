@@ -366,8 +366,13 @@ contains
     end subroutine test_family_cli
 
     !> A family in the preload of a damper that lifts off (a contact law): each curve's
-    !> first point is the single solve of the model at that preload and the start's omega
-    !> (amplitudes to 1e-8), whichever neighbour it was started from.
+    !> first point is a periodic solution of the model at that preload and the start's omega
+    !> (a single solve started from its forces stays there, amplitudes to 1e-8), whichever
+    !> neighbour it was started from, and the first curve's (started cold) is the cold
+    !> single solve's. The case has two periodic solutions at preload 2 (max |r| 2.12 and
+    !> 5.46, both converged and trusted): on an AMD EPYC VM the second curve, started from
+    !> the first's stuck solution, reaches the other one than the cold solve, so a cold
+    !> solve is no yardstick for the curves started from a neighbour.
     subroutine test_family_laws(t)
         type(test_counter_t), intent(inout) :: t
         type(case_t) :: c
@@ -377,7 +382,7 @@ contains
         type(hbm_options_t) :: ho
         type(error_type), allocatable :: error
         character(len=*), parameter :: path = scratch//"/family_laws.nml"
-        real(dp) :: worst, a
+        real(dp) :: worst, a, cold
         integer :: k
         call write_lines(path, [character(len=300) :: &
             "&system ndof = 2, mass = 1,0,0,1, stiffness = 1.3,-0.3,-0.3,1.8,", &
@@ -399,6 +404,7 @@ contains
         call check_error(t, error, "family laws: run", .false.)
         if (allocated(error)) return
         worst = huge(1.0_dp)
+        cold = huge(1.0_dp)
         if (all([(fam%curves(k)%npoints > 0, k=1, 3)])) then
             worst = 0.0_dp
             do k = 1, 3
@@ -407,15 +413,25 @@ contains
                 call set_sweep_parameter(m, 'omega', 0.8_dp, m%force_amplitude)
                 ho = c%hbm
                 ho%want_samples = .true.
-                call solve_periodic(m, ho, sol, error)
-                if (allocated(error)) exit
-                a = maxval(abs(sol%x(:, 1)))
-                worst = max(worst, abs(fam%curves(k)%points(1)%amplitude(1) - a)/a)
+                associate (p => fam%curves(k)%points(1))
+                    call solve_periodic(m, ho, sol, error, r_start=p%rcoef)
+                    if (allocated(error)) exit
+                    a = maxval(abs(sol%x(:, 1)))
+                    worst = max(worst, abs(p%amplitude(1) - a)/a)
+                    if (k == 1) then
+                        call solve_periodic(m, ho, sol, error)
+                        if (allocated(error)) exit
+                        a = maxval(abs(sol%x(:, 1)))
+                        cold = abs(p%amplitude(1) - a)/a
+                    end if
+                end associate
             end do
         end if
-        call check(t, .not. allocated(error) .and. worst < 1.0e-8_dp, &
-                   "family laws: each curve's first point = the single solve at its preload", &
-                   "largest relative difference "//real_text(worst))
+        call check(t, .not. allocated(error) .and. worst < 1.0e-8_dp .and. cold < 1.0e-8_dp, &
+                   "family laws: each curve's first point is a solution at its preload, "// &
+                   "the first curve's the cold single solve", &
+                   "largest relative difference "//real_text(worst)//", cold "// &
+                   real_text(cold))
     end subroutine test_family_laws
 
     !> A family on the reduced CalculiX strip (2412 DOFs, Craig-Bampton): both curves complete,

@@ -10,7 +10,7 @@ module stickslip_run_sector_modes
     use stickslip_case_studies, only: diameter_mode
     use stickslip_cyclic, only: cyclic_t
     use stickslip_modes, only: modes_options_t, modes_result_t, mode_point_t, run_modes, &
-        refine_factor
+        refine_factor, max_refined_samples
     use stickslip_solution, only: hbm_options_t
     use stickslip_diagnostics, only: level_note
     implicit none
@@ -231,11 +231,10 @@ contains
                 b%factorizations = factorizations
                 b%rejected = rejected
                 b%diagnosis = b%diagnosis//"; traced again on more samples (at most "// &
-                              itoa(case%hbm%samples*refine_factor**one%refinements)// &
-                              "), it did no better"
+                              itoa(min(case%hbm%samples*refine_factor**one%refinements, &
+                                       max_refined_samples))//"), it did no better"
                 return
             end if
-            if (size(best%refined_at) == 0) best%refined_at = [best%points(1)%p%parameter]
             best%first_try = "on "//itoa(case%hbm%samples)//" samples: "//before
             best%rho_held = held
             best%seconds = seconds

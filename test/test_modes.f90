@@ -138,12 +138,7 @@ contains
             none = mo
             none%refinements = 0
             call run_modes(m, hs, none, plain, error)
-            if (allocated(error)) then
-                ok = .false.
-                detail = detail//" "//error%message
-                exit
-            end if
-            call run_modes(m, hs, mo, refined, error)
+            if (.not. allocated(error)) call run_modes(m, hs, mo, refined, error)
             if (allocated(error)) then
                 ok = .false.
                 detail = detail//" "//error%message

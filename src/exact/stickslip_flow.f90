@@ -131,7 +131,8 @@ contains
         !> matrix-vector product of order n_a) costs less than the track's exponentials
         !> (the seed's stability ran 2.4 times slower tracked).
         integer, parameter :: track_min_states = 24
-        integer :: n, nz, na, im, imnew, j, k, nevents, zero_length, max_events, level
+        integer :: n, nz, na, im, imnew, j, k, nevents, zero_length, max_events, level, &
+                   last_element
         integer, allocatable :: code(:), oldcode(:), zset(:)
         real(dp), allocatable :: y(:), yb(:), ybb(:), yeb(:), ye(:), jac(:, :), &
                                  fm(:), fp(:), jump(:, :), pj(:, :), dirs(:, :), &
@@ -204,6 +205,7 @@ contains
         fresh = .true.
         nevents = 0
         zero_length = 0
+        last_element = 0
         do
             if (t >= tend) exit
             if (self%modes(im)%m > 0) then
@@ -374,6 +376,15 @@ contains
                 end do
                 if (self%modes(imnew)%m == 0) call orbit%add_phase(te, ye, imnew)
             end if
+            if (want_orbit .and. nevents > 0 .and. te - tp <= 1.0e-12_dp*self%period .and. &
+                hit%element /= last_element) then
+                if (orbit%simultaneous == 0) then
+                    orbit%simultaneous_t = te
+                    orbit%simultaneous_contacts = [last_element, hit%element]
+                end if
+                orbit%simultaneous = orbit%simultaneous + 1
+            end if
+            last_element = hit%element
             why = event_guard(te, tp, self%period, max_zero_length + 3*self%nslot, &
                               max_events, "chattering", zero_length, nevents)
             if (len(why) > 0) then

@@ -9,8 +9,10 @@
 !>
 !> The decision at an event concerns the element whose event fired and every element
 !> holding a rigid constraint (its code may change with the others'). The rigid ones
-!> (contact_element_t%coupled) decide jointly: Coulomb contacts only by Coulomb's law at
-!> acceleration level (the box QP of the Coulomb element, for any number of contacts),
+!> (contact_element_t%coupled) decide jointly: by their laws at acceleration level where
+!> each has one (contact_element_t%accel_law: Coulomb's box QP, the disk of 2D friction,
+!> and a unilateral contact on an elastic normal as Coulomb's law with its current limit
+!> mu lambda; for any number of contacts),
 !> others by trying their candidate codes (stuck and closed first) until a combination is
 !> consistent with every law (at most 8 contacts at once enumerated). Elastic ones (a
 !> Jenkins or microslip slider) then decide alone with the accelerations of the new mode:
@@ -26,7 +28,8 @@ module stickslip_flow_algebra
     use stickslip_flow_modal, only: project_velocity_rows, gram_solve
     use stickslip_contact_modes, only: mode_terms_t, event_list_t
     use stickslip_contact_set, only: contact_set_t, new_element_set
-    use stickslip_contact_element, only: element_box_t, state_stick, along_normal
+    use stickslip_contact_element, only: element_box_t, state_stick, along_normal, &
+        accel_none, accel_box, accel_alone
     implicit none
     private
     public :: mode_index, assemble, start_codes, decide_codes, impact_jump, &
@@ -419,66 +422,91 @@ contains
 
     contains
 
-        !> Every rigid element decides by its law at acceleration level and no other
-        !> constraint is held: their laws between their forces r and the accelerations of
-        !> their channels a = a_free + D r (D the modal Delassus matrix of their channels,
-        !> a_free the accelerations without their forces) solved together by their own local
-        !> solves (contact_set_t%step_forces; Coulomb contacts only: the box QP of
-        !> stickslip_contact_solve), then each one's codes from its forces (accel_code).
+        !> Every rigid element decides by its law at acceleration level (contact_element_t
+        !> %accel_law) and no other constraint is held: the laws of those at rest (accel_box)
+        !> between their forces r and the accelerations of their channels a = a_free + D r
+        !> (D the modal Delassus matrix of their channels, a_free the accelerations without
+        !> their forces, nor those of the elements that carry none now) solved together by
+        !> their own local solves (contact_set_t%step_forces: Coulomb's box QP of
+        !> stickslip_contact_solve, the disk), each one's codes from its forces
+        !> (accel_code); then those that carry no force at this instant (accel_alone: a
+        !> contact that opens or closes) by the enumeration of their candidates, the
+        !> others' codes fixed. Those that move keep their codes (accel_keep). Not ok, and
+        !> the codes unchanged, when an element cannot (accel_none) or the enumeration
+        !> finds no consistent combination.
         subroutine at_acceleration_level(ok)
             logical, intent(out) :: ok
             logical :: skip(self%nc)
             real(dp), allocatable :: dirsub(:, :), accel(:), f(:), r(:), u(:)
-            type(element_box_t), allocatable :: boxes(:)
+            type(element_box_t), allocatable :: boxes(:), boxed(:)
             type(contact_set_t) :: sub
+            integer, allocatable :: kinds(:), chans(:, :), nchan(:), saved(:), all_rigid(:), &
+                                    inbox(:), cj(:)
             integer :: q, c, nch, a, sweeps, c0
             ok = .false.
+            allocate (kinds(size(rigid)), boxes(size(rigid)), nchan(size(rigid)), &
+                      chans(maxval(self%cs%width(rigid)), size(rigid)))
             do q = 1, size(rigid)
-                if (.not. self%cs%elements(rigid(q))%e%accel_decision()) return
+                j = rigid(q)
+                call self%cs%elements(j)%e%accel_law(code(self%slot0(j) + 1:self%slot_hi(j)), &
+                                                     self%geom(j), yb, kinds(q), boxes(q)%e, cj)
+                if (kinds(q) == accel_none) return
+                nchan(q) = 0
+                if (kinds(q) == accel_box) then
+                    nchan(q) = size(cj)
+                    chans(1:size(cj), q) = cj
+                end if
             end do
             skip = .false.
-            skip(rigid) = .true.
+            skip(pack(rigid, kinds == accel_box .or. kinds == accel_alone)) = .true.
             call assemble(self, code, terms, ok, skip)
             if (.not. ok) return
             ok = .false.
             if (size(terms%chan) > 0) return
-            ! the rigid elements' channels and their modal directions
-            allocate (boxes(size(rigid)))
-            nch = 0
-            do q = 1, size(rigid)
-                allocate (boxes(q)%e, source=self%cs%elements(rigid(q))%e)
-                nch = nch + self%cs%width(rigid(q))
-            end do
-            allocate (dirsub(self%n, nch))
-            c = 0
-            do q = 1, size(rigid)
-                j = rigid(q)
-                do a = 1, self%cs%width(j)
-                    c = c + 1
-                    dirsub(:, c) = self%geom(j)%dt(:, self%cs%along(self%cs%first(j) + a - 1))
+            saved = code
+            inbox = pack([(q, q=1, size(rigid))], kinds == accel_box)
+            if (size(inbox) > 0) then
+                ! the boxed elements' channels and their modal directions
+                nch = sum(nchan(inbox))
+                allocate (dirsub(self%n, nch))
+                c = 0
+                do q = 1, size(inbox)
+                    j = rigid(inbox(q))
+                    do a = 1, nchan(inbox(q))
+                        c = c + 1
+                        dirsub(:, c) = self%geom(j)%dt(:, self%cs%along(self%cs%first(j) + &
+                                                                        chans(a, inbox(q)) - 1))
+                    end do
                 end do
-            end do
-            accel = rate_of(self, code, terms, yb, dirs)
-            f = accel(self%n + 1:2*self%n)
-            call new_element_set(sub, boxes)
-            allocate (r(nch))
-            r = 0.0_dp
-            call sub%step_forces(matmul(transpose(dirsub), dirsub), matmul(f, dirsub), r, &
-                                 max(sub%force_scale(), tiny(1.0_dp)), 1.0e-15_dp, 1000000, &
-                                 sweeps)
-            if (.not. all(abs(r) <= huge(1.0_dp))) return
-            u = matmul(f, dirsub) + matmul(matmul(transpose(dirsub), dirsub), r)
-            c0 = 0
-            do q = 1, size(rigid)
-                j = rigid(q)
-                associate (w => self%cs%width(j))
-                    call self%cs%elements(j)%e%accel_code(r(c0 + 1:c0 + w), u(c0 + 1:c0 + w), &
+                accel = rate_of(self, code, terms, yb, dirs)
+                f = accel(self%n + 1:2*self%n)
+                boxed = boxes(inbox)
+                call new_element_set(sub, boxed)
+                allocate (r(nch))
+                r = 0.0_dp
+                call sub%step_forces(matmul(transpose(dirsub), dirsub), matmul(f, dirsub), r, &
+                                     max(sub%force_scale(), tiny(1.0_dp)), 1.0e-15_dp, &
+                                     1000000, sweeps)
+                if (.not. all(abs(r) <= huge(1.0_dp))) return
+                u = matmul(f, dirsub) + matmul(matmul(transpose(dirsub), dirsub), r)
+                c0 = 0
+                do q = 1, size(inbox)
+                    j = rigid(inbox(q))
+                    associate (w => nchan(inbox(q)))
+                        call boxes(inbox(q))%e%accel_code(r(c0 + 1:c0 + w), u(c0 + 1:c0 + w), &
                                                           code(self%slot0(j) + 1:self%slot_hi(j)), &
                                                           dirs(:, j))
-                    c0 = c0 + w
-                end associate
-            end do
+                        c0 = c0 + w
+                    end associate
+                end do
+            end if
             ok = .true.
+            if (.not. any(kinds == accel_alone)) return
+            all_rigid = rigid
+            rigid = pack(rigid, kinds == accel_alone)
+            call enumerate(ok)
+            rigid = all_rigid
+            if (.not. ok) code = saved
         end subroutine at_acceleration_level
 
         !> Every combination of the rigid elements' candidates, in order; the first

@@ -283,7 +283,7 @@ contains
         real(dp), intent(in) :: vref(:)
         type(error_type), allocatable, intent(inout) :: error
         real(dp), allocatable :: phi(:, :), mm(:, :), lam(:), work(:), s(:), phit(:, :)
-        real(dp) :: query(1), fs
+        real(dp) :: query(1), fs, fstruct
         integer :: n, na, info, k, j, c
         n = self%n
         na = self%na
@@ -310,6 +310,8 @@ contains
                      maxval(abs(matmul(transpose(phi), self%w(:, j)))))
         end do
         self%se = fs/self%omega
+        fstruct = 0.0_dp
+        if (self%ne > 0) fstruct = maxval(abs(self%hf(:, self%nz + 1:)))
         if (.not. (self%se > 0.0_dp .and. self%se < huge(1.0_dp))) self%se = 1.0_dp
         self%lam = lam
         self%s = s
@@ -360,7 +362,11 @@ contains
                 end do
                 g%vref = vref(j)
                 g%gref = vref(j)/self%omega
-                g%fref = max(e%force_scale(), e%preload(), e%normal_load(), tiny(1.0_dp))
+                g%fref = max(e%force_scale(), e%preload(), e%normal_load())
+                ! a contact with no load of its own (a unilateral contact pressed by the
+                ! structure's static load) takes the scale of the forces on the structure
+                if (.not. (g%fref > 0.0_dp)) g%fref = fstruct
+                g%fref = max(g%fref, tiny(1.0_dp))
             end associate
         end do
     end subroutine balance

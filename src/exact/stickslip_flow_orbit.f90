@@ -39,6 +39,13 @@ module stickslip_flow_orbit
         !> nonlinear phases).
         real(dp), allocatable :: phase_b(:, :)
         real(dp) :: integration_error = 0.0_dp
+        !> Events of another contact at the instant of the one before (within 1e-12 of the
+        !> period: sectors in phase, or contacts that reach their limits together), where
+        !> the flow's linearization depends on the order it took them in; the first such
+        !> instant [s] and its two contacts.
+        integer :: simultaneous = 0
+        real(dp) :: simultaneous_t = 0.0_dp
+        integer :: simultaneous_contacts(2) = 0
     contains
         procedure :: start => orbit_start
         procedure :: add_phase => orbit_add_phase
@@ -58,6 +65,9 @@ contains
         integer, intent(in) :: na, nc
         self%t0 = t0
         self%nphase = 0
+        self%simultaneous = 0
+        self%simultaneous_t = 0.0_dp
+        self%simultaneous_contacts = 0
         self%nevent = 0
         allocate (self%phase_t(16), self%phase_y(na, 16), self%phase_mode(16))
         allocate (self%event_t(16), self%event_force(16), self%event_velocity(16), &

@@ -280,7 +280,7 @@ contains
         real(dp) :: c0, c1, ampx, ampv, distance, ftol
         integer :: stride
         logical :: finer
-        character(len=200) :: buf
+        character(len=400) :: buf
 
         c0 = thread_cpu_seconds()
         ftol = default_floquet_tol
@@ -379,6 +379,16 @@ contains
             fl%verdict = 'unknown'
             fl%stable = .false.
             fl%asymptotic = .false.
+        end if
+        if (res%orbit%simultaneous > 0 .and. fl%verdict == 'unstable') then
+            ! the flow map is piecewise smooth there: its Jacobian is that of the order the
+            ! flow took the events in, and a perturbation that swaps them follows another
+            write (buf, '(a,i0,a,i0,a,es12.5e2,a)') "; unconfirmed: contacts ", &
+                res%orbit%simultaneous_contacts(1), " and ", &
+                res%orbit%simultaneous_contacts(2), " switch at one instant (t = ", &
+                res%orbit%simultaneous_t, " s), and these multipliers are those of one "// &
+                "order of such events (doc/cyclic.md)"
+            fl%diagnosis = fl%diagnosis//trim(buf)
         end if
         call give_ref()
         c1 = thread_cpu_seconds()

@@ -34,6 +34,13 @@ module stickslip_contact_element
     public :: contact_element_t, element_box_t, channel_t, hb_work_t
     public :: kinematics_velocity, kinematics_gap, along_tangent, along_tangent2, along_normal
     public :: state_open, state_stick, state_slip, element_step_forces
+    public :: accel_none, accel_box, accel_alone, accel_keep
+
+    !> How an element takes part in a joint decision at rest (accel_law): not at
+    !> acceleration level (the enumeration of candidates decides); by a law on some of its
+    !> channels, solved with the others' (a box of the Coulomb or disk kind); alone after
+    !> the others (it carries no force at that instant); its code stands (it moves).
+    integer, parameter :: accel_none = 0, accel_box = 1, accel_alone = 2, accel_keep = 3
 
     !> Kinematic quantity of a channel: a (slider) velocity, or omega times a gap.
     integer, parameter :: kinematics_velocity = 1, kinematics_gap = 2
@@ -165,6 +172,8 @@ module stickslip_contact_element
         procedure :: accel_decision => element_accel_decision
         !> Its codes from its forces and accelerations at rest.
         procedure :: accel_code => element_accel_code
+        !> How it takes part in a joint decision at a state (accel_none, ...).
+        procedure :: accel_law => element_accel_law
     end type contact_element_t
 
     !> A slot holding one element (arrays of polymorphic elements).
@@ -808,6 +817,32 @@ contains
         !> Its slip memory (3: a direction and a regime flag).
         real(dp), intent(inout) :: dir(:)
     end subroutine element_accel_code
+
+    !> How the element takes part in a joint decision at state y: by its own law on every
+    !> channel (box = a copy of itself) when it decides at acceleration level
+    !> (accel_decision), else by the enumeration of candidates (accel_none). No errors.
+    subroutine element_accel_law(self, code, geom, y, kind, box, chans)
+        !> The element.
+        class(contact_element_t), intent(in) :: self
+        !> Its codes.
+        integer, intent(in) :: code(:)
+        !> Its geometry.
+        type(element_geometry_t), intent(in) :: geom
+        !> The state (balanced).
+        real(dp), intent(in) :: y(:)
+        !> accel_none, accel_box, accel_alone or accel_keep.
+        integer, intent(out) :: kind
+        !> With accel_box: the law at acceleration level (its accel_code gives the codes).
+        class(contact_element_t), allocatable, intent(out) :: box
+        !> With accel_box: the element's channels the law acts on (1-based).
+        integer, allocatable, intent(out) :: chans(:)
+        integer :: k
+        kind = accel_none
+        if (.not. self%accel_decision()) return
+        kind = accel_box
+        allocate (box, source=self)
+        chans = [(k, k=1, size(self%channel))]
+    end subroutine element_accel_law
 
     !> Solve the small system a x = b (m <= a few) by Gaussian elimination with partial
     !> pivoting; info = 1 when a pivot vanishes.

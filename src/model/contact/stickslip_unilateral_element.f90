@@ -31,7 +31,10 @@
 !> its impacts take the 2D impulse law.
 module stickslip_unilateral_element
     use stickslip_kinds, only: dp
-    use stickslip_contact_element, only: contact_element_t
+    use stickslip_contact_element, only: contact_element_t, accel_none, accel_box, &
+        accel_alone, accel_keep
+    use stickslip_coulomb_element, only: new_coulomb_element
+    use stickslip_planar_element, only: new_planar_element
     use stickslip_friction_contact, only: friction_contact_t, init_friction_contact
     use stickslip_contact_modes, only: element_geometry_t, mode_terms_t, event_list_t, &
         action_decide, action_close
@@ -68,6 +71,7 @@ module stickslip_unilateral_element
         procedure :: step_rows => unilateral_step_rows
         procedure :: inputs => unilateral_inputs
         procedure :: slip_direction => unilateral_slip_direction
+        procedure :: accel_law => unilateral_accel_law
     end type unilateral_element_t
 
 contains
@@ -607,6 +611,54 @@ contains
                              self%law%mu*fq(3, 1:2))
         end if
     end subroutine unilateral_inputs
+
+    !> Rigid friction on an elastic normal: closed and loaded (lambda above 1e-9 of the
+    !> force scale) and at rest, Coulomb's law (1D) or the disk (2D) with the limit mu
+    !> lambda(y) on the tangential channels (lambda is continuous: it does not depend on the
+    !> codes); loaded and moving, its code stands; unloaded (open, opening or closing), it
+    !> carries no force and decides alone. A rigid normal or a Jenkins friction: the
+    !> enumeration decides. No errors.
+    subroutine unilateral_accel_law(self, code, geom, y, kind, box, chans)
+        class(unilateral_element_t), intent(in) :: self
+        integer, intent(in) :: code(:)
+        type(element_geometry_t), intent(in) :: geom
+        real(dp), intent(in) :: y(:)
+        integer, intent(out) :: kind
+        class(contact_element_t), allocatable, intent(out) :: box
+        integer, allocatable, intent(out) :: chans(:)
+        real(dp) :: lam
+        logical :: moving
+        kind = accel_none
+        if (.not. self%kn > 0.0_dp .or. self%nstate() > 0) return
+        lam = -self%kn*dot_product(gap_row(self, geom), y)
+        if (lam <= tol*geom%fref) then
+            kind = accel_alone
+            return
+        end if
+        ! stuck, its velocity is held at zero (roundoff aside)
+        moving = .false.
+        if (code(1) /= 0) then
+            if (self%law%ntangent == 2) then
+                moving = slip_speed(geom, y) > 1.5_dp*rest_speed*geom%vref
+            else
+                moving = abs(dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))) > &
+                         1.0e-12_dp*geom%vref
+            end if
+        end if
+        if (moving) then
+            ! slipping on: its force is known; open and moving while loaded: enumerated
+            if (code(1) /= 2) kind = accel_keep
+            return
+        end if
+        kind = accel_box
+        if (self%law%ntangent == 2) then
+            allocate (box, source=new_planar_element(self%law%mu, lam))
+            chans = [1, 2]
+        else
+            allocate (box, source=new_coulomb_element(self%law%mu, lam))
+            chans = [1]
+        end if
+    end subroutine unilateral_accel_law
 
     !> 2D friction, slipping: the memory of the slip (stickslip_disk_slip).
     subroutine unilateral_slip_direction(self, code, geom, fb, y, dir)

@@ -1,0 +1,150 @@
+!> The exact reference and the stability on the lumped disk with underplatform dampers of
+!> examples/bladed_disk_damper.nml (unilateral contacts on elastic normals, lifting off;
+!> issue 27), at omega = 2.3 rad/s:
+!>   - on 6 sectors in engine order 1 (no two sectors in phase): the disk's exact orbit shot
+!>     from the sector's wave (H = 20), then against it the weighted residual on one sector
+!>     and on the assembled disk at H = 10, 20, 40 (with the sector's truncation estimate),
+!>     and implicit Euler on the disk from rest at 500, 1000, 2000 steps a period (the
+!>     largest error of sector 0's displacements over the period / their amplitude);
+!>   - on the example's 24 sectors in engine order 3 (sectors 8 apart in phase): the disk's
+!>     stability from the sector's wave (its flow over T / 8), and implicit Euler on the
+!>     disk started from that wave (1000 steps a period): where it settles, against the
+!>     wave's amplitude.
+!> Usage: fpm run --example bench_damper_disk --profile release
+program bench_damper_disk
+    use stickslip_kinds, only: dp
+    use stickslip_error, only: error_type
+    use stickslip_model, only: model_t
+    use stickslip_case, only: case_t, read_case
+    use stickslip_cyclic, only: disk_dof
+    use stickslip_solution, only: hbm_options_t, hbm_solution_t
+    use stickslip_hbm, only: solve_periodic
+    use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
+    use stickslip_truncation, only: truncation_t, estimate_truncation
+    use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
+        sample_reference
+    use stickslip_euler, only: euler_options_t, euler_result_t, integrate_euler
+    use stickslip_stability, only: floquet_t, periodic_stability
+    use stickslip_wave_symmetry, only: wave_symmetry_t
+    implicit none
+    type(case_t) :: c
+    type(model_t) :: disk
+    type(error_type), allocatable :: error
+    type(hbm_options_t) :: ho
+    type(hbm_solution_t) :: sec, dsol, full
+    type(truncation_t) :: est
+    type(reference_options_t) :: ro
+    type(reference_result_t) :: ref
+    type(euler_options_t) :: eo
+    type(euler_result_t) :: eul
+    type(floquet_t) :: fl
+    real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :)
+    integer, allocatable :: cols(:)
+    integer :: j, k, steps, a4
+    real(dp) :: amp, t0, t1
+
+    call load(6, 1)
+    ho = c%hbm
+    ho%samples = 1020
+    call solve_periodic_cyclic(c%model, c%cyclic%cyc, ho, sec, error)
+    call stop_on(error)
+    call disk_solution(c%model, c%cyclic%cyc, ho, sec, disk, dsol, error)
+    call stop_on(error)
+    cols = [(disk_dof(c%cyclic%cyc, c%model%ndof, j, 0), j=1, c%model%ndof)]
+    ro = c%reference%reference_options_t
+    ro%samples = ho%samples
+    call cpu_time(t0)
+    call solve_reference(disk, ro, dsol%x, dsol%v, ref, error)
+    call stop_on(error)
+    call cpu_time(t1)
+    write (*, '(a,l1,a,es9.2,a,f7.2,a)') "6 sectors, EO 1: exact reference on the 42-DOF "// &
+        "disk: converged ", ref%converged, ", periodicity defect ", ref%defect, ", ", &
+        t1 - t0, " s CPU"
+    write (*, '(a)') ""
+    write (*, '(a)') "weighted residual against it (sector 0's DOFs, error / amplitude)"
+    write (*, '(a)') "    H   on the sector   on the disk   sector's truncation estimate"
+    do k = 1, 3
+        ho%harmonics = 10*2**(k - 1)
+        ho%samples = 2040
+        call solve_periodic_cyclic(c%model, c%cyclic%cyc, ho, sec, error)
+        call stop_on(error)
+        call estimate_truncation(c%model, ho, sec, est, error, cyclic=c%cyclic%cyc)
+        call stop_on(error)
+        call solve_periodic(disk, ho, full, error)
+        call stop_on(error)
+        call sample_reference(ref, ho%samples, xr, vr, rr, error)
+        call stop_on(error)
+        amp = maxval(abs(xr(:, cols)))
+        if (est%available) then
+            write (*, '(i5,2es16.3,es21.3)') ho%harmonics, maxval(abs(xr(:, cols) - sec%x))/amp, &
+                maxval(abs(xr(:, cols) - full%x(:, cols)))/amp, est%estimate
+        else
+            write (*, '(i5,2es16.3,a21)') ho%harmonics, maxval(abs(xr(:, cols) - sec%x))/amp, &
+                maxval(abs(xr(:, cols) - full%x(:, cols)))/amp, "none"
+        end if
+    end do
+    write (*, '(a)') ""
+    write (*, '(a)') "implicit Euler on the disk from rest against it"
+    write (*, '(a)') " steps/period   error / amplitude   periods   CPU [s]"
+    do k = 1, 3
+        steps = 500*2**(k - 1)
+        eo = c%euler
+        eo%steps_per_period = steps
+        eo%max_periods = 600
+        call integrate_euler(disk, eo, eul, error)
+        call stop_on(error)
+        call sample_reference(ref, steps, xr, vr, rr, error)
+        call stop_on(error)
+        write (*, '(i13,es20.3,i10,f10.2)') steps, maxval(abs(eul%x(1:steps, cols) - &
+            xr(:, cols)))/maxval(abs(xr(:, cols))), eul%periods, eul%seconds
+    end do
+
+    call load(24, 3)
+    ho = c%hbm
+    call solve_periodic_cyclic(c%model, c%cyclic%cyc, ho, sec, error)
+    call stop_on(error)
+    call disk_solution(c%model, c%cyclic%cyc, ho, sec, disk, dsol, error)
+    call stop_on(error)
+    call cpu_time(t0)
+    call periodic_stability(disk, dsol, c%reference%reference_options_t, fl, error, &
+                            symmetry=wave_symmetry_t(24, 3))
+    call stop_on(error)
+    call cpu_time(t1)
+    write (*, '(a)') ""
+    write (*, '(a,f7.2,a)') "24 sectors, EO 3 (H = 20): the 168-DOF disk's stability from "// &
+        "the sector's wave (", t1 - t0, " s CPU): "//fl%verdict//": "//fl%diagnosis
+    a4 = disk_dof(c%cyclic%cyc, c%model%ndof, 4, 0)
+    eo = c%euler
+    eo%steps_per_period = 1000
+    eo%max_periods = 600
+    call integrate_euler(disk, eo, eul, error, x0=dsol%x(1, :), v0=dsol%v(1, :))
+    call stop_on(error)
+    write (*, '(a,l1,a,i0,a,f7.4,a,f7.4)') "implicit Euler (1000 steps a period) from that "// &
+        "wave: periodic ", eul%periodic, " after ", eul%periods, " periods, airfoil amplitude ", &
+        maxval(abs(eul%x(:, a4))), "; the wave's ", maxval(abs(dsol%x(:, a4)))
+    call integrate_euler(disk, eo, eul, error)
+    call stop_on(error)
+    write (*, '(a,l1,a,i0,a,f7.4)') "implicit Euler from rest: periodic ", eul%periodic, &
+        " after ", eul%periods, " periods, airfoil amplitude ", maxval(abs(eul%x(:, a4)))
+
+contains
+
+    !> The example with N sectors forced in engine order eo, at omega = 2.3 rad/s.
+    subroutine load(n, order)
+        integer, intent(in) :: n, order
+        call read_case("examples/bladed_disk_damper.nml", c, error)
+        call stop_on(error)
+        c%model%omega = 2.3_dp
+        c%cyclic%cyc%sectors = n
+        c%cyclic%cyc%engine_order = order
+        ! the cyclic modes read with the case are the 24 sectors' diameters
+        if (n /= 24 .and. allocated(c%cyclic%cyc%modes)) deallocate (c%cyclic%cyc%modes)
+    end subroutine load
+
+    subroutine stop_on(e)
+        type(error_type), allocatable, intent(in) :: e
+        if (.not. allocated(e)) return
+        write (*, '(a)') "bench_damper_disk: "//e%message
+        error stop 1
+    end subroutine stop_on
+end program bench_damper_disk

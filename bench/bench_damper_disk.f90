@@ -137,8 +137,6 @@ contains
         c%model%omega = 2.3_dp
         c%cyclic%cyc%sectors = n
         c%cyclic%cyc%engine_order = order
-        ! the cyclic modes read with the case are the 24 sectors' diameters
-        if (n /= 24 .and. allocated(c%cyclic%cyc%modes)) deallocate (c%cyclic%cyc%modes)
     end subroutine load
 
     subroutine stop_on(e)

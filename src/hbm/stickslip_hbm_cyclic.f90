@@ -115,7 +115,7 @@ contains
             if (allocated(model%damping)) then
                 if (any(shape(model%damping) /= [n, n])) return
             end if
-            free_modes = cyc%modes_key == structure_key(model)
+            free_modes = cyc%modes_key == structure_key(model, cyc%sectors)
         end function free_modes
 
         !> `structure` was set for this sector at this omega.

@@ -298,7 +298,7 @@ contains
         logical function modal()
             modal = .false.
             if (.not. allocated(cyc%modes)) return
-            if (cyc%modes_key /= structure_key(model)) return
+            if (cyc%modes_key /= structure_key(model, cyc%sectors)) return
             if (nd > ubound(cyc%modes, 1)) return
             if (.not. allocated(cyc%modes(nd)%lambda)) return
             if (size(cyc%modes(nd)%shapes, 1) /= n) return

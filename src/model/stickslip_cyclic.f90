@@ -69,12 +69,12 @@ module stickslip_cyclic
         integer, allocatable :: next_dof(:), next_normal_dof(:), next_tangent2_dof(:)
         !> Optional, per nodal diameter 0 .. N/2: the sector's cyclic modes
         !> (prepare_cyclic_modes), which make the condensation per harmonic a modal sum.
-        !> Valid for the sector they were prepared from only.
+        !> Valid for the sector and the N they were prepared from only (modes_key).
         type(cyclic_modes_t), allocatable :: modes(:)
         !> With `modes`: the smallest singular values of the sector's K and M.
         real(dp) :: smin_k = -1.0_dp, smin_m = -1.0_dp
-        !> With `modes`: structure_key of the sector they belong to (another sector's
-        !> condensation ignores them).
+        !> With `modes`: structure_key of the sector and N they belong to (another
+        !> sector's condensation, or this sector's in a disk of another N, ignores them).
         integer(int64) :: modes_key = 0
         !> With `modes` (when prepared): the free sector's modes (its faces free), K Phi =
         !> M Phi Lambda with Phi^H M Phi = I, whose sums give its contact mobility at any
@@ -192,18 +192,22 @@ contains
         end subroutine check_next
     end subroutine validate_cyclic
 
-    !> A fingerprint of the sector's structure (ndof, M, K, C), what its cyclic modes
-    !> depend on: a hash of the sums of |A| and of the quadratic forms v^T A v with v_i = i
-    !> / n for each matrix (O(n^2), cheap beside a condensation; another sector gives
-    !> another key but for a coincidence of all six).
-    pure integer(int64) function structure_key(model) result(key)
+    !> A fingerprint of the sector's structure (ndof, M, K, C) and of the number of sectors
+    !> N, what its cyclic modes depend on: a hash of N, of the sums of |A| and of the
+    !> quadratic forms v^T A v with v_i = i / n for each matrix (O(n^2), cheap beside a
+    !> condensation; another sector or another N gives another key but for a coincidence
+    !> of all six). No errors.
+    pure integer(int64) function structure_key(model, sectors) result(key)
         !> The sector.
         type(model_t), intent(in) :: model
+        !> The number of sectors N of the disk.
+        integer, intent(in) :: sectors
         type(hash_t) :: hk
         real(dp), allocatable :: v(:)
         integer :: i
         v = [(real(i, dp)/real(max(model%ndof, 1), dp), i=1, model%ndof)]
         call hk%add(model%ndof)
+        call hk%add(sectors)
         call hk%add([sum(abs(model%mass)), dot_product(v, matmul(model%mass, v)), &
                      sum(abs(model%stiffness)), dot_product(v, matmul(model%stiffness, v))])
         call hk%add(allocated(model%damping))

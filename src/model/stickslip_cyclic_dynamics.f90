@@ -139,7 +139,7 @@ contains
         if (cached) then
             modal = .true.
         else if (allocated(cyc%modes)) then
-            modal = cyc%modes_key == structure_key(model)
+            modal = cyc%modes_key == structure_key(model, cyc%sectors)
             if (modal .and. present(projections)) call reset_projections()
         end if
         if (modal) then

@@ -113,7 +113,7 @@ contains
         end if
         cyc%smin_k = smallest_singular(model%stiffness, maxval(sum(abs(model%stiffness), 1)))
         cyc%smin_m = smallest_singular(model%mass, maxval(sum(abs(model%mass), 1)))
-        cyc%modes_key = structure_key(model)
+        cyc%modes_key = structure_key(model, cyc%sectors)
         if (present(prepared)) prepared = .true.
     end subroutine prepare_cyclic_modes
 end module stickslip_cyclic_modal

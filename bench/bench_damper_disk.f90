@@ -112,7 +112,7 @@ program bench_damper_disk
     call cpu_time(t1)
     write (*, '(a)') ""
     write (*, '(a,f7.2,a)') "24 sectors, EO 3 (H = 20): the 168-DOF disk's stability from "// &
-        "the sector's wave (", t1 - t0, " s CPU): "//fl%verdict//": "//fl%diagnosis
+        "the sector's wave (", t1 - t0, " s CPU): "//fl%diagnosis
     a4 = disk_dof(c%cyclic%cyc, c%model%ndof, 4, 0)
     eo = c%euler
     eo%steps_per_period = 1000

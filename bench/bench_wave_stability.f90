@@ -5,7 +5,9 @@
 !> with 24 sectors in engine orders 1, 2, 3, 48 in 1, 2 and 80 in 1, at the example's omega
 !> (an unknown verdict prints its diagnosis). Each stability is repeated R times (default
 !> 3) in this process; prints per case the disk's DOFs, m, the median CPU seconds of both,
-!> their ratio and the largest multiplier moduli.
+!> their ratio, the largest multiplier moduli and, where sectors in phase switch at one
+!> instant, the growth a period of perturbations followed by the exact flow over T / m
+!> (stickslip_orbit_growth: the check of the verdict, part of both CPU times).
 !> Usage: fpm run --example bench_wave_stability --profile release [-- R]
 program bench_wave_stability
     use stickslip_kinds, only: dp
@@ -41,7 +43,7 @@ program bench_wave_stability
     ho = c%hbm
     ho%rho = 0.5_dp
     write (*, '(a)') "sectors  EO  disk DOFs   m   full [s]   wave [s]  full/wave  "// &
-        "max |mu| full, wave"
+        "max |mu| full, wave; perturbed flow"
     do i = 1, size(sectors)
         c%cyclic%cyc%sectors = sectors(i)
         c%cyclic%cyc%engine_order = orders(i)
@@ -61,9 +63,9 @@ program bench_wave_stability
             if (allocated(error)) error stop "bench_wave_stability: the stability failed"
         end do
         call wave_spans(wave_symmetry_t(sectors(i), orders(i)), m, u)
-        write (*, '(i7,i4,i11,i4,2f11.3,f11.1,2x,a,", ",a)') sectors(i), orders(i), &
+        write (*, '(i7,i4,i11,i4,2f11.3,f11.1,2x,a,", ",a,"; ",a)') sectors(i), orders(i), &
             disk%ndof, m, median(t_full), median(t_wave), median(t_full)/median(t_wave), &
-            modulus(f1), modulus(f2)
+            modulus(f1), modulus(f2), growth(f2)
         if (f1%verdict == 'unknown') write (*, '(2x,a)') f1%diagnosis
         if (f2%verdict == 'unknown') write (*, '(2x,a)') f2%diagnosis
     end do
@@ -77,6 +79,17 @@ contains
         call sort_ascending(b)
         median = 0.5_dp*(b((size(b) + 1)/2) + b(size(b)/2 + 1))
     end function median
+
+    !> The perturbed flow's growth a period, or '-' when it was not followed.
+    function growth(f) result(s)
+        type(floquet_t), intent(in) :: f
+        character(len=:), allocatable :: s
+        character(len=16) :: buf
+        s = '-'
+        if (f%flow_growth < 0.0_dp) return
+        write (buf, '(f12.8)') f%flow_growth
+        s = trim(adjustl(buf))
+    end function growth
 
     !> The largest modulus, or the verdict when unknown.
     function modulus(f) result(s)

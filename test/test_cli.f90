@@ -6,7 +6,7 @@
 module test_cli
     use, intrinsic :: iso_fortran_env, only: output_unit, int64
     use stickslip_kinds, only: dp
-    use stickslip_error, only: error_type, stickslip_stat, itoa
+    use stickslip_error, only: error_type, stickslip_stat, itoa, real_text
     use stickslip_case, only: case_t, read_case
     use stickslip_cli, only: string_t, run_cli, report_run
     use stickslip_files, only: make_directory, open_temporary, close_and_rename, lock_name, &
@@ -689,10 +689,14 @@ contains
 
     !> The stability of a sector's travelling wave (examples/bladed_disk.nml with &hbm
     !> stability) says on stdout and in summary.nml that it is the assembled disk's, its
-    !> exact flow over T / 8 by the wave's symmetry (24 sectors, EO 3).
+    !> exact flow over T / 8 by the wave's symmetry (24 sectors, EO 3); its contacts switch
+    !> at one instant (sectors 8 apart in phase), so summary.nml has the growth of the
+    !> perturbed flow that checked the verdict, equal to floquet_max to 1e-3.
     subroutine test_cli_sector_stability(t)
         type(test_counter_t), intent(inout) :: t
         integer :: code, ui, uo, stat
+        real(dp) :: growth, fmax
+        character(len=:), allocatable :: text
         character(len=:), allocatable :: out, err, path
         character(len=200) :: edited
         character(len=1000) :: line
@@ -721,6 +725,17 @@ contains
                                  "stability_spans") == "8" .and. &
                    index(out, "its exact flow over T/8 by that symmetry") > 0, &
                    "cli sector stability: stdout and summary say it is the disk's", err)
+        ! sectors 8 apart switch together: the perturbed flow's growth checks the verdict
+        growth = -1.0_dp
+        fmax = -2.0_dp
+        text = summary_value(scratch//"/stab_bladed_disk/summary.nml", "stability_flow_growth")
+        read (text, *, iostat=stat) growth
+        text = summary_value(scratch//"/stab_bladed_disk/summary.nml", "floquet_max")
+        read (text, *, iostat=stat) fmax
+        call check(t, abs(growth - fmax) <= 1.0e-3_dp*fmax, &
+                   "cli sector stability: summary's stability_flow_growth = floquet_max", &
+                   "stability_flow_growth "//real_text(growth)//", floquet_max "// &
+                   real_text(fmax))
     end subroutine test_cli_sector_stability
 
     subroutine test_cli_examples(t)

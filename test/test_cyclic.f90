@@ -18,6 +18,7 @@ module test_cyclic
     use stickslip_hbm_cyclic, only: solve_periodic_cyclic, disk_solution
     use stickslip_stability, only: floquet_t, periodic_stability
     use stickslip_wave_symmetry, only: wave_symmetry_t, wave_spans
+    use stickslip_orbit_growth, only: orbit_growth_t, orbit_growth
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference, reference_energy_error
     use stickslip_sweep, only: sweep_options_t, sweep_result_t, run_sweep
@@ -421,8 +422,11 @@ contains
     !> multiplier of modulus above 1e-3 of either within 1e-7 of one of the other's, on the
     !> shrouded disk (24 sectors) in engine orders 1, 2, 3 (m = 24, 12, 8) and on 6 sectors
     !> whose shrouds lift off the next blade (an elastic unilateral normal, preloaded) in
-    !> engine orders 1, 2, 3 (m = 6, 3, 2). A disk with one mass changed is refused, naming
-    !> the mass matrix.
+    !> engine orders 1, 2, 3 (m = 6, 3, 2). Each has sectors in phase whose contacts switch
+    !> at one instant (except the lift-off in EO 1): perturbations followed by the exact
+    !> flow grow by the largest multiplier's modulus to 1e-3, over T and over T / m; from
+    !> an arbitrary direction (the lift-off in EO 3), to 1e-2 after 8 periods. A disk with
+    !> one mass changed is refused, naming the mass matrix.
     subroutine test_wave_symmetry_stability(t)
         type(test_counter_t), intent(inout) :: t
         type(case_t) :: c
@@ -433,6 +437,9 @@ contains
         type(reference_options_t) :: ro
         type(floquet_t) :: f2
         type(error_type), allocatable :: error
+        type(reference_result_t) :: rref
+        type(orbit_growth_t) :: g
+        real(dp), allocatable :: st(:, :)
         integer :: k
         call read_case(project_path("examples/bladed_disk.nml"), c, error)
         call check_error(t, error, "wave symmetry: read the shrouded disk", .false.)
@@ -443,7 +450,7 @@ contains
         do k = 1, 3
             c%cyclic%cyc%engine_order = k
             call compare(c%model, c%cyclic%cyc, ho, c%reference%reference_options_t, &
-                         "shrouded disk, EO "//itoa(k))
+                         "shrouded disk, EO "//itoa(k), .true.)
         end do
         ! the shroud lifting off the next blade: DOF 5 the blade's normal motion
         sector = normal_sector()
@@ -466,8 +473,32 @@ contains
             cyc%sectors = 6
             cyc%next_dof = [2]
             cyc%next_normal_dof = [5]
-            call compare(sector, cyc, ho, ro, "lift-off on 6 sectors, EO "//itoa(k))
+            call compare(sector, cyc, ho, ro, "lift-off on 6 sectors, EO "//itoa(k), k > 1)
         end do
+        ! EO 3's orbit again, and the perturbed flow from an arbitrary direction instead of
+        ! the dominant multiplier's (the power iteration of the flow map alone): after 8
+        ! periods it grows by the largest modulus
+        call solve_reference(disk, ro, dsol%x, dsol%v, rref, error, start_name='hbm', &
+                             light=.true., r_start=dsol%r, symmetry=wave_symmetry_t(6, 3))
+        if (.not. allocated(error)) then
+            allocate (st(rref%flow%nz, 1))
+            st(:, 1) = [(cos(1.7_dp*k**2), k=1, rref%flow%nz)]
+            call orbit_growth(rref, st, 8, 8, g, error)
+        end if
+        call check_error(t, error, "wave symmetry: the perturbed flow from any direction", &
+                         .false.)
+        if (.not. allocated(error)) &
+            call check(t, abs(g%rate - f2%max_modulus) <= 1.0e-2_dp*f2%max_modulus, &
+                       "wave symmetry: lift-off, EO 3, the perturbed flow from any direction "// &
+                       "grows by the largest multiplier", "growth "//real_text(g%rate)// &
+                       " a period, largest multiplier "//real_text(f2%max_modulus)//", "// &
+                       itoa(g%maps)//" maps")
+        if (allocated(st)) then
+            call orbit_growth(rref, st(1:3, :), 1, 0, g, error)
+            call check(t, allocated(error), "wave symmetry: orbit_growth refuses a start "// &
+                       "of the wrong size", "no error")
+            if (allocated(error)) deallocate (error)
+        end if
         ! not the disk of a sector: one mass changed
         disk%mass(1, 1) = 1.01_dp*disk%mass(1, 1)
         call periodic_stability(disk, dsol, ro, f2, error, symmetry=wave_symmetry_t(6, 3))
@@ -479,12 +510,14 @@ contains
 
     contains
 
-        subroutine compare(sec, cy, hopts, ref, what)
+        !> in_phase: sectors in phase (their contacts switch together).
+        subroutine compare(sec, cy, hopts, ref, what, in_phase)
             type(model_t), intent(in) :: sec
             type(cyclic_t), intent(in) :: cy
             type(hbm_options_t), intent(in) :: hopts
             type(reference_options_t), intent(in) :: ref
             character(len=*), intent(in) :: what
+            logical, intent(in) :: in_phase
             type(hbm_solution_t) :: sol
             type(floquet_t) :: f1
             real(dp) :: worst
@@ -509,7 +542,29 @@ contains
                        ", worst distance "//real_text(worst)//", CPU "// &
                        real_text(f2%seconds)//" s vs "//real_text(f1%seconds)//" s; "// &
                        f1%diagnosis//" / "//f2%diagnosis)
+            ! sectors in phase switch together: the perturbed exact flow checks the verdict
+            ! (stickslip_orbit_growth), and grows as the largest multiplier says, over T
+            ! and over T / m; without them it is not followed
+            if (.not. in_phase) then
+                call check(t, f1%flow_growth < 0.0_dp .and. f2%flow_growth < 0.0_dp, &
+                           "wave symmetry: "//what//", no sectors in phase, no perturbed flow", &
+                           "growth "//real_text(f1%flow_growth)//" and "// &
+                           real_text(f2%flow_growth))
+                return
+            end if
+            call check(t, near(f1) .and. near(f2), "wave symmetry: "//what// &
+                       ", perturbations followed by the flow grow as the largest multiplier", &
+                       "growth "//real_text(f1%flow_growth)//" and "// &
+                       real_text(f2%flow_growth)//" a period, largest multiplier "// &
+                       real_text(f1%max_modulus)//" and "//real_text(f2%max_modulus))
         end subroutine compare
+
+        !> The perturbed flow was followed and grew by the largest multiplier, to 1e-3.
+        logical function near(f)
+            type(floquet_t), intent(in) :: f
+            near = f%flow_growth >= 0.0_dp .and. &
+                   abs(f%flow_growth - f%max_modulus) <= 1.0e-3_dp*f%max_modulus
+        end function near
 
         !> The largest distance from a multiplier of a (modulus above 1e-3) to b's.
         real(dp) function apart(a, b)
@@ -531,7 +586,9 @@ contains
     !> wave approaches it as H grows (H = 10, 20, 40; within its truncation estimate at 10
     !> and 20, where one is given); on the example's 24 sectors (EO 3: 21
     !> stuck contacts decide at once at the start, beyond the 8 the enumeration takes) the
-    !> disk's stability finds the exact orbit near the wave. N is changed after the case
+    !> disk's stability finds the exact orbit near the wave, unstable (1.60), confirmed by
+    !> perturbations followed by the exact flow (growth within 1e-3 of the largest
+    !> multiplier, though contacts switch at one instant). N is changed after the case
     !> was read with its cyclic modes of 24 sectors: the sector's condensation must ignore
     !> them (it did not, and the wave did not converge: 5.2, 3.9, 4.8 %).
     subroutine test_damper_disk_reference(t)
@@ -614,6 +671,14 @@ contains
         call check(t, allocated(fl%multipliers) .and. size(fl%multipliers) > 0 .and. &
                    fl%distance < 0.2_dp, &
                    "damper disk reference: 24 sectors, EO 3, the disk's exact orbit found", &
+                   fl%verdict//": "//fl%diagnosis)
+        ! sectors 8 apart switch together; perturbations followed by the exact flow grow as
+        ! the multipliers say (implicit Euler at 1000 steps a period stays on the orbit: its
+        ! numerical damping)
+        call check(t, fl%verdict == 'unstable' .and. fl%flow_growth > 0.0_dp .and. &
+                   abs(fl%flow_growth - fl%max_modulus) <= 1.0e-3_dp*fl%max_modulus, &
+                   "damper disk reference: 24 sectors, EO 3, unstable, confirmed by the "// &
+                   "perturbed flow", "growth "//real_text(fl%flow_growth)//" a period; "// &
                    fl%verdict//": "//fl%diagnosis)
     end subroutine test_damper_disk_reference
 

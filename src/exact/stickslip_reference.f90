@@ -82,6 +82,10 @@ module stickslip_reference
         character(len=:), allocatable :: diagnosis
         !> Section time of the shooting [s].
         real(dp) :: t_section = 0.0_dp
+        !> The map the orbit is a fixed point of: the flow over T / spans from t_section,
+        !> its state then shifted back by span_shift sectors of `sectors` (a disk's
+        !> travelling wave, stickslip_wave_symmetry; spans = 1: the period map).
+        integer :: spans = 1, span_shift = 0, sectors = 1
         !> Work of the forcing, friction and viscous dissipation over one period [J].
         real(dp) :: work_forcing = 0.0_dp, diss_friction = 0.0_dp, diss_damping = 0.0_dp
         !> Gross work of the forcing over one period, integral |f . v| dt [J].
@@ -551,6 +555,9 @@ contains
             end associate
         end do
         shooting%t0 = res%t_section
+        res%spans = shooting%spans
+        res%span_shift = shooting%shift
+        res%sectors = shooting%sectors
         shooting%scale = [(xscale, k=1, n), (vscale, k=1, n), (xscale, k=1, nstate)]
         allocate (shooting%mono(nz, nz))
         zs = [xs(ksec, :), vs(ksec, :), ss]

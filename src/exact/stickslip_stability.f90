@@ -32,6 +32,7 @@ module stickslip_stability
     use stickslip_reference, only: reference_options_t, reference_result_t, solve_reference, &
         sample_reference, reference_cache_t, keep_flow
     use stickslip_wave_symmetry, only: wave_symmetry_t
+    use stickslip_orbit_growth, only: orbit_growth_t, orbit_growth
     implicit none
     private
     public :: floquet_t, floquet_multipliers, periodic_stability, verify_periodicity
@@ -47,6 +48,14 @@ module stickslip_stability
     !> weighted-residual solution and the exact orbit shot from it for the orbit to count
     !> as the same periodic solution in periodic_stability.
     real(dp), parameter :: max_orbit_distance = 0.25_dp
+    !> Where the orbit has simultaneous events, periodic_stability follows a perturbation
+    !> along the dominant multiplier's direction with the exact flow for a period: a growth
+    !> within growth_match (relative) of its modulus confirms the verdict. Otherwise the
+    !> growth is measured over growth_periods periods after growth_settle, and one that
+    !> contradicts the verdict by more than growth_margin in |log(growth)| (1 % a period)
+    !> makes it 'unknown'.
+    integer, parameter :: growth_periods = 4, growth_settle = 2
+    real(dp), parameter :: growth_match = 1.0e-3_dp, growth_margin = 0.01_dp
 
     !> Floquet multipliers of a periodic solution and the verdict drawn from them.
     type :: floquet_t
@@ -78,6 +87,10 @@ module stickslip_stability
         !> CPU seconds: eigenvalues only (floquet_multipliers) or shooting + eigenvalues
         !> (periodic_stability).
         real(dp) :: seconds = 0.0_dp
+        !> periodic_stability, where events of several contacts fall at one instant: the
+        !> growth per period of perturbations followed by the exact flow
+        !> (stickslip_orbit_growth); -1 when not measured.
+        real(dp) :: flow_growth = -1.0_dp
     end type floquet_t
 
 contains
@@ -380,16 +393,8 @@ contains
             fl%stable = .false.
             fl%asymptotic = .false.
         end if
-        if (res%orbit%simultaneous > 0 .and. fl%verdict == 'unstable') then
-            ! the flow map is piecewise smooth there: its Jacobian is that of the order the
-            ! flow took the events in, and a perturbation that swaps them follows another
-            write (buf, '(a,i0,a,i0,a,es12.5e2,a)') "; unconfirmed: contacts ", &
-                res%orbit%simultaneous_contacts(1), " and ", &
-                res%orbit%simultaneous_contacts(2), " switch at one instant (t = ", &
-                res%orbit%simultaneous_t, " s), and these multipliers are those of one "// &
-                "order of such events (doc/cyclic.md)"
-            fl%diagnosis = fl%diagnosis//trim(buf)
-        end if
+        if (res%orbit%simultaneous > 0 .and. (fl%verdict == 'unstable' .or. &
+                                              fl%verdict == 'stable')) call check_by_flow()
         call give_ref()
         c1 = thread_cpu_seconds()
         fl%seconds = c1 - c0
@@ -408,6 +413,68 @@ contains
             fl%seconds = c1 - c0
         end subroutine unknown
 
+        !> The orbit has events of several contacts at one instant: its monodromy is the
+        !> Jacobian of one order of them (stickslip_orbit_growth). A perturbation along the
+        !> dominant multiplier's direction followed by the exact flow over one period grows
+        !> by its modulus (to growth_match): confirmed. Otherwise it is followed for
+        !> growth_settle + growth_periods periods: the verdict stands when it grows or
+        !> decays as the verdict says, becomes 'unknown' when it clearly does the opposite
+        !> (by more than growth_margin a period), and says "not confirmed" within that
+        !> margin of 1 or when the flow fails.
+        subroutine check_by_flow()
+            type(orbit_growth_t) :: g
+            type(error_type), allocatable :: gerr
+            character(len=:), allocatable :: instant
+            real(dp), allocatable :: d(:, :)
+            logical :: grows
+            write (buf, '(a,i0,a,i0,a,es12.5e2,a)') "; contacts ", &
+                res%orbit%simultaneous_contacts(1), " and ", &
+                res%orbit%simultaneous_contacts(2), " switch at one instant (t = ", &
+                res%orbit%simultaneous_t, " s), where the period map is only piecewise "// &
+                "smooth and the monodromy is that of one order of such events"
+            instant = trim(buf)
+            ! one period from the dominant multiplier's direction: where the order of the
+            ! events does not matter along it, the perturbation grows by its modulus;
+            ! otherwise it is followed longer, from where the flow takes it
+            d = dominant_direction(res%monodromy)
+            call orbit_growth(res, d, 1, 0, g, gerr)
+            if (.not. allocated(gerr)) then
+                if (abs(g%rate - fl%max_modulus) <= growth_match*fl%max_modulus) then
+                    fl%flow_growth = g%rate
+                    write (buf, '(a,f9.5,a)') "; a perturbation along the dominant "// &
+                        "multiplier's direction followed by the exact flow grows by", g%rate, &
+                        " a period, its modulus: confirmed (doc/cyclic.md)"
+                    fl%diagnosis = fl%diagnosis//instant//trim(buf)
+                    return
+                end if
+                call orbit_growth(res, d, growth_periods, growth_settle, g, gerr)
+            end if
+            fl%flow_growth = g%rate
+            if (allocated(gerr)) then
+                fl%diagnosis = fl%diagnosis//instant//"; not confirmed: the perturbed "// &
+                               "exact flow failed ("//gerr%message//") (doc/cyclic.md)"
+                return
+            end if
+            grows = g%rate > 1.0_dp
+            write (buf, '(a,a,a,f9.5,a,i0,a,i0,a)') "; perturbations followed by the exact "// &
+                "flow ", trim(merge("grow  ", "decay ", grows)), " by a factor", g%rate, &
+                " a period (over ", g%periods, " periods after ", growth_settle, &
+                "), not by the dominant multiplier's modulus"
+            if (grows .eqv. fl%verdict == 'unstable') then
+                fl%diagnosis = fl%diagnosis//instant//trim(buf)//": confirmed (doc/cyclic.md)"
+            else if (abs(log(max(g%rate, tiny(1.0_dp)))) > growth_margin) then
+                fl%diagnosis = "unknown: the multipliers say "//fl%verdict// &
+                               " (largest modulus "//trim(adjustl(fmt_g(fl%max_modulus)))// &
+                               ")"//instant//trim(buf)//" (doc/cyclic.md); "//fl%diagnosis
+                fl%verdict = 'unknown'
+                fl%stable = .false.
+                fl%asymptotic = .false.
+            else
+                fl%diagnosis = fl%diagnosis//instant//trim(buf)//": not confirmed, "// &
+                               "within 1 % of 1 (doc/cyclic.md)"
+            end if
+        end subroutine check_by_flow
+
         subroutine give_ref()
             if (present(ref)) ref = res
             if (present(cache) .and. .not. finer) call keep_flow(cache, res)
@@ -421,6 +488,43 @@ contains
             f%bracket_steps = (3*o%bracket_steps)/2
         end function finer_grid
     end subroutine periodic_stability
+
+    !> The eigenvector of the dominant multiplier of `mono` by LAPACK dgeev: n x 1 (a real
+    !> multiplier) or n x 2 (the real and imaginary parts of a complex one's); a vector of
+    !> ones when dgeev fails (the power iteration of orbit_growth then finds it).
+    function dominant_direction(mono) result(d)
+        real(dp), intent(in) :: mono(:, :)
+        real(dp), allocatable :: d(:, :)
+        real(dp), allocatable :: a(:, :), wr(:), wi(:), vr(:, :), work(:)
+        real(dp) :: vl(1, 1), query(1)
+        integer :: n, info, k
+        n = size(mono, 1)
+        allocate (d(n, 1))
+        d = 1.0_dp
+        a = mono
+        allocate (wr(n), wi(n), vr(n, n))
+        call dgeev('N', 'V', n, a, n, wr, wi, vl, 1, vr, n, query, -1, info)
+        if (info /= 0) return
+        allocate (work(max(4*n, int(query(1)))))
+        call dgeev('N', 'V', n, a, n, wr, wi, vl, 1, vr, n, work, size(work), info)
+        if (info /= 0) return
+        k = maxloc(hypot(wr, wi), 1)
+        ! a complex pair's vectors are columns k (real part) and k + 1 (imaginary part), the
+        ! first of the pair carrying the positive imaginary part
+        if (wi(k) < 0.0_dp .and. k > 1) k = k - 1
+        if (wi(k) > 0.0_dp .and. k < n) then
+            d = vr(:, k:k + 1)
+        else
+            d = vr(:, k:k)
+        end if
+    end function dominant_direction
+
+    !> A real number as text, 6 significant digits.
+    function fmt_g(x) result(s)
+        real(dp), intent(in) :: x
+        character(len=16) :: s
+        write (s, '(es12.5e2)') x
+    end function fmt_g
 
     !> A-posteriori check of a weighted-residual solution: integrate `periods` periods of the
     !> exact event-driven flow of `model` from the solution's state at t = 0 and return the

@@ -125,6 +125,8 @@ contains
                     call put(u, "  floquet_multipliers_im = "//rlist(aimag(f%multipliers)), &
                              stat, msg)
                 end if
+                if (f%flow_growth >= 0.0_dp) call put(u, "  stability_flow_growth = "// &
+                                                      rtoa(f%flow_growth), stat, msg)
                 if (allocated(f%diagnosis)) call put(u, "  stability_diagnosis = '"// &
                                                      quote(f%diagnosis)//"'", stat, msg)
             end associate

@@ -26,9 +26,10 @@ module stickslip_orbit_growth
     private
     public :: orbit_growth_t, orbit_growth
 
-    !> Relative size of the perturbation (of the orbit's amplitudes of x and v): far above
-    !> the roundoff of a period map (~1e-12) and far below the size where the flow stops
-    !> being homogeneous (the damper disk's growth is the same from 1e-5 to 1e-9).
+    !> Relative size of the perturbation, root mean square over the states (of the orbit's
+    !> amplitudes of x and v): far above the roundoff of a period map (~1e-12) and far
+    !> below the size where the flow stops being homogeneous (the damper disk's growth is
+    !> the same from 1e-5 to 1e-9).
     real(dp), parameter :: growth_eps = 1.0e-7_dp
 
     !> What following perturbations of the orbit found.
@@ -48,7 +49,7 @@ contains
     !> the map it is a fixed point of: reference_result_t%spans) with the exact flow for
     !> `settle` + `periods` periods: after each map the perturbation is measured (x, v and internal
     !> states each relative to their amplitude over the orbit; the 2-norm of both columns
-    !> together) and scaled back to growth_eps; g%rate is the growth per period over the
+    !> together) and scaled back to growth_eps times sqrt(n_z); g%rate is the growth per period over the
     !> last `periods` of them. `start` (n_z x 1, or n_z x 2: the real and imaginary parts
     !> of a complex direction, e.g. the monodromy's dominant eigenvector) is the first
     !> perturbation. res%flow's mode cache grows. Errors: stat input (no converged orbit,
@@ -66,7 +67,7 @@ contains
         !> Set as described.
         type(error_type), allocatable, intent(out) :: error
         real(dp), allocatable :: zs(:), zb(:), z1(:), d(:, :), sc(:)
-        real(dp) :: c0, ampx, ampv, logsum, size1
+        real(dp) :: c0, ampx, ampv, logsum, size1, eps
         integer :: n, nz, k, kmax, kmeasure, col
 
         c0 = thread_cpu_seconds()
@@ -102,14 +103,15 @@ contains
         zs = res%orbit%phase_y(1:nz, 1)
         call span_map(zs, zb)
         if (allocated(error)) return
+        eps = growth_eps*sqrt(real(nz, dp))
         kmeasure = periods*res%spans
         kmax = kmeasure + settle*res%spans
         logsum = 0.0_dp
         do k = 1, kmax
             do col = 1, size(d, 2)
-                call span_map(zs + growth_eps*d(:, col), z1)
+                call span_map(zs + eps*d(:, col), z1)
                 if (allocated(error)) return
-                d(:, col) = (z1 - zb)/growth_eps
+                d(:, col) = (z1 - zb)/eps
             end do
             size1 = measure(d)
             if (.not. (size1 < huge(1.0_dp))) then

@@ -527,6 +527,12 @@ contains
                 "; stuck all period: mean force set to the admissible value closest to 0"
             write (u, '(a)') ""
         end do
+        if (sol%at_rest) then
+            write (buffer, '(a,es9.2,a)') "  at rest: every DOF's velocity is below the "// &
+                "solve's resolution (", sol%velocity_resolution, " m/s): the contacts hold "// &
+                "the forcing, every work is roundoff"
+            call emit(u)
+        end if
         write (buffer, '(a,es11.4,a,es11.4,a,es11.4,a,es8.1,a)') &
             "  energy per period [J]: forcing ", &
             sol%work_forcing, ", friction ", sol%diss_friction, ", damping ", sol%diss_damping, &

@@ -736,6 +736,30 @@ contains
                    "cli sector stability: summary's stability_flow_growth = floquet_max", &
                    "stability_flow_growth "//real_text(growth)//", floquet_max "// &
                    real_text(fmax))
+        ! engine order 6: every shroud stuck, the disk at rest (the batch contract: exit 0,
+        ! nothing on stderr, summary at_rest = T; the stuck ring's stability 'marginal')
+        open (newunit=ui, file=trim(edited), status='old', action='read')
+        open (newunit=uo, file=scratch//"/stab_rest.nml", status='replace', action='write')
+        do
+            read (ui, '(a)', iostat=stat) line
+            if (stat /= 0) exit
+            if (index(line, "engine_order = 3") > 0) line = line(1:index(line, &
+                "engine_order = 3") - 1)//"engine_order = 6"//line(index(line, &
+                "engine_order = 3") + 16:)
+            write (uo, '(a)') trim(line)
+        end do
+        close (ui)
+        close (uo)
+        edited = scratch//"/stab_rest.nml"
+        call cli([character(len=200) :: edited], code, out, err)
+        call check(t, code == 0 .and. len_trim(err) == 0 .and. index(out, "at rest:") > 0 .and. &
+                   summary_value(scratch//"/stab_bladed_disk/summary.nml", "at_rest") == "T" &
+                   .and. summary_value(scratch//"/stab_bladed_disk/summary.nml", &
+                                       "engine_order") == "6" .and. &
+                   summary_value(scratch//"/stab_bladed_disk/summary.nml", "stability") == &
+                   "'marginal'", &
+                   "cli sector stability: EO 6, the disk at rest, trusted, exit 0", &
+                   "exit "//itoa(code)//"; "//err)
     end subroutine test_cli_sector_stability
 
     subroutine test_cli_examples(t)

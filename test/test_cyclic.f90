@@ -10,7 +10,8 @@ module test_cyclic
     use stickslip_model, only: model_t, validate_model, force_direction
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, &
         assemble_disk, cyclic_frequencies, sector_phase
-    use stickslip_lapack, only: dsygv, zgesv
+    use stickslip_lapack, only: dsygv, zgesv, dsyev, dgeev, dgesv
+    use stickslip_diagnostics, only: level_untrusted, level_warning
     use testing, only: test_counter_t, check, check_error
     use stickslip_case, only: case_t, read_case, write_case
     use stickslip_solution, only: hbm_solution_t
@@ -61,6 +62,7 @@ contains
         call test_sector_stability(t)
         call test_wave_symmetry_stability(t)
         call test_damper_disk_reference(t)
+        call test_stuck_ring(t)
         call test_sector_family(t)
         call test_modal_condensation(t)
         call test_channel_condensation(t)
@@ -1063,6 +1065,164 @@ contains
                    "cyclic sector solve: the sector's truncation estimate = the disk's", &
                    real_text(est_sector%estimate)//" vs "//real_text(est_disk%estimate))
     end subroutine test_sector_solve
+
+    !> The shrouded disk (examples/bladed_disk.nml, 24 sectors, omega 2.9) where every shroud
+    !> sticks to the next blade all period: in engine orders 6 and 12 the blades cannot
+    !> move (a tip stuck to both neighbours moves in nodal diameter 0 only) and the forcing
+    !> 0.2 N at the tip is held by the shrouds, |r| = 0.2 / (2 sin(pi EO / N)) = 0.141421 and
+    !> 0.1 (< mu N = 0.15); in engine order 0 the disk moves in phase, the shrouds without
+    !> force. At rest the sector's solution says so (at_rest), is trusted (no energy or
+    !> Coulomb-dissipation finding: every work is roundoff) and its truncation estimate is
+    !> small. The stuck shrouds close a ring (24 constraints, 23 independent): the exact
+    !> flow runs (minimum-norm forces) and the disk's Floquet multipliers in all three
+    !> engine orders are those of the disk with its shrouds held rigidly, computed here
+    !> independently (the velocities in the null space of the 24 constraints, its 98
+    !> eigenvalues, exp(lambda T)) and 23 of 1 (the stuck shrouds' offsets persist): the
+    !> verdict 'marginal', every nonzero multiplier within 1e-7.
+    subroutine test_stuck_ring(t)
+        type(test_counter_t), intent(inout) :: t
+        type(case_t) :: c
+        type(model_t) :: disk
+        type(hbm_solution_t) :: sec, dsol
+        type(hbm_options_t) :: ho
+        type(floquet_t) :: fl
+        type(truncation_t) :: est
+        type(error_type), allocatable :: error
+        real(dp), allocatable :: expected(:), got(:)
+        real(dp) :: rmax, rexact, worst
+        integer :: k, eo, nexp
+        integer, parameter :: orders(3) = [6, 12, 0]
+        call read_case(project_path("examples/bladed_disk.nml"), c, error)
+        call check_error(t, error, "stuck ring: read the shrouded disk", .false.)
+        if (allocated(error)) return
+        ho = c%hbm
+        do k = 1, size(orders)
+            eo = orders(k)
+            c%cyclic%cyc%engine_order = eo
+            call solve_periodic_cyclic(c%model, c%cyclic%cyc, ho, sec, error)
+            if (.not. allocated(error)) call estimate_truncation(c%model, ho, sec, est, error, &
+                                                                 cyclic=c%cyclic%cyc)
+            if (.not. allocated(error)) call disk_solution(c%model, c%cyclic%cyc, ho, sec, &
+                                                           disk, dsol, error)
+            if (.not. allocated(error)) call periodic_stability(disk, dsol, &
+                                                                c%reference%reference_options_t, &
+                                                                fl, error)
+            call check_error(t, error, "stuck ring: EO "//itoa(eo), .false.)
+            if (allocated(error)) return
+            rmax = maxval(abs(sec%r(:, 1)))
+            if (eo /= 0) then
+                rexact = 0.2_dp/(2.0_dp*sin(two_pi/2.0_dp*eo/ns))
+                call check(t, sec%converged .and. sec%at_rest .and. &
+                           abs(rmax - rexact) < 1.0e-8_dp*rexact .and. &
+                           minval(sec%stick_fraction) == 1.0_dp .and. &
+                           .not. sec%diagnostics%has("energy_balance") .and. &
+                           .not. sec%diagnostics%has("coulomb_dissipation") .and. &
+                           sec%diagnostics%worst() < level_warning .and. &
+                           est%estimate < 1.0e-3_dp, &
+                           "stuck ring: EO "//itoa(eo)//", the disk at rest, the shrouds "// &
+                           "holding the forcing, trusted", &
+                           "at_rest "//merge("T", "F", sec%at_rest)//", max |r| "// &
+                           real_text(rmax)//" vs "//real_text(rexact)//", truncation "// &
+                           real_text(est%estimate)//", worst finding "// &
+                           itoa(sec%diagnostics%worst()))
+            else
+                call check(t, sec%converged .and. .not. sec%at_rest .and. &
+                           rmax < 1.0e-12_dp .and. sec%diagnostics%worst() < level_warning, &
+                           "stuck ring: EO 0, the disk moves in phase, the shrouds idle", &
+                           "max |r| "//real_text(rmax))
+            end if
+            if (k == 1) then
+                call held_multipliers(disk, c%cyclic%cyc, expected, error)
+                call check_error(t, error, "stuck ring: the held disk's multipliers", .false.)
+                if (allocated(error)) return
+            end if
+            nexp = size(expected)
+            worst = huge(1.0_dp)
+            if (allocated(fl%multipliers)) then
+                if (size(fl%multipliers) >= nexp) then
+                    got = abs(fl%multipliers(1:nexp))
+                    worst = maxval(abs(got - expected))
+                end if
+            end if
+            call check(t, fl%verdict == 'marginal' .and. fl%nmarginal == ns - 1 .and. &
+                       fl%nzero == 2*disk%ndof - nexp .and. worst < 1.0e-7_dp, &
+                       "stuck ring: EO "//itoa(eo)//", the disk's multipliers = the held "// &
+                       "disk's and 23 of 1", "verdict "//fl%verdict//", "//itoa(fl%nmarginal)// &
+                       " on the circle, "//itoa(fl%nzero)//" zero, largest difference "// &
+                       real_text(worst)//"; "//fl%diagnosis)
+        end do
+
+    contains
+
+        !> Moduli of the multipliers exp(lambda T) of the disk with every shroud held (C^T v
+        !> = 0, C the 24 relative tip directions), by decreasing modulus, with the 23 of 1
+        !> of the held offsets among them.
+        subroutine held_multipliers(disk, cyc, mods, error)
+            type(model_t), intent(in) :: disk
+            type(cyclic_t), intent(in) :: cyc
+            real(dp), allocatable, intent(out) :: mods(:)
+            type(error_type), allocatable, intent(out) :: error
+            real(dp), allocatable :: cm(:, :), g(:, :), ev(:), work(:), z(:, :), mr(:, :), &
+                                     kr(:, :), cr(:, :), a(:, :), wr(:), wi(:)
+            real(dp) :: vl(1, 1), period
+            integer, allocatable :: ipiv(:)
+            integer :: n, s, info, nr, j, q
+            n = disk%ndof
+            allocate (cm(n, ns))
+            cm = 0.0_dp
+            do s = 0, ns - 1
+                cm(disk_dof(cyc, 4, 2, s), s + 1) = 1.0_dp
+                cm(disk_dof(cyc, 4, 2, mod(s + 1, ns)), s + 1) = -1.0_dp
+            end do
+            ! the null space of C^T: eigenvectors of C C^T with eigenvalue ~0
+            g = matmul(cm, transpose(cm))
+            allocate (ev(n), work(10*n))
+            call dsyev('V', 'U', n, g, n, ev, work, size(work), info)
+            if (info /= 0) then
+                error = error_type(1, "dsyev failed")
+                return
+            end if
+            z = g(:, pack([(j, j=1, n)], ev < 1.0e-10_dp*maxval(ev)))
+            nr = size(z, 2)
+            mr = matmul(transpose(z), matmul(disk%mass, z))
+            kr = matmul(transpose(z), matmul(disk%stiffness, z))
+            cr = matmul(transpose(z), matmul(disk%damping, z))
+            ! A = [0 I; -Mr^-1 Kr, -Mr^-1 Cr]
+            allocate (ipiv(nr), a(2*nr, 2*nr))
+            g = reshape([kr, cr], [nr, 2*nr])
+            call dgesv(nr, 2*nr, mr, nr, ipiv, g, nr, info)
+            a = 0.0_dp
+            do q = 1, nr
+                a(q, nr + q) = 1.0_dp
+            end do
+            a(nr + 1:, :) = -g
+            allocate (wr(2*nr), wi(2*nr))
+            deallocate (work)
+            allocate (work(20*nr))
+            call dgeev('N', 'N', 2*nr, a, 2*nr, wr, wi, vl, 1, vl, 1, work, size(work), info)
+            if (info /= 0) then
+                error = error_type(1, "dgeev failed")
+                return
+            end if
+            period = two_pi/disk%omega
+            mods = [exp(wr*period), [(1.0_dp, j=1, n - nr)]]
+            ! by decreasing modulus
+            do j = 2, size(mods)
+                do q = j, 2, -1
+                    if (mods(q) <= mods(q - 1)) exit
+                    call swap(mods(q), mods(q - 1))
+                end do
+            end do
+        end subroutine held_multipliers
+
+        subroutine swap(a, b)
+            real(dp), intent(inout) :: a, b
+            real(dp) :: w
+            w = a
+            a = b
+            b = w
+        end subroutine swap
+    end subroutine test_stuck_ring
 
     !> examples/bladed_disk.nml (24 sectors, a shroud contact rubbing on the next blade, EO 3)
     !> with &cyclic model = 'disk', solved by the weighted residual on the assembled disk:

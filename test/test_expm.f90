@@ -5,13 +5,14 @@
 !> empty matrix and a non-finite one. The modal form of a contact mode's dynamics
 !> (stickslip_flow_modal) against the matrix exponential: a free damped 3-DOF oscillator, the
 !> same with a velocity constraint (a stuck contact: deflated Jordan block), and a Jordan
-!> block it must refuse.
+!> block it must refuse. The constraint solve of a mode: independent constraints as LU,
+!> dependent consistent ones (a ring) the minimum-norm solution, inconsistent ones refused.
 module test_expm
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use stickslip_kinds, only: dp
     use stickslip_expm, only: expm
     use stickslip_flow_modal, only: modal_form_t, build_modal_form, modal_propagate, &
-        project_velocity_rows, off_constraints
+        project_velocity_rows, off_constraints, constraint_solve
     use testing, only: test_counter_t, check, check_close
     implicit none
     private
@@ -25,7 +26,44 @@ contains
         call test_taylor_and_inverse(t)
         call test_edge_cases(t)
         call test_modal_form(t)
+        call test_constraint_solve(t)
     end subroutine run_expm_tests
+
+    !> constraint_solve on three rigid constraints between four masses in a ring (x1 - x2,
+    !> x2 - x3, x3 - x1: rank 2) and on two independent ones: the Gram matrix's system.
+    !> Independent: the exact solution. The ring, with a right-hand side in its range: g x
+    !> = r to roundoff and x orthogonal to the null vector (1, 1, 1) (minimum norm: the
+    !> ring's common force zero). A right-hand side off the range: refused.
+    subroutine test_constraint_solve(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp) :: c(4, 3), g(3, 3), r(3, 1), c2(4, 2)
+        real(dp), allocatable :: x(:, :)
+        logical :: ok
+        c = 0.0_dp
+        c(1, 1) = 1.0_dp
+        c(2, 1) = -1.0_dp
+        c(2, 2) = 1.0_dp
+        c(3, 2) = -1.0_dp
+        c(3, 3) = 1.0_dp
+        c(1, 3) = -1.0_dp
+        g = matmul(transpose(c), c)
+        ! in the range: C^T u for some velocity u
+        r(:, 1) = matmul([0.3_dp, -1.1_dp, 0.7_dp, 2.0_dp], c)
+        call constraint_solve(g, r, x, ok)
+        call check(t, ok .and. maxval(abs(matmul(g, x) - r)) < 1.0e-14_dp .and. &
+                   abs(sum(x)) < 1.0e-14_dp, &
+                   "constraint solve: a dependent ring, the minimum-norm solution")
+        r(:, 1) = [1.0_dp, 1.0_dp, 1.0_dp]
+        call constraint_solve(g, r, x, ok)
+        call check(t, .not. ok, "constraint solve: a dependent ring, inconsistent: refused")
+        c2 = c(:, 1:2)
+        call constraint_solve(matmul(transpose(c2), c2), reshape([1.0_dp, 0.0_dp], [2, 1]), &
+                              x, ok)
+        ! [2 -1; -1 2] x = [1; 0]: x = [2/3; 1/3]
+        call check(t, ok .and. abs(x(1, 1) - 2.0_dp/3.0_dp) < 1.0e-15_dp .and. &
+                   abs(x(2, 1) - 1.0_dp/3.0_dp) < 1.0e-15_dp, &
+                   "constraint solve: independent constraints, the exact solution")
+    end subroutine test_constraint_solve
 
     subroutine test_closed_forms(t)
         type(test_counter_t), intent(inout) :: t

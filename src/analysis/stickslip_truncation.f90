@@ -55,7 +55,8 @@ module stickslip_truncation
     !> largest amplitude.
     real(dp), parameter :: amplitude_floor = 1.0e-3_dp
     !> Velocity floor of the Coulomb defect, relative to the peak velocity of the structure:
-    !> a contact stuck all period (slip velocity ~ solver tolerance) is not divided by ~0.
+    !> a contact stuck all period (slip velocity ~ solver tolerance) is not divided by ~0;
+    !> never below the solve's velocity resolution (hbm_solution_t%velocity_resolution).
     real(dp), parameter :: velocity_floor = 1.0e-4_dp
 
     !> Truncation error estimate of one solution, and the record of an adaptive solve.
@@ -463,7 +464,8 @@ contains
             call grid%synthesize(fb, observed(sol%xcoef, p, observe), xt)
             est%amplitude(p) = maxval(abs(xt))
         end do
-        vfloor = velocity_floor*vstruct
+        ! below the solve's velocity resolution a channel's motion is roundoff (at rest)
+        vfloor = max(velocity_floor*vstruct, sol%velocity_resolution)
         ! the weight the solution was solved with (opts%rho = 0 asks for the automatic one)
         rho = sol%rho
         if (.not. (rho > 0.0_dp)) rho = opts%rho
@@ -597,7 +599,9 @@ contains
         ! a DOF that hardly moves (a contact DOF stuck but for tiny slips, 1e-6 of the
         ! response) is measured against 1e-3 of the largest amplitude, not its own: its
         ! relative change can be large while the response's error is not
-        floor_amp = max(amplitude_floor*amax, tiny(1.0_dp))
+        ! and the displacement the solve's velocity resolution allows (a structure at rest)
+        floor_amp = max(amplitude_floor*amax, fine%velocity_resolution/model%omega, &
+                        tiny(1.0_dp))
         do p = 1, observed_count(model, observe)
             ! the coarse series, embedded in the fine basis, and the difference
             xc = 0.0_dp
@@ -620,7 +624,7 @@ contains
         end do
         floor_energy = 1.0e-12_dp*pi*floor_energy*amax
         energy = max(abs(fine%work_forcing), fine%diss_friction + fine%diss_damping, &
-                     floor_energy, tiny(1.0_dp))
+                     floor_energy, fine%work_resolution, tiny(1.0_dp))
         est%dissipation_change_rel = est%dissipation_change/energy
         est%estimate = max(est%psi_rms, maxval(est%displacement_change_rel), &
                            est%dissipation_change_rel)

@@ -7,7 +7,7 @@ module stickslip_lapack
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgeqrf, zungqr, &
         zgetrf, zgetrs, zgemm, zgecon, zlange, dgeev, dgesv, zgesv, dsygv, dsyev, sgetrf, sgetrs, &
-        dgemm, dgemv, zgemv, zhegv
+        dgemm, dgemv, zgemv, zhegv, dgelss
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -144,6 +144,18 @@ module stickslip_lapack
             real(dp), intent(inout) :: b(ldb, *)
             integer, intent(out) :: info
         end subroutine dgesv
+
+        !> Minimum-norm least-squares solution of A X = B (A m x n, any rank) by the SVD:
+        !> singular values below rcond times the largest are taken as zero (rank returned);
+        !> s the singular values. lwork = -1 is a workspace query.
+        subroutine dgelss(m, n, nrhs, a, lda, b, ldb, s, rcond, rank, work, lwork, info)
+            import :: dp
+            integer, intent(in) :: m, n, nrhs, lda, ldb, lwork
+            real(dp), intent(inout) :: a(lda, *), b(ldb, *)
+            real(dp), intent(out) :: s(*), work(*)
+            real(dp), intent(in) :: rcond
+            integer, intent(out) :: rank, info
+        end subroutine dgelss
 
         !> Solve A X = B for a general complex matrix (as dgesv).
         subroutine zgesv(n, nrhs, a, lda, ipiv, b, ldb, info)

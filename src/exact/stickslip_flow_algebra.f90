@@ -25,7 +25,7 @@ module stickslip_flow_algebra
     use stickslip_lapack, only: dgesv
     use stickslip_flow_modes, only: mode_t, flow_modes_t, build_ladder, identity_matrix, &
         tune_mode
-    use stickslip_flow_modal, only: project_velocity_rows, gram_solve
+    use stickslip_flow_modal, only: project_velocity_rows, gram_solve, constraint_solve
     use stickslip_contact_modes, only: mode_terms_t, event_list_t
     use stickslip_contact_set, only: contact_set_t, new_element_set
     use stickslip_contact_element, only: element_box_t, state_stick, along_normal, &
@@ -42,7 +42,8 @@ contains
 
     !> The terms of the mode `code` with its constraints solved: hb, sb, fb of `terms`
     !> hold the dynamics, the constraint forces added (ok = .false. when the constraint
-    !> matrix Ct^T Ft is singular: dependent constraints or Painleve's paradox). Elements
+    !> matrix Ct^T Ft is singular and its constraints inconsistent: Painleve's paradox;
+    !> dependent consistent ones get the minimum-norm forces, constraint_solve). Elements
     !> flagged in `skip` add nothing (their forces left out: the free accelerations of a
     !> joint decision).
     subroutine assemble(self, code, terms, ok, skip)
@@ -56,9 +57,8 @@ contains
         logical, intent(out) :: ok
         !> Elements left out.
         logical, intent(in), optional :: skip(:)
-        real(dp), allocatable :: g(:, :), l(:, :)
-        integer, allocatable :: ipiv(:)
-        integer :: n, na, j, k, info, m
+        real(dp), allocatable :: l(:, :)
+        integer :: n, na, j, k, m
         n = self%n
         na = self%na
         ok = .true.
@@ -82,14 +82,11 @@ contains
         end if
         ! Lambda = -(Ct^T Ft)^-1 Ct^T [hb, gu] (the nonlinear inputs' part too)
         m = size(terms%in_elem)
-        g = matmul(transpose(terms%ctm), terms%ftm)
-        l = -matmul(transpose(terms%ctm), reshape([terms%hb, terms%gu], [n, na + m]))
-        allocate (ipiv(k))
-        call dgesv(k, na + m, g, k, ipiv, l, k, info)
-        if (info /= 0 .or. .not. all(ieee_is_finite(l))) then
-            ok = .false.
-            return
-        end if
+        ! (dependent constraints, a ring of stuck contacts: the minimum-norm forces)
+        call constraint_solve(matmul(transpose(terms%ctm), terms%ftm), &
+                              -matmul(transpose(terms%ctm), &
+                                      reshape([terms%hb, terms%gu], [n, na + m])), l, ok)
+        if (.not. ok) return
         terms%hb = terms%hb + matmul(terms%ftm, l(:, 1:na))
         if (m > 0) terms%gu = terms%gu + matmul(terms%ftm, l(:, na + 1:))
         do j = 1, k

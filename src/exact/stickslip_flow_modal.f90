@@ -25,12 +25,12 @@
 module stickslip_flow_modal
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
-    use stickslip_lapack, only: dgeev, dgetrf, dgetrs, dgecon, dgesv
+    use stickslip_lapack, only: dgeev, dgetrf, dgetrs, dgecon, dgesv, dgelss
     use stickslip_dense_products, only: mat_mul
     implicit none
     private
     public :: modal_form_t, build_modal_form, modal_propagate, project_velocity_rows, &
-        off_constraints, gram_solve, on_constraints
+        off_constraints, gram_solve, constraint_solve, on_constraints
 
     !> Largest relative component off a mode's constraints (off_constraints) of the columns
     !> the modal form propagates (a Jacobian, a phase's start state, the forcing columns).
@@ -40,6 +40,13 @@ module stickslip_flow_modal
     !> Largest difference, relative to the largest entry of exp(B delta), between the modal
     !> form's propagator and the mode's exponential over one grid step.
     real(dp), parameter :: check_tol = 1.0e-11_dp
+    !> Reciprocal condition number of a constraint matrix below which its constraints are
+    !> taken as dependent (constraint_solve), and the singular values dropped then,
+    !> relative to the largest.
+    real(dp), parameter :: dependent_rcond = 1.0e-13_dp
+    !> Largest residual |g x - r| of dependent constraints, relative to |r| + |g| |x|,
+    !> accepted as consistent.
+    real(dp), parameter :: consistency_tol = 1.0e-9_dp
 
     !> The modal form of one contact mode's state dynamics.
     type :: modal_form_t
@@ -223,8 +230,10 @@ contains
             (amax*maxval(sqrt(sum(ctm**2, 1))))
     end function off_constraints
 
-    !> x = (C^T C)^-1 r for the k columns of c (n x k) and r (k x m) (LAPACK dgesv); ok =
-    !> .false. when C^T C is singular (dependent constraint directions) or x not finite.
+    !> x = (C^T C)^+ r for the k columns of c (n x k) and r (k x m) (constraint_solve: the
+    !> pseudo-inverse when the directions are dependent, so C x is still the orthogonal
+    !> projection of the right-hand side's directions onto the span of C); ok = .false.
+    !> when x is not finite.
     subroutine gram_solve(c, r, x, ok)
         !> The directions, n x k.
         real(dp), intent(in) :: c(:, :)
@@ -234,12 +243,59 @@ contains
         real(dp), allocatable, intent(out) :: x(:, :)
         !> The system was solved.
         logical, intent(out) :: ok
-        real(dp) :: g(size(c, 2), size(c, 2))
-        integer :: ipiv(size(c, 2)), info, k
-        k = size(c, 2)
-        g = matmul(transpose(c), c)
-        x = r
-        call dgesv(k, size(r, 2), g, k, ipiv, x, k, info)
-        ok = info == 0 .and. all(ieee_is_finite(x))
+        call constraint_solve(matmul(transpose(c), c), r, x, ok)
     end subroutine gram_solve
+
+    !> x solving g x = r, g the k x k matrix of a mode's velocity constraints (C_t^T F_t,
+    !> or the Gram matrix C^T C), r k x m. Independent constraints: LU (dgesv), as always.
+    !> Dependent ones (reciprocal condition below dependent_rcond: stuck contacts whose
+    !> constraints close a ring, e.g. every shroud of a disk stuck, 23 of 24 independent):
+    !> the minimum-norm least-squares solution (SVD, dgelss), which meets the constraints
+    !> when they are consistent; the accelerations are then unique and the statically
+    !> undetermined force (the ring's common one) is zero, the weighted residual's choice
+    !> for the harmonics it leaves free. ok = .false. when x is not finite or dependent
+    !> constraints are inconsistent (Painleve's paradox: no constraint force holds them).
+    subroutine constraint_solve(g, r, x, ok)
+        !> The constraint matrix, k x k (k >= 1).
+        real(dp), intent(in) :: g(:, :)
+        !> Right-hand sides, k x m.
+        real(dp), intent(in) :: r(:, :)
+        !> The solutions, k x m.
+        real(dp), allocatable, intent(out) :: x(:, :)
+        !> The system was solved.
+        logical, intent(out) :: ok
+        real(dp), allocatable :: a(:, :), b(:, :), work(:), sv(:)
+        integer, allocatable :: ipiv(:), iwork(:)
+        real(dp) :: anorm, rcond, query(1), resid, scale
+        integer :: k, m, info, rank
+        k = size(g, 1)
+        m = size(r, 2)
+        a = g
+        x = r
+        allocate (ipiv(k))
+        anorm = maxval(sum(abs(g), 1))
+        call dgesv(k, m, a, k, ipiv, x, k, info)
+        if (info == 0 .and. all(ieee_is_finite(x))) then
+            allocate (work(4*k), iwork(k))
+            call dgecon('1', k, a, k, anorm, rcond, work, iwork, info)
+            ok = info == 0 .and. rcond >= dependent_rcond
+            if (ok) return
+            deallocate (work)
+        end if
+        ! dependent constraints: the minimum-norm solution, if they are consistent
+        a = g
+        b = r
+        allocate (sv(k))
+        call dgelss(k, k, m, a, k, b, k, sv, dependent_rcond, rank, query, -1, info)
+        ok = info == 0
+        if (.not. ok) return
+        allocate (work(max(1, int(query(1)))))
+        call dgelss(k, k, m, a, k, b, k, sv, dependent_rcond, rank, work, size(work), info)
+        ok = info == 0 .and. all(ieee_is_finite(b))
+        if (.not. ok) return
+        resid = maxval(abs(matmul(g, b) - r))
+        scale = maxval(abs(r)) + maxval(sum(abs(g), 2))*maxval(abs(b))
+        ok = resid <= consistency_tol*scale
+        call move_alloc(b, x)
+    end subroutine constraint_solve
 end module stickslip_flow_modal

@@ -268,9 +268,9 @@ contains
     !> checks of a converged orbit (energy balance, Coulomb's law) go to res%diagnostics.
     !> Errors: stat input (invalid model or options, start samples of the wrong shape or not
     !> finite, a symmetry without light or that the model does not have); stat numerical
-    !> (dependent stuck contact directions).
+    !> (stuck contact constraints that no force holds: Painleve's paradox).
     subroutine solve_reference(model, opts, x_start, v_start, res, error, start_name, light, &
-                               r_start, cache, symmetry)
+                               r_start, cache, symmetry, rest_scale)
         !> The structure, its contacts and forcing.
         type(model_t), intent(in) :: model
         !> Reference options.
@@ -305,6 +305,11 @@ contains
         !> that m-th of the period only (the samples cover the period). Where m does not
         !> divide the start's samples, the period map as without it.
         type(wave_symmetry_t), intent(in), optional :: symmetry
+        !> A start at rest (the contacts hold the forcing: the weighted residual's at_rest):
+        !> the velocity scale of the shooting [m/s] (its displacement scale this over omega),
+        !> e.g. the weighted residual's fscale; the start's own amplitudes are roundoff
+        !> then, and the flow's roundoff over a period would not meet the tolerance on them.
+        real(dp), intent(in), optional :: rest_scale
         character(len=:), allocatable :: name
         logical :: is_light
         type(wave_symmetry_t) :: sym
@@ -347,7 +352,7 @@ contains
             end if
         end if
         call shoot_from(model, opts, name, x_start, v_start, res, error, is_light, sym, &
-                        r_start, cache)
+                        r_start, cache, rest_scale)
         if (allocated(error)) return
         if (res%converged .and. is_light) then
             continue
@@ -434,7 +439,8 @@ contains
     !> One shooting attempt from samples xs, vs (t_k = k T / size(xs, 1)) of an approximate
     !> periodic solution (rs its channel forces, for the internal states), then the recording
     !> pass, the events and the samples.
-    subroutine shoot_from(model, opts, name, xs, vs, res, error, light, sym, rs, cache)
+    subroutine shoot_from(model, opts, name, xs, vs, res, error, light, sym, rs, cache, &
+                          rest_scale)
         type(model_t), intent(in) :: model
         type(reference_options_t), intent(in) :: opts
         character(len=*), intent(in) :: name
@@ -446,6 +452,8 @@ contains
         type(wave_symmetry_t), intent(in) :: sym
         real(dp), intent(in), optional :: rs(:, :)
         type(reference_cache_t), intent(inout), optional :: cache
+        !> A start at rest: the shooting's velocity scale [m/s] (solve_reference).
+        real(dp), intent(in), optional :: rest_scale
         type(shooting_t) :: shooting
         type(mode_t), allocatable :: modes(:)
         type(hybrj_options_t) :: hopts
@@ -453,6 +461,7 @@ contains
         real(dp), allocatable :: vref(:), u(:), z0(:), z1(:), speed(:), w(:), gs(:), ss(:), &
                                  rk(:), zs(:), zp(:), jmap(:, :)
         real(dp) :: c0, c1, period, xscale, vscale, ampx, ampv, ampz, gamp, dx(3), vfloor, ratio
+        logical :: rest_start
         integer :: n, nc, ns, j, k, ksec, nsamp, nz, nstate, s0, m, ushift, kfirst
         logical :: reused
         type(channel_t) :: ch
@@ -480,6 +489,15 @@ contains
             vfloor = max(vfloor, 1.0e-3_dp*model%omega*sum(abs(model%force_amplitude))/ &
                          max(maxval([(abs(model%stiffness(k, k)), k=1, n)]), tiny(1.0_dp)))
         if (.not. (vfloor > 0.0_dp .and. vfloor <= huge(1.0_dp))) vfloor = 1.0_dp
+        ! a start at rest (the contacts hold the forcing, its motion is roundoff): the
+        ! caller's scale, on which the flow's roundoff over a period meets the tolerance
+        rest_start = .false.
+        if (present(rest_scale)) rest_start = rest_scale > 0.0_dp .and. &
+                                              rest_scale <= huge(1.0_dp)
+        if (rest_start) then
+            vscale = max(vscale, rest_scale)
+            xscale = max(xscale, rest_scale/model%omega)
+        end if
         do j = 1, nc
             w = contact_velocity_direction(model, j)
             vref(j) = max(maxval(abs(matmul(vs, w))), vfloor)
@@ -561,6 +579,9 @@ contains
         shooting%scale = [(xscale, k=1, n), (vscale, k=1, n), (xscale, k=1, nstate)]
         allocate (shooting%mono(nz, nz))
         zs = [xs(ksec, :), vs(ksec, :), ss]
+        ! at rest the start's velocities are the solve's noise: the orbit's are zero (a
+        ! noise velocity would start a stuck contact slipping)
+        if (rest_start) zs(n + 1:2*n) = 0.0_dp
         u = zs/shooting%scale
         if (present(cache)) then
             ! the last orbit at the same section: its monodromy is hybrj's first Jacobian,
@@ -652,6 +673,11 @@ contains
         call contact_samples(model, res)
         ampx = max(maxval(abs(res%x)), maxval(abs(z0(1:n))))
         ampv = max(maxval(abs(res%v)), maxval(abs(z0(n + 1:2*n))))
+        if (rest_start) then
+            ! on the caller's scale, as the shooting
+            ampx = max(ampx, xscale)
+            ampv = max(ampv, vscale)
+        end if
         res%defect = max(maxval(abs(z1(1:n) - z0(1:n)))/max(ampx, tiny(1.0_dp)), &
                          maxval(abs(z1(n + 1:2*n) - z0(n + 1:2*n)))/max(ampv, tiny(1.0_dp)))
         if (nstate > 0) then

@@ -290,7 +290,7 @@ contains
         type(reference_result_t) :: res
         type(wave_symmetry_t) :: sym
         real(dp), allocatable :: xr(:, :), vr(:, :), rr(:, :), xs(:, :), vs(:, :)
-        real(dp) :: c0, c1, ampx, ampv, distance, ftol
+        real(dp) :: c0, c1, ampx, ampv, distance, ftol, rest
         integer :: stride
         logical :: finer
         character(len=400) :: buf
@@ -312,16 +312,21 @@ contains
         ! the full reference (energies, checks, opts%samples) only when the caller wants it;
         ! a light one uses the symmetry of a disk's wave
         if (present(symmetry) .and. .not. present(ref)) sym = symmetry
+        ! a solution at rest shoots on the scale of the solve's residual (its own motion
+        ! is roundoff)
+        rest = 0.0_dp
+        if (sol%at_rest) rest = sol%fscale
         call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
                              light=.not. present(ref), r_start=sol%r, cache=cache, &
-                             symmetry=sym)
+                             symmetry=sym, rest_scale=rest)
         if (present(cache) .and. .not. allocated(error)) then
             if (.not. res%converged .or. .not. allocated(res%monodromy)) then
                 ! the last orbit's start or Jacobian may have led the shooting astray: once
                 ! more from the weighted-residual solution alone, the cache emptied
                 cache = reference_cache_t()
                 call solve_reference(model, opts, sol%x, sol%v, res, error, start_name='hbm', &
-                                     light=.not. present(ref), r_start=sol%r, symmetry=sym)
+                                     light=.not. present(ref), r_start=sol%r, symmetry=sym, &
+                                     rest_scale=rest)
             end if
         end if
         finer = .false.
@@ -332,7 +337,7 @@ contains
                 ! 1.5 times finer, not kept for the next point
                 call solve_reference(model, finer_grid(opts), sol%x, sol%v, res, error, &
                                      start_name='hbm', light=.not. present(ref), &
-                                     r_start=sol%r, symmetry=sym)
+                                     r_start=sol%r, symmetry=sym, rest_scale=rest)
                 finer = .true.
             end if
         end if
@@ -368,8 +373,10 @@ contains
             call sample_reference(res, size(sol%x, 1), xr, vr, rr, error)
             if (allocated(error)) return
         end if
-        ampx = max(maxval(abs(xr)), tiny(1.0_dp))
-        ampv = max(maxval(abs(vr)), tiny(1.0_dp))
+        ! (at least what the weighted residual resolves: a structure at rest moves by
+        ! roundoff, which the two solutions need not share)
+        ampv = max(maxval(abs(vr)), sol%velocity_resolution, tiny(1.0_dp))
+        ampx = max(maxval(abs(xr)), sol%velocity_resolution/model%omega, tiny(1.0_dp))
         distance = max(maxval(abs(xs - xr))/ampx, maxval(abs(vs - vr))/ampv)
         if (allocated(sol%offset_undetermined)) then
             if (any(sol%offset_undetermined)) then
@@ -388,7 +395,7 @@ contains
             write (buf, '(a,es10.2e3,a)') "the exact orbit shot from the weighted-residual "// &
                 "solution differs from it by ", distance, " of its amplitude: possibly "// &
                 "another periodic solution; the multipliers are that orbit's: "
-            fl%diagnosis = trim(buf)//fl%diagnosis
+            fl%diagnosis = trim(buf)//" "//fl%diagnosis
             fl%verdict = 'unknown'
             fl%stable = .false.
             fl%asymptotic = .false.

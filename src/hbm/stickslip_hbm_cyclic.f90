@@ -196,5 +196,11 @@ contains
         o%want_samples = .true.
         call solution_from_forces(disk, o, phased_copies(sol%rcoef, sol%harmonic, cyc), dsol, &
                                   error)
+        if (allocated(error)) return
+        ! the sector's solve resolves the copies as well as itself (N sectors' forcing work)
+        dsol%fscale = sol%fscale
+        dsol%velocity_resolution = sol%velocity_resolution
+        dsol%work_resolution = cyc%sectors*sol%work_resolution
+        dsol%at_rest = sol%at_rest
     end subroutine disk_solution
 end module stickslip_hbm_cyclic

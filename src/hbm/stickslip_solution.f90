@@ -130,6 +130,20 @@ module stickslip_solution
         !> Gross work of the forcing over one period, integral |f . v| dt [J]: the scale of
         !> the energy balance when the net work is ~0 (a contact stuck all period).
         real(dp) :: work_gross = 0.0_dp
+        !> The solve's velocity resolution 100 max(tol, 1e-12) fscale [m/s]: the convergence
+        !> test holds the residual, a stuck contact's velocity coefficients, to tol fscale
+        !> in norm, so velocities below this (a margin for the sum over the coefficients
+        !> and the dynamics' condition) are its noise (0 when unknown: no floor).
+        real(dp) :: velocity_resolution = 0.0_dp
+        !> The work the forcing does over one period on a velocity error of
+        !> velocity_resolution at every forced DOF [J]: the floor of the energy checks' scale
+        !> (works below it are roundoff of the solve, e.g. a structure at rest).
+        real(dp) :: work_resolution = 0.0_dp
+        !> The structure does not move within the solve's resolution: every DOF's velocity
+        !> bound sum_h |V_h| <= velocity_resolution. The contacts hold the forcing (stuck,
+        !> or closed, all period); every work is 0 to roundoff, so the energy balance and
+        !> Coulomb dissipation checks are not graded (doc/convergence.md, "At rest").
+        logical :: at_rest = .false.
         !> Energy dissipated by friction over one period, -integral r . W^T v dt [J].
         real(dp) :: diss_friction = 0.0_dp
         !> Coulomb dissipation over one period, integral mu N |W^T v| dt [J]; equals

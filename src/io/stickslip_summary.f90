@@ -35,14 +35,15 @@ module stickslip_summary
 contains
 
     !> Relative energy balance error over one period: |work_forcing - diss_friction -
-    !> diss_damping| / max(|work_forcing|, 1e-6 work_gross): relative to the net work, or to
-    !> the gross work integral |f . v| dt when the net work is ~0 (a contact stuck all
-    !> period, undamped: nothing dissipates, and the balance is 0 = 0 to roundoff).
+    !> diss_damping| / max(|work_forcing|, 1e-6 work_gross, work_resolution): relative to the
+    !> net work, or to the gross work integral |f . v| dt when the net work is ~0 (a contact
+    !> stuck all period, undamped: nothing dissipates, and the balance is 0 = 0 to
+    !> roundoff), or to the work the solve cannot resolve (a structure at rest).
     pure real(dp) function energy_balance_error(sol) result(e)
         !> The solution.
         type(hbm_solution_t), intent(in) :: sol
         e = contact_energy_error(sol%work_forcing, sol%diss_friction, sol%diss_damping, &
-                                 0.0_dp, sol%work_gross)
+                                 0.0_dp, sol%work_gross, sol%work_resolution)
     end function energy_balance_error
 
     !> Relative energy balance error of a reference over one period (the impact losses of
@@ -198,6 +199,7 @@ contains
             call put(u, "  stick_fraction = "//rlist(sol%stick_fraction), stat, msg)
             call put(u, "  stick_phases = "//ilist(sol%stick_phases), stat, msg)
             call put(u, "  offset_undetermined = "//llist(sol%offset_undetermined), stat, msg)
+            call put(u, "  at_rest = "//ltoa(sol%at_rest), stat, msg)
         end if
         if (nc > 0 .and. .not. sol%contacts%coulomb_only) then
             ! contact laws: the open and slip shares, the normal law's checks
@@ -208,6 +210,7 @@ contains
         end if
         call put(u, "  work_forcing = "//rtoa(sol%work_forcing), stat, msg)
         call put(u, "  work_gross = "//rtoa(sol%work_gross), stat, msg)
+        call put(u, "  work_resolution = "//rtoa(sol%work_resolution), stat, msg)
         call put(u, "  diss_friction = "//rtoa(sol%diss_friction), stat, msg)
         call put(u, "  diss_damping = "//rtoa(sol%diss_damping), stat, msg)
         call put(u, "  diss_coulomb = "//rtoa(sol%diss_coulomb), stat, msg)

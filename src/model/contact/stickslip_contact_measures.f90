@@ -80,28 +80,43 @@ contains
 
     !> Relative mismatch of the friction dissipation and what the laws dissipate:
     !> |diss_law - diss_friction| / max(diss_law, |diss_friction| + |diss_damping|, 1e-6
-    !> work_gross) (dimensionless; ~1% for a sound weighted-residual solution, O(1) when the
-    !> forces and velocities do not obey the laws).
-    pure real(dp) function coulomb_check(diss_law, diss_friction, diss_damping, work_gross)
+    !> work_gross, work_floor) (dimensionless; ~1% for a sound weighted-residual solution,
+    !> O(1) when the forces and velocities do not obey the laws).
+    pure real(dp) function coulomb_check(diss_law, diss_friction, diss_damping, work_gross, &
+                                         work_floor)
         !> What the laws dissipate, the friction and viscous dissipation, the gross work [J].
         real(dp), intent(in) :: diss_law, diss_friction, diss_damping, work_gross
+        !> The work the solve cannot resolve (hbm_solution_t%work_resolution) [J]; 0 when
+        !> absent.
+        real(dp), intent(in), optional :: work_floor
+        real(dp) :: floor
+        floor = 0.0_dp
+        if (present(work_floor)) floor = work_floor
         coulomb_check = abs(diss_law - diss_friction)/ &
                         max(diss_law, abs(diss_friction) + abs(diss_damping), &
-                            1.0e-6_dp*work_gross, tiny(1.0_dp))
+                            1.0e-6_dp*work_gross, floor, tiny(1.0_dp))
     end function coulomb_check
 
     !> Relative energy balance error over one period: |work_forcing - diss_friction -
-    !> diss_damping - impact_loss| / max(|work_forcing|, 1e-6 work_gross): relative to the
-    !> net work, or to the gross work integral |f . v| dt when the net work is ~0 (a contact
-    !> stuck all period, undamped: nothing dissipates, and the balance is 0 = 0 to roundoff).
+    !> diss_damping - impact_loss| / max(|work_forcing|, 1e-6 work_gross, work_floor):
+    !> relative to the net work, or to the gross work integral |f . v| dt when the net work
+    !> is ~0 (a contact stuck all period, undamped: nothing dissipates, and the balance is
+    !> 0 = 0 to roundoff), or to the work the solve cannot resolve when the structure is at
+    !> rest (every work is roundoff then).
     pure real(dp) function energy_balance_error(work_forcing, diss_friction, diss_damping, &
-                                                impact_loss, work_gross) result(e)
+                                                impact_loss, work_gross, work_floor) result(e)
         !> Work of the forcing, friction and viscous dissipation, kinetic energy lost in
         !> impacts, gross work of the forcing, all over one period [J].
         real(dp), intent(in) :: work_forcing, diss_friction, diss_damping, impact_loss, &
                                 work_gross
+        !> The work the solve cannot resolve (hbm_solution_t%work_resolution) [J]; 0 when
+        !> absent.
+        real(dp), intent(in), optional :: work_floor
+        real(dp) :: floor
+        floor = 0.0_dp
+        if (present(work_floor)) floor = work_floor
         e = abs(work_forcing - diss_friction - diss_damping - impact_loss)/ &
-            max(abs(work_forcing), 1.0e-6_dp*work_gross, tiny(1.0_dp))
+            max(abs(work_forcing), 1.0e-6_dp*work_gross, floor, tiny(1.0_dp))
     end function energy_balance_error
 
     !> Number of stick phases in one period of the cyclic stick indicator `stick`, counted at

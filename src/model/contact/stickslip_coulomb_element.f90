@@ -19,6 +19,13 @@ module stickslip_coulomb_element
     private
     public :: coulomb_element_t, new_coulomb_element
 
+    !> A slip velocity below this share of the contact's velocity scale at the start of the
+    !> exact flow is rest (decided jointly, at acceleration level): the start state comes
+    !> from a weighted-residual solution, whose stuck velocities are roundoff of its
+    !> transformation into the flow's coordinates (~1e-15 of the structure's velocity; a
+    !> stuck ring of shrouds in a disk at rest or in engine order 0), not slips.
+    real(dp), parameter :: start_rest = 1.0e-9_dp
+
     !> Rigid 1D Coulomb friction with a constant normal load.
     type, extends(contact_element_t) :: coulomb_element_t
         !> Friction coefficient (>= 0) and normal load [N] (>= 0).
@@ -267,8 +274,8 @@ contains
         end if
     end subroutine coulomb_event_rows
 
-    !> Slipping in the direction of a slip velocity above 1e-12 of its scale; at rest the
-    !> joint decision settles it (no limit: slipping, no force).
+    !> Slipping in the direction of a slip velocity above start_rest of its scale; at rest
+    !> the joint decision settles it (no limit: slipping, no force).
     subroutine coulomb_start_code(self, geom, y, code, decide)
         class(coulomb_element_t), intent(in) :: self
         type(element_geometry_t), intent(in) :: geom
@@ -278,7 +285,7 @@ contains
         real(dp) :: v
         v = dot_product(geom%dt(:, 1), y(geom%n + 1:2*geom%n))
         decide = .false.
-        if (abs(v) > 1.0e-12_dp*geom%vref) then
+        if (abs(v) > start_rest*geom%vref) then
             code(1) = nint(sign(1.0_dp, v))
         else if (self%limit > 0.0_dp) then
             code(1) = 0

@@ -89,13 +89,17 @@ contains
         !> The work the solve cannot resolve (hbm_solution_t%work_resolution) [J]; 0 when
         !> absent.
         real(dp), intent(in), optional :: work_floor
-        real(dp) :: floor
-        floor = 0.0_dp
-        if (present(work_floor)) floor = work_floor
         coulomb_check = abs(diss_law - diss_friction)/ &
                         max(diss_law, abs(diss_friction) + abs(diss_damping), &
-                            1.0e-6_dp*work_gross, floor, tiny(1.0_dp))
+                            1.0e-6_dp*work_gross, given_floor(work_floor), tiny(1.0_dp))
     end function coulomb_check
+
+    !> An optional work floor [J], 0 when absent.
+    pure real(dp) function given_floor(work_floor) result(floor)
+        real(dp), intent(in), optional :: work_floor
+        floor = 0.0_dp
+        if (present(work_floor)) floor = work_floor
+    end function given_floor
 
     !> Relative energy balance error over one period: |work_forcing - diss_friction -
     !> diss_damping - impact_loss| / max(|work_forcing|, 1e-6 work_gross, work_floor):
@@ -112,11 +116,9 @@ contains
         !> The work the solve cannot resolve (hbm_solution_t%work_resolution) [J]; 0 when
         !> absent.
         real(dp), intent(in), optional :: work_floor
-        real(dp) :: floor
-        floor = 0.0_dp
-        if (present(work_floor)) floor = work_floor
         e = abs(work_forcing - diss_friction - diss_damping - impact_loss)/ &
-            max(abs(work_forcing), 1.0e-6_dp*work_gross, floor, tiny(1.0_dp))
+            max(abs(work_forcing), 1.0e-6_dp*work_gross, given_floor(work_floor), &
+                tiny(1.0_dp))
     end function energy_balance_error
 
     !> Number of stick phases in one period of the cyclic stick indicator `stick`, counted at

@@ -1215,13 +1215,6 @@ contains
             end do
         end subroutine held_multipliers
 
-        subroutine swap(a, b)
-            real(dp), intent(inout) :: a, b
-            real(dp) :: w
-            w = a
-            a = b
-            b = w
-        end subroutine swap
     end subroutine test_stuck_ring
 
     !> examples/bladed_disk.nml (24 sectors, a shroud contact rubbing on the next blade, EO 3)
@@ -1525,15 +1518,16 @@ contains
         call check(t, maxval(abs(all - ev)/ev) < 1.0e-10_dp, &
                    "cyclic frequencies: the sector's per nodal diameter = the disk's", &
                    "largest relative difference "//real_text(maxval(abs(all - ev)/ev)))
-    contains
-        subroutine swap(a, b)
-            real(dp), intent(inout) :: a, b
-            real(dp) :: c
-            c = a
-            a = b
-            b = c
-        end subroutine swap
     end subroutine test_frequencies
+
+    !> Exchange two reals.
+    pure subroutine swap(a, b)
+        real(dp), intent(inout) :: a, b
+        real(dp) :: c
+        c = a
+        a = b
+        b = c
+    end subroutine swap
 
     !> The disk's linear response at the forced harmonic (Z_disk X = F_disk from the
     !> assembled, phased forcing) against the sector's: X_sector from the sector's pencil on

@@ -19,7 +19,6 @@
 !> their force is continuous at the event, so the structure's acceleration does not
 !> depend on their codes.
 module stickslip_flow_algebra
-    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use stickslip_kinds, only: dp
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa
     use stickslip_lapack, only: dgesv

@@ -2,7 +2,7 @@
 !> from the exact flow over the whole period, against the flow over T / m by the travelling
 !> wave's symmetry (periodic_stability with `symmetry`, m = N / gcd(EO, N)), on the shrouded
 !> disk of examples/bladed_disk.nml (3 DOFs a sector, tip shrouds rubbing on the next blade)
-!> with 24 sectors in engine orders 1, 2, 3, 48 in 1, 2 and 80 in 1, at the example's omega
+!> with 24 sectors in engine orders 1, 2, 3, 48 in 1, 2, 3, 6 and 80 in 1, at the example's omega
 !> (an unknown verdict prints its diagnosis). Each stability is repeated R times (default
 !> 3) in this process; prints per case the disk's DOFs, m, the median CPU seconds of both,
 !> their ratio, the largest multiplier moduli and, where sectors in phase switch at one
@@ -27,7 +27,8 @@ program bench_wave_stability
     type(hbm_options_t) :: ho
     type(floquet_t) :: f1, f2
     type(error_type), allocatable :: error
-    integer, parameter :: sectors(6) = [24, 24, 24, 48, 48, 80], orders(6) = [1, 2, 3, 1, 2, 1]
+    integer, parameter :: sectors(8) = [24, 24, 24, 48, 48, 48, 48, 80]
+    integer, parameter :: orders(8) = [1, 2, 3, 1, 2, 3, 6, 1]
     integer :: i, r, repeats, m, u
     real(dp), allocatable :: t_full(:), t_wave(:)
     character(len=32) :: arg

@@ -18,8 +18,9 @@ make up
   the blade      r 0.205 .. 0.350, a band 4 mm thick about theta = 0 (its faces at
                  theta = +-0.002/r: constant thickness), z -0.020 .. 0.020 (6 x 1 x 4).
 Each platform's free edge face (theta = -+0.85 pi/N) is a *RIGID BODY whose reference node
-sits exactly at the sector's edge angle, r = 0.2025, z = 0: LREF_NODE at theta = -pi/N,
-RREF_NODE at +pi/N (each with its rotation node), so the right platform's reference node of
+sits exactly at the sector's edge angle, r = 0.2025, z = 0: node 9001 at theta = -pi/N,
+9003 at +pi/N (each with its rotation node, 9002 and 9004; with more than 9000 mesh nodes the
+next power of ten plus 1 to 4), so the right platform's reference node of
 sector s is the left one's of sector s + 1: the two rub there. The cyclic faces LEFT
 (theta = -pi/N) and RIGHT (+pi/N) are the disk's, without the clamped hub line; the right
 node of each pair is the left one turned by 2 pi/N. A shaker drives the blade's surface
@@ -60,16 +61,30 @@ What it does:
                                 diameter (nd, mode, rad/s, Hz);
     and prints the DOF counts, the checks and the DOF numbers of the contact and the drive.
 
-Usage: python3 make_sector.py   (about 6 s: 4 s the cyclic modes in ccx, 1.5 s the rotation)
+Options:
+  --refine K  split every cell of the grid into K x K x K cells (K >= 1, default 1: the
+              example): the same sector with about 5 K^2.6 thousand DOFs (the faces K^2 times
+              the nodes), for measuring the program on FE sectors of 10^4 to 10^5 DOFs. With
+              K > 1 CalculiX's cyclic modes are computed in the engine order's nodal diameter
+              only (the case needs its frequencies), and the case writes its results to
+              out/calculix_sector_rK;
+  --out DIR   write every file into DIR (created if missing; default: this script's folder),
+              the two decks copied there beside the mesh.
+
+Usage: python3 make_sector.py [--refine K] [--out DIR]   (K = 1: about 6 s, 4 s the cyclic
+       modes in ccx, 1.5 s the rotation)
 """
+import argparse
 import math
 import os
 import re
+import shutil
 import sys
 import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))   # the project's root
 sys.dont_write_bytecode = True        # no __pycache__ left in ../calculix_beam
 sys.path.insert(0, os.path.join(HERE, "..", "calculix_beam"))
 import make_model  # noqa: E402  (run_ccx, convert, write_triangle)
@@ -82,9 +97,22 @@ Z_LINES = [-0.020, -0.010, 0.0, 0.010, 0.020]         # axial grid lines [m]
 DISK_Z = 0.010                                        # the disk's half thickness [m]
 PLATFORM_EDGE = 0.85 * EDGE                           # the platforms end at |theta| = this
 HALF_BLADE = 0.002                                    # the blade's half thickness [m]
-LREF_NODE, LROT_NODE, RREF_NODE, RROT_NODE = 9001, 9002, 9003, 9004
 R_REF = 0.5 * (R_DISK[-1] + R_PLAT)                   # the reference nodes' radius [m]
 ENGINE_ORDER, ZETA = 3, 0.003
+
+
+def reference_nodes(count):
+    """The platforms' reference and rotation node numbers (left reference, its rotation, right
+    reference, its rotation) above a mesh of count nodes numbered from 1: 9001 .. 9004 when
+    count < 9000 (the example's), else the next power of ten plus 1 .. 4."""
+    base = 9000 if count < 9000 else 10 ** len(str(count))
+    return base + 1, base + 2, base + 3, base + 4
+
+
+def subdivide(lines, k):
+    """Grid lines with each interval of lines split into k equal ones."""
+    return [lines[i] + (lines[i + 1] - lines[i]) * m / k
+            for i in range(len(lines) - 1) for m in range(k)] + [lines[-1]]
 
 
 def theta_line(j, r):
@@ -102,22 +130,34 @@ def half_step(lines, i):
     return lines[i // 2] if i % 2 == 0 else 0.5 * (lines[i // 2] + lines[i // 2 + 1])
 
 
-def mesh():
-    """The sector's C3D20R mesh on the structured grid: the cells of the disk, the platforms
-    and the blade, their nodes at half-step grid points with at most one odd index (as
-    make_model.mesh), numbered in grid order. Returns ({(i, j, k): id}, {id: (r, theta, z)},
-    [element connectivity])."""
-    r_lines = R_DISK + [R_PLAT] + [R_PLAT + (R_TIP - R_PLAT) * n / NR_BLADE
-                                   for n in range(1, NR_BLADE + 1)]
-    nr, nt, nz = len(r_lines) - 1, 7, len(Z_LINES) - 1
-    plat = len(R_DISK) - 1                            # the platforms' cell in r
+def fine_theta_line(j, r, refine):
+    """The angle [rad] of the refined grid's theta line j (0 .. 7 refine) at radius r: line
+    j // refine of theta_line and the next, split in refine equal angles."""
+    coarse, m = divmod(j, refine)
+    if m == 0:
+        return theta_line(coarse, r)
+    low, high = theta_line(coarse, r), theta_line(coarse + 1, r)
+    return low + (high - low) * m / refine
+
+
+def mesh(refine):
+    """The sector's C3D20R mesh on the structured grid, each cell of the coarse grid split in
+    refine^3: the cells of the disk, the platforms and the blade, their nodes at half-step
+    grid points with at most one odd index (as make_model.mesh), numbered in grid order.
+    Returns ({(i, j, k): id}, {id: (r, theta, z)}, [element connectivity])."""
+    r_lines = subdivide(R_DISK + [R_PLAT] + [R_PLAT + (R_TIP - R_PLAT) * n / NR_BLADE
+                                             for n in range(1, NR_BLADE + 1)], refine)
+    z_lines = subdivide(Z_LINES, refine)
+    nr, nt, nz = len(r_lines) - 1, 7 * refine, len(z_lines) - 1
+    plat = len(R_DISK) - 1                            # the platforms' coarse cell in r
     cells = []
     for ci in range(nr):
         for cj in range(nt):
             for ck in range(nz):
-                in_disk = ci < plat and abs(half_step(Z_LINES, 2 * ck + 1)) < DISK_Z
-                in_plat = ci == plat and 1 <= cj <= nt - 2
-                in_blade = ci > plat and cj == nt // 2
+                cr, ct = ci // refine, cj // refine     # the coarse cell
+                in_disk = cr < plat and abs(half_step(z_lines, 2 * ck + 1)) < DISK_Z
+                in_plat = cr == plat and 1 <= ct <= 5
+                in_blade = cr > plat and ct == 3
                 if in_disk or in_plat or in_blade:
                     cells.append((ci, cj, ck))
     # C3D20 node order (make_model.mesh) with (r, theta, z) for (x, y, z): right-handed
@@ -130,18 +170,18 @@ def mesh():
     for n, (i, j, k) in enumerate(used, start=1):
         r = half_step(r_lines, i)
         ids[(i, j, k)] = n
-        cyl[n] = (r, half_step([theta_line(m, r) for m in range(nt + 1)], j),
-                  half_step(Z_LINES, k))
+        cyl[n] = (r, half_step([fine_theta_line(m, r, refine) for m in range(nt + 1)], j),
+                  half_step(z_lines, k))
     elements = [[ids[(2 * ci + a, 2 * cj + b, 2 * ck + c)] for (a, b, c) in offsets]
                 for (ci, cj, ck) in cells]
     return ids, cyl, elements
 
 
-def node_sets(ids, cyl):
+def node_sets(ids, cyl, refine):
     """The named node sets of the mesh, and the (left, right) node pairs of the cyclic faces
     (same grid indices r and z: same r and z)."""
     jmax = max(j for (_, j, _) in ids)
-    plat = 2 * (len(R_DISK) - 1)                      # half index of r = 0.200
+    plat = 2 * refine * (len(R_DISK) - 1)             # half index of r = 0.200
 
     def face(j):
         """The nodes of the platform edge face at theta line half index j."""
@@ -150,11 +190,12 @@ def node_sets(ids, cyl):
     sets = {"HUB": [n for (i, _, _), n in sorted(ids.items()) if i == 0],
             "LEFT": [n for (i, j, _), n in sorted(ids.items()) if j == 0 and i > 0],
             "RIGHT": [n for (i, j, _), n in sorted(ids.items()) if j == jmax and i > 0],
-            "LPLAT": face(2), "RPLAT": face(jmax - 2)}
+            "LPLAT": face(2 * refine), "RPLAT": face(jmax - 2 * refine)}
     pairs = [(n, ids[(i, jmax, k)]) for (i, j, k), n in sorted(ids.items())
              if j == 0 and i > 0]
     imax = max(i for (i, _, _) in ids)
-    drive = ids[(imax - 2, jmax // 2 + 1, max(k for (_, _, k) in ids) // 2)]
+    # one coarse element below the tip, on the blade's face theta = +HALF_BLADE / r, z = 0
+    drive = ids[(imax - 2 * refine, 8 * refine, max(k for (_, _, k) in ids) // 2)]
     sets["DRIVE"] = [drive]
     for (a, b) in pairs:
         (ra, _, za), (rb, _, zb) = cyl[a], cyl[b]
@@ -185,7 +226,7 @@ def write_mesh(path, cyl, elements, sets, refs):
         # the platforms' reference nodes (translations) and rotation nodes (their
         # translations are the rotations), on the sector's edges
         f.write("*NODE\n")
-        for n in (LREF_NODE, LROT_NODE, RREF_NODE, RROT_NODE):
+        for n in refs:
             x, y, z = cartesian(*refs[n])
             f.write(f"{n}, {x:.12g}, {y:.12g}, {z:.12g}\n")
         for name, members in sets.items():
@@ -247,6 +288,12 @@ def cyclic_frequencies(dat):
     return rows
 
 
+def from_root(path):
+    """path relative to the project's root when it is inside it, else absolute."""
+    rel = os.path.relpath(os.path.abspath(path), ROOT)
+    return os.path.abspath(path) if rel.startswith("..") else rel
+
+
 def namelist_list(name, values, indent=2):
     """`name = v1, v2, ...` broken over lines under 100 characters (a namelist list)."""
     lines, line = [], " " * indent + f"{name} = "
@@ -260,15 +307,23 @@ def namelist_list(name, values, indent=2):
     return "\n".join(lines)
 
 
-def write_case(path, dofs, cyclic, contact, drive, modes):
+def write_case(path, dofs, cyclic, contact, drive, modes, refine, ref):
     """case.nml: the sector's forced response in engine order 3 across its axial family at
     nodal diameter 3 (the second distinct frequency of CalculiX's diameter 3; the first, the
     blades' tangential bending, leaves the platforms' z still: see the case's comment), the
-    platforms rubbing axially. cyclic = (left_dofs, right_dofs), contact = (contact_dof,
-    next_dof), drive = the driven node's axial DOF."""
+    platforms rubbing axially, each cyclic face by 12 interface modes. cyclic = (left_dofs,
+    right_dofs), contact = (contact_dof, next_dof), drive = the driven node's axial DOF,
+    refine the mesh's (1: the example; otherwise the results go to out/calculix_sector_rK),
+    ref the platforms' reference_nodes."""
     nd3 = sorted({float(m[2]) for m in modes if m[0] == ENGINE_ORDER})
     first, omega = nd3[0], nd3[1]
     alpha = 2.0 * ZETA * omega
+
+    face = len(cyclic[0])
+    size = (f"{dofs} DOFs is below the\n! 2000 at which 'auto' reduces" if dofs < 2000 else
+            f"'auto' would choose it too at\n! {dofs} DOFs")
+    mesh = "" if refine == 1 else f", each cell of the example's\n! mesh split in {refine}^3"
+    out = "out/calculix_sector" + ("" if refine == 1 else f"_r{refine}")
 
     def line(text, comment):
         """A namelist line with its comment from column 37, as ../calculix_beam/case.nml."""
@@ -277,7 +332,7 @@ def write_case(path, dofs, cyclic, contact, drive, modes):
     with open(path, "w") as f:
         f.write(f"""\
 ! One sector of a tuned bladed disk of {SECTORS} sectors exported from CalculiX (make_sector.py:
-! steel disk, platforms and a blade, C3D20R, {dofs} DOFs, SI units), every DOF in its node's
+! steel disk, platforms and a blade, C3D20R, {dofs} DOFs, SI units{mesh}), every DOF in its node's
 ! cylindrical frame (r, theta, z). The right platform's rigid edge rubs axially (z) on the
 ! left platform of the next sector, at the sectors' common edge. Forced in engine order
 ! {ENGINE_ORDER} near the blade tip, axially: swept across the axial (out-of-plane) family of nodal
@@ -286,13 +341,14 @@ def write_case(path, dofs, cyclic, contact, drive, modes):
 ! Not the first family ({first:.1f} rad/s, the blades bending tangentially): the sector is
 ! symmetric about z = 0 and that family moves in-plane, so the platforms' z stays exactly
 ! still (the contact sticks with zero force); its platforms' r and theta move 5e-5 of the tip.
-! The reduction (Craig-Bampton, &reduction method = 'craig-bampton': {dofs} DOFs is below the
-! 2000 at which 'auto' reduces) keeps the cyclic faces, the contact, its partner and the
-! drive as boundary DOFs; summary.nml reports its error per nodal diameter the harmonics
-! reach (reduction_error_nd3, _nd9). normal_load: in CalculiX's mode the platforms'
-! relative z motion is 0.8 % of the drive's, so an energy balance puts lock-up near mu N =
-! 100 N per N of drive; with mu N = 30 N the platforms stick over part of the period.
-! Run: fpm run -- examples/calculix_sector/case.nml   (writes out/calculix_sector/)
+! The reduction (Craig-Bampton, &reduction method = 'craig-bampton': {size}) keeps the cyclic faces, the contact, its partner and the
+! drive as boundary DOFs, then describes each face by 12 interface modes (the faces' motion
+! in the sector's cyclic modes; doc/cyclic.md); summary.nml reports its error per nodal
+! diameter the harmonics reach (reduction_error_nd3, _nd9) against the full sector.
+! normal_load: in CalculiX's mode the platforms' relative z motion is 0.8 % of the drive's,
+! so an energy balance puts lock-up near mu N = 100 N per N of drive; with mu N = 30 N the
+! platforms stick over part of the period.
+! Run: fpm run -- {from_root(path)}   (writes {out}/)
 &system
 """)
         f.write(line("mass_file = 'mass.mtx'", "kg; relative paths: from this file's folder"))
@@ -304,18 +360,21 @@ def write_case(path, dofs, cyclic, contact, drive, modes):
         f.write(line(f"force_dof = {drive}", "blade surface near the tip, mid-chord, z: dofs.csv"))
         f.write(line("force_amplitude = 1.0", "N"))
         f.write("/\n&friction\n")
-        f.write(line(f"contact_dof = {contact[0]}", f"node {RREF_NODE} (right platform's edge), z"))
+        f.write(line(f"contact_dof = {contact[0]}", f"node {ref[2]} (right platform's edge), z"))
         f.write("  mu = 0.3\n")
         f.write(line("normal_load = 100.0", "N: mu N = 30 N"))
         f.write("/\n! left_dofs, right_dofs: the disk's cyclic faces without the hub line, node by "
                 "node (r, theta, z)\n")
         f.write(f"&cyclic\n  sectors = {SECTORS}\n  engine_order = {ENGINE_ORDER}\n")
-        f.write(line(f"next_dof = {contact[1]}", f"node {LREF_NODE} (left platform's edge) of "
+        f.write(line(f"next_dof = {contact[1]}", f"node {ref[0]} (left platform's edge) of "
                      "sector s + 1, z"))
         f.write(namelist_list("left_dofs", cyclic[0]) + "\n")
         f.write(namelist_list("right_dofs", cyclic[1]) + "\n")
-        f.write("/\n&reduction method = 'craig-bampton' /  ! keeps the cyclic faces, the contact "
-                "and the drive\n")
+        f.write("/\n&reduction\n")
+        f.write(line("method = 'craig-bampton'", "keeps the contact, the drive and the cyclic "
+                     "faces,"))
+        f.write(line("interface_modes = 12", f"each face ({face} DOFs) by 12 interface modes"))
+        f.write("/\n")
         f.write("&hbm\n  harmonics = 15\n")
         f.write(line("odd_only = T", "no static load: half-wave symmetric response"))
         f.write(line("samples = 384", f"a multiple of {SECTORS}: the sector is exact "
@@ -325,26 +384,67 @@ def write_case(path, dofs, cyclic, contact, drive, modes):
         f.write(line(f"max_step = {omega / 500:.1f}", "rad/s: about 100 points"))
         f.write(line("stability = F", f"the whole disk's Floquet multipliers: {SECTORS} x "
                      f"{dofs} DOFs"))
-        f.write("/\n&output\n  directory = 'out/calculix_sector'\n")
+        f.write(f"/\n&output\n  directory = '{out}'\n")
         f.write(line(f"dofs = {contact[0]}, {contact[1]}, {drive}",
                      "the contact, its partner, the drive"))
         f.write("/\n")
 
 
+def arguments():
+    """The command line: (refine, output folder)."""
+    parser = argparse.ArgumentParser(description="Mesh one sector of a bladed disk, export "
+                                     "its matrices with CalculiX, write a stickslip case.")
+    parser.add_argument("--refine", type=int, default=1, metavar="K",
+                        help="split every cell of the grid into K^3 (default 1)")
+    parser.add_argument("--out", default=HERE, metavar="DIR",
+                        help="folder for the files (default: this script's)")
+    args = parser.parse_args()
+    if args.refine < 1:
+        parser.error(f"--refine {args.refine}: K must be at least 1")
+    if args.refine > 1 and os.path.abspath(args.out) == HERE:
+        parser.error("--refine K > 1 needs --out DIR: this folder holds the example")
+    return args.refine, os.path.abspath(args.out)
+
+
+def prepare_decks(out, refine, ref):
+    """Copy the two CalculiX decks to out (when it is not this folder) with the platforms'
+    reference nodes ref; with refine > 1 the modes deck asks for the engine order's nodal
+    diameter only."""
+    for deck in ("sector_matrices.inp", "sector_modes.inp"):
+        with open(os.path.join(HERE, deck)) as f:
+            text = f.read()
+        edits = [(f"REF NODE={9001 + 2 * side}, ROT NODE={9002 + 2 * side}",
+                  f"REF NODE={ref[2 * side]}, ROT NODE={ref[2 * side + 1]}") for side in (0, 1)]
+        if refine > 1 and deck == "sector_modes.inp":
+            edits.append(("NMIN=0, NMAX=12", f"NMIN={ENGINE_ORDER}, NMAX={ENGINE_ORDER}"))
+        for (old, new) in edits:
+            if text.count(old) != 1:
+                sys.exit(f"make_sector.py: {deck}: expected one '{old}'")
+            text = text.replace(old, new)
+        target = os.path.join(out, deck)
+        if os.path.abspath(target) != os.path.join(HERE, deck):
+            with open(target, "w") as f:
+                f.write(text)
+
+
 def main():
     """Mesh, run ccx, rotate and check the matrices, write the files, print the figures."""
     start = time.time()
-    ids, cyl, elements = mesh()
-    sets, pairs, drive = node_sets(ids, cyl)
-    refs = {LREF_NODE: (R_REF, -EDGE, 0.0), LROT_NODE: (R_REF, -EDGE, 0.0),
-            RREF_NODE: (R_REF, EDGE, 0.0), RROT_NODE: (R_REF, EDGE, 0.0)}
+    refine, out = arguments()
+    os.makedirs(out, exist_ok=True)
+    ids, cyl, elements = mesh(refine)
+    sets, pairs, drive = node_sets(ids, cyl, refine)
+    ref = reference_nodes(len(cyl))
+    prepare_decks(out, refine, ref)
+    refs = {ref[0]: (R_REF, -EDGE, 0.0), ref[1]: (R_REF, -EDGE, 0.0),
+            ref[2]: (R_REF, EDGE, 0.0), ref[3]: (R_REF, EDGE, 0.0)}
     cyl.update(refs)
-    write_mesh(os.path.join(HERE, "sector_mesh.inp"), cyl, elements, sets, refs)
+    write_mesh(os.path.join(out, "sector_mesh.inp"), cyl, elements, sets, refs)
     angle = {n: cyl[n][1] for n in cyl}
     one_core = dict(os.environ, OMP_NUM_THREADS="1")   # ccx on one core
     with tempfile.TemporaryDirectory(prefix="ccx_") as work:
         for job in ("sector_matrices", "sector_modes"):
-            make_model.run_ccx(job, work, HERE, "sector_mesh.inp", one_core, "make_sector.py")
+            make_model.run_ccx(job, work, out, "sector_mesh.inp", one_core, "make_sector.py")
         with open(os.path.join(work, "sector_matrices.dof")) as f:
             rows = [tuple(map(int, line.split("."))) for line in f.read().split()]
         dofs = len(rows)
@@ -364,7 +464,7 @@ def main():
     for name, unit, file in (("K", "stiffness K [N/m]", "stiffness.mtx"),
                              ("M", "mass M [kg]", "mass.mtx")):
         nnz[name] = make_model.write_triangle(
-            os.path.join(HERE, file),
+            os.path.join(out, file),
             [(i, j, v, f"{v:.15g}") for (i, j), v in cylm[name].items()], dofs,
             f"{unit} of the CalculiX model sector_matrices.inp (*FREQUENCY, "
             "SOLVER=MATRIXSTORAGE),\nturned into the nodes' cylindrical frames (r, theta, z) "
@@ -378,7 +478,7 @@ def main():
             after = sum(cylm[name][(row_of[(n, d)],) * 2] for d in (1, 2, 3))
             trace = max(trace, abs(after - before) / abs(before))
     node_pairs = [(a, b) for (a, b) in pairs if (a, 1) in row_of]
-    mirrored = node_pairs + [(LREF_NODE, RREF_NODE), (LROT_NODE, RROT_NODE)]
+    mirrored = node_pairs + [(ref[0], ref[2]), (ref[1], ref[3])]
     for name in cylm:
         for (a, b) in mirrored:
             for d in (1, 2, 3):
@@ -388,30 +488,30 @@ def main():
         sys.exit(f"make_sector.py: check failed: paired diagonals {match}, trace {trace:.2e}")
     left = [row_of[(a, d)] for (a, _) in node_pairs for d in (1, 2, 3)]
     right = [row_of[(b, d)] for (_, b) in node_pairs for d in (1, 2, 3)]
-    with open(os.path.join(HERE, "dofs.csv"), "w") as f:
+    with open(os.path.join(out, "dofs.csv"), "w") as f:
         f.write("row,node,direction,x,y,z\n")
         for row, (n, d) in enumerate(rows, start=1):
             x, y, z = cartesian(*cyl[n])
             f.write(f"{row},{n},{d},{x:.10g},{y:.10g},{z:.10g}\n")
-    with open(os.path.join(HERE, "calculix_frequencies.txt"), "w") as f:
+    with open(os.path.join(out, "calculix_frequencies.txt"), "w") as f:
         f.write("# natural frequencies of the bladed disk, sector_modes.inp (*CYCLIC SYMMETRY "
                 f"MODEL, N={SECTORS}),\n# from CalculiX's sector_modes.dat (the digits it "
                 "prints; a diameter 1..11 mode comes twice)\n# nd  mode  omega [rad/s]  f [Hz]\n")
         for (nd, mode, omega, hz) in modes:
             f.write(f"{nd} {mode} {omega} {hz}\n")
-    contact, nxt = row_of[(RREF_NODE, 3)], row_of[(LREF_NODE, 3)]
-    write_case(os.path.join(HERE, "case.nml"), dofs, (left, right), (contact, nxt),
-               row_of[(drive, 3)], modes)
+    contact, nxt = row_of[(ref[2], 3)], row_of[(ref[0], 3)]
+    write_case(os.path.join(out, "case.nml"), dofs, (left, right), (contact, nxt),
+               row_of[(drive, 3)], modes, refine, ref)
     print(f"{len(cyl) - 4} nodes and 4 reference nodes, {len(elements)} C3D20R elements, "
           f"{dofs} DOFs (K: {nnz['K']} entries, M: {nnz['M']} entries in one triangle)")
     print(f"cyclic boundary: {len(node_pairs)} node pairs, {len(left)} DOF pairs")
     print(f"largest relative mismatch of the paired (and mirrored) diagonals: K {match['K']:.2e}, "
           f"M {match['M']:.2e}; of a node block's trace after the rotation: {trace:.2e}")
-    for n, what in ((LREF_NODE, "left platform's reference"), (LROT_NODE, "its rotation"),
-                    (RREF_NODE, "right platform's reference"), (RROT_NODE, "its rotation")):
+    for n, what in zip(ref, ("left platform's reference", "its rotation",
+                             "right platform's reference", "its rotation")):
         print(f"node {n} ({what}): r, theta, z -> DOFs "
               + ", ".join(str(row_of[(n, d)]) for d in (1, 2, 3)))
-    print(f"contact: DOF {contact} (node {RREF_NODE}, z), next_dof {nxt} (node {LREF_NODE}, z)")
+    print(f"contact: DOF {contact} (node {ref[2]}, z), next_dof {nxt} (node {ref[0]}, z)")
     print(f"drive:   node {drive} (r = {cyl[drive][0]:g} m, z = 0): theta -> DOF "
           f"{row_of[(drive, 2)]}, z -> DOF {row_of[(drive, 3)]} (case.nml)")
     for nd in sorted({m[0] for m in modes}):

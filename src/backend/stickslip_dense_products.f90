@@ -8,7 +8,7 @@ module stickslip_dense_products
     use stickslip_lapack, only: dgemm, dgemv, zgemm, zgemv
     implicit none
     private
-    public :: mat_mul, mat_vec, cmat_mul
+    public :: mat_mul, mat_tmul, mat_vec, cmat_mul
 
     !> Below this many multiply-adds (m n k; (m n)^(3/2) for a matrix-vector product) the
     !> intrinsic matmul is used: the call into BLAS costs more than it saves on the small
@@ -42,6 +42,30 @@ contains
         end if
         call dgemm('N', 'N', m, n, k, 1.0_dp, a, m, b, k, 0.0_dp, c, m)
     end function mat_mul
+
+    !> c = a^T b (a: k x m, b: k x n) by dgemm, without forming a^T: the projections of
+    !> a reduction (T^T (A T) over the long dimension k of a FE model's DOFs), where the
+    !> intrinsic matmul of a transpose ran at a tenth of BLAS's speed. No error: the shapes
+    !> must agree (size(a, 1) = size(b, 1); the caller's arrays).
+    function mat_tmul(a, b) result(c)
+        !> Left factor (transposed in the product) and right factor.
+        real(dp), intent(in) :: a(:, :), b(:, :)
+        real(dp) :: c(size(a, 2), size(b, 2))
+        integer :: m, n, k
+        m = size(a, 2)
+        n = size(b, 2)
+        k = size(a, 1)
+        if (m == 0 .or. n == 0) return
+        if (k == 0) then
+            c = 0.0_dp
+            return
+        end if
+        if (real(m, dp)*real(n, dp)*real(k, dp) < small_product) then
+            c = matmul(transpose(a), b)
+            return
+        end if
+        call dgemm('T', 'N', m, n, k, 1.0_dp, a, k, b, k, 0.0_dp, c, m)
+    end function mat_tmul
 
     !> y = a x (a: m x n, x: n) by dgemv.
     function mat_vec(a, x) result(y)

@@ -7,7 +7,7 @@ module stickslip_lapack
     private
     public :: dpotrf, dpotrs, dgetrf, dgetrs, dgecon, dlange, dgeqrf, dorgqr, zgeqrf, zungqr, &
         zgetrf, zgetrs, zgemm, zgecon, zlange, dgeev, dgesv, zgesv, dsygv, dsyev, sgetrf, sgetrs, &
-        dgemm, dgemv, zgemv, zhegv, dgelss
+        dgemm, dgemv, zgemv, zhegv, zhegvd, dgelss
 
     interface
         !> Cholesky factorization of a real symmetric positive definite matrix.
@@ -208,6 +208,23 @@ module stickslip_lapack
             real(dp), intent(out) :: rwork(*)
             integer, intent(out) :: info
         end subroutine zhegv
+        !> zhegv by divide and conquer (much faster with the eigenvectors of a large
+        !> pencil): the same problem and results; workspaces work (lwork), rwork (lrwork) and
+        !> iwork (liwork), their sizes returned by a query with lwork = lrwork = liwork = -1.
+        subroutine zhegvd(itype, jobz, uplo, n, a, lda, b, ldb, w, work, lwork, rwork, lrwork, &
+                          iwork, liwork, info)
+            import :: dp
+            integer, intent(in) :: itype
+            character(len=1), intent(in) :: jobz, uplo
+            integer, intent(in) :: n, lda, ldb, lwork, lrwork, liwork
+            complex(dp), intent(inout) :: a(lda, *)
+            complex(dp), intent(inout) :: b(ldb, *)
+            real(dp), intent(out) :: w(*)
+            complex(dp), intent(out) :: work(*)
+            real(dp), intent(out) :: rwork(*)
+            integer, intent(out) :: iwork(*)
+            integer, intent(out) :: info
+        end subroutine zhegvd
         !> LU factorization of a general single-precision matrix with partial pivoting.
         subroutine sgetrf(m, n, a, lda, ipiv, info)
             import :: sp

@@ -26,7 +26,7 @@ module stickslip_cyclic
     use stickslip_model, only: model_t, force_direction, contact_velocity_direction, &
         contact_normal_direction, contact_tangent2_direction, is_unilateral, is_planar, &
         preload_force
-    use stickslip_lapack, only: zhegv
+    use stickslip_lapack, only: zhegv, zhegvd
     use stickslip_contact_set, only: contact_set_t, channel_directions
     use stickslip_contact_element, only: along_tangent, along_normal, along_tangent2
     implicit none
@@ -34,7 +34,7 @@ module stickslip_cyclic
     public :: cyclic_t, cyclic_modes_t, validate_cyclic, nodal_diameter, disk_dof, assemble_disk, &
         conjugate_shapes, cyclic_frequencies, sector_phase, channel_displacements, next_of, &
         cyclic_basis, structure_key, disk_dof_table, channel_next_dofs, cyclic_directions, &
-        cyclic_preload_force, phased_copies, hermitian_pencil, cyclic_pencil
+        cyclic_preload_force, phased_copies, hermitian_pencil, cyclic_pencil, cyclic_projection
 
     !> Most sectors of a disk.
     integer, parameter, public :: max_sectors = 1000
@@ -601,9 +601,50 @@ contains
         complex(dp) :: e
         e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
         t = cyclic_basis(cyc, sector%ndof, e)
-        kc = matmul(conjg(transpose(t)), matmul(cmplx(sector%stiffness, 0.0_dp, dp), t))
-        mc = matmul(conjg(transpose(t)), matmul(cmplx(sector%mass, 0.0_dp, dp), t))
+        kc = cyclic_projection(sector%stiffness, cyc, e)
+        mc = cyclic_projection(sector%mass, cyc, e)
     end subroutine cyclic_pencil
+
+    !> t^H A t for t = cyclic_basis(cyc, n, e) (A real, n x n; the result m x m, m = n -
+    !> the right boundary DOFs), from A's columns and rows: column j of t is 1 on its DOF
+    !> and e on that DOF's right partner when it is a left boundary DOF, so the product
+    !> costs n m operations instead of a dense product's n^2 m (a reduced FE sector of a
+    !> thousand DOFs, projected on every nodal diameter). No errors.
+    pure function cyclic_projection(a, cyc, e) result(r)
+        !> The sector's matrix.
+        real(dp), intent(in) :: a(:, :)
+        !> The symmetry.
+        type(cyclic_t), intent(in) :: cyc
+        !> The phase factor of the right boundary.
+        complex(dp), intent(in) :: e
+        complex(dp), allocatable :: r(:, :)
+        complex(dp), allocatable :: at(:, :)
+        integer, allocatable :: dof(:), partner(:)
+        integer :: n, m, j, k
+        n = size(a, 1)
+        m = n - size(cyc%right)
+        allocate (dof(m), partner(m), at(n, m), r(m, m))
+        partner = 0
+        j = 0
+        do k = 1, n
+            if (any(cyc%right == k)) cycle
+            j = j + 1
+            dof(j) = k
+        end do
+        do k = 1, size(cyc%left)
+            j = findloc(dof, cyc%left(k), 1)
+            partner(j) = cyc%right(k)
+        end do
+        ! A t, column by column; then t^H (A t), row by row
+        do j = 1, m
+            at(:, j) = cmplx(a(:, dof(j)), 0.0_dp, dp)
+            if (partner(j) > 0) at(:, j) = at(:, j) + e*a(:, partner(j))
+        end do
+        do j = 1, m
+            r(j, :) = at(dof(j), :)
+            if (partner(j) > 0) r(j, :) = r(j, :) + conjg(e)*at(partner(j), :)
+        end do
+    end function cyclic_projection
 
     !> The Hermitian-definite pencil A v = lambda B v (LAPACK zhegv with its workspace query):
     !> `w` the eigenvalues, increasing; with `vectors` A holds the B-orthonormal eigenvectors
@@ -623,14 +664,26 @@ contains
         complex(dp), allocatable :: work(:)
         complex(dp) :: query(1)
         real(dp), allocatable :: rwork(:)
-        character(len=1) :: jobz
-        integer :: n
+        real(dp) :: rquery(1)
+        integer, allocatable :: iwork(:)
+        integer :: n, iquery(1)
         n = size(a, 1)
-        jobz = merge('V', 'N', vectors)
-        allocate (w(n), rwork(max(1, 3*n - 2)))
-        call zhegv(1, jobz, 'U', n, a, n, b, n, w, query, -1, rwork, info)
-        allocate (work(max(1, int(real(query(1), dp)), 2*n)))
-        call zhegv(1, jobz, 'U', n, a, n, b, n, w, work, size(work), rwork, info)
+        allocate (w(n))
+        if (vectors) then
+            ! divide and conquer: the eigenvectors of a reduced FE sector's pencil (a
+            ! thousand DOFs) in a fraction of the QR iteration's time
+            call zhegvd(1, 'V', 'U', n, a, n, b, n, w, query, -1, rquery, -1, iquery, -1, info)
+            if (info /= 0) return
+            allocate (work(max(1, int(real(query(1), dp)))), &
+                      rwork(max(1, int(rquery(1)))), iwork(max(1, iquery(1))))
+            call zhegvd(1, 'V', 'U', n, a, n, b, n, w, work, size(work), rwork, size(rwork), &
+                        iwork, size(iwork), info)
+        else
+            allocate (rwork(max(1, 3*n - 2)))
+            call zhegv(1, 'N', 'U', n, a, n, b, n, w, query, -1, rwork, info)
+            allocate (work(max(1, int(real(query(1), dp)), 2*n)))
+            call zhegv(1, 'N', 'U', n, a, n, b, n, w, work, size(work), rwork, info)
+        end if
     end subroutine hermitian_pencil
 
     !> The undamped natural frequencies [rad/s], increasing, of the sector's structure (M and

@@ -12,11 +12,11 @@
 !> so the conjugate shapes) or nd = N - p; only the diameters the harmonics 0..hmax reach
 !> are prepared.
 module stickslip_cyclic_modal
-    use stickslip_kinds, only: dp
+    use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat
     use stickslip_model, only: model_t
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, cyclic_pencil, nodal_diameter, &
-        structure_key, hermitian_pencil
+        structure_key, hermitian_pencil, cyclic_projection
     use stickslip_dynamics, only: smallest_singular
     implicit none
     private
@@ -73,7 +73,8 @@ contains
         do nd = 0, cyc%sectors/2
             if (.not. wanted(nd)) cycle
             call cyclic_pencil(model, cyc, nd, t, kc, mc)
-            cc = matmul(conjg(transpose(t)), matmul(cmplx(model%damping, 0.0_dp, dp), t))
+            cc = cyclic_projection(model%damping, cyc, exp(cmplx(0.0_dp, two_pi*real(nd, dp)/ &
+                                                                real(cyc%sectors, dp), dp)))
             call hermitian_pencil(kc, mc, w, .true., info)
             if (info /= 0) then
                 ok = .false.

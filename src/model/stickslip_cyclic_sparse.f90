@@ -6,8 +6,8 @@
 !> nd / N) (stickslip_cyclic). The projected pencil K_c = T^H K T, M_c = T^H M T is
 !> Hermitian; written in real arithmetic, H = A + i B acting on (Re q, Im q) is the real
 !> symmetric [A -B; B A] of order 2 m, whose eigenvalues are K_c's, each twice (q and i q).
-!> The existing sparse shift-invert block Lanczos (CHOLMOD) solves it; the block handles
-!> the double eigenvalues. The full disk is N copies of the sector with the boundaries
+!> The sparse shift-invert block Lanczos on its Cholesky factor (CHOLMOD) solves it; the
+!> block handles the double eigenvalues. The full disk is N copies of the sector with the boundaries
 !> merged (disk_dof), each nodal diameter 1 .. N/2 - 1 a double eigenvalue there.
 module stickslip_cyclic_sparse
     use stickslip_kinds, only: dp, two_pi
@@ -15,6 +15,8 @@ module stickslip_cyclic_sparse
     use stickslip_sparse, only: sparse_matrix_t, new_sparse_from_triplets
     use stickslip_arpack, only: eigen_options_t, eigen_report_t
     use stickslip_sparse_eigen, only: sparse_eigenpairs
+    use stickslip_sparse_factor, only: sparse_factor_t
+    use stickslip_stiffness_factor, only: factorize_stiffness
     use stickslip_model, only: model_t
     use stickslip_cyclic, only: cyclic_t, disk_dof_table, cyclic_frequencies
     implicit none
@@ -40,6 +42,7 @@ contains
         type(error_type), allocatable, intent(out) :: error
         type(sparse_matrix_t) :: kr, mr
         type(eigen_report_t) :: report
+        class(sparse_factor_t), allocatable :: fac
         real(dp), allocatable :: values(:), vectors(:, :)
         integer :: n, m
         complex(dp) :: e
@@ -60,10 +63,16 @@ contains
         if (allocated(error)) return
         call realified(mmat, mr, error)
         if (allocated(error)) return
-        ! full storage, symmetric: the CSR arrays are the CSC ones
-        call sparse_eigenpairs(2*m, kr%row_start, kr%col, kr%val, mr%row_start, mr%col, &
-                               mr%val, 2*count, 0.0_dp, eigen_options_t(), values, vectors, &
-                               report, error)
+        ! full storage, symmetric: the CSR arrays are the CSC ones. The real form of a
+        ! positive definite K_c is: its Cholesky factor (supernodal on a FE sector) lets the
+        ! block Lanczos read it once per block of solves (an LU where it is not)
+        call factorize_stiffness(2*m, kr%row_start, kr%col, kr%val, fac, error)
+        if (.not. allocated(error)) then
+            call sparse_eigenpairs(2*m, kr%row_start, kr%col, kr%val, mr%row_start, mr%col, &
+                                   mr%val, 2*count, 0.0_dp, eigen_options_t(), values, &
+                                   vectors, report, error, factorization=fac)
+        end if
+        if (allocated(fac)) call fac%release()
         if (allocated(error)) then
             error%message = "cyclic frequencies, nodal diameter "//itoa(nd)//": "// &
                             error%message

@@ -60,6 +60,7 @@ module stickslip_reduction
     use stickslip_sparse_eigen, only: sparse_eigenpairs, sparse_eigenpairs_below, &
         eigen_range_report_t
     use stickslip_lapack, only: dsygv
+    use stickslip_dense_products, only: mat_tmul
     use stickslip_reduced_model, only: reduced_model_t, recover_dofs, reduced_dof_of, &
         reduce_vectors
     use stickslip_reduction_error, only: receptance_error
@@ -606,7 +607,7 @@ contains
             real(dp), allocatable, intent(out) :: r(:, :)
             allocate (at(n, nr))
             call sparse_times_block(a, t, at)
-            r = matmul(transpose(t), at)
+            r = mat_tmul(t, at)
             r = 0.5_dp*(r + transpose(r))
             deallocate (at)
         end subroutine project

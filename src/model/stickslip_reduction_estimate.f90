@@ -39,6 +39,7 @@ module stickslip_reduction_estimate
     use stickslip_sparse_factor, only: sparse_factor_t
     use stickslip_stiffness_factor, only: factorize_stiffness
     use stickslip_lapack, only: zgesv
+    use stickslip_dense_products, only: mat_tmul
     use stickslip_reduced_model, only: reduced_model_t
     use stickslip_reduction_error, only: receptance_error
     use stickslip_progress, only: progress_t
@@ -115,7 +116,7 @@ contains
         type(progress_t), intent(inout), optional :: progress
         class(sparse_factor_t), allocatable :: own_lu
         integer(int64) :: t0, t1, rate
-        integer :: n, nb, ni, nr, nc, nf, level, f, k, nv, nlev
+        integer :: n, nb, ni, nr, nc, nf, level, f, k, nv, nlev, nold
         integer, allocatable :: loc(:)
         logical :: damped, with_c, accepted
         real(dp), allocatable :: wb(:, :), v(:, :), newv(:, :), mv(:, :), cv(:, :)
@@ -217,10 +218,14 @@ contains
         if (reduced%nl > 0) base = reshape([base, reduced%loads], [ni, size(base, 2) + reduced%nl])
         call interior_products(mmat, base, mbase)
         allocate (v(ni, 0), ef(nf, estimate_max_levels))
+        nv = 0
         ef = 0.0_dp
         accepted = .false.
         nlev = 0
         last_change = 0.0_dp
+        kz = kred
+        mz = mred
+        if (damped) cz = cred
         do level = 1, estimate_max_levels
             call interior_solves(seeds, newv)
             if (allocated(error)) return
@@ -233,13 +238,14 @@ contains
                 base = reshape([base, newv], [ni, size(base, 2) + size(newv, 2)])
                 mbase = reshape([mbase, mv], [ni, size(mbase, 2) + size(mv, 2)])
             end if
+            nold = nv
             nv = size(v, 2)
             estimate%vectors = nv
-            ! the enriched Galerkin matrices [T V]^T A [T V]
-            call enriched(kmat, kred, kz)
-            call enriched(mmat, mred, mz)
+            ! the enriched Galerkin matrices [T V]^T A [T V], the last level's extended
+            call enriched(kmat, kz)
+            call enriched(mmat, mz)
             if (damped) then
-                call enriched(cmat, cred, cz)
+                call enriched(cmat, cz)
             else
                 if (allocated(cz)) deallocate (cz)
                 allocate (cz(nr + nv, nr + nv))
@@ -449,31 +455,39 @@ contains
                                   error)
         end subroutine orthonormalize
 
-        !> [T V]^T A [T V], (nr + nv)^2, from T^T A T (`tat`) and the enrichment vectors v
-        !> (interior only): T^T A V = [ (AV)_b + Phi_c^T (AV)_i ; Phi_n^T (AV)_i ;
-        !> Psi^T (AV)_i ], V^T A V = V^T (AV)_i.
-        subroutine enriched(a, tat, r)
+        !> [T V]^T A [T V], (nr + nv)^2, from the last level's (r on entry, (nr + nold)^2:
+        !> T^T A T at the first) and the enrichment vectors v (interior only), of which the
+        !> columns after nold are new: only their products are formed, T^T A V_new = [ (A
+        !> V_new)_b + Phi_c^T (A V_new)_i ; Phi_n^T (A V_new)_i ; Psi^T (A V_new)_i ] and
+        !> V^T A V_new = V^T (A V_new)_i, with their transposes (A symmetric).
+        subroutine enriched(a, r)
             type(sparse_matrix_t), intent(in) :: a
-            real(dp), intent(in) :: tat(:, :)
-            real(dp), allocatable, intent(out) :: r(:, :)
-            real(dp), allocatable :: av(:, :), tav(:, :), vf(:, :)
-            allocate (r(nr + nv, nr + nv), av(n, nv), tav(nr, nv))
-            r(1:nr, 1:nr) = tat
-            if (nv == 0) return
-            allocate (vf(n, nv))
+            real(dp), allocatable, intent(inout) :: r(:, :)
+            real(dp), allocatable :: av(:, :), tav(:, :), vf(:, :), avi(:, :), old(:, :), &
+                                     vav(:, :)
+            integer :: nnew, lo
+            nnew = nv - nold
+            if (nnew == 0) return
+            lo = nr + nold + 1
+            call move_alloc(r, old)
+            allocate (r(nr + nv, nr + nv), av(n, nnew), tav(nr, nnew))
+            r(1:nr + nold, 1:nr + nold) = old
+            deallocate (old)
+            allocate (vf(n, nnew))
             vf = 0.0_dp
-            vf(reduced%interior, :) = v
+            vf(reduced%interior, :) = v(:, nold + 1:nv)
             call sparse_times_block(a, vf, av)
-            tav(1:nb, :) = av(reduced%boundary, :) + &
-                           matmul(transpose(reduced%constraint), av(reduced%interior, :))
-            if (reduced%nm > 0) tav(nb + 1:nb + reduced%nm, :) = &
-                matmul(transpose(reduced%modes), av(reduced%interior, :))
-            if (reduced%nl > 0) tav(nb + reduced%nm + 1:nr, :) = &
-                matmul(transpose(reduced%loads), av(reduced%interior, :))
-            r(1:nr, nr + 1:) = tav
-            r(nr + 1:, 1:nr) = transpose(tav)
-            r(nr + 1:, nr + 1:) = matmul(transpose(v), av(reduced%interior, :))
-            r(nr + 1:, nr + 1:) = 0.5_dp*(r(nr + 1:, nr + 1:) + transpose(r(nr + 1:, nr + 1:)))
+            deallocate (vf)
+            avi = av(reduced%interior, :)
+            tav(1:nb, :) = av(reduced%boundary, :) + mat_tmul(reduced%constraint, avi)
+            if (reduced%nm > 0) tav(nb + 1:nb + reduced%nm, :) = mat_tmul(reduced%modes, avi)
+            if (reduced%nl > 0) tav(nb + reduced%nm + 1:nr, :) = mat_tmul(reduced%loads, avi)
+            r(1:nr, lo:) = tav
+            r(lo:, 1:nr) = transpose(tav)
+            vav = mat_tmul(v, avi)
+            r(nr + 1:, lo:) = vav
+            r(lo:, nr + 1:) = transpose(vav)
+            r(lo:, lo:) = 0.5_dp*(vav(nold + 1:, :) + transpose(vav(nold + 1:, :)))
         end subroutine enriched
 
         !> The receptance W_b^T Z^-1 W_b (n_c x n_c) of the dense model (k, m, c) of order

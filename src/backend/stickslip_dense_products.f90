@@ -27,20 +27,7 @@ contains
         !> Left and right factors.
         real(dp), intent(in) :: a(:, :), b(:, :)
         real(dp) :: c(size(a, 1), size(b, 2))
-        integer :: m, n, k
-        m = size(a, 1)
-        n = size(b, 2)
-        k = size(a, 2)
-        if (m == 0 .or. n == 0) return
-        if (k == 0) then
-            c = 0.0_dp
-            return
-        end if
-        if (real(m, dp)*real(n, dp)*real(k, dp) < small_product) then
-            c = matmul(a, b)
-            return
-        end if
-        call dgemm('N', 'N', m, n, k, 1.0_dp, a, m, b, k, 0.0_dp, c, m)
+        call product_into('N', a, b, c)
     end function mat_mul
 
     !> c = a^T b (a: k x m, b: k x n) by dgemm, without forming a^T: the projections of
@@ -51,21 +38,34 @@ contains
         !> Left factor (transposed in the product) and right factor.
         real(dp), intent(in) :: a(:, :), b(:, :)
         real(dp) :: c(size(a, 2), size(b, 2))
+        call product_into('T', a, b, c)
+    end function mat_tmul
+
+    !> c = op(a) b, op(a) = a (trans 'N') or a^T ('T'), c m x n, b k x n: dgemm, or the
+    !> intrinsic matmul below small_product multiply-adds.
+    subroutine product_into(trans, a, b, c)
+        character(len=1), intent(in) :: trans
+        real(dp), intent(in) :: a(:, :), b(:, :)
+        real(dp), intent(out) :: c(:, :)
         integer :: m, n, k
-        m = size(a, 2)
-        n = size(b, 2)
-        k = size(a, 1)
+        m = size(c, 1)
+        n = size(c, 2)
+        k = size(b, 1)
         if (m == 0 .or. n == 0) return
         if (k == 0) then
             c = 0.0_dp
             return
         end if
         if (real(m, dp)*real(n, dp)*real(k, dp) < small_product) then
-            c = matmul(transpose(a), b)
+            if (trans == 'T') then
+                c = matmul(transpose(a), b)
+            else
+                c = matmul(a, b)
+            end if
             return
         end if
-        call dgemm('T', 'N', m, n, k, 1.0_dp, a, k, b, k, 0.0_dp, c, m)
-    end function mat_tmul
+        call dgemm(trans, 'N', m, n, k, 1.0_dp, a, size(a, 1), b, k, 0.0_dp, c, m)
+    end subroutine product_into
 
     !> y = a x (a: m x n, x: n) by dgemv.
     function mat_vec(a, x) result(y)

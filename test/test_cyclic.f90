@@ -9,7 +9,8 @@ module test_cyclic
     use stickslip_error, only: error_type, real_text, itoa
     use stickslip_model, only: model_t, validate_model, force_direction
     use stickslip_cyclic, only: cyclic_t, validate_cyclic, nodal_diameter, disk_dof, &
-        assemble_disk, cyclic_frequencies, sector_phase
+        assemble_disk, cyclic_frequencies, sector_phase, cyclic_basis, cyclic_projection, &
+        hermitian_pencil
     use stickslip_lapack, only: dsygv, zgesv, dsyev, dgeev, dgesv
     use stickslip_diagnostics, only: level_untrusted, level_warning
     use testing, only: test_counter_t, check, check_error
@@ -67,7 +68,79 @@ contains
         call test_modal_condensation(t)
         call test_channel_condensation(t)
         call test_wave_rho(t)
+        call test_cyclic_projection(t)
     end subroutine run_cyclic_tests
+
+    !> cyclic_projection (t^H A t from the cyclic basis' structure) against the dense
+    !> product with cyclic_basis, on a random symmetric 9-DOF sector whose faces pair DOFs
+    !> (2, 7), (5, 9), (1, 4) in no order, at three phases (1e-14 of the largest entry);
+    !> and hermitian_pencil's two paths (zhegvd with the eigenvectors, zhegv without) give
+    !> the same eigenvalues, its vectors B-orthonormal and A v = lambda B v.
+    subroutine test_cyclic_projection(t)
+        type(test_counter_t), intent(inout) :: t
+        type(cyclic_t) :: cyc
+        real(dp) :: a(9, 9), b(9, 9)
+        complex(dp), allocatable :: tb(:, :), dense(:, :), kc(:, :), mc(:, :), v(:, :), &
+                                    k0(:, :), m0(:, :)
+        real(dp), allocatable :: w1(:), w2(:)
+        complex(dp) :: e
+        real(dp) :: worst, pencil, orth
+        integer :: k, info1, info2, j
+        cyc%sectors = 7
+        cyc%left = [2, 5, 1]
+        cyc%right = [7, 9, 4]
+        call random_number(a)
+        a = a + transpose(a)
+        call random_number(b)
+        b = matmul(transpose(b), b)
+        do k = 1, 9
+            b(k, k) = b(k, k) + 1.0_dp
+        end do
+        worst = 0.0_dp
+        pencil = 0.0_dp
+        orth = 0.0_dp
+        do k = 0, 2
+            e = exp(cmplx(0.0_dp, two_pi*real(k, dp)/7.0_dp, dp))
+            tb = cyclic_basis(cyc, 9, e)
+            dense = matmul(conjg(transpose(tb)), matmul(cmplx(a, 0.0_dp, dp), tb))
+            worst = max(worst, maxval(abs(cyclic_projection(a, cyc, e) - dense))/maxval(abs(a)))
+            k0 = cyclic_projection(a + 20.0_dp*b, cyc, e)
+            m0 = cyclic_projection(b, cyc, e)
+            kc = k0
+            mc = m0
+            call hermitian_pencil(kc, mc, w1, .true., info1)
+            v = kc
+            kc = k0
+            mc = m0
+            call hermitian_pencil(kc, mc, w2, .false., info2)
+            call check(t, info1 == 0 .and. info2 == 0, "cyclic projection: both pencil paths "// &
+                       "succeed at phase "//itoa(k))
+            if (info1 /= 0 .or. info2 /= 0) return
+            pencil = max(pencil, maxval(abs(w1 - w2))/maxval(abs(w2)))
+            do j = 1, size(w1)
+                pencil = max(pencil, maxval(abs(matmul(k0, v(:, j)) - &
+                                                w1(j)*matmul(m0, v(:, j))))/maxval(abs(w2)))
+            end do
+            orth = max(orth, maxval(abs(matmul(conjg(transpose(v)), matmul(m0, v)) - &
+                                        identity(size(w1)))))
+        end do
+        call check(t, worst < 1.0e-14_dp, "cyclic projection = t^H A t with the dense basis ("// &
+                   real_text(worst, '(es9.2)')//")")
+        call check(t, pencil < 1.0e-12_dp, "hermitian pencil: zhegvd's eigenvalues = zhegv's, "// &
+                   "A v = lambda B v ("//real_text(pencil, '(es9.2)')//")")
+        call check(t, orth < 1.0e-12_dp, "hermitian pencil: eigenvectors B-orthonormal ("// &
+                   real_text(orth, '(es9.2)')//")")
+    contains
+        pure function identity(n) result(id)
+            integer, intent(in) :: n
+            complex(dp) :: id(n, n)
+            integer :: i
+            id = (0.0_dp, 0.0_dp)
+            do i = 1, n
+                id(i, i) = (1.0_dp, 0.0_dp)
+            end do
+        end function identity
+    end subroutine test_cyclic_projection
 
     !> The sector's held weight (cyclic_held_rho) on the underplatform damper disk
     !> at the stuck frequency 2.887 rad/s, in the waves of nodal diameters 0, 1, 3 and 12:

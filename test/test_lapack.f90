@@ -1,13 +1,15 @@
 !> stickslip_lapack: the interface blocks agree with the system LAPACK (argument order,
 !> kinds, intents) on problems with known answers: real and complex LU solves, a Cholesky
 !> solve, a singular and a non-SPD matrix reported by info, a condition-number estimate and
-!> a matrix norm of a diagonal matrix, and the eigenvalues of a rotation-plus-scaling matrix.
+!> a matrix norm of a diagonal matrix, and the eigenvalues of a rotation-plus-scaling matrix;
+!> the dense products on BLAS against the intrinsic matmul.
 module test_lapack
     use stickslip_kinds, only: dp
     use stickslip_lapack, only: dpotrf, dpotrs, dgetrf, dgetrs, zgetrf, zgetrs, zgecon, &
         zlange, dgeev
     use testing, only: test_counter_t, check, check_close
     use stickslip_small_dense, only: small_zgetrf, small_zgetrs, small_zrcond
+    use stickslip_dense_products, only: mat_mul, mat_tmul
     implicit none
     private
     public :: run_lapack_tests
@@ -20,7 +22,34 @@ contains
         call test_complex(t)
         call test_eigen(t)
         call test_small_dense(t)
+        call test_products(t)
     end subroutine run_lapack_tests
+
+    !> mat_mul and mat_tmul (stickslip_dense_products: dgemm above 32^3 multiply-adds, the
+    !> intrinsic matmul below) against matmul on random factors of both sizes, a^T b with a
+    !> k x m (k the long dimension, as a reduction's projections), relative 1e-13.
+    subroutine test_products(t)
+        type(test_counter_t), intent(inout) :: t
+        real(dp), allocatable :: a(:, :), b(:, :)
+        integer, parameter :: rows(2) = [5, 300], cols(2) = [3, 70]
+        real(dp) :: worst_n, worst_t
+        integer :: i
+        worst_n = 0.0_dp
+        worst_t = 0.0_dp
+        do i = 1, 2
+            allocate (a(rows(i), cols(i)), b(rows(i), cols(i) + 1))
+            call random_number(a)
+            call random_number(b)
+            worst_t = max(worst_t, maxval(abs(mat_tmul(a, b) - matmul(transpose(a), b)))/ &
+                          maxval(abs(matmul(transpose(a), b))))
+            worst_n = max(worst_n, maxval(abs(mat_mul(transpose(a), b) - &
+                                              matmul(transpose(a), b)))/ &
+                          maxval(abs(matmul(transpose(a), b))))
+            deallocate (a, b)
+        end do
+        call check(t, worst_t < 1.0e-13_dp, "mat_tmul = matmul(transpose(a), b), small and large")
+        call check(t, worst_n < 1.0e-13_dp, "mat_mul = matmul, small and large")
+    end subroutine test_products
 
     !> The plain-Fortran LU of small complex matrices against LAPACK: the same solutions
     !> (n = 1..16, nonsymmetric, 3 right-hand sides, relative 1e-12), the condition number

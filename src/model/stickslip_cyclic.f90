@@ -646,7 +646,8 @@ contains
         end do
     end function cyclic_projection
 
-    !> The Hermitian-definite pencil A v = lambda B v (LAPACK zhegv with its workspace query):
+    !> The Hermitian-definite pencil A v = lambda B v (LAPACK zhegv with its workspace query;
+    !> zhegvd, divide and conquer, when the eigenvectors are wanted):
     !> `w` the eigenvalues, increasing; with `vectors` A holds the B-orthonormal eigenvectors
     !> on return (B is overwritten either way). info: zhegv's (nonzero: B not positive
     !> definite, or no convergence).

@@ -7,8 +7,8 @@
 !> Hermitian; written in real arithmetic, H = A + i B acting on (Re q, Im q) is the real
 !> symmetric [A -B; B A] of order 2 m, whose eigenvalues are K_c's, each twice (q and i q).
 !> The sparse shift-invert block Lanczos on its Cholesky factor (CHOLMOD) solves it; the
-!> block handles the double eigenvalues. The full disk is N copies of the sector with the boundaries
-!> merged (disk_dof), each nodal diameter 1 .. N/2 - 1 a double eigenvalue there.
+!> block handles the double eigenvalues. The full disk is N copies of the sector with the
+!> boundaries merged (disk_dof), each nodal diameter 1 .. N/2 - 1 a double eigenvalue there.
 module stickslip_cyclic_sparse
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa

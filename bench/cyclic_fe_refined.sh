@@ -15,7 +15,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 refines=("$@")
 [ ${#refines[@]} -eq 0 ] && refines=(1 2 3)
-command -v ccx >/dev/null || { echo "cyclic_fe_refined.sh: needs ccx (apt-get install calculix-ccx)" >&2; exit 1; }
+if ! command -v ccx >/dev/null; then
+    echo "cyclic_fe_refined.sh: needs ccx (apt-get install calculix-ccx)" >&2
+    exit 1
+fi
 fpm build --profile release >/dev/null
 exe=$(fpm run --profile release --runner echo 2>/dev/null | tail -n 1)
 work=$(mktemp -d)
@@ -34,9 +37,9 @@ for k in "${refines[@]}"; do
         "$(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }')"
     for estimate in T F; do
         name="run_$estimate"
+        settings="interface_modes = 12, cache = 'off', error_estimate = $estimate"
         sed -e "s|^  directory = .*|  directory = '$dir/$name'|" \
-            -e "s|^  interface_modes = 12 .*|  interface_modes = 12, cache = 'off', error_estimate = $estimate|" \
-            "$dir/case.nml" > "$dir/$name.nml"
+            -e "s|^  interface_modes = 12 .*|  $settings|" "$dir/case.nml" > "$dir/$name.nml"
         t0=$(date +%s.%N)
         "$exe" "$dir/$name.nml" > "$dir/$name.out" 2> "$dir/$name.err"
         t1=$(date +%s.%N)
@@ -46,10 +49,12 @@ for k in "${refines[@]}"; do
         printf '  error_estimate = %s: wall %.1f s; reduction %.1f s, estimate %.1f s (%s); ' \
             "$estimate" "$(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }')" \
             "$(value "$out" reduction_seconds)" \
-            "$(awk -v e="$(value "$out" reduction_error_seconds)" 'BEGIN { print (e < 0) ? 0 : e }')" \
+            "$(awk -v e="$(value "$out" reduction_error_seconds)" \
+                'BEGIN { print (e < 0) ? 0 : e }')" \
             "$(value "$out" reduction_error_method | tr -d "'")"
         printf 'reduced %s DOFs; error nd3 %s, nd9 %s; %s points, %.2f ms a point\n' \
-            "$(value "$out" reduction_interface_dof)" "$(sci "$(value "$out" reduction_error_nd3)")" \
+            "$(value "$out" reduction_interface_dof)" \
+            "$(sci "$(value "$out" reduction_error_nd3)")" \
             "$(sci "$(value "$out" reduction_error_nd9)")" "$points" \
             "$(awk -v c="$cpu" -v p="$points" 'BEGIN { print 1000 * c / p }')"
         sed 's/^stickslip: /    /' "$dir/$name.err" | grep "reduction:" || true

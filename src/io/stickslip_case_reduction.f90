@@ -256,6 +256,9 @@ contains
         type(reduction_report_t) :: cached_report
         type(reduction_estimate_t) :: estimate
         class(sparse_factor_t), allocatable :: interior_lu
+        ! [alpha, beta] when C is Rayleigh's alone (no damping file): unallocated otherwise,
+        ! then absent as an optional argument
+        real(dp), allocatable :: rayleigh(:)
         type(hash_t) :: hk
         integer, allocatable :: bset(:)
         real(dp), allocatable :: freqs(:), directions(:, :)
@@ -400,11 +403,11 @@ contains
             if (sparse%has_damping .and. allocated(model%force_shape)) then
                 call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
                                    error, cmat=sparse%damping, loads=model%force_shape, &
-                                   interior_lu=interior_lu, progress=progress)
+                                   interior_lu=interior_lu, progress=progress, rayleigh=rayleigh)
             else if (sparse%has_damping) then
                 call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
                                    error, cmat=sparse%damping, interior_lu=interior_lu, &
-                                   progress=progress)
+                                   progress=progress, rayleigh=rayleigh)
             else if (allocated(model%force_shape)) then
                 call craig_bampton(sparse%stiffness, sparse%mass, bset, opts, rm, red%report, &
                                    error, loads=model%force_shape, interior_lu=interior_lu, &
@@ -548,9 +551,14 @@ contains
             end do
         end subroutine check_range
 
-        !> The matrix files read (unless they were), timed.
+        !> The matrix files read (unless they were), timed; the Rayleigh factors noted when
+        !> they make C alone.
         subroutine load_matrices()
             integer(int64) :: s0, s1, r
+            if (files%rayleigh_alpha /= 0.0_dp .or. files%rayleigh_beta /= 0.0_dp) then
+                if (.not. allocated(files%damping_file)) &
+                    rayleigh = [files%rayleigh_alpha, files%rayleigh_beta]
+            end if
             if (sparse%loaded) return
             call system_clock(s0, r)
             call load_sparse_system(nml, files, n, sparse, error, progress)
@@ -573,11 +581,13 @@ contains
                 call estimate_reduction_error(sparse%stiffness, sparse%mass, rm, directions, &
                                               freqs, estimate, error, cmat=sparse%damping, &
                                               proportional=proportional, &
-                                              interior_lu=interior_lu, progress=progress)
+                                              interior_lu=interior_lu, progress=progress, &
+                                              rayleigh=rayleigh)
             else if (sparse%has_damping) then
                 call estimate_reduction_error(sparse%stiffness, sparse%mass, rm, directions, &
                                               freqs, estimate, error, cmat=sparse%damping, &
-                                              proportional=proportional, progress=progress)
+                                              proportional=proportional, progress=progress, &
+                                              rayleigh=rayleigh)
             else if (reuse) then
                 call estimate_reduction_error(sparse%stiffness, sparse%mass, rm, directions, &
                                               freqs, estimate, error, &

@@ -38,8 +38,10 @@
 !> max_modes (report%capped then).
 !> options%modes > 0 keeps exactly that many (at most the number of interior DOFs).
 !>
-!> Damping: C given on the full model is projected (C_r = T^T C T); options%damping_ratio > 0
-!> adds modal damping 2 zeta w_k on the diagonal of the fixed-interface modes (unit modal mass).
+!> Damping: C given on the full model is projected (C_r = T^T C T; when the caller says C =
+!> alpha M + beta K, argument `rayleigh`, C_r = alpha M_r + beta K_r without the third
+!> projection, exactly the same matrix); options%damping_ratio > 0 adds modal damping 2 zeta
+!> w_k on the diagonal of the fixed-interface modes (unit modal mass).
 !>
 !> The reduced model type, recovery and reduce_vectors live in stickslip_reduced_model, the
 !> reduction error (receptance_error: the contact receptance of the reduced model against the
@@ -152,9 +154,11 @@ contains
     !> shift-invert Lanczos of the fixed-interface modes alike; with
     !> `interior_lu` the factorization is handed to the caller on return (for the error
     !> estimate, stickslip_reduction_estimate), released otherwise. With `progress`, the
-    !> phases that took a second or more are reported (progress_t%phase).
+    !> phases that took a second or more are reported (progress_t%phase). With `rayleigh`
+    !> = [alpha, beta] the caller says that cmat is alpha M + beta K (Rayleigh damping):
+    !> C_r is then formed from M_r and K_r.
     subroutine craig_bampton(kmat, mmat, boundary_dofs, options, reduced, report, error, cmat, &
-                             loads, interior_lu, progress)
+                             loads, interior_lu, progress, rayleigh)
         !> Stiffness K, N x N (full storage).
         type(sparse_matrix_t), intent(in) :: kmat
         !> Mass M, N x N.
@@ -179,6 +183,8 @@ contains
         class(sparse_factor_t), allocatable, intent(inout), optional :: interior_lu
         !> Where the phases are reported (optional).
         type(progress_t), intent(inout), optional :: progress
+        !> [alpha, beta] [1/s, s]: cmat is alpha M + beta K (optional; only with cmat).
+        real(dp), intent(in), optional :: rayleigh(2)
         integer, allocatable :: loc(:)
         integer :: n, nb, ni, j, p, r, q, nm, nr, nl
         real(dp), allocatable :: psi(:, :)
@@ -203,6 +209,13 @@ contains
             if (cmat%nrows /= n .or. cmat%ncols /= n) then
                 call fatal_error(error, "craig_bampton: C must be "//itoa(n)//" x "//itoa(n), &
                                  stickslip_stat%input)
+                return
+            end if
+        end if
+        if (present(rayleigh)) then
+            if (.not. (present(cmat) .and. all(ieee_is_finite(rayleigh)))) then
+                call fatal_error(error, "craig_bampton: rayleigh needs cmat and finite "// &
+                                 "factors", stickslip_stat%input)
                 return
             end if
         end if
@@ -412,7 +425,9 @@ contains
         end do
         call project(mmat, reduced%mass)
         call project(kmat, reduced%stiffness)
-        if (present(cmat)) then
+        if (present(cmat) .and. present(rayleigh)) then
+            reduced%damping = rayleigh(1)*reduced%mass + rayleigh(2)*reduced%stiffness
+        else if (present(cmat)) then
             call project(cmat, reduced%damping)
         else
             allocate (reduced%damping(nr, nr))

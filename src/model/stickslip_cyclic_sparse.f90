@@ -7,7 +7,8 @@
 !> Hermitian; written in real arithmetic, H = A + i B acting on (Re q, Im q) is the real
 !> symmetric [A -B; B A] of order 2 m, whose eigenvalues are K_c's, each twice (q and i q).
 !> The sparse shift-invert block Lanczos on its Cholesky factor (CHOLMOD) solves it; the
-!> block handles the double eigenvalues. The full disk is N copies of the sector with the
+!> block handles the double eigenvalues. At nd = 0 and N/2 (e = +-1) B vanishes and the
+!> pencil is the real A of order m, solved as it is. The full disk is N copies of the sector with the
 !> boundaries merged (disk_dof), each nodal diameter 1 .. N/2 - 1 a double eigenvalue there.
 module stickslip_cyclic_sparse
     use stickslip_kinds, only: dp, two_pi
@@ -44,7 +45,8 @@ contains
         type(eigen_report_t) :: report
         class(sparse_factor_t), allocatable :: fac
         real(dp), allocatable :: values(:), vectors(:, :)
-        integer :: n, m
+        integer :: n, m, order
+        logical :: real_phase
         complex(dp) :: e
         n = kmat%nrows
         m = n - size(cyc%right)
@@ -59,6 +61,10 @@ contains
             return
         end if
         e = exp(cmplx(0.0_dp, two_pi*real(nd, dp)/real(cyc%sectors, dp), dp))
+        ! e = +-1: the pencil is real (B = 0), of order m, each eigenvalue once
+        real_phase = nd == 0 .or. 2*nd == cyc%sectors
+        if (real_phase) e = cmplx(merge(1.0_dp, -1.0_dp, nd == 0), 0.0_dp, dp)
+        order = merge(m, 2*m, real_phase)
         call realified(kmat, kr, error)
         if (allocated(error)) return
         call realified(mmat, mr, error)
@@ -66,11 +72,12 @@ contains
         ! full storage, symmetric: the CSR arrays are the CSC ones. The real form of a
         ! positive definite K_c is: its Cholesky factor (supernodal on a FE sector) lets the
         ! block Lanczos read it once per block of solves (an LU where it is not)
-        call factorize_stiffness(2*m, kr%row_start, kr%col, kr%val, fac, error)
+        call factorize_stiffness(order, kr%row_start, kr%col, kr%val, fac, error)
         if (.not. allocated(error)) then
-            call sparse_eigenpairs(2*m, kr%row_start, kr%col, kr%val, mr%row_start, mr%col, &
-                                   mr%val, 2*count, 0.0_dp, eigen_options_t(), values, &
-                                   vectors, report, error, factorization=fac)
+            call sparse_eigenpairs(order, kr%row_start, kr%col, kr%val, mr%row_start, mr%col, &
+                                   mr%val, merge(count, 2*count, real_phase), 0.0_dp, &
+                                   eigen_options_t(), values, vectors, report, error, &
+                                   factorization=fac)
         end if
         if (allocated(fac)) call fac%release()
         if (allocated(error)) then
@@ -79,7 +86,11 @@ contains
             return
         end if
         ! every eigenvalue twice: take one of each pair
-        omegas = sqrt(max(values(1:2*count:2), 0.0_dp))
+        if (real_phase) then
+            omegas = sqrt(max(values(1:count), 0.0_dp))
+        else
+            omegas = sqrt(max(values(1:2*count:2), 0.0_dp))
+        end if
 
     contains
 
@@ -106,20 +117,27 @@ contains
                 col(cyc%right(k)) = col(cyc%left(k))
                 f(cyc%right(k)) = e
             end do
-            nt = 4*a%nnz()
+            nt = merge(1, 4, real_phase)*a%nnz()
             allocate (rows(nt), cols(nt), vals(nt))
             p = 0
             do i = 1, n
                 do k = a%row_start(i), a%row_start(i + 1) - 1
                     j = a%col(k)
                     c = conjg(f(i))*a%val(k)*f(j)
-                    rows(p + 1:p + 4) = [col(i), col(i), col(i) + m, col(i) + m]
-                    cols(p + 1:p + 4) = [col(j), col(j) + m, col(j), col(j) + m]
-                    vals(p + 1:p + 4) = [real(c, dp), -aimag(c), aimag(c), real(c, dp)]
-                    p = p + 4
+                    if (real_phase) then
+                        rows(p + 1) = col(i)
+                        cols(p + 1) = col(j)
+                        vals(p + 1) = real(c, dp)
+                        p = p + 1
+                    else
+                        rows(p + 1:p + 4) = [col(i), col(i), col(i) + m, col(i) + m]
+                        cols(p + 1:p + 4) = [col(j), col(j) + m, col(j), col(j) + m]
+                        vals(p + 1:p + 4) = [real(c, dp), -aimag(c), aimag(c), real(c, dp)]
+                        p = p + 4
+                    end if
                 end do
             end do
-            call new_sparse_from_triplets(r, 2*m, 2*m, rows, cols, vals, error)
+            call new_sparse_from_triplets(r, order, order, rows, cols, vals, error)
         end subroutine realified
     end subroutine cyclic_sparse_frequencies
 

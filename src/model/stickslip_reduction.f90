@@ -6,7 +6,9 @@
 !> sides) and the fixed-interface normal modes Phi_n of K_ii phi = w^2 M_ii phi (shift-invert
 !> Lanczos at sigma = 0 on the sparse LU of K_ii, or LAPACK dsygv when the interior is small),
 !> M_ii-orthonormal. The reduced matrices M_r = T^T M T, K_r = T^T K T, C_r = T^T C T are
-!> formed from sparse products with the N x (nb + nm + nl) basis (no dense N x N matrix).
+!> formed from sparse products with the N x (nb + nm + nl) basis (no dense N x N matrix);
+!> K_r from the basis' structure (the constraint columns of K T vanish on the interior), so
+!> its dense product over the interior covers the modal and load columns only.
 !> Reduced DOF j <= nb is full DOF boundary(j) (boundary DOFs ascending); reduced DOF nb + k
 !> is the amplitude of fixed-interface mode k; reduced DOF nb + nm + l that of load vector l.
 !>
@@ -424,7 +426,7 @@ contains
             if (nl > 0) t(reduced%interior(p), nb + nm + 1:nr) = reduced%loads(p, :)
         end do
         call project(mmat, reduced%mass)
-        call project(kmat, reduced%stiffness)
+        call project_stiffness(reduced%stiffness)
         if (present(cmat) .and. present(rayleigh)) then
             reduced%damping = rayleigh(1)*reduced%mass + rayleigh(2)*reduced%stiffness
         else if (present(cmat)) then
@@ -626,6 +628,37 @@ contains
             r = 0.5_dp*(r + transpose(r))
             deallocate (at)
         end subroutine project
+
+        !> T^T K T (nr x nr) from the basis' structure: the constraint columns of K T vanish on
+        !> the interior (K_ii Phi_c + K_ib = 0, to the solve's roundoff), so their part is
+        !> the boundary rows of K T (K_bb + K_bi Phi_c, the Schur complement, and K_bi Phi_n,
+        !> K_bi Psi), and the dense product over the interior is formed for the modal and
+        !> load columns only (nr x (nm + nl) instead of nr x nr).
+        subroutine project_stiffness(r)
+            real(dp), allocatable, intent(out) :: r(:, :)
+            real(dp), allocatable :: kt(:, :), kti(:, :)
+            integer :: jb, pp, row
+            allocate (r(nr, nr))
+            r = 0.0_dp
+            do jb = 1, nb
+                row = reduced%boundary(jb)
+                do pp = kmat%row_start(row), kmat%row_start(row + 1) - 1
+                    r(jb, :) = r(jb, :) + kmat%val(pp)*t(kmat%col(pp), :)
+                end do
+            end do
+            if (nr > nb) then
+                allocate (kt(n, nr - nb))
+                call sparse_times_block(kmat, t(:, nb + 1:nr), kt)
+                kti = kt(reduced%interior, :)
+                deallocate (kt)
+                r(1:nb, nb + 1:) = r(1:nb, nb + 1:) + mat_tmul(reduced%constraint, kti)
+                if (nm > 0) r(nb + 1:nb + nm, nb + 1:) = r(nb + 1:nb + nm, nb + 1:) + &
+                                                         mat_tmul(reduced%modes, kti)
+                if (nl > 0) r(nb + nm + 1:, nb + 1:) = r(nb + nm + 1:, nb + 1:) + &
+                                                       mat_tmul(reduced%loads, kti)
+            end if
+            r = 0.5_dp*(r + transpose(r))
+        end subroutine project_stiffness
 
         !> Error: an explicit max_frequency with more modes below it than max_modes.
         subroutine too_many_below(count)

@@ -502,16 +502,23 @@ contains
         function basis_times(x) result(y)
             real(dp), intent(in) :: x(:, :)
             real(dp), allocatable :: y(:, :)
+            real(dp), allocatable :: part(:, :)
             integer :: nm, nl
             nm = reduced%nm
             nl = reduced%nl
             allocate (y(n, size(x, 2)))
-            y(reduced%boundary, :) = x(1:nb, :)
-            y(reduced%interior, :) = mat_mul(reduced%constraint, x(1:nb, :))
-            if (nm > 0) y(reduced%interior, :) = y(reduced%interior, :) + &
-                                                 mat_mul(reduced%modes, x(nb + 1:nb + nm, :))
-            if (nl > 0) y(reduced%interior, :) = y(reduced%interior, :) + &
-                                                 mat_mul(reduced%loads, x(nb + nm + 1:nr, :))
+            ! (each block of rows copied: contiguous for dgemm)
+            part = x(1:nb, :)
+            y(reduced%boundary, :) = part
+            y(reduced%interior, :) = mat_mul(reduced%constraint, part)
+            if (nm > 0) then
+                part = x(nb + 1:nb + nm, :)
+                y(reduced%interior, :) = y(reduced%interior, :) + mat_mul(reduced%modes, part)
+            end if
+            if (nl > 0) then
+                part = x(nb + nm + 1:nr, :)
+                y(reduced%interior, :) = y(reduced%interior, :) + mat_mul(reduced%loads, part)
+            end if
         end function basis_times
 
         !> The columns of x M_ii-orthogonalized (classical Gram-Schmidt, twice) against

@@ -323,7 +323,7 @@ contains
             integer :: c0, nc
             ! in blocks of solve_chunk columns: CHOLMOD's supernodal solve of 1083
             ! right-hand sides at once took 12.5 s on a 33k-DOF sector, 4-5 s in blocks
-            ! of 32 to 256 (its workspace per supernode then stays in cache)
+            ! of 32 to 256 (a smaller working set per supernode, presumably)
             do c0 = 1, size(b, 2), solve_chunk
                 nc = min(solve_chunk, size(b, 2) - c0 + 1)
                 bb = b(:, c0:c0 + nc - 1)

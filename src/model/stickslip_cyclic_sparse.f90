@@ -8,8 +8,9 @@
 !> symmetric [A -B; B A] of order 2 m, whose eigenvalues are K_c's, each twice (q and i q).
 !> The sparse shift-invert block Lanczos on its Cholesky factor (CHOLMOD) solves it; the
 !> block handles the double eigenvalues. At nd = 0 and N/2 (e = +-1) B vanishes and the
-!> pencil is the real A of order m, solved as it is. The full disk is N copies of the sector with the
-!> boundaries merged (disk_dof), each nodal diameter 1 .. N/2 - 1 a double eigenvalue there.
+!> pencil is the real A of order m, solved as it is. The full disk is N copies of the sector
+!> with the boundaries merged (disk_dof), each nodal diameter 1 .. N/2 - 1 a double
+!> eigenvalue there.
 module stickslip_cyclic_sparse
     use stickslip_kinds, only: dp, two_pi
     use stickslip_error, only: error_type, fatal_error, stickslip_stat, itoa

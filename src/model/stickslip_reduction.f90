@@ -42,7 +42,7 @@
 !>
 !> Damping: C given on the full model is projected (C_r = T^T C T; when the caller says C =
 !> alpha M + beta K, argument `rayleigh`, C_r = alpha M_r + beta K_r without the third
-!> projection, exactly the same matrix); options%damping_ratio > 0 adds modal damping 2 zeta
+!> projection, the same matrix to roundoff); options%damping_ratio > 0 adds modal damping 2 zeta
 !> w_k on the diagonal of the fixed-interface modes (unit modal mass).
 !>
 !> The reduced model type, recovery and reduce_vectors live in stickslip_reduced_model, the

@@ -34,10 +34,12 @@
 !> estimate by about q^2 of itself (q <= 0.11: 1.2 %), as with the full seeds at level 2;
 !> tested against the exact measure on the CalculiX sector with its faces
 !> (test_reduction_estimate) and on its refinements of 10^4 DOFs and more (doc/cyclic.md).
-!> Cost: (nb + nl) real solves per level (2 n_c n_f response-seeded) with the held factorization and sparse products,
-!> whatever the number of frequencies (Rotor 37 blade, 61098 DOFs, 17 boundary DOFs, 3
-!> frequencies: about 4 s per level, two levels), against one complex sparse LU of the full
-!> model per frequency (about 25-35 s each there).
+!> Cost: (nb + nl) real solves per level (2 n_c n_f response-seeded) with the held
+!> factorization and sparse products, whatever the number of frequencies (Rotor 37 blade,
+!> 61098 DOFs, 17 boundary DOFs, 3 frequencies: about 4 s per level, two levels), against
+!> one complex sparse LU of the full model per frequency (about 25-35 s each there); a
+!> 33414-DOF sector with 1083 boundary DOFs: 1.6 s response-seeded, 62 s with every
+!> constraint mode.
 !>
 !> Knows nothing of case files; the caller (stickslip_case_reduction) decides when to run it.
 module stickslip_reduction_estimate

@@ -65,10 +65,11 @@ contains
     end subroutine test_small
 
     !> The 7-point Laplacian of a 12^3 grid plus a small diagonal shift (1728 unknowns):
-    !> CHOLMOD chooses its supernodal factorization; 3 right-hand sides against dgesv.
+    !> CHOLMOD chooses its supernodal factorization; 300 right-hand sides against dgesv
+    !> (solve_many's blocks of 128: two full ones and a partial one).
     subroutine test_grid(t)
         type(test_counter_t), intent(inout) :: t
-        integer, parameter :: g = 12, n = g**3, m = 3
+        integer, parameter :: g = 12, n = g**3, m = 300
         real(dp), allocatable :: a(:, :), b(:, :), xd(:, :), xs(:, :)
         type(sparse_cholesky_t) :: chol
         type(error_type), allocatable :: error

@@ -569,6 +569,32 @@ contains
             call new_sparse_from_triplets(s, ni, ni, ri, ci, vi, error)
         end subroutine submatrix
 
+        !> The boundary rows of a (nb x n, in the order of reduced%boundary).
+        subroutine boundary_rows(a, s)
+            type(sparse_matrix_t), intent(in) :: a
+            type(sparse_matrix_t), intent(out) :: s
+            integer, allocatable :: ri(:), ci(:)
+            real(dp), allocatable :: vi(:)
+            integer :: jb, k, m, row
+            m = 0
+            do jb = 1, nb
+                row = reduced%boundary(jb)
+                m = m + a%row_start(row + 1) - a%row_start(row)
+            end do
+            allocate (ri(m), ci(m), vi(m))
+            m = 0
+            do jb = 1, nb
+                row = reduced%boundary(jb)
+                do k = a%row_start(row), a%row_start(row + 1) - 1
+                    m = m + 1
+                    ri(m) = jb
+                    ci(m) = a%col(k)
+                    vi(m) = a%val(k)
+                end do
+            end do
+            call new_sparse_from_triplets(s, nb, n, ri, ci, vi, error)
+        end subroutine boundary_rows
+
         !> A phase is done: report it (progress) with its wall time since the last one.
         subroutine phase(text)
             character(len=*), intent(in) :: text
@@ -637,15 +663,15 @@ contains
         subroutine project_stiffness(r)
             real(dp), allocatable, intent(out) :: r(:, :)
             real(dp), allocatable :: kt(:, :), kti(:, :)
-            integer :: jb, pp, row
-            allocate (r(nr, nr))
+            type(sparse_matrix_t) :: kb
+            allocate (r(nr, nr), kt(nb, nr))
             r = 0.0_dp
-            do jb = 1, nb
-                row = reduced%boundary(jb)
-                do pp = kmat%row_start(row), kmat%row_start(row + 1) - 1
-                    r(jb, :) = r(jb, :) + kmat%val(pp)*t(kmat%col(pp), :)
-                end do
-            end do
+            ! the boundary rows of K T: K's boundary rows (nb x n) times T
+            call boundary_rows(kmat, kb)
+            if (allocated(error)) return
+            call sparse_times_block(kb, t, kt)
+            r(1:nb, :) = kt
+            deallocate (kt)
             if (nr > nb) then
                 allocate (kt(n, nr - nb))
                 call sparse_times_block(kmat, t(:, nb + 1:nr), kt)

@@ -143,7 +143,7 @@ contains
         real(dp), allocatable :: wb(:, :), v(:, :), newv(:, :), mv(:, :), cv(:, :)
         real(dp), allocatable :: kred(:, :), mred(:, :), cred(:, :), kz(:, :), mz(:, :), &
                                  cz(:, :), ma(:, :), ca(:, :), ef(:, :), base(:, :), &
-                                 seeds(:, :), mbase(:, :), q(:, :)
+                                 seeds(:, :), mbase(:, :), q(:, :), tq(:, :)
         complex(dp), allocatable :: gr(:, :), g(:, :), qf(:, :)
         real(dp) :: gmax, last_change, exact
 
@@ -242,9 +242,10 @@ contains
                                    nb + reduced%nl + merge(nr, 0, with_c)
         if (estimate%response_seeded) then
             ! [A T]_i q = [A (T q)]_i: one sparse product with the n x 2 n_c n_f block T q
-            call interior_products(mmat, basis_times(q), seeds, full_length=.true.)
+            tq = basis_times(q)
+            call interior_products(mmat, tq, seeds, full_length=.true.)
             if (with_c) then
-                call interior_products(cmat, basis_times(q), ca, full_length=.true.)
+                call interior_products(cmat, tq, ca, full_length=.true.)
                 seeds = reshape([seeds, ca], [ni, 2*size(q, 2)])
             end if
         else
